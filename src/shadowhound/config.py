@@ -1,0 +1,242 @@
+"""Configuration: one typed model, loaded from a YAML profile, then environment, then options.
+
+Precedence (lowest first): model defaults < profile file < environment variables
+(`SHADOWHOUND_<SECTION>__<FIELD>`, e.g. `SHADOWHOUND_SAFETY__MAX_LINEAR_SPEED=0.3`) < explicit
+overrides (CLI options, ROS parameters). Secrets (API keys) are read from the environment
+variable a profile names and are never stored in the model.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+ENV_PREFIX = "SHADOWHOUND_"
+_PACKAGE_DIR = Path(__file__).resolve().parent
+
+
+class ConfigError(Exception):
+    """A profile, file or value is wrong. The message says which and what is allowed."""
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+
+class SafetyConfig(_Section):
+    """Limits every skill call must respect before it reaches the robot."""
+
+    max_linear_speed: float = Field(0.5, gt=0, le=1.5, description="m/s cap on any translation")
+    max_angular_speed: float = Field(1.0, gt=0, le=3.0, description="rad/s cap on any rotation")
+    max_step_distance: float = Field(5.0, gt=0, le=100, description="metres one step may travel")
+    geofence_radius: float = Field(
+        10.0, gt=0, le=1000, description="metres around the odom origin the robot must stay in"
+    )
+    allow_risky_tricks: bool = Field(False, description="allow flips, jumps, pounce, handstand")
+    max_wait: float = Field(300.0, gt=0, le=3600, description="longest sys.wait in seconds")
+
+
+class MotionConfig(_Section):
+    """Closed-loop motion control shared by every robot."""
+
+    control_rate_hz: float = Field(20.0, ge=1, le=200)
+    default_linear_speed: float = Field(0.4, gt=0, le=1.5)
+    default_angular_speed: float = Field(0.8, gt=0, le=3.0)
+    linear_accel: float = Field(0.8, gt=0, le=5.0, description="m/s^2 used for ramps")
+    angular_accel: float = Field(2.0, gt=0, le=10.0, description="rad/s^2 used for ramps")
+    position_tolerance: float = Field(0.002, gt=0, le=0.5, description="metres")
+    yaw_tolerance: float = Field(0.00002, gt=0, le=0.2, description="radians")
+    stall_timeout: float = Field(3.0, gt=0, le=60, description="seconds without progress")
+    auto_stand: bool = Field(True, description="stand up before moving when sitting or lying")
+
+
+class SimConfig(_Section):
+    """The simulated Go2."""
+
+    time_scale: float = Field(
+        0.0, ge=0, le=100, description="real seconds per simulated second; 0 = as fast as possible"
+    )
+    max_linear_speed: float = Field(1.0, gt=0, description="hardware limit, m/s")
+    max_angular_speed: float = Field(2.0, gt=0, description="hardware limit, rad/s")
+    linear_accel: float = Field(1.0, gt=0, description="m/s^2")
+    angular_accel: float = Field(3.0, gt=0, description="rad/s^2")
+    battery_drain_idle: float = Field(0.01, ge=0, description="percent per second standing")
+    battery_drain_per_metre: float = Field(0.05, ge=0, description="percent per metre walked")
+    camera_width: int = Field(160, ge=16, le=1920)
+    camera_height: int = Field(120, ge=12, le=1080)
+    command_log_size: int = Field(10000, ge=10, le=10_000_000)
+
+
+class LLMConfig(_Section):
+    """Language-model backend (used when `backend` is not offline)."""
+
+    model: str = ""
+    base_url: str = ""
+    api_key_env: str = "OPENAI_API_KEY"
+    timeout: float = Field(30.0, gt=0, le=600)
+    max_retries: int = Field(2, ge=0, le=10)
+    max_tokens: int = Field(512, ge=16, le=32768)
+    temperature: float = Field(0.0, ge=0, le=2)
+    vision: bool = False
+
+
+class AgentConfig(_Section):
+    """Behaviour of the mission loop."""
+
+    max_mission_chars: int = Field(2000, ge=1, le=100_000)
+    max_steps: int = Field(50, ge=1, le=1000)
+    conversation_history_size: int = Field(10, ge=0, le=1000)
+    replan_on_failure: bool = True
+
+
+def _finite_pair(value: Any) -> tuple[float, float]:
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise ValueError("must be a pair [x, y] in metres")
+    x, y = (float(v) for v in value)
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ValueError("must be finite numbers")
+    return (x, y)
+
+
+class ShadowHoundConfig(_Section):
+    """Everything ShadowHound can be configured with. Loaded by `load_config`."""
+
+    profile: str = "offline"
+    backend: Literal["offline", "openai", "ollama", "vllm", "llamacpp"] = "offline"
+    robot: Literal["sim", "go2"] = "sim"
+    safety: SafetyConfig = Field(default_factory=SafetyConfig)
+    motion: MotionConfig = Field(default_factory=MotionConfig)
+    sim: SimConfig = Field(default_factory=SimConfig)
+    llm: LLMConfig = Field(default_factory=LLMConfig)
+    agent: AgentConfig = Field(default_factory=AgentConfig)
+    places: dict[str, tuple[float, float]] = Field(
+        default_factory=lambda: {"kitchen": (3.0, 2.0), "charging dock": (-1.0, 0.0)},
+        description="named places in the odom frame, metres",
+    )
+    patrol_route: list[tuple[float, float]] = Field(
+        default_factory=lambda: [(2.0, 0.0), (2.0, 2.0), (0.0, 2.0)],
+        description="waypoints visited by nav.patrol before it returns to where it started",
+    )
+
+    @field_validator("places", mode="before")
+    @classmethod
+    def _places(cls, value: Any) -> dict[str, tuple[float, float]]:
+        if not isinstance(value, Mapping):
+            raise ValueError("must be a mapping of name -> [x, y]")
+        return {str(k).strip().lower(): _finite_pair(v) for k, v in value.items()}
+
+    @field_validator("patrol_route", mode="before")
+    @classmethod
+    def _route(cls, value: Any) -> list[tuple[float, float]]:
+        if not isinstance(value, (list, tuple)) or not value:
+            raise ValueError("must be a non-empty list of [x, y] waypoints")
+        return [_finite_pair(v) for v in value]
+
+    @model_validator(mode="after")
+    def _speeds_within_hardware(self) -> ShadowHoundConfig:
+        if self.motion.default_linear_speed > self.safety.max_linear_speed:
+            self.motion.default_linear_speed = self.safety.max_linear_speed
+        if self.motion.default_angular_speed > self.safety.max_angular_speed:
+            self.motion.default_angular_speed = self.safety.max_angular_speed
+        return self
+
+
+def profiles_dirs() -> list[Path]:
+    """Where named profiles live: inside the installed package, or the source tree's configs/."""
+    return [_PACKAGE_DIR / "configs", _PACKAGE_DIR.parent.parent / "configs"]
+
+
+def available_profiles() -> list[str]:
+    names = {p.stem for d in profiles_dirs() if d.is_dir() for p in d.glob("*.yaml")}
+    return sorted(names)
+
+
+def _read_profile(profile: str) -> tuple[dict[str, Any], str]:
+    path = Path(profile).expanduser()
+    if profile.endswith((".yaml", ".yml")) or path.is_file():
+        if not path.is_file():
+            raise ConfigError(f"config file {str(path)!r} does not exist")
+    else:
+        candidates = [d / f"{profile}.yaml" for d in profiles_dirs()]
+        found = next((c for c in candidates if c.is_file()), None)
+        if found is None:
+            raise ConfigError(
+                f"unknown config profile {profile!r}; available profiles: "
+                f"{', '.join(available_profiles()) or 'none'}, or give a path to a YAML file"
+            )
+        path = found
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise ConfigError(f"cannot read config {str(path)!r}: {exc}") from exc
+    if not isinstance(data, dict):
+        raise ConfigError(f"config {str(path)!r} must be a YAML mapping, not {type(data).__name__}")
+    data.setdefault("profile", path.stem)
+    return data, str(path)
+
+
+def _env_overrides(environ: Mapping[str, str]) -> dict[str, Any]:
+    """SHADOWHOUND_BACKEND=ollama, SHADOWHOUND_SAFETY__MAX_LINEAR_SPEED=0.3 ... as a nested dict.
+
+    Values are parsed as YAML scalars so numbers and booleans keep their types.
+    """
+    out: dict[str, Any] = {}
+    for key, raw in environ.items():
+        if not key.startswith(ENV_PREFIX) or key in ("SHADOWHOUND_CONFIG", "SHADOWHOUND_TOKEN"):
+            continue
+        path = key[len(ENV_PREFIX) :].lower().split("__")
+        if path[0] not in ShadowHoundConfig.model_fields:
+            continue
+        try:
+            value = yaml.safe_load(raw)
+        except yaml.YAMLError:
+            value = raw
+        node = out
+        for part in path[:-1]:
+            node = node.setdefault(part, {})
+        node[path[-1]] = value
+    return out
+
+
+def _merge(base: dict[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
+    merged = dict(base)
+    for key, value in extra.items():
+        if isinstance(value, Mapping) and isinstance(merged.get(key), dict):
+            merged[key] = _merge(merged[key], value)
+        else:
+            merged[key] = value
+    return merged
+
+
+def _explain(exc: ValidationError, source: str) -> str:
+    problems = []
+    for err in exc.errors():
+        where = ".".join(str(p) for p in err["loc"]) or "(top level)"
+        problems.append(f"{where}: {err['msg']} (got {err.get('input')!r})")
+    return f"invalid configuration from {source}: " + "; ".join(problems)
+
+
+def load_config(
+    profile: str | None = None,
+    overrides: Mapping[str, Any] | None = None,
+    environ: Mapping[str, str] | None = None,
+) -> ShadowHoundConfig:
+    """Build the configuration: profile (name or YAML path) < environment < overrides.
+
+    `profile` defaults to $SHADOWHOUND_CONFIG, then to "offline". Raises ConfigError.
+    """
+    env = os.environ if environ is None else environ
+    profile = profile or env.get("SHADOWHOUND_CONFIG") or "offline"
+    data, source = _read_profile(profile)
+    data = _merge(data, _env_overrides(env))
+    data = _merge(data, overrides or {})
+    try:
+        return ShadowHoundConfig.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(_explain(exc, source)) from exc

@@ -1,0 +1,84 @@
+"""Plans: what a planner proposes. Nothing here touches the robot."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+
+@dataclass(frozen=True)
+class SkillCall:
+    """One proposed step: a registered skill name and its (not yet validated) arguments."""
+
+    skill: str
+    args: dict[str, Any] = field(default_factory=dict)
+    label: str = ""  # the words of the request this step came from, for people
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"skill": self.skill, "args": dict(self.args), "label": self.label}
+
+
+@dataclass
+class Usage:
+    """Language-model cost of a mission. All zero for the offline planner."""
+
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+    round_trips: int = 0
+    estimated: bool = False  # True when the server reported no usage and tokens were counted
+
+    @property
+    def total_tokens(self) -> int:
+        return self.prompt_tokens + self.completion_tokens
+
+    def add(self, other: Usage) -> None:
+        self.prompt_tokens += other.prompt_tokens
+        self.completion_tokens += other.completion_tokens
+        self.round_trips += other.round_trips
+        self.estimated = self.estimated or other.estimated
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "prompt_tokens": self.prompt_tokens,
+            "completion_tokens": self.completion_tokens,
+            "total_tokens": self.total_tokens,
+            "round_trips": self.round_trips,
+            "estimated": self.estimated,
+        }
+
+
+@dataclass
+class Plan:
+    """An ordered list of skill calls for one request, plus what the planner assumed."""
+
+    steps: list[SkillCall]
+    text: str = ""
+    notes: list[str] = field(default_factory=list)  # assumptions, e.g. "no distance given: 1 m"
+    usage: Usage = field(default_factory=Usage)
+    planner: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "text": self.text,
+            "planner": self.planner,
+            "steps": [s.to_dict() for s in self.steps],
+            "notes": list(self.notes),
+        }
+
+
+class PlanningError(Exception):
+    """The planner could not turn the request into a plan. The message is for people."""
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        understood: list[str] | None = None,
+        not_understood: list[str] | None = None,
+        usage: Usage | None = None,
+    ) -> None:
+        super().__init__(message)
+        self.message = message
+        self.understood = understood or []
+        self.not_understood = not_understood or []
+        self.usage = usage or Usage()

@@ -1,0 +1,116 @@
+"""What the robot is and where it is: postures, poses, camera frames and the state snapshot."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from enum import Enum
+from typing import Any
+
+
+class Posture(str, Enum):
+    """Body posture of a quadruped. Motion is only possible while standing."""
+
+    STANDING = "standing"
+    SITTING = "sitting"
+    LYING = "lying"
+
+
+def normalize_angle(angle: float) -> float:
+    """Wrap an angle in radians to (-pi, pi] (REP-103)."""
+    wrapped = math.remainder(angle, 2.0 * math.pi)
+    return math.pi if wrapped == -math.pi else wrapped
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    """A planar pose in the odom frame: metres and radians, yaw counter-clockwise positive."""
+
+    x: float = 0.0
+    y: float = 0.0
+    yaw: float = 0.0
+
+    def distance_to(self, x: float, y: float) -> float:
+        return math.hypot(x - self.x, y - self.y)
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """A snapshot of the robot. Velocities are in the body frame (x forward, y left)."""
+
+    x: float = 0.0
+    y: float = 0.0
+    yaw: float = 0.0
+    vx: float = 0.0
+    vy: float = 0.0
+    wz: float = 0.0
+    posture: Posture = Posture.STANDING
+    battery: float = 100.0  # percent
+    distance_travelled: float = 0.0  # metres, path length since the robot started
+    angle_turned: float = 0.0  # radians, absolute rotation since the robot started
+    stamp: float = 0.0  # seconds on the robot's clock
+    estopped: bool = False
+    connected: bool = True
+
+    @property
+    def pose(self) -> Pose2D:
+        return Pose2D(self.x, self.y, self.yaw)
+
+    @property
+    def is_moving(self) -> bool:
+        return abs(self.vx) > 1e-3 or abs(self.vy) > 1e-3 or abs(self.wz) > 1e-3
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form used by the CLI, the web API and diagnostics (rounded for people)."""
+        return {
+            "x": round(self.x, 4),
+            "y": round(self.y, 4),
+            "yaw": round(self.yaw, 4),
+            "yaw_deg": round(math.degrees(self.yaw), 2),
+            "posture": self.posture.value,
+            "battery": round(self.battery, 2),
+            "distance_travelled": round(self.distance_travelled, 4),
+            "angle_turned": round(self.angle_turned, 4),
+            "moving": self.is_moving,
+            "estopped": self.estopped,
+            "connected": self.connected,
+            "stamp": round(self.stamp, 3),
+        }
+
+
+@dataclass(frozen=True)
+class Sighting:
+    """Something in view, as a simulator knows it (ground truth, not a model's guess)."""
+
+    name: str
+    distance: float  # metres from the camera
+    bearing_deg: float  # + left of centre
+
+    def describe(self) -> str:
+        side = "ahead"
+        if self.bearing_deg > 8:
+            side = f"{abs(self.bearing_deg):.0f} degrees to the left"
+        elif self.bearing_deg < -8:
+            side = f"{abs(self.bearing_deg):.0f} degrees to the right"
+        return f"{self.name} about {self.distance:.1f} m {side}"
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """One camera image. `encoding` is jpeg or png (compressed bytes) or rgb8/bgr8/mono8 (raw)."""
+
+    data: bytes
+    width: int
+    height: int
+    encoding: str
+    stamp: float = field(default_factory=time.time)  # wall-clock seconds when received
+    source: str = "camera"
+    sightings: tuple[Sighting, ...] = ()  # only a simulator fills this
+
+    def summary(self) -> dict[str, Any]:
+        out = asdict(self)
+        out.pop("data")
+        out["bytes"] = len(self.data)
+        out["sightings"] = [s.describe() for s in self.sightings]
+        return out
