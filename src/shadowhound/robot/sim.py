@@ -1,0 +1,323 @@
+"""SimRobot: a kinematic Unitree Go2 with its own clock. A real robot for development and tests.
+
+Physics: body-frame velocity follows the command within the Go2's acceleration and velocity
+limits; the pose integrates in the odom frame. Postures form a small state machine:
+
+    standing <-> sitting, standing <-> lying, sitting <-> lying (through standing)
+
+Like the real Go2, velocity commands are *ignored* while sitting or lying (they are recorded
+with accepted=False); the motion skills stand the robot up first (MotionConfig.auto_stand).
+Tricks run only while standing and never translate the robot.
+
+Clock: with time_scale 0 simulated time advances only when the controller sleeps, as fast
+as the CPU allows; with time_scale s > 0 each simulated second takes s real seconds and the
+simulation also advances while idle.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from ..config import SimConfig
+from ..state import CameraFrame, Posture, RobotState, normalize_angle
+from .base import RobotError
+from .go2_api import TRICKS
+
+_SUBSTEP = 0.01  # seconds of physics per integration step
+
+_POSTURE_SECONDS = {
+    (Posture.SITTING, Posture.STANDING): 1.0,
+    (Posture.STANDING, Posture.SITTING): 1.0,
+    (Posture.LYING, Posture.STANDING): 1.5,
+    (Posture.STANDING, Posture.LYING): 1.5,
+}
+
+
+@dataclass(frozen=True)
+class RobotCommand:
+    """One command the robot received, as recorded by the simulator."""
+
+    stamp: float
+    kind: str  # velocity | stop | posture | trick
+    value: Any
+    accepted: bool = True
+    note: str = ""
+
+
+@dataclass
+class _Counters:
+    motion_commands: int = 0  # accepted non-zero velocity commands
+    ignored_motion: int = 0
+    tricks: int = 0
+    postures: int = 0
+    stops: int = 0
+    by_kind: dict[str, int] = field(default_factory=dict)
+
+
+class SimRobot:
+    """A simulated Go2. `SimRobot()` starts standing at the origin with a full battery."""
+
+    def __init__(
+        self,
+        config: SimConfig | None = None,
+        *,
+        time_scale: float | None = None,
+        world: Any = None,
+        name: str = "sim-go2",
+    ) -> None:
+        self.config = config or SimConfig()
+        if time_scale is not None:
+            self.config = self.config.model_copy(update={"time_scale": float(time_scale)})
+        if self.config.time_scale < 0 or not math.isfinite(self.config.time_scale):
+            raise ValueError("time_scale must be a finite number >= 0 (0 = as fast as possible)")
+        self.name = name
+        self._world = world
+        self._lock = threading.RLock()
+        self._wake = threading.Event()
+        self._state = RobotState()
+        self._cmd = (0.0, 0.0, 0.0)
+        self._sim_time = 0.0
+        self._wall_origin = time.monotonic()
+        self._commands: deque[RobotCommand] = deque(maxlen=self.config.command_log_size)
+        self._counters = _Counters()
+        self._closed = False
+
+    # -- clock ---------------------------------------------------------------------------
+
+    @property
+    def time_scale(self) -> float:
+        return self.config.time_scale
+
+    def now(self) -> float:
+        with self._lock:
+            self._catch_up()
+            return self._sim_time
+
+    def sleep(self, seconds: float) -> None:
+        if seconds <= 0:
+            return
+        if self.time_scale == 0:
+            with self._lock:
+                self._advance(seconds)
+            return
+        # Real-time mode: wait on an event so stop() from another thread wakes the loop early.
+        self._wake.clear()
+        self._wake.wait(seconds * self.time_scale)
+        with self._lock:
+            self._catch_up()
+
+    def _catch_up(self) -> None:
+        if self.time_scale > 0:
+            target = (time.monotonic() - self._wall_origin) / self.time_scale
+            if target > self._sim_time:
+                self._advance(target - self._sim_time)
+
+    # -- physics -------------------------------------------------------------------------
+
+    def _advance(self, seconds: float) -> None:
+        remaining = seconds
+        while remaining > 1e-12:
+            dt = min(_SUBSTEP, remaining)
+            self._integrate(dt)
+            remaining -= dt
+
+    def _integrate(self, dt: float) -> None:
+        cfg = self.config
+        s = self._state
+        standing = s.posture is Posture.STANDING and not s.estopped
+        tx, ty, tw = self._cmd if standing else (0.0, 0.0, 0.0)
+        vx = _approach(s.vx, tx, cfg.linear_accel * dt)
+        vy = _approach(s.vy, ty, cfg.linear_accel * dt)
+        wz = _approach(s.wz, tw, cfg.angular_accel * dt)
+        # Integrate with the mean velocity over the substep, heading at the midpoint.
+        mvx, mvy, mwz = (s.vx + vx) / 2, (s.vy + vy) / 2, (s.wz + wz) / 2
+        mid_yaw = s.yaw + mwz * dt / 2
+        c, si = math.cos(mid_yaw), math.sin(mid_yaw)
+        dx = (mvx * c - mvy * si) * dt
+        dy = (mvx * si + mvy * c) * dt
+        step = math.hypot(dx, dy)
+        drain = cfg.battery_drain_idle * dt + cfg.battery_drain_per_metre * step
+        self._state = replace(
+            s,
+            x=s.x + dx,
+            y=s.y + dy,
+            yaw=normalize_angle(s.yaw + mwz * dt),
+            vx=vx,
+            vy=vy,
+            wz=wz,
+            battery=max(0.0, s.battery - drain),
+            distance_travelled=s.distance_travelled + step,
+            angle_turned=s.angle_turned + abs(mwz * dt),
+            stamp=self._sim_time + dt,
+        )
+        self._sim_time += dt
+
+    # -- Robot protocol ------------------------------------------------------------------
+
+    def get_state(self) -> RobotState:
+        with self._lock:
+            self._catch_up()
+            return replace(self._state, stamp=self._sim_time)
+
+    def send_velocity(self, vx: float, vy: float, wz: float) -> None:
+        values = (float(vx), float(vy), float(wz))
+        if not all(math.isfinite(v) for v in values):
+            raise RobotError(f"velocity must be finite numbers, got {values}")
+        cfg = self.config
+        clamped = (
+            _clamp(values[0], cfg.max_linear_speed),
+            _clamp(values[1], cfg.max_linear_speed),
+            _clamp(values[2], cfg.max_angular_speed),
+        )
+        with self._lock:
+            self._catch_up()
+            posture = self._state.posture
+            accepted = posture is Posture.STANDING and not self._state.estopped
+            note = "" if accepted else f"ignored: robot is {posture.value}"
+            if self._state.estopped:
+                note = "ignored: e-stop latched"
+            self._record("velocity", clamped, accepted, note)
+            if accepted:
+                self._cmd = clamped
+                if any(clamped):
+                    self._counters.motion_commands += 1
+            else:
+                self._counters.ignored_motion += int(any(clamped))
+
+    def stop(self) -> None:
+        with self._lock:
+            self._catch_up()
+            self._cmd = (0.0, 0.0, 0.0)
+            self._counters.stops += 1
+            self._record("stop", None, True)
+        self._wake.set()
+
+    def emergency_stop(self) -> None:
+        """Hard stop: velocity to zero at once and further motion ignored until released."""
+        with self._lock:
+            self._catch_up()
+            self._cmd = (0.0, 0.0, 0.0)
+            self._state = replace(self._state, vx=0.0, vy=0.0, wz=0.0, estopped=True)
+            self._record("estop", None, True)
+        self._wake.set()
+
+    def release_estop(self) -> None:
+        with self._lock:
+            self._state = replace(self._state, estopped=False)
+            self._record("estop_release", None, True)
+
+    def set_posture(self, posture: Posture) -> None:
+        posture = Posture(posture)
+        with self._lock:
+            self._catch_up()
+            current = self._state.posture
+            if self._state.estopped:
+                self._record("posture", posture.value, False, "ignored: e-stop latched")
+                raise RobotError("e-stop is latched; release it before changing posture")
+            self._record("posture", posture.value, True)
+            self._counters.postures += 1
+            self._cmd = (0.0, 0.0, 0.0)
+        if current is posture:
+            return
+        path = [current, posture]
+        if Posture.STANDING not in path:  # sitting <-> lying goes through standing
+            path = [current, Posture.STANDING, posture]
+        for a, b in zip(path, path[1:]):
+            self._settle()
+            self.sleep(_POSTURE_SECONDS[(a, b)])
+            with self._lock:
+                self._state = replace(self._state, posture=b)
+
+    def perform(self, trick: str) -> None:
+        info = TRICKS.get(trick)
+        with self._lock:
+            self._catch_up()
+            if info is None:
+                self._record("trick", trick, False, "unknown trick")
+                raise RobotError(f"unknown trick {trick!r}; known: {', '.join(TRICKS)}")
+            if self._state.estopped or self._state.posture is not Posture.STANDING:
+                why = "e-stop latched" if self._state.estopped else self._state.posture.value
+                self._record("trick", trick, False, f"ignored: {why}")
+                raise RobotError(f"cannot perform {trick} while {why}; stand up first")
+            self._record("trick", trick, True)
+            self._counters.tricks += 1
+            self._cmd = (0.0, 0.0, 0.0)
+        self.sleep(info.duration)
+
+    def get_camera_frame(self) -> CameraFrame | None:
+        from . import scene  # rendering is only needed when someone looks
+
+        world = self._world if self._world is not None else scene.DEFAULT_WORLD
+        state = self.get_state()
+        return scene.camera_frame(
+            world,
+            state.pose,
+            width=self.config.camera_width,
+            height=self.config.camera_height,
+        )
+
+    def close(self) -> None:
+        self.stop()
+        self._closed = True
+
+    # -- inspection (for tests, eval and dashboards) --------------------------------------
+
+    @property
+    def commands(self) -> list[RobotCommand]:
+        """Every command received (bounded by SimConfig.command_log_size), oldest first."""
+        with self._lock:
+            return list(self._commands)
+
+    @property
+    def received_motion(self) -> bool:
+        """True when any non-zero velocity command was accepted (the robot was asked to move)."""
+        return self._counters.motion_commands > 0
+
+    @property
+    def counters(self) -> dict[str, int]:
+        with self._lock:
+            c = self._counters
+            return {
+                "motion_commands": c.motion_commands,
+                "ignored_motion": c.ignored_motion,
+                "tricks": c.tricks,
+                "postures": c.postures,
+                "stops": c.stops,
+                **c.by_kind,
+            }
+
+    def reset(self, x: float = 0.0, y: float = 0.0, yaw: float = 0.0) -> None:
+        """Put the robot back at a pose, standing, stopped, with a full battery."""
+        with self._lock:
+            self._cmd = (0.0, 0.0, 0.0)
+            self._state = RobotState(x=x, y=y, yaw=normalize_angle(yaw), stamp=self._sim_time)
+
+    def _settle(self) -> None:
+        """Let the body come to rest (bounded) before a posture change."""
+        for _ in range(200):
+            if not self.get_state().is_moving:
+                return
+            self.sleep(_SUBSTEP * 5)
+
+    def _record(self, kind: str, value: Any, accepted: bool, note: str = "") -> None:
+        self._commands.append(RobotCommand(self._sim_time, kind, value, accepted, note))
+        self._counters.by_kind[kind] = self._counters.by_kind.get(kind, 0) + 1
+
+
+MockRobot = SimRobot
+"""Alias kept from the original ShadowHound design: the simulator is the development robot."""
+
+
+def _approach(current: float, target: float, max_delta: float) -> float:
+    if target > current:
+        return min(target, current + max_delta)
+    return max(target, current - max_delta)
+
+
+def _clamp(value: float, limit: float) -> float:
+    return max(-limit, min(limit, value))

@@ -1,0 +1,129 @@
+import math
+import threading
+import time
+
+import pytest
+
+from shadowhound import Posture, RobotError, SimRobot
+from shadowhound.config import SimConfig
+
+
+def test_starts_standing_at_origin_with_full_battery(robot):
+    st = robot.get_state()
+    assert (st.x, st.y, st.yaw) == (0.0, 0.0, 0.0)
+    assert st.posture is Posture.STANDING and st.battery == 100.0
+
+
+def test_velocity_integrates_in_odom_frame(robot):
+    robot.reset(yaw=math.pi / 2)  # facing +y
+    robot.send_velocity(0.5, 0.0, 0.0)
+    robot.sleep(3.0)
+    st = robot.get_state()
+    assert abs(st.x) < 1e-6
+    # 0.5 s ramp at 1 m/s^2 covers 0.125 m, then 2.5 s at full speed.
+    assert st.y == pytest.approx(0.125 + 1.25, abs=1e-3)
+    assert st.distance_travelled == pytest.approx(st.y, abs=1e-6)
+
+
+def test_acceleration_and_speed_limits(robot):
+    robot.send_velocity(5.0, 0.0, 9.0)  # beyond the Go2's hardware limits
+    robot.sleep(0.1)
+    assert robot.get_state().vx == pytest.approx(0.1, abs=1e-9)  # 1 m/s^2 for 0.1 s
+    robot.sleep(5.0)
+    st = robot.get_state()
+    assert st.vx == pytest.approx(1.0) and st.wz == pytest.approx(2.0)
+
+
+def test_motion_ignored_while_sitting_and_recorded(robot):
+    robot.set_posture(Posture.SITTING)
+    robot.send_velocity(0.3, 0.0, 0.0)
+    robot.sleep(2.0)
+    assert robot.get_state().distance_travelled == 0.0
+    last = robot.commands[-1]
+    assert last.kind == "velocity" and not last.accepted and "sitting" in last.note
+    assert not robot.received_motion
+
+
+def test_posture_state_machine_goes_through_standing(robot):
+    robot.set_posture(Posture.SITTING)
+    t0 = robot.now()
+    robot.set_posture(Posture.LYING)
+    assert robot.get_state().posture is Posture.LYING
+    assert robot.now() - t0 == pytest.approx(1.0 + 1.5, abs=0.02)  # sit->stand->lie
+
+
+def test_tricks_need_standing_and_do_not_translate(robot):
+    robot.perform("hello")
+    assert robot.get_state().distance_travelled == 0.0
+    robot.set_posture(Posture.SITTING)
+    with pytest.raises(RobotError, match="stand up first"):
+        robot.perform("hello")
+    with pytest.raises(RobotError, match="unknown trick"):
+        robot.perform("moonwalk-ish")
+
+
+def test_battery_drains_with_time_and_distance(robot):
+    robot.sleep(100.0)
+    idle = 100.0 - robot.get_state().battery
+    assert idle == pytest.approx(1.0, rel=1e-6)
+    robot.send_velocity(1.0, 0, 0)
+    robot.sleep(10.0)
+    assert 100.0 - robot.get_state().battery > idle + 0.3
+
+
+def test_emergency_stop_latches(robot):
+    robot.send_velocity(0.5, 0, 0)
+    robot.sleep(1.0)
+    robot.emergency_stop()
+    assert robot.get_state().vx == 0.0
+    robot.send_velocity(0.5, 0, 0)
+    robot.sleep(1.0)
+    x = robot.get_state().x
+    robot.sleep(1.0)
+    assert robot.get_state().x == x
+    robot.release_estop()
+    robot.send_velocity(0.5, 0, 0)
+    robot.sleep(1.0)
+    assert robot.get_state().x > x
+
+
+def test_rejects_non_finite_velocity(robot):
+    with pytest.raises(RobotError, match="finite"):
+        robot.send_velocity(float("nan"), 0, 0)
+    assert robot.get_state().vx == 0.0
+
+
+def test_real_time_scale_follows_wall_clock():
+    robot = SimRobot(time_scale=1.0)
+    robot.send_velocity(0.2, 0, 0)
+    time.sleep(0.3)
+    assert 0.2 < robot.now() < 5.0
+    assert robot.get_state().x > 0
+
+
+def test_stop_from_another_thread_wakes_sleep():
+    robot = SimRobot(time_scale=1.0)
+    threading.Timer(0.05, robot.stop).start()
+    t0 = time.monotonic()
+    robot.sleep(5.0)
+    assert time.monotonic() - t0 < 4.0
+
+
+def test_camera_frame_shows_the_world(robot):
+    frame = robot.get_camera_frame()
+    assert frame.encoding == "png" and frame.data.startswith(b"\x89PNG")
+    assert (frame.width, frame.height) == (160, 120)
+    assert frame.sightings and frame.sightings[0].name == "red ball"
+
+
+def test_command_log_is_bounded():
+    robot = SimRobot(SimConfig(command_log_size=10))
+    for _ in range(50):
+        robot.send_velocity(0.1, 0, 0)
+    assert len(robot.commands) == 10
+    assert robot.counters["motion_commands"] == 50
+
+
+def test_invalid_time_scale():
+    with pytest.raises(ValueError, match="time_scale"):
+        SimRobot(time_scale=float("inf"))
