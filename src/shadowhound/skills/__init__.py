@@ -1,0 +1,29 @@
+"""Skills: typed robot capabilities in one registry."""
+
+from __future__ import annotations
+
+from . import body, nav, sense
+from .context import MissionCancelled, PlanEnv, PlanProblem, SkillContext, SkillError, SkillTimeout
+from .registry import NoArgs, Skill, SkillArgs, SkillRegistry, SkillValidationError, ValidatedCall
+
+
+def default_registry() -> SkillRegistry:
+    """A fresh registry with every built-in skill."""
+    return SkillRegistry([*nav.SKILLS, *body.SKILLS, *sense.SKILLS])
+
+
+__all__ = [
+    "MissionCancelled",
+    "NoArgs",
+    "PlanEnv",
+    "PlanProblem",
+    "Skill",
+    "SkillArgs",
+    "SkillContext",
+    "SkillError",
+    "SkillRegistry",
+    "SkillTimeout",
+    "SkillValidationError",
+    "ValidatedCall",
+    "default_registry",
+]

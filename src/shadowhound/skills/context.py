@@ -1,0 +1,118 @@
+"""What a running skill can use: the robot, the limits, the clock, cancellation and the camera."""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from ..config import ShadowHoundConfig
+from ..robot.base import Robot
+from ..state import CameraFrame, Pose2D, Posture
+
+
+class SkillError(Exception):
+    """A skill could not do what it was asked. The message is for people."""
+
+
+class SkillTimeout(SkillError):
+    """A skill ran past its time-out on the robot's clock."""
+
+
+class MissionCancelled(Exception):
+    """The mission was cancelled or the e-stop was pressed while a skill ran."""
+
+
+class PlanProblem(ValueError):
+    """A step is valid in form but cannot be done here (unknown place, limit exceeded)."""
+
+
+@dataclass
+class PlanEnv:
+    """What predictions and checks know before anything moves."""
+
+    config: ShadowHoundConfig
+    mission_start: Pose2D = field(default_factory=Pose2D)
+
+    def resolve_place(self, name: str) -> tuple[float, float]:
+        key = " ".join(name.strip().lower().split())
+        if key.startswith("the "):
+            key = key[4:]
+        if key in self.config.places:
+            return self.config.places[key]
+        if key in ("start", "mission start", "where i started", "starting point"):
+            return (self.mission_start.x, self.mission_start.y)
+        if key in ("home", "origin"):
+            return (0.0, 0.0)
+        known = ", ".join([*self.config.places, "start", "home"])
+        raise PlanProblem(f"unknown place {name!r}; known places: {known}")
+
+
+class SkillContext:
+    """Handed to every running skill. `tick()` is the control loop's heartbeat."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        env: PlanEnv,
+        cancelled: threading.Event,
+        *,
+        camera: Callable[[], CameraFrame | None] = lambda: None,
+        vision: Callable[[CameraFrame, str], str] | None = None,
+        on_progress: Callable[[float], None] = lambda _fraction: None,
+    ) -> None:
+        self.robot = robot
+        self.env = env
+        self.config = env.config
+        self._cancelled = cancelled
+        self._camera = camera
+        self.vision = vision
+        self.on_progress = on_progress
+        self.period = 1.0 / self.config.motion.control_rate_hz
+        self.deadline = math.inf
+        self.notes: list[str] = []
+
+    def start_clock(self, timeout: float) -> None:
+        self.deadline = self.robot.now() + timeout
+        self._timeout = timeout
+
+    def check(self) -> None:
+        """Raise if the mission was cancelled or the skill ran out of time."""
+        if self._cancelled.is_set():
+            raise MissionCancelled("mission cancelled")
+        if self.robot.now() > self.deadline:
+            raise SkillTimeout(f"timed out after {self._timeout:.1f} s (robot clock)")
+
+    def tick(self) -> None:
+        """Wait one control period, then check cancellation and the time-out."""
+        self.robot.sleep(self.period)
+        self.check()
+
+    def drive(self, vx: float, vy: float, wz: float) -> None:
+        """Send body-frame velocity within the safety caps (defence in depth behind the plan check)."""
+        s = self.config.safety
+        vx, vy = _cap_vector(vx, vy, s.max_linear_speed)
+        wz = max(-s.max_angular_speed, min(s.max_angular_speed, wz))
+        self.check()
+        self.robot.send_velocity(vx, vy, wz)
+
+    def ensure_standing(self) -> None:
+        posture = self.robot.get_state().posture
+        if posture is Posture.STANDING:
+            return
+        if not self.config.motion.auto_stand:
+            raise SkillError(f"the robot is {posture.value}; stand up first (body.stand)")
+        self.robot.set_posture(Posture.STANDING)
+        self.notes.append(f"stood up first (was {posture.value})")
+        self.check()
+
+    def camera_frame(self) -> CameraFrame | None:
+        return self._camera()
+
+
+def _cap_vector(vx: float, vy: float, limit: float) -> tuple[float, float]:
+    norm = math.hypot(vx, vy)
+    if norm <= limit or norm == 0:
+        return vx, vy
+    return vx * limit / norm, vy * limit / norm

@@ -1,0 +1,134 @@
+"""Closed-loop motion on the measured pose: straight lines, rotations, go-to-point.
+
+Every loop commands velocity, lets one control period pass, then measures the pose again;
+distance and angle are measured, never assumed from time. Velocity follows a ramp profile
+(v = sqrt(2 a d) near the goal) and a final proportional approach, so the robot stops on the
+target without overshoot. A loop fails if the robot makes no progress for `stall_timeout`.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..state import normalize_angle
+from .context import SkillContext, SkillError
+
+_SETTLE_SPEED = 0.01
+
+
+def straight_timeout(distance: float, speed: float, accel: float) -> float:
+    return abs(distance) / speed + 2 * speed / accel + 5.0
+
+
+def rotate_timeout(angle: float, speed: float, accel: float) -> float:
+    return abs(angle) / speed + 2 * speed / accel + 5.0
+
+
+def _profile(error: float, v_max: float, accel: float, period: float) -> float:
+    """Speed toward a goal `error` away, never faster than `v_max`.
+
+    The command is held for one control period and then the robot must still be able to brake
+    at `accel`: v * period + v^2 / (2 accel) <= |error|. Solving for v gives the ramp below,
+    which also shrinks smoothly to zero at the goal (no overshoot, no chatter).
+    """
+    magnitude = accel * (math.sqrt(period * period + 2 * abs(error) / accel) - period)
+    return math.copysign(min(v_max, magnitude), error)
+
+
+def _arrived(error: float, speed: float, tolerance: float, period: float) -> bool:
+    """Close enough, and slow enough that stopping now keeps the robot within tolerance."""
+    return abs(error) < tolerance and abs(speed) * period < tolerance
+
+
+def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
+    """Translate to (tx, ty) given in the body frame at the start, holding the heading.
+
+    Returns the distance actually covered (measured).
+    """
+    robot = ctx.robot
+    m = ctx.config.motion
+    start = robot.get_state()
+    c, s = math.cos(start.yaw), math.sin(start.yaw)
+    goal = math.hypot(tx, ty)
+    best, best_time = math.inf, robot.now()
+    while True:
+        st = robot.get_state()
+        dx, dy = st.x - start.x, st.y - start.y
+        lx, ly = dx * c + dy * s, -dx * s + dy * c  # displacement in the start frame
+        ex, ey = tx - lx, ty - ly
+        error = math.hypot(ex, ey)
+        if _arrived(error, math.hypot(st.vx, st.vy), m.position_tolerance, ctx.period):
+            break
+        if error < best - 1e-3:
+            best, best_time = error, robot.now()
+        elif robot.now() - best_time > m.stall_timeout:
+            robot.stop()
+            raise SkillError(
+                f"no progress for {m.stall_timeout:.1f} s with {error:.2f} m to go: "
+                "the robot is blocked, stalled or ignoring velocity commands"
+            )
+        v = abs(_profile(error, speed, m.linear_accel, ctx.period))
+        yaw_error = normalize_angle(start.yaw - st.yaw)
+        # Body-frame command toward the goal; the start frame and the body differ by yaw_error.
+        bx, by = ex / error * v, ey / error * v
+        cy, sy = math.cos(yaw_error), math.sin(yaw_error)
+        ctx.drive(bx * cy - by * sy, bx * sy + by * cy, _profile(yaw_error, 0.5, 2.0, ctx.period))
+        ctx.on_progress(min(1.0, 1.0 - error / goal) if goal else 1.0)
+        ctx.tick()
+    settle(ctx)
+    end = robot.get_state()
+    return math.hypot(end.x - start.x, end.y - start.y)
+
+
+def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
+    """Turn in place by `angle` radians (+ counter-clockwise). Returns the measured turn."""
+    robot = ctx.robot
+    m = ctx.config.motion
+    last_yaw = robot.get_state().yaw
+    turned = 0.0
+    best, best_time = math.inf, robot.now()
+    while True:
+        st = robot.get_state()
+        turned += normalize_angle(st.yaw - last_yaw)  # unwrapped, so 360 degree turns work
+        last_yaw = st.yaw
+        error = angle - turned
+        if _arrived(error, st.wz, m.yaw_tolerance, ctx.period):
+            break
+        if abs(error) < best - 1e-3:
+            best, best_time = abs(error), robot.now()
+        elif robot.now() - best_time > m.stall_timeout:
+            robot.stop()
+            raise SkillError(
+                f"no progress for {m.stall_timeout:.1f} s with {math.degrees(error):.0f} degrees "
+                "to go: the robot is blocked, stalled or ignoring velocity commands"
+            )
+        ctx.drive(0.0, 0.0, _profile(error, speed, m.angular_accel, ctx.period))
+        ctx.on_progress(min(1.0, 1.0 - abs(error) / abs(angle)) if angle else 1.0)
+        ctx.tick()
+    settle(ctx)
+    yaw = robot.get_state().yaw
+    return turned + normalize_angle(yaw - last_yaw)
+
+
+def go_to(ctx: SkillContext, x: float, y: float, linear: float, angular: float) -> float:
+    """Face the point (x, y) in the odom frame, then walk to it. Returns metres covered."""
+    st = ctx.robot.get_state()
+    distance = math.hypot(x - st.x, y - st.y)
+    if distance < ctx.config.motion.position_tolerance:
+        return 0.0
+    bearing = math.atan2(y - st.y, x - st.x)
+    rotate(ctx, normalize_angle(bearing - st.yaw), angular)
+    st = ctx.robot.get_state()
+    c, s = math.cos(st.yaw), math.sin(st.yaw)
+    dx, dy = x - st.x, y - st.y
+    return drive_local(ctx, dx * c + dy * s, -dx * s + dy * c, linear)
+
+
+def settle(ctx: SkillContext) -> None:
+    """Command zero and wait (bounded) until the robot has come to rest."""
+    ctx.drive(0.0, 0.0, 0.0)
+    for _ in range(int(2.0 / ctx.period) + 1):
+        st = ctx.robot.get_state()
+        if max(abs(st.vx), abs(st.vy), abs(st.wz)) < _SETTLE_SPEED:
+            return
+        ctx.tick()

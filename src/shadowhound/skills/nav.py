@@ -1,0 +1,244 @@
+"""Navigation skills: nav.move, nav.strafe, nav.rotate, nav.goto, nav.patrol, nav.stop."""
+
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+from pydantic import Field, model_validator
+
+from ..state import Pose2D, normalize_angle
+from . import motion
+from .context import PlanEnv, SkillContext
+from .registry import NoArgs, Skill, SkillArgs
+
+# Schema ranges are sanity bounds on the form of a request; the configured safety limits
+# (SafetyConfig) are checked on top of them before anything moves.
+_MAX_DISTANCE = 1000.0
+
+
+class MoveArgs(SkillArgs):
+    distance: float = Field(
+        ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres; + forward, - backward"
+    )
+    speed: Optional[float] = Field(None, gt=0, le=1.5, description="m/s; default from config")
+
+
+class StrafeArgs(SkillArgs):
+    distance: float = Field(
+        ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres sideways; + left, - right"
+    )
+    speed: Optional[float] = Field(None, gt=0, le=1.5, description="m/s; default from config")
+
+
+class RotateArgs(SkillArgs):
+    degrees: float = Field(
+        ge=-3600, le=3600, description="degrees; + counter-clockwise (left), - clockwise (right)"
+    )
+    speed: Optional[float] = Field(None, gt=0, le=3.0, description="rad/s; default from config")
+
+
+class GotoArgs(SkillArgs):
+    x: Optional[float] = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
+    y: Optional[float] = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
+    place: Optional[str] = Field(
+        None, min_length=1, max_length=100, description="a named place, 'start' or 'home'"
+    )
+    heading_degrees: Optional[float] = Field(
+        None, ge=-360, le=360, description="final heading in degrees (odom); default: keep"
+    )
+    speed: Optional[float] = Field(None, gt=0, le=1.5, description="m/s; default from config")
+
+    @model_validator(mode="after")
+    def _target(self) -> GotoArgs:
+        has_xy = self.x is not None or self.y is not None
+        if has_xy and self.place is not None:
+            raise ValueError("give either x and y, or a place, not both")
+        if has_xy and (self.x is None or self.y is None):
+            raise ValueError("give both x and y (metres in the odom frame)")
+        if not has_xy and self.place is None:
+            raise ValueError("give a target: x and y in metres, or a place name")
+        return self
+
+
+class PatrolArgs(SkillArgs):
+    laps: int = Field(1, ge=1, le=20, description="how many times to walk the patrol route")
+
+
+def _linear(ctx_or_env: SkillContext | PlanEnv, speed: float | None) -> float:
+    return speed or ctx_or_env.config.motion.default_linear_speed
+
+
+def _angular(ctx_or_env: SkillContext | PlanEnv, speed: float | None) -> float:
+    return speed or ctx_or_env.config.motion.default_angular_speed
+
+
+def _offset(pose: Pose2D, forward: float, left: float) -> Pose2D:
+    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+    return Pose2D(pose.x + forward * c - left * s, pose.y + forward * s + left * c, pose.yaw)
+
+
+# -- nav.move / nav.strafe -------------------------------------------------------------------
+
+
+def _run_move(ctx: SkillContext, a: MoveArgs) -> str:
+    ctx.ensure_standing()
+    covered = motion.drive_local(ctx, a.distance, 0.0, _linear(ctx, a.speed))
+    return f"moved {covered:.2f} m {'forward' if a.distance >= 0 else 'backward'}"
+
+
+def _run_strafe(ctx: SkillContext, a: StrafeArgs) -> str:
+    ctx.ensure_standing()
+    covered = motion.drive_local(ctx, 0.0, a.distance, _linear(ctx, a.speed))
+    return f"stepped {covered:.2f} m to the {'left' if a.distance >= 0 else 'right'}"
+
+
+def _straight_timeout(a: MoveArgs | StrafeArgs, env: PlanEnv) -> float:
+    return motion.straight_timeout(a.distance, _linear(env, a.speed), env.config.motion.linear_accel)
+
+
+# -- nav.rotate ------------------------------------------------------------------------------
+
+
+def _run_rotate(ctx: SkillContext, a: RotateArgs) -> str:
+    ctx.ensure_standing()
+    turned = motion.rotate(ctx, math.radians(a.degrees), _angular(ctx, a.speed))
+    side = "left (counter-clockwise)" if a.degrees >= 0 else "right (clockwise)"
+    return f"turned {abs(math.degrees(turned)):.1f} degrees {side}"
+
+
+def _rotate_timeout(a: RotateArgs, env: PlanEnv) -> float:
+    return motion.rotate_timeout(
+        math.radians(a.degrees), _angular(env, a.speed), env.config.motion.angular_accel
+    )
+
+
+# -- nav.goto --------------------------------------------------------------------------------
+
+
+def _goto_target(a: GotoArgs, env: PlanEnv) -> tuple[float, float]:
+    if a.place is not None:
+        return env.resolve_place(a.place)
+    assert a.x is not None and a.y is not None  # guaranteed by GotoArgs._target
+    return (a.x, a.y)
+
+
+def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
+    ctx.ensure_standing()
+    x, y = _goto_target(a, ctx.env)
+    motion.go_to(ctx, x, y, _linear(ctx, a.speed), _angular(ctx, None))
+    if a.heading_degrees is not None:
+        yaw = ctx.robot.get_state().yaw
+        turn = normalize_angle(math.radians(a.heading_degrees) - yaw)
+        motion.rotate(ctx, turn, _angular(ctx, None))
+    st = ctx.robot.get_state()
+    names = {None: "the point", "start": "where the mission started", "home": "home"}
+    where = names.get(a.place, f"the {a.place}")
+    return f"reached {where} at x={st.x:.2f} m, y={st.y:.2f} m"
+
+
+def _predict_goto(pose: Pose2D, a: GotoArgs, env: PlanEnv) -> list[Pose2D]:
+    x, y = _goto_target(a, env)
+    yaw = math.atan2(y - pose.y, x - pose.x) if pose.distance_to(x, y) > 1e-6 else pose.yaw
+    if a.heading_degrees is not None:
+        yaw = normalize_angle(math.radians(a.heading_degrees))
+    return [Pose2D(x, y, yaw)]
+
+
+def _goto_timeout(a: GotoArgs, env: PlanEnv) -> float:
+    # The distance is not known before the pose is; bound it by the geofence diameter.
+    reach = 2 * env.config.safety.geofence_radius
+    m = env.config.motion
+    return motion.straight_timeout(reach, _linear(env, a.speed), m.linear_accel) + (
+        motion.rotate_timeout(2 * math.pi, _angular(env, None), m.angular_accel)
+    )
+
+
+# -- nav.patrol ------------------------------------------------------------------------------
+
+
+def _patrol_points(pose: Pose2D, env: PlanEnv) -> list[tuple[float, float]]:
+    return [*env.config.patrol_route, (pose.x, pose.y)]
+
+
+def _run_patrol(ctx: SkillContext, a: PatrolArgs) -> str:
+    ctx.ensure_standing()
+    st = ctx.robot.get_state()
+    points = _patrol_points(st.pose, ctx.env)
+    walked = 0.0
+    for _ in range(a.laps):
+        for x, y in points:
+            walked += motion.go_to(ctx, x, y, _linear(ctx, None), _angular(ctx, None))
+    laps = "lap" if a.laps == 1 else "laps"
+    return f"patrolled {a.laps} {laps} of {len(points)} waypoints ({walked:.1f} m) and returned"
+
+
+def _predict_patrol(pose: Pose2D, a: PatrolArgs, env: PlanEnv) -> list[Pose2D]:
+    return [Pose2D(x, y, pose.yaw) for x, y in _patrol_points(pose, env)]
+
+
+def _patrol_timeout(a: PatrolArgs, env: PlanEnv) -> float:
+    legs = len(env.config.patrol_route) + 1
+    return a.laps * legs * _goto_timeout(GotoArgs(x=0.0, y=0.0), env)
+
+
+# -- nav.stop --------------------------------------------------------------------------------
+
+
+def _run_stop(ctx: SkillContext, _a: NoArgs) -> str:
+    ctx.robot.stop()
+    motion.settle(ctx)
+    return "stopped"
+
+
+SKILLS = (
+    Skill(
+        "nav.move",
+        "Walk straight forward (+) or backward (-) by a distance in metres, keeping the heading.",
+        MoveArgs,
+        _run_move,
+        timeout=_straight_timeout,
+        moves=True,
+        predict=lambda p, a, env: [_offset(p, a.distance, 0.0)],
+    ),
+    Skill(
+        "nav.strafe",
+        "Step sideways left (+) or right (-) by a distance in metres without turning.",
+        StrafeArgs,
+        _run_strafe,
+        timeout=_straight_timeout,
+        moves=True,
+        predict=lambda p, a, env: [_offset(p, 0.0, a.distance)],
+    ),
+    Skill(
+        "nav.rotate",
+        "Turn in place by an angle in degrees: + counter-clockwise (left), - clockwise (right).",
+        RotateArgs,
+        _run_rotate,
+        timeout=_rotate_timeout,
+        moves=True,
+        predict=lambda p, a, env: [
+            Pose2D(p.x, p.y, normalize_angle(p.yaw + math.radians(a.degrees)))
+        ],
+    ),
+    Skill(
+        "nav.goto",
+        "Walk to a point (x, y in metres, odom frame) or to a named place "
+        "('start' = where this mission began, 'home' = the origin).",
+        GotoArgs,
+        _run_goto,
+        timeout=_goto_timeout,
+        moves=True,
+        predict=_predict_goto,
+    ),
+    Skill(
+        "nav.patrol",
+        "Walk the configured patrol route and return to where the patrol started.",
+        PatrolArgs,
+        _run_patrol,
+        timeout=_patrol_timeout,
+        moves=True,
+        predict=_predict_patrol,
+    ),
+    Skill("nav.stop", "Stop moving and stand still.", NoArgs, _run_stop, timeout=5.0),
+)

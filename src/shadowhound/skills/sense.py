@@ -1,0 +1,106 @@
+"""Perception and system skills: describe the view, look around, status, wait."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Optional
+
+from pydantic import Field
+
+from ..state import CameraFrame
+from . import motion
+from .context import SkillContext
+from .registry import NoArgs, Skill, SkillArgs
+
+
+class DescribeArgs(SkillArgs):
+    question: Optional[str] = Field(
+        None, max_length=500, description="what to look for; default: describe the view"
+    )
+
+
+class WaitArgs(SkillArgs):
+    seconds: float = Field(ge=0, le=3600, description="seconds to stand still")
+
+
+def describe_frame(
+    frame: CameraFrame | None,
+    question: str | None,
+    vision: Callable[[CameraFrame, str], str] | None = None,
+) -> str:
+    """Answer from the latest frame: with a vision model if one is configured, else honestly."""
+    if frame is None:
+        return "I have no camera image yet, so I cannot say what I see."
+    if vision is not None:
+        return vision(frame, question or "Describe what you see.")
+    age = max(0.0, time.time() - frame.stamp)
+    parts = [
+        "No vision model is configured, so I cannot interpret the image myself. "
+        f"I have a {frame.width}x{frame.height} {frame.encoding.upper()} frame from the "
+        f"{frame.source}, {age:.1f} s old."
+    ]
+    if frame.sightings:
+        seen = "; ".join(s.describe() for s in frame.sightings)
+        parts.append(f"The simulator reports in view: {seen}.")
+    elif frame.source == "simulator":
+        parts.append("The simulator reports nothing in view but the room.")
+    return " ".join(parts)
+
+
+def _run_describe(ctx: SkillContext, a: DescribeArgs) -> str:
+    return describe_frame(ctx.camera_frame(), a.question, ctx.vision)
+
+
+def _run_look_around(ctx: SkillContext, a: DescribeArgs) -> str:
+    ctx.ensure_standing()
+    views = []
+    for quarter, side in enumerate(("ahead", "to my left", "behind me", "to my right")):
+        if quarter:
+            motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed)
+        views.append(f"{side}: {describe_frame(ctx.camera_frame(), a.question, ctx.vision)}")
+    motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed)
+    return " | ".join(views)
+
+
+def _run_status(ctx: SkillContext, _a: NoArgs) -> str:
+    st = ctx.robot.get_state()
+    return (
+        f"{st.posture.value.capitalize()} at x={st.x:.2f} m, y={st.y:.2f} m, "
+        f"facing {math.degrees(st.yaw):.0f} degrees; battery {st.battery:.1f}%; "
+        f"travelled {st.distance_travelled:.2f} m in total"
+        + ("; e-stop latched" if st.estopped else "")
+    )
+
+
+def _run_wait(ctx: SkillContext, a: WaitArgs) -> str:
+    end = ctx.robot.now() + a.seconds
+    while ctx.robot.now() < end - 1e-9:
+        ctx.robot.sleep(min(ctx.period, end - ctx.robot.now()))
+        ctx.check()
+    return f"waited {a.seconds:g} s"
+
+
+SKILLS = (
+    Skill(
+        "perception.describe",
+        "Describe what the camera sees now, or answer a question about it. Does not move.",
+        DescribeArgs,
+        _run_describe,
+        timeout=60.0,
+    ),
+    Skill(
+        "perception.look_around",
+        "Turn in place a full circle in quarter turns, describing each view.",
+        DescribeArgs,
+        _run_look_around,
+        timeout=120.0,
+        moves=True,
+        predict=lambda p, a, env: [p],
+    ),
+    Skill("sys.status", "Report pose, posture and battery. Does not move.", NoArgs, _run_status,
+          timeout=5.0),
+    Skill("sys.wait", "Stand still for a number of seconds.", WaitArgs, _run_wait,
+          timeout=lambda a, env: a.seconds + 5.0),
+)

@@ -1,0 +1,172 @@
+import math
+import threading
+
+import pytest
+
+from shadowhound import SkillCall, SkillValidationError, default_registry
+from shadowhound.config import ShadowHoundConfig
+from shadowhound.skills import MissionCancelled, PlanEnv, SkillContext, SkillError, SkillTimeout
+
+
+@pytest.fixture
+def registry():
+    return default_registry()
+
+
+def run(registry, robot, skill, settings=None, **args):
+    settings = settings or ShadowHoundConfig()
+    call = registry.validate(SkillCall(skill, args))
+    ctx = SkillContext(robot, PlanEnv(settings, robot.get_state().pose), threading.Event(),
+                       camera=robot.get_camera_frame)
+    ctx.start_clock(call.skill.timeout_for(call.args, ctx.env))
+    return call.skill.run(ctx, call.args)
+
+
+def test_builtin_skills_are_namespaced_and_described(registry):
+    names = registry.names
+    for expected in ("nav.move", "nav.strafe", "nav.rotate", "nav.goto", "nav.stop",
+                     "nav.patrol", "body.stand", "body.sit", "body.lie_down", "body.sport",
+                     "sys.wait", "sys.status", "perception.describe"):
+        assert expected in names
+    for skill in registry:
+        assert skill.description and "." in skill.name
+
+
+def test_tool_schemas_are_openai_functions(registry):
+    tools = registry.tool_schemas()
+    move = next(t for t in tools if t["function"]["name"] == "nav_move")
+    params = move["function"]["parameters"]
+    assert params["required"] == ["distance"]
+    assert params["additionalProperties"] is False
+    assert params["properties"]["distance"]["maximum"] == 1000
+    sport = next(t for t in tools if t["function"]["name"] == "body_sport")
+    assert "backflip" in sport["function"]["parameters"]["properties"]["trick"]["enum"]
+
+
+def test_numbers_as_strings_are_accepted(registry):
+    call = registry.validate(SkillCall("nav.move", {"distance": "1.5"}))
+    assert call.args.distance == 1.5
+    assert registry.validate(SkillCall("nav_rotate", {"degrees": 90})).name == "nav.rotate"
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (SkillCall("nav.fly", {}), "unknown skill 'nav.fly'; available skills: nav.move"),
+        (SkillCall("nav.move", {}), "missing required argument 'distance'"),
+        (SkillCall("nav.move", {"distance": "far"}), "'distance' input should be a valid number"),
+        (SkillCall("nav.move", {"distance": 1, "turbo": True}), "unknown argument 'turbo'"),
+        (SkillCall("nav.move", {"distance": float("nan")}), "finite number"),
+        (SkillCall("nav.move", {"distance": 5000}), "less than or equal to 1000"),
+        (SkillCall("nav.rotate", {"degrees": 90, "speed": -1}), "greater than 0"),
+        (SkillCall("nav.goto", {"x": 1}), "give both x and y"),
+        (SkillCall("nav.goto", {}), "give a target"),
+        (SkillCall("body.sport", {"trick": "fly"}), "'trick' input should be"),
+        (SkillCall("sys.wait", {"seconds": -1}), "greater than or equal to 0"),
+        (SkillCall("nav.move", [1]), "arguments must be an object"),
+        (SkillCall("", {}), "needs a skill name"),
+    ],
+)
+def test_validation_errors_say_what_is_wrong(registry, call, message):
+    with pytest.raises(SkillValidationError) as info:
+        registry.validate(call)
+    assert message in str(info.value)
+
+
+def test_move_is_closed_loop_on_measured_pose(registry, robot):
+    out = run(registry, robot, "nav.move", distance=1.0)
+    assert robot.get_state().x == pytest.approx(1.0, abs=0.002)
+    assert "moved 1.00 m forward" in out
+    run(registry, robot, "nav.move", distance=-0.5)
+    assert robot.get_state().x == pytest.approx(0.5, abs=0.003)
+
+
+def test_rotate_is_precise_and_unwrapped(registry, robot):
+    run(registry, robot, "nav.rotate", degrees=90)
+    assert round(robot.get_state().yaw, 4) == 1.5708
+    run(registry, robot, "nav.rotate", degrees=-450)
+    assert math.degrees(robot.get_state().yaw) == pytest.approx(0.0, abs=0.05)
+    assert robot.get_state().angle_turned == pytest.approx(math.radians(540), abs=0.01)
+
+
+def test_strafe_goes_left_without_turning(registry, robot):
+    run(registry, robot, "nav.strafe", distance=1.0)
+    st = robot.get_state()
+    assert (st.x, st.yaw) == (pytest.approx(0, abs=0.002), pytest.approx(0, abs=0.001))
+    assert st.y == pytest.approx(1.0, abs=0.002)
+
+
+def test_goto_point_and_place(registry, robot):
+    run(registry, robot, "nav.goto", x=2.0, y=1.0)
+    st = robot.get_state()
+    assert (st.x, st.y) == (pytest.approx(2.0, abs=0.003), pytest.approx(1.0, abs=0.003))
+    run(registry, robot, "nav.goto", place="kitchen", heading_degrees=180)
+    st = robot.get_state()
+    assert (st.x, st.y) == (pytest.approx(3.0, abs=0.003), pytest.approx(2.0, abs=0.003))
+    assert abs(math.degrees(st.yaw)) == pytest.approx(180, abs=0.1)
+
+
+def test_motion_stands_up_first(registry, robot):
+    run(registry, robot, "body.sit")
+    run(registry, robot, "nav.move", distance=0.5)
+    assert robot.get_state().x == pytest.approx(0.5, abs=0.003)
+
+
+def test_motion_fails_when_auto_stand_is_off(registry, robot):
+    settings = ShadowHoundConfig(motion={"auto_stand": False})
+    run(registry, robot, "body.lie_down", settings)
+    with pytest.raises(SkillError, match="stand up first"):
+        run(registry, robot, "nav.move", settings, distance=0.5)
+
+
+def test_stall_is_detected(registry, robot):
+    robot.send_velocity = lambda vx, vy, wz: None  # a robot that ignores velocity
+    with pytest.raises(SkillError, match="no progress"):
+        run(registry, robot, "nav.move", distance=1.0)
+
+
+def test_cancel_stops_a_move(registry, robot):
+    call = registry.validate(SkillCall("nav.move", {"distance": 3.0}))
+    cancelled = threading.Event()
+    ctx = SkillContext(robot, PlanEnv(ShadowHoundConfig()), cancelled,
+                       on_progress=lambda f: cancelled.set() if f > 0.3 else None)
+    ctx.start_clock(60)
+    with pytest.raises(MissionCancelled):
+        call.skill.run(ctx, call.args)
+    assert 0.5 < robot.get_state().x < 2.0
+
+
+def test_timeout_on_robot_clock(registry, robot):
+    call = registry.validate(SkillCall("sys.wait", {"seconds": 10}))
+    ctx = SkillContext(robot, PlanEnv(ShadowHoundConfig()), threading.Event())
+    ctx.start_clock(2.0)
+    with pytest.raises(SkillTimeout, match="timed out after 2.0 s"):
+        call.skill.run(ctx, call.args)
+
+
+def test_wait_takes_robot_time(registry, robot):
+    t0 = robot.now()
+    run(registry, robot, "sys.wait", seconds=2.5)
+    assert robot.now() - t0 == pytest.approx(2.5, abs=1e-6)
+
+
+def test_describe_without_vision_model_is_honest(registry, robot):
+    out = run(registry, robot, "perception.describe")
+    assert "No vision model is configured" in out
+    assert "red ball about 3.0 m ahead" in out
+
+
+def test_look_around_turns_full_circle(registry, robot):
+    out = run(registry, robot, "perception.look_around")
+    assert out.count("No vision model") == 4
+    assert robot.get_state().angle_turned == pytest.approx(2 * math.pi, abs=0.01)
+
+
+def test_status_reports_pose_and_battery(registry, robot):
+    out = run(registry, robot, "sys.status")
+    assert "Standing at x=0.00 m" in out and "battery 100.0%" in out
+
+
+def test_unknown_place_is_a_plan_problem(registry, robot):
+    with pytest.raises(ValueError, match="unknown place 'garage'; known places: kitchen"):
+        run(registry, robot, "nav.goto", place="garage")
