@@ -116,7 +116,7 @@ class ShadowHoundConfig(_Section):
     llm: LLMConfig = Field(default_factory=LLMConfig)
     agent: AgentConfig = Field(default_factory=AgentConfig)
     places: dict[str, tuple[float, float]] = Field(
-        default_factory=lambda: {"kitchen": (3.0, 2.0), "charging dock": (-1.0, 0.0)},
+        default_factory=lambda: {"kitchen": (3.0, 2.0), "charging dock": (-2.4, -1.0)},
         description="named places in the odom frame, metres",
     )
     patrol_route: list[tuple[float, float]] = Field(

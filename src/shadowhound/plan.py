@@ -15,7 +15,9 @@ class SkillCall:
     label: str = ""  # the words of the request this step came from, for people
 
     def to_dict(self) -> dict[str, Any]:
-        return {"skill": self.skill, "args": dict(self.args), "label": self.label}
+        # A language model may propose anything; keep the record JSON-safe whatever it is.
+        args = dict(self.args) if isinstance(self.args, dict) else {"_invalid": repr(self.args)}
+        return {"skill": self.skill, "args": args, "label": self.label}
 
 
 @dataclass

@@ -228,6 +228,7 @@ DEFAULT_WORLD = World(
         WorldObject("yellow chair", -2.0, 3.0, radius=0.4, height=0.9, color=(230, 200, 40)),
         WorldObject("person", 1.5, -4.0, radius=0.25, height=1.7, color=(140, 70, 170)),
         WorldObject("charging dock", -3.0, -1.0, radius=0.3, height=0.15, color=(0, 170, 170)),
+        WorldObject("white fridge", 4.8, 3.2, radius=0.4, height=1.8, color=(235, 235, 230)),
     )
 )
 

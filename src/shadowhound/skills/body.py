@@ -38,7 +38,7 @@ def _run_sport(ctx: SkillContext, a: SportArgs) -> str:
     ctx.ensure_standing()
     ctx.robot.perform(a.trick)
     ctx.check()
-    return f"performed {a.trick.replace('_', ' ')}"
+    return f"performed {str(a.trick).replace('_', ' ')}"
 
 
 SKILLS = (

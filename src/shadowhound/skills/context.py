@@ -90,7 +90,7 @@ class SkillContext:
         self.check()
 
     def drive(self, vx: float, vy: float, wz: float) -> None:
-        """Send body-frame velocity within the safety caps (defence in depth behind the plan check)."""
+        """Send body-frame velocity within the safety caps (defence behind the plan check)."""
         s = self.config.safety
         vx, vy = _cap_vector(vx, vy, s.max_linear_speed)
         wz = max(-s.max_angular_speed, min(s.max_angular_speed, wz))

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 from pydantic import Field, model_validator
 
@@ -21,33 +20,33 @@ class MoveArgs(SkillArgs):
     distance: float = Field(
         ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres; + forward, - backward"
     )
-    speed: Optional[float] = Field(None, gt=0, le=1.5, description="m/s; default from config")
+    speed: float | None = Field(None, gt=0, le=1.5, description="m/s; default from config")
 
 
 class StrafeArgs(SkillArgs):
     distance: float = Field(
         ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres sideways; + left, - right"
     )
-    speed: Optional[float] = Field(None, gt=0, le=1.5, description="m/s; default from config")
+    speed: float | None = Field(None, gt=0, le=1.5, description="m/s; default from config")
 
 
 class RotateArgs(SkillArgs):
     degrees: float = Field(
         ge=-3600, le=3600, description="degrees; + counter-clockwise (left), - clockwise (right)"
     )
-    speed: Optional[float] = Field(None, gt=0, le=3.0, description="rad/s; default from config")
+    speed: float | None = Field(None, gt=0, le=3.0, description="rad/s; default from config")
 
 
 class GotoArgs(SkillArgs):
-    x: Optional[float] = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
-    y: Optional[float] = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
-    place: Optional[str] = Field(
+    x: float | None = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
+    y: float | None = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
+    place: str | None = Field(
         None, min_length=1, max_length=100, description="a named place, 'start' or 'home'"
     )
-    heading_degrees: Optional[float] = Field(
+    heading_degrees: float | None = Field(
         None, ge=-360, le=360, description="final heading in degrees (odom); default: keep"
     )
-    speed: Optional[float] = Field(None, gt=0, le=1.5, description="m/s; default from config")
+    speed: float | None = Field(None, gt=0, le=1.5, description="m/s; default from config")
 
     @model_validator(mode="after")
     def _target(self) -> GotoArgs:
@@ -94,7 +93,8 @@ def _run_strafe(ctx: SkillContext, a: StrafeArgs) -> str:
 
 
 def _straight_timeout(a: MoveArgs | StrafeArgs, env: PlanEnv) -> float:
-    return motion.straight_timeout(a.distance, _linear(env, a.speed), env.config.motion.linear_accel)
+    accel = env.config.motion.linear_accel
+    return motion.straight_timeout(a.distance, _linear(env, a.speed), accel)
 
 
 # -- nav.rotate ------------------------------------------------------------------------------
@@ -179,7 +179,7 @@ def _predict_patrol(pose: Pose2D, a: PatrolArgs, env: PlanEnv) -> list[Pose2D]:
 
 def _patrol_timeout(a: PatrolArgs, env: PlanEnv) -> float:
     legs = len(env.config.patrol_route) + 1
-    return a.laps * legs * _goto_timeout(GotoArgs(x=0.0, y=0.0), env)
+    return a.laps * legs * _goto_timeout(GotoArgs(x=0.0, y=0.0, place=None), env)
 
 
 # -- nav.stop --------------------------------------------------------------------------------

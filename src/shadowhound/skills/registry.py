@@ -102,7 +102,7 @@ class ValidatedCall:
 
 
 class SkillRegistry:
-    """Named skills. `validate` turns a proposed SkillCall into a ValidatedCall or explains why not."""
+    """Named skills. `validate` turns a SkillCall into a ValidatedCall or explains why not."""
 
     def __init__(self, skills: Iterable[Skill] = ()) -> None:
         self._skills: dict[str, Skill] = {}
@@ -183,15 +183,20 @@ def _explain(skill: Skill, exc: ValidationError) -> list[str]:
         name = ".".join(str(p) for p in err["loc"]) or "(arguments)"
         got = err.get("input")
         if err["type"] == "extra_forbidden":
-            problems.append(f"{skill.name}: unknown argument {name!r}; allowed arguments: {allowed}")
+            problems.append(
+                f"{skill.name}: unknown argument {name!r}; allowed arguments: {allowed}"
+            )
             continue
         if err["type"] == "missing":
-            problems.append(f"{skill.name}: missing required argument {name!r}{_hint(fields, name)}")
+            problems.append(
+                f"{skill.name}: missing required argument {name!r}{_hint(fields, name)}"
+            )
             continue
         if isinstance(got, float) and not math.isfinite(got):
             problems.append(f"{skill.name}: {name!r} must be a finite number, got {got}")
             continue
-        problems.append(f"{skill.name}: {name!r} {err['msg'].lower()} (got {got!r}){_hint(fields, name)}")
+        message = err["msg"].lower()
+        problems.append(f"{skill.name}: {name!r} {message} (got {got!r}){_hint(fields, name)}")
     return problems
 
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from typing import Optional
 
 from pydantic import Field
 
@@ -16,7 +15,7 @@ from .registry import NoArgs, Skill, SkillArgs
 
 
 class DescribeArgs(SkillArgs):
-    question: Optional[str] = Field(
+    question: str | None = Field(
         None, max_length=500, description="what to look for; default: describe the view"
     )
 

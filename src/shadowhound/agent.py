@@ -1,0 +1,447 @@
+"""RobotAgent: the brain. Text in, a checked plan, skills on the robot, a MissionResult out.
+
+Pure Python: no ROS, web or model library is imported here. Interfaces call this public API
+and subscribe to its events. `execute_mission` runs in the caller's thread, one mission at a
+time; `estop`, `cancel`, `get_diagnostics` and `update_camera_image` are safe from any thread.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+import uuid
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+from . import events as ev
+from .camera import to_camera_frame
+from .config import ConfigError, ShadowHoundConfig
+from .conversation import answer_offline
+from .plan import Plan, PlanningError, SkillCall, Usage
+from .planning import FixedPlanner, Planner, make_planner
+from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing
+from .robot.base import Robot, RobotError
+from .safety import Governor
+from .skills import (
+    MissionCancelled,
+    PlanEnv,
+    SkillContext,
+    SkillError,
+    SkillRegistry,
+    SkillValidationError,
+    ValidatedCall,
+    default_registry,
+)
+from .state import CameraFrame, RobotState
+
+log = logging.getLogger(__name__)
+
+# Skills whose output is an answer for the user rather than a record of motion.
+_REPORTING_SKILLS = frozenset({"perception.describe", "perception.look_around", "sys.status"})
+
+
+@dataclass
+class RobotAgentConfig:
+    """How to build an agent. Anything left None is made from `settings`."""
+
+    robot: Robot | None = None
+    settings: ShadowHoundConfig = field(default_factory=ShadowHoundConfig)
+    planner: Planner | None = None
+    registry: SkillRegistry | None = None
+
+
+class RobotAgent:
+    """Plans missions into validated skill calls and runs them on a robot."""
+
+    def __init__(self, config: RobotAgentConfig | ShadowHoundConfig | None = None) -> None:
+        if isinstance(config, ShadowHoundConfig):
+            config = RobotAgentConfig(settings=config)
+        self.config = config or RobotAgentConfig()
+        self.settings = self.config.settings
+        self.registry = self.config.registry or default_registry()
+        self.governor = Governor(self.settings.safety)
+        self._robot = self.config.robot
+        self._planner = self.config.planner
+        self._events = ev.EventBus()
+        self._mission_lock = threading.Lock()
+        self._state_lock = threading.Lock()
+        self._cancel = threading.Event()
+        self._estop_latched = False
+        self._camera_frame: CameraFrame | None = None
+        self._status = MissionStatus.IDLE
+        self._current: dict[str, Any] = {"mission_id": None, "mission": None, "skill": None,
+                                         "step": 0, "steps": 0, "progress": 0.0}
+        self._errors: deque[str] = deque(maxlen=20)
+        self._history: deque[MissionResult] = deque(
+            maxlen=max(1, self.settings.agent.conversation_history_size)
+        )
+        self._initialized = False
+
+    # -- life cycle ------------------------------------------------------------------------
+
+    def initialize(self) -> bool:
+        """Create the robot and planner if not given. Raises ConfigError on a bad setup."""
+        if self._initialized:
+            return True
+        if self._robot is None:
+            if self.settings.robot != "sim":
+                raise ConfigError(
+                    f"robot {self.settings.robot!r} needs a robot object (e.g. Go2RosRobot); "
+                    "only the simulated robot ('sim') is built automatically"
+                )
+            from .robot.sim import SimRobot
+
+            self._robot = SimRobot(self.settings.sim)
+        if self._planner is None:
+            self._planner = make_planner(self.settings)
+        self._initialized = True
+        return True
+
+    def cleanup(self) -> None:
+        """Cancel any mission, stop the robot and release it."""
+        self._cancel.set()
+        if self._robot is not None:
+            self._robot.stop()
+            self._robot.close()
+
+    @property
+    def robot(self) -> Robot:
+        self.initialize()
+        assert self._robot is not None
+        return self._robot
+
+    @property
+    def planner(self) -> Planner:
+        self.initialize()
+        assert self._planner is not None
+        return self._planner
+
+    def add_listener(self, listener: ev.Listener) -> Any:
+        """Call `listener(MissionEvent)` on every event. Returns a function that unsubscribes."""
+        return self._events.subscribe(listener)
+
+    # -- missions ----------------------------------------------------------------------------
+
+    def execute_mission(self, text: str) -> MissionResult:
+        """Plan `text`, check every step, run it. Never raises for bad input or robot faults."""
+        return self._execute(text, self.planner)
+
+    def run_plan(self, calls: list[SkillCall], text: str = "") -> MissionResult:
+        """Run explicit skill calls (from the web, a test, a script) through the same checks."""
+        plan = Plan(list(calls), text=text or "explicit plan", planner="explicit")
+        return self._execute(plan.text, FixedPlanner(plan))
+
+    def _execute(self, text: str, planner: Planner) -> MissionResult:
+        self.initialize()
+        mission_id = uuid.uuid4().hex[:12]
+        started = time.perf_counter()
+        if not isinstance(text, str):
+            return self._refuse(mission_id, repr(text)[:200], started,
+                                f"a mission must be text, got {type(text).__name__}")
+        if not self._mission_lock.acquire(blocking=False):
+            return self._refuse(mission_id, text, started, "another mission is running; wait for "
+                                "it to finish or cancel it", record=False)
+        try:
+            return self._run_mission(mission_id, text, started, planner)
+        finally:
+            self._mission_lock.release()
+
+    def _run_mission(self, mission_id: str, text: str, started: float,
+                     planner: Planner) -> MissionResult:
+        if self._estop_latched:
+            return self._refuse(mission_id, text, started,
+                                "the e-stop is latched; release it before running missions")
+        limit = self.settings.agent.max_mission_chars
+        if not text.strip():
+            return self._refuse(mission_id, text, started, "the mission is empty; say what the "
+                                "robot should do, e.g. 'walk forward 1 meter'")
+        if len(text) > limit:
+            return self._refuse(mission_id, text[:200] + "...", started,
+                                f"the mission is {len(text)} characters long; the limit is "
+                                f"{limit} (agent.max_mission_chars)")
+        self._cancel.clear()
+        self._set_current(mission_id=mission_id, mission=text, skill=None, step=0, steps=0,
+                          progress=0.0)
+        self._set_status(MissionStatus.PLANNING)
+        self._emit(ev.MISSION_STARTED, mission_id, mission=text)
+        timing = Timing()
+        robot = self.robot
+        env = PlanEnv(self.settings, robot.get_state().pose)
+
+        # 1. Plan. The planner never touches the robot.
+        t = time.perf_counter()
+        try:
+            plan = planner.plan(text, self._planning_context())
+        except PlanningError as exc:
+            timing.agent_duration = time.perf_counter() - t
+            return self._finish(mission_id, text, started, timing, [], None,
+                                MissionStatus.FAILED, exc.message, usage=exc.usage)
+        timing.agent_duration = time.perf_counter() - t
+        if self._cancel.is_set():
+            return self._finish(mission_id, text, started, timing, [], plan,
+                                MissionStatus.STOPPED, self._stop_reason())
+
+        # 2. Validate every step and check the whole predicted path before anything moves.
+        calls, problems = self._validate(plan)
+        steps = [StepResult(i, c.skill, _plain_args(c.args), c.label)
+                 for i, c in enumerate(plan.steps, 1)]
+        refusals, _path = self.governor.check_plan(calls, env.mission_start, env)
+        problems += [str(r) for r in refusals]
+        if problems:
+            for s in steps:
+                s.status = StepStatus.SKIPPED
+            return self._finish(mission_id, text, started, timing, steps, plan,
+                                MissionStatus.FAILED, "Refused before moving: " +
+                                "; ".join(problems), refusals=problems)
+        valid = [c for c in calls if c is not None]
+        for s, c in zip(steps, valid, strict=False):
+            s.args = c.args_dict()
+        self._emit(ev.PLAN_READY, mission_id, plan=plan.to_dict())
+
+        # 3. Run the steps in order; the first failure stops the mission and the robot.
+        self._set_status(MissionStatus.EXECUTING)
+        self._set_current(steps=len(steps))
+        status, error = MissionStatus.SUCCEEDED, None
+        for step, call in zip(steps, valid, strict=False):
+            outcome = self._run_step(mission_id, step, call, env)
+            timing.execution_duration += step.duration
+            timing.robot_duration += step.robot_duration
+            if outcome is not MissionStatus.SUCCEEDED:
+                status, error = outcome, step.error
+                robot.stop()
+                for later in steps[step.index:]:
+                    later.status = StepStatus.SKIPPED
+                break
+        response = self._compose_response(status, steps, plan, error)
+        return self._finish(mission_id, text, started, timing, steps, plan, status, response,
+                            error=error)
+
+    def _validate(self, plan: Plan) -> tuple[list[ValidatedCall | None], list[str]]:
+        """Validate every step; invalid ones become None so the rest can still be checked."""
+        problems: list[str] = []
+        calls: list[ValidatedCall | None] = []
+        if not plan.steps:
+            problems.append("the plan has no steps")
+        if len(plan.steps) > self.settings.agent.max_steps:
+            problems.append(f"the plan has {len(plan.steps)} steps; at most "
+                            f"{self.settings.agent.max_steps} are allowed (agent.max_steps)")
+        for index, call in enumerate(plan.steps, start=1):
+            try:
+                calls.append(self.registry.validate(call))
+            except SkillValidationError as exc:
+                calls.append(None)
+                problems.extend(f"step {index}: {p}" for p in exc.problems)
+        return calls, problems
+
+    def _run_step(self, mission_id: str, step: StepResult, call: ValidatedCall,
+                  env: PlanEnv) -> MissionStatus:
+        robot = self.robot
+        step.status = StepStatus.RUNNING
+        step.started_at = time.time()
+        self._set_current(skill=call.name, step=step.index)
+        self._emit(ev.STEP_STARTED, mission_id, step=step.to_dict())
+        wall, robot_t0 = time.perf_counter(), robot.now()
+        status = MissionStatus.SUCCEEDED
+        ctx = SkillContext(robot, env, self._cancel, camera=self._latest_frame,
+                           on_progress=lambda f: self._step_progress(step.index, f))
+        try:
+            refused = self.governor.check_step(call, robot.get_state().pose, env)
+            if refused:
+                raise SkillError("refused by the safety governor: " + "; ".join(refused))
+            ctx.start_clock(call.skill.timeout_for(call.args, env))
+            ctx.check()
+            output = call.skill.run(ctx, call.args)
+            step.output = "; ".join([*ctx.notes, output])
+            step.status = StepStatus.SUCCEEDED
+        except MissionCancelled:
+            robot.stop()
+            step.status, step.error = StepStatus.CANCELLED, self._stop_reason()
+            status = MissionStatus.STOPPED
+        except (SkillError, RobotError) as exc:
+            robot.stop()
+            step.status, step.error = StepStatus.FAILED, str(exc)
+            status = MissionStatus.FAILED
+        except Exception as exc:  # a bug in a skill must still leave the robot stopped
+            log.exception("skill %s crashed", call.name)
+            robot.stop()
+            step.status, step.error = StepStatus.FAILED, f"internal error: {exc!r}"
+            status = MissionStatus.FAILED
+        step.duration = time.perf_counter() - wall
+        step.robot_duration = robot.now() - robot_t0
+        self._step_progress(step.index, 1.0)
+        self._emit(ev.STEP_FINISHED, mission_id, step=step.to_dict())
+        return status
+
+    def _compose_response(self, status: MissionStatus, steps: list[StepResult], plan: Plan,
+                          error: str | None) -> str:
+        done = [s.output for s in steps if s.status is StepStatus.SUCCEEDED and s.output]
+        if status is MissionStatus.SUCCEEDED:
+            reports = [s.output for s in steps if s.skill in _REPORTING_SKILLS]
+            actions = [s.output for s in steps if s.skill not in _REPORTING_SKILLS and s.output]
+            parts = ["Done: " + "; ".join(actions) + "."] if actions else []
+            parts += [o[0].upper() + o[1:] + ("" if o.endswith(".") else ".") for o in reports]
+            if plan.notes:
+                parts.append("(" + "; ".join(plan.notes) + ")")
+            return " ".join(parts)
+        failed = next((s for s in steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)),
+                      None)
+        where = f" at step {failed.index} ({failed.skill})" if failed else ""
+        verb = "Stopped" if status is MissionStatus.STOPPED else "Failed"
+        text = f"{verb}{where}: {error}."
+        if done:
+            text += " Completed before that: " + "; ".join(done) + "."
+        return text + " The robot is stopped."
+
+    # -- control from any thread -----------------------------------------------------------
+
+    def cancel(self) -> None:
+        """Stop the running mission within one control tick and leave the robot stopped."""
+        self._cancel.set()
+        if self._robot is not None:
+            self._robot.stop()
+
+    def estop(self) -> None:
+        """Emergency stop: latched until `release_estop()`. Also cancels planning in flight."""
+        self._estop_latched = True
+        self._cancel.set()
+        robot = self._robot
+        if robot is not None:
+            hard_stop = getattr(robot, "emergency_stop", None)
+            (hard_stop or robot.stop)()
+        self._errors.append("e-stop pressed")
+        self._emit(ev.ESTOP, self._current.get("mission_id") or "", latched=True)
+
+    def release_estop(self) -> None:
+        self._estop_latched = False
+        release = getattr(self._robot, "release_estop", None)
+        if release is not None:
+            release()
+        self._emit(ev.ESTOP, self._current.get("mission_id") or "", latched=False)
+
+    @property
+    def estop_latched(self) -> bool:
+        return self._estop_latched
+
+    def _stop_reason(self) -> str:
+        return "e-stop pressed" if self._estop_latched else "mission cancelled"
+
+    # -- information -------------------------------------------------------------------------
+
+    def chat(self, text: str) -> str:
+        """Answer a question about the robot and its missions. Never moves the robot."""
+        if not isinstance(text, str) or not text.strip():
+            return "Ask me something, for example: where are you? how is your battery?"
+        return answer_offline(text[: self.settings.agent.max_mission_chars], self)
+
+    def get_diagnostics(self) -> dict[str, Any]:
+        with self._state_lock:
+            current = dict(self._current)
+            status = self._status
+            errors = list(self._errors)
+        last = self._history[-1] if self._history else None
+        return {
+            "status": status.value,
+            "mission_id": current["mission_id"],
+            "mission": current["mission"],
+            "current_skill": current["skill"],
+            "step": current["step"],
+            "steps": current["steps"],
+            "progress": round(current["progress"], 3),
+            "errors": errors,
+            "estop": self._estop_latched,
+            "backend": self.settings.backend,
+            "robot": self.get_robot_status(),
+            "last_mission": last.summary() if last else None,
+            "limits": self.settings.safety.model_dump(),
+        }
+
+    def get_robot_status(self) -> dict[str, Any]:
+        return self.robot.get_state().to_dict()
+
+    def get_robot_state(self) -> RobotState:
+        return self.robot.get_state()
+
+    def get_available_skills(self) -> list[dict[str, Any]]:
+        return self.registry.describe()
+
+    @property
+    def history(self) -> list[MissionResult]:
+        return list(self._history)
+
+    def update_camera_image(self, frame: Any) -> None:
+        """Store the latest camera frame (CameraFrame, JPEG/PNG bytes or an HxW[x3] array).
+
+        Raises ValueError for data that is not an image.
+        """
+        self._camera_frame = to_camera_frame(frame)
+
+    def _latest_frame(self) -> CameraFrame | None:
+        return self._camera_frame or self.robot.get_camera_frame()
+
+    def _planning_context(self) -> dict[str, Any]:
+        return {"state": self.robot.get_state(), "places": dict(self.settings.places),
+                "skills": self.registry, "history": [r.summary() for r in self._history]}
+
+    # -- bookkeeping ---------------------------------------------------------------------------
+
+    def _set_status(self, status: MissionStatus) -> None:
+        with self._state_lock:
+            self._status = status
+
+    def _set_current(self, **values: Any) -> None:
+        with self._state_lock:
+            self._current.update(values)
+
+    def _step_progress(self, index: int, fraction: float) -> None:
+        with self._state_lock:
+            total = self._current["steps"] or 1
+            self._current["progress"] = min(1.0, ((index - 1) + fraction) / total)
+
+    def _emit(self, kind: str, mission_id: str, **data: Any) -> None:
+        self._events.emit(ev.MissionEvent(kind, mission_id, data))
+
+    def _refuse(self, mission_id: str, text: str, started: float, reason: str,
+                record: bool = True) -> MissionResult:
+        result = MissionResult(mission_id, text, False, f"Refused: {reason}.",
+                               MissionStatus.FAILED, robot=self.robot.get_state(), error=reason,
+                               refusals=[reason])
+        result.timing.total_duration = time.perf_counter() - started
+        if record:
+            self._errors.append(reason)
+            self._history.append(result)
+            self._set_status(MissionStatus.FAILED)
+        return result
+
+    def _finish(self, mission_id: str, text: str, started: float, timing: Timing,
+                steps: list[StepResult], plan: Plan | None, status: MissionStatus,
+                response: str, *, error: str | None = None, usage: Usage | None = None,
+                refusals: list[str] | None = None) -> MissionResult:
+        if status is not MissionStatus.SUCCEEDED:
+            self.robot.stop()
+            error = error or response
+            self._errors.append(error)
+        timing.total_duration = time.perf_counter() - started
+        result = MissionResult(
+            mission_id, text, status is MissionStatus.SUCCEEDED, response, status, steps,
+            self.robot.get_state(), timing, usage or (plan.usage if plan else Usage()), plan,
+            refusals or [], error,
+        )
+        self._history.append(result)
+        self._set_status(status)
+        if result.success:
+            self._set_current(skill=None, progress=1.0)
+        else:
+            self._set_current(skill=None)
+        self._emit(ev.MISSION_FINISHED, mission_id, result=result.to_dict())
+        return result
+
+
+def _plain_args(args: Any) -> dict[str, Any]:
+    """Proposed arguments as given, for the record (a model may send anything)."""
+    return dict(args) if isinstance(args, dict) else {"_invalid": repr(args)}
+
+
+MissionExecutor = RobotAgent
+MissionExecutorConfig = RobotAgentConfig

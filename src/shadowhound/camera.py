@@ -1,0 +1,69 @@
+"""Turning what interfaces receive (bytes, arrays, frames) into a CameraFrame."""
+
+from __future__ import annotations
+
+import struct
+from typing import Any
+
+from .state import CameraFrame
+
+_MAX_BYTES = 50 * 1024 * 1024
+
+
+def image_size(data: bytes) -> tuple[str, int, int]:
+    """(encoding, width, height) of JPEG or PNG bytes. Raises ValueError for anything else."""
+    if data[:8] == b"\x89PNG\r\n\x1a\n":
+        if len(data) < 24 or data[12:16] != b"IHDR":
+            raise ValueError("PNG data is truncated (no IHDR header)")
+        width, height = struct.unpack(">II", data[16:24])
+        return "png", width, height
+    if data[:2] == b"\xff\xd8":
+        return ("jpeg", *_jpeg_size(data))
+    raise ValueError("image bytes must be JPEG or PNG (unknown signature "
+                     f"{data[:4].hex() or 'empty'})")
+
+
+def _jpeg_size(data: bytes) -> tuple[int, int]:
+    i = 2
+    while i + 9 < len(data):
+        if data[i] != 0xFF:
+            raise ValueError("JPEG data is corrupt (bad marker)")
+        marker = data[i + 1]
+        if marker in (0xD8, 0x01) or 0xD0 <= marker <= 0xD7:
+            i += 2
+            continue
+        (length,) = struct.unpack(">H", data[i + 2 : i + 4])
+        if 0xC0 <= marker <= 0xCF and marker not in (0xC4, 0xC8, 0xCC):
+            height, width = struct.unpack(">HH", data[i + 5 : i + 9])
+            return width, height
+        i += 2 + length
+    raise ValueError("JPEG data is truncated (no frame header)")
+
+
+def to_camera_frame(frame: Any, source: str = "camera") -> CameraFrame:
+    """Accept a CameraFrame, JPEG/PNG bytes, or an HxWx3 (rgb8) / HxW (mono8) array."""
+    if isinstance(frame, CameraFrame):
+        return frame
+    if isinstance(frame, (bytes, bytearray, memoryview)):
+        data = bytes(frame)
+        if not data:
+            raise ValueError("camera frame is empty")
+        if len(data) > _MAX_BYTES:
+            raise ValueError(f"camera frame of {len(data)} bytes exceeds {_MAX_BYTES} bytes")
+        encoding, width, height = image_size(data)
+        return CameraFrame(data, width, height, encoding, source=source)
+    shape = getattr(frame, "shape", None)
+    if shape is not None and hasattr(frame, "tobytes"):
+        if len(shape) == 3 and shape[2] == 3:
+            encoding = "rgb8"
+        elif len(shape) == 2:
+            encoding = "mono8"
+        else:
+            raise ValueError(f"image array must be HxWx3 (rgb8) or HxW (mono8), got {shape}")
+        if str(getattr(frame, "dtype", "uint8")) != "uint8":
+            raise ValueError(f"image array must be uint8, got {frame.dtype}")
+        return CameraFrame(frame.tobytes(), int(shape[1]), int(shape[0]), encoding, source=source)
+    raise ValueError(
+        f"unsupported camera frame {type(frame).__name__}: give JPEG/PNG bytes, a CameraFrame, "
+        "or a uint8 array of shape HxWx3 or HxW"
+    )

@@ -1,0 +1,130 @@
+"""What a mission produced: per-step outcomes, timing, usage and the robot state after."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+from .plan import Plan, Usage
+from .state import RobotState
+
+
+class StepStatus(str, Enum):
+    PENDING = "pending"
+    RUNNING = "running"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+    SKIPPED = "skipped"
+
+
+class MissionStatus(str, Enum):
+    """Agent status, also reported by diagnostics."""
+
+    IDLE = "idle"
+    PLANNING = "planning"
+    EXECUTING = "executing"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    STOPPED = "stopped"
+
+
+@dataclass
+class StepResult:
+    """One step of a mission. Durations: wall seconds, and seconds on the robot's clock."""
+
+    index: int
+    skill: str
+    args: dict[str, Any]
+    label: str = ""
+    status: StepStatus = StepStatus.PENDING
+    started_at: float | None = None  # wall-clock epoch seconds
+    duration: float = 0.0
+    robot_duration: float = 0.0
+    output: str = ""
+    error: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "index": self.index,
+            "skill": self.skill,
+            "args": self.args,
+            "label": self.label,
+            "status": self.status.value,
+            "started_at": self.started_at,
+            "duration": round(self.duration, 6),
+            "robot_duration": round(self.robot_duration, 3),
+            "output": self.output,
+            "error": self.error,
+        }
+
+
+@dataclass
+class Timing:
+    """Where the time of a mission went (wall seconds). Keys match the original ShadowHound."""
+
+    agent_duration: float = 0.0  # planning
+    execution_duration: float = 0.0  # inside skills
+    total_duration: float = 0.0
+    robot_duration: float = 0.0  # robot-clock seconds the steps took
+
+    @property
+    def overhead_duration(self) -> float:
+        return max(0.0, self.total_duration - self.agent_duration - self.execution_duration)
+
+    @property
+    def agent_percentage(self) -> float:
+        return 100.0 * self.agent_duration / self.total_duration if self.total_duration else 0.0
+
+    def to_dict(self) -> dict[str, float]:
+        return {
+            "agent_duration": round(self.agent_duration, 6),
+            "execution_duration": round(self.execution_duration, 6),
+            "overhead_duration": round(self.overhead_duration, 6),
+            "total_duration": round(self.total_duration, 6),
+            "agent_percentage": round(self.agent_percentage, 2),
+            "robot_duration": round(self.robot_duration, 3),
+        }
+
+
+@dataclass
+class MissionResult:
+    """The outcome of `execute_mission`. Unpacks as `(response, timing)` for old callers."""
+
+    mission_id: str
+    mission: str
+    success: bool
+    response: str
+    status: MissionStatus
+    steps: list[StepResult] = field(default_factory=list)
+    robot: RobotState | None = None
+    timing: Timing = field(default_factory=Timing)
+    usage: Usage = field(default_factory=Usage)
+    plan: Plan | None = None
+    refusals: list[str] = field(default_factory=list)
+    error: str | None = None
+
+    def __iter__(self) -> Iterator[Any]:
+        yield self.response
+        yield self.timing.to_dict()
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "mission_id": self.mission_id,
+            "mission": self.mission,
+            "success": self.success,
+            "status": self.status.value,
+            "response": self.response,
+            "error": self.error,
+            "refusals": list(self.refusals),
+            "plan": self.plan.to_dict() if self.plan else None,
+            "steps": [s.to_dict() for s in self.steps],
+            "robot": self.robot.to_dict() if self.robot else None,
+            "timing": self.timing.to_dict(),
+            "usage": self.usage.to_dict(),
+        }
+
+    def summary(self) -> str:
+        return f"{self.status.value}: {self.mission!r} -> {self.response}"

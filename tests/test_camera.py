@@ -1,0 +1,44 @@
+import pytest
+
+from shadowhound.camera import image_size, to_camera_frame
+from shadowhound.robot.scene import DEFAULT_WORLD, encode_png, render
+from shadowhound.state import CameraFrame, Pose2D
+from tests.images import tiny_jpeg
+
+
+def test_jpeg_and_png_sizes():
+    assert image_size(tiny_jpeg(640, 480)) == ("jpeg", 640, 480)
+    png = encode_png(render(DEFAULT_WORLD, Pose2D(), 32, 24), 32, 24)
+    assert image_size(png) == ("png", 32, 24)
+
+
+@pytest.mark.parametrize(("data", "message"), [
+    (b"", "empty"), (b"GIF89a....", "JPEG or PNG"), (b"\xff\xd8\xff", "truncated"),
+    (b"\x89PNG\r\n\x1a\n", "truncated"), (12, "unsupported camera frame int"),
+])
+def test_bad_frames_are_rejected_clearly(data, message):
+    with pytest.raises(ValueError, match=message):
+        to_camera_frame(data)
+
+
+def test_arrays_become_raw_frames():
+    class Array:  # the numpy surface the converter relies on
+        def __init__(self, shape):
+            self.shape, self.dtype = shape, "uint8"
+
+        def tobytes(self):
+            n = 1
+            for d in self.shape:
+                n *= d
+            return bytes(n)
+
+    frame = to_camera_frame(Array((48, 64, 3)))
+    assert (frame.width, frame.height, frame.encoding) == (64, 48, "rgb8")
+    assert to_camera_frame(Array((4, 5))).encoding == "mono8"
+    with pytest.raises(ValueError, match="HxWx3"):
+        to_camera_frame(Array((4, 5, 4)))
+
+
+def test_frames_pass_through():
+    frame = CameraFrame(b"x", 1, 1, "mono8")
+    assert to_camera_frame(frame) is frame
