@@ -1,0 +1,305 @@
+"""`shadowhound`: run missions, list skills, chat, and evaluate mission cases.
+
+Exit codes: 0 success, 1 mission (or evaluation) failure, 2 usage or configuration error,
+130 interrupted (the robot is stopped first).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import threading
+from collections.abc import Sequence
+from typing import Any, TextIO
+
+from . import __version__
+from . import events as ev
+from .config import ConfigError, ShadowHoundConfig, available_profiles, load_config
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+def _common(parser: argparse.ArgumentParser, suppress: bool) -> None:
+    default: Any = argparse.SUPPRESS if suppress else None
+    parser.add_argument("--config", "-c", metavar="PROFILE|PATH", default=default,
+                        help="profile name (" + ", ".join(available_profiles()) +
+                        ") or a YAML file; default $SHADOWHOUND_CONFIG or offline")
+    parser.add_argument("--backend", default=default,
+                        choices=["offline", "openai", "ollama", "vllm", "llamacpp"],
+                        help="planner backend, overrides the profile")
+    parser.add_argument("--time-scale", type=float, metavar="S", default=default,
+                        help="simulated robot: real seconds per simulated second (0 = fastest)")
+    parser.add_argument("--verbose", "-v", action="count", default=argparse.SUPPRESS
+                        if suppress else 0, help="log more (-vv for debug)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="shadowhound",
+        description="Mission agent for quadruped robots: plans a sentence into checked skills "
+                    "and runs it on a simulated Unitree Go2 (default) or a real one.",
+    )
+    parser.add_argument("--version", action="version", version=f"shadowhound {__version__}")
+    _common(parser, suppress=False)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    run = sub.add_parser("run", help="plan and run one mission",
+                         description="Plan MISSION, check it, run it, print the result.")
+    _common(run, suppress=True)
+    run.add_argument("mission", help='what to do, e.g. "stand up and walk forward 1 meter"')
+    run.add_argument("--json", action="store_true",
+                     help="print exactly one JSON object with the result on stdout")
+    run.add_argument("--quiet", "-q", action="store_true", help="no progress on stderr")
+
+    skills = sub.add_parser("skills", help="list the skills with their argument schemas")
+    _common(skills, suppress=True)
+    skills.add_argument("--json", action="store_true", help="print the skills as JSON")
+
+    chat = sub.add_parser("chat", help="talk to the agent (a REPL; /run MISSION runs one)")
+    _common(chat, suppress=True)
+
+    evaluate = sub.add_parser("eval", help="run mission cases from a YAML file and score them")
+    _common(evaluate, suppress=True)
+    evaluate.add_argument("file", help="YAML list of {mission, expect} cases")
+    evaluate.add_argument("--json", action="store_true", help="print the report as JSON")
+
+    show = sub.add_parser("config", help="print the effective configuration (no secrets)")
+    _common(show, suppress=True)
+    return parser
+
+
+def _settings(args: argparse.Namespace) -> ShadowHoundConfig:
+    overrides: dict[str, Any] = {}
+    if args.backend:
+        overrides["backend"] = args.backend
+    if args.time_scale is not None:
+        overrides["sim"] = {"time_scale": args.time_scale}
+    return load_config(args.config, overrides)
+
+
+def _agent(settings: ShadowHoundConfig) -> Any:
+    from .agent import RobotAgent
+
+    agent = RobotAgent(settings)
+    agent.initialize()
+    return agent
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)],
+                        format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+    try:
+        settings = _settings(args)
+        handler = {"run": cmd_run, "skills": cmd_skills, "chat": cmd_chat, "eval": cmd_eval,
+                   "config": cmd_config}[args.command]
+        return handler(args, settings)
+    except ConfigError as exc:
+        print(f"shadowhound: configuration error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+
+
+# -- run -----------------------------------------------------------------------------------
+
+
+def _progress(stream: TextIO) -> ev.Listener:
+    def show(event: ev.MissionEvent) -> None:
+        if event.kind == ev.MISSION_STARTED:
+            print(f"mission: {event.data['mission']!r}", file=stream)
+        elif event.kind == ev.PLAN_READY:
+            steps = event.data["plan"]["steps"]
+            print(f"plan: {len(steps)} step(s)", file=stream)
+        elif event.kind == ev.STEP_STARTED:
+            step = event.data["step"]
+            args = ", ".join(f"{k}={v}" for k, v in step["args"].items())
+            print(f"  [{step['index']}] {step['skill']}({args}) ...", file=stream, flush=True)
+        elif event.kind == ev.STEP_FINISHED:
+            step = event.data["step"]
+            mark = "ok" if step["status"] == "succeeded" else step["status"].upper()
+            detail = step["output"] if step["status"] == "succeeded" else step["error"]
+            print(f"  [{step['index']}] {mark}: {detail} ({step['robot_duration']:.1f} s robot "
+                  "time)", file=stream, flush=True)
+        stream.flush()
+
+    return show
+
+
+def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    agent = _agent(settings)
+    if not args.quiet:
+        agent.add_listener(_progress(sys.stderr))
+    box: dict[str, Any] = {}
+    # The mission runs on a worker so that Ctrl-C here can stop the robot at once.
+    worker = threading.Thread(target=lambda: box.update(result=agent.execute_mission(
+        args.mission)), name="shadowhound-mission", daemon=True)
+    worker.start()
+    interrupted = False
+    try:
+        while worker.is_alive():
+            worker.join(0.1)
+    except KeyboardInterrupt:
+        interrupted = True
+        agent.estop()
+        worker.join(5.0)
+    result = box.get("result")
+    agent.cleanup()
+    if result is None:
+        print("shadowhound: interrupted; the robot was stopped", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if args.json:
+        out = result.to_dict()
+        json.dump(out, sys.stdout, separators=(",", ":"))
+        sys.stdout.write("\n")
+    else:
+        st = result.robot
+        print(result.response)
+        print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
+              f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
+              f"battery={st.battery:.1f}%")
+    if interrupted:
+        return EXIT_INTERRUPTED
+    return EXIT_OK if result.success else EXIT_FAILED
+
+
+# -- skills ----------------------------------------------------------------------------------
+
+
+def cmd_skills(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    from .skills import default_registry
+
+    described = default_registry().describe()
+    if args.json:
+        json.dump(described, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+        return EXIT_OK
+    for skill in described:
+        props = skill["parameters"].get("properties", {})
+        required = set(skill["parameters"].get("required", []))
+        params = ", ".join(f"{n}{'' if n in required else '?'}" for n in props)
+        print(f"{skill['name']}({params})")
+        print(f"    {skill['description']}")
+        for name, prop in props.items():
+            print(f"      {name}: {_schema_summary(prop)}")
+    return EXIT_OK
+
+
+def _schema_summary(prop: dict[str, Any]) -> str:
+    options = prop.get("anyOf", [prop])
+    kinds = [o.get("type", "any") for o in options if o.get("type") != "null"]
+    text = "|".join(kinds) or "any"
+    if "enum" in prop or any("enum" in o for o in options):
+        enum = prop.get("enum") or next(o["enum"] for o in options if "enum" in o)
+        text += " one of " + ", ".join(map(str, enum))
+    for key, sign in (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="),
+                      ("exclusiveMaximum", "<")):
+        bound = next((o[key] for o in options if key in o), None)
+        if bound is not None:
+            text += f" {sign}{bound:g}"
+    if prop.get("description"):
+        text += f" - {prop['description']}"
+    return text
+
+
+# -- chat --------------------------------------------------------------------------------------
+
+_CHAT_HELP = ("Ask a question (where are you? battery? what do you see? what did you do?), or: "
+              "/run MISSION, /status, /skills, /estop, /release, /help, /quit")
+
+
+def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    agent = _agent(settings)
+    interactive = sys.stdin.isatty()
+    if interactive:
+        print("ShadowHound chat. " + _CHAT_HELP)
+    try:
+        while True:
+            if interactive:
+                print("you> ", end="", flush=True)
+            line = sys.stdin.readline()
+            if not line:
+                break
+            line = line.strip()
+            if not line:
+                continue
+            if line in ("/quit", "/exit"):
+                break
+            print(_chat_line(agent, line), flush=True)
+    except KeyboardInterrupt:
+        agent.estop()
+    finally:
+        agent.cleanup()
+    return EXIT_OK
+
+
+def _chat_line(agent: Any, line: str) -> str:
+    if line.startswith("/run"):
+        mission = line[4:].strip()
+        if not mission:
+            return "usage: /run MISSION"
+        result = agent.execute_mission(mission)
+        return ("ok: " if result.success else "failed: ") + result.response
+    commands = {
+        "/status": lambda: json.dumps(agent.get_robot_status()),
+        "/skills": lambda: ", ".join(s["name"] for s in agent.get_available_skills()),
+        "/estop": lambda: (agent.estop(), "e-stop latched; /release to release it")[1],
+        "/release": lambda: (agent.release_estop(), "e-stop released")[1],
+        "/help": lambda: _CHAT_HELP,
+    }
+    if line.startswith("/"):
+        action = commands.get(line.split()[0])
+        return action() if action else f"unknown command {line.split()[0]!r}. {_CHAT_HELP}"
+    return str(agent.chat(line))
+
+
+# -- eval ----------------------------------------------------------------------------------------
+
+
+def cmd_eval(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    from .evaluation import CaseFileError, load_cases, run_cases
+
+    try:
+        cases = load_cases(args.file)
+    except CaseFileError as exc:
+        print(f"shadowhound: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+
+    def show(outcome: Any) -> None:
+        if args.json:
+            return
+        mark = "PASS" if outcome.passed else "FAIL"
+        print(f"{mark}  {outcome.case.mission!r}")
+        for failure in outcome.failures:
+            print(f"      {failure}  [{outcome.response}]")
+
+    outcomes = run_cases(cases, settings, on_case=show)
+    passed = sum(o.passed for o in outcomes)
+    total = len(outcomes)
+    rate = passed / total if total else 0.0
+    if args.json:
+        json.dump({"total": total, "passed": passed, "failed": total - passed,
+                   "pass_rate": round(rate, 4), "cases": [o.to_dict() for o in outcomes]},
+                  sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(f"{passed}/{total} cases passed ({100 * rate:.1f}%)")
+    return EXIT_OK if passed == total and total else EXIT_FAILED
+
+
+# -- config --------------------------------------------------------------------------------------
+
+
+def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    import yaml
+
+    sys.stdout.write(yaml.safe_dump(json.loads(settings.model_dump_json()), sort_keys=False))
+    return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())
