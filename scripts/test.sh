@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Set up a virtual environment with everything the tests need, then run lint and the tests.
+# This is the README's test command and exactly what CI runs (.ci/run).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+PYTHON=${PYTHON:-python3}
+VENV=${VENV:-.venv}
+
+if [ ! -x "$VENV/bin/python" ]; then
+  "$PYTHON" -m venv "$VENV"
+fi
+"$VENV/bin/python" -m pip install --quiet --upgrade pip
+"$VENV/bin/python" -m pip install --quiet -e ".[dev]"
+
+echo "== lint (ruff)"
+"$VENV/bin/ruff" check src tests bench
+
+echo "== type check (mypy, core)"
+"$VENV/bin/mypy" --no-error-summary src/shadowhound
+
+echo "== tests (Python $("$VENV/bin/python" -c 'import platform; print(platform.python_version())'))"
+"$VENV/bin/python" -m pytest -q "$@"
+
+# The core must also work on Python 3.10 (ROS 2 Humble's Python). Run the core tests there
+# when a 3.10 interpreter is available (pyenv on the project's machines).
+PY310=${PY310:-$(command -v python3.10 || ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.10*/bin/python 2>/dev/null | head -n 1 || true)}
+if [ -n "$PY310" ] && [ -x "$PY310" ] && [ -z "${SKIP_PY310:-}" ]; then
+  echo "== core tests on Python 3.10 ($PY310)"
+  if [ ! -x .venv310/bin/python ]; then
+    "$PY310" -m venv .venv310
+  fi
+  .venv310/bin/python -m pip install --quiet --upgrade pip
+  .venv310/bin/python -m pip install --quiet -e ".[dev]"
+  .venv310/bin/python -m pytest -q -p no:cacheprovider
+fi
