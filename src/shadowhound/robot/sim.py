@@ -227,7 +227,7 @@ class SimRobot:
         path = [current, posture]
         if Posture.STANDING not in path:  # sitting <-> lying goes through standing
             path = [current, Posture.STANDING, posture]
-        for a, b in zip(path, path[1:]):
+        for a, b in zip(path, path[1:], strict=False):
             self._settle()
             self.sleep(_POSTURE_SECONDS[(a, b)])
             with self._lock:
