@@ -16,9 +16,8 @@ import time
 import timeit
 from pathlib import Path
 
-from shadowhound.planning.rules import RulePlanner
-
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, SkillCall, default_registry
+from shadowhound.planning.rules import RulePlanner
 from shadowhound.skills import NoArgs, Skill
 
 FIVE_STEPS = ("stand up, walk forward 2 meters, turn left 90 degrees, "
