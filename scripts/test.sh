@@ -24,8 +24,18 @@ echo "== tests (Python $("$VENV/bin/python" -c 'import platform; print(platform.
 
 # The core must also work on Python 3.10 (ROS 2 Humble's Python). Run the core tests there
 # when a 3.10 interpreter is available (pyenv on the project's machines).
-PY310=${PY310:-$(command -v python3.10 || ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.10*/bin/python 2>/dev/null | head -n 1 || true)}
-if [ -n "$PY310" ] && [ -x "$PY310" ] && [ -z "${SKIP_PY310:-}" ]; then
+find_py310() {
+  local candidate
+  for candidate in "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.10*/bin/python python3.10; do
+    # pyenv shims exist even where no 3.10 is installed: check that it really runs.
+    if "$candidate" -c 'import sys; assert sys.version_info[:2] == (3, 10)' 2>/dev/null; then
+      echo "$candidate"
+      return
+    fi
+  done
+}
+PY310=${PY310:-$(find_py310)}
+if [ -n "$PY310" ] && [ -z "${SKIP_PY310:-}" ]; then
   echo "== core tests on Python 3.10 ($PY310)"
   if [ ! -x .venv310/bin/python ]; then
     "$PY310" -m venv .venv310
