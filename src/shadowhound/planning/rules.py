@@ -3,148 +3,31 @@
 It recognises kinds of requests (postures, moves, turns, go-to, shapes, patrols, waits, tricks,
 questions) rather than fixed sentences, and records every assumption in `Plan.notes`. It never
 refuses on safety grounds; limits and risky tricks are the safety layer's business.
+
+This module decides what each kind of request means. Reading the English is done by `_english`
+(clauses, clean-up, tokens), `_phrases` (patterns per kind of clause), `_vocabulary` (word
+tables) and `_numbers` (units, number words); `_errors` words the replies when a plan fails.
 """
 
 from __future__ import annotations
 
-import re
 from typing import Any
 
 from shadowhound.plan import Plan, PlanningError, SkillCall
 from shadowhound.planning import _english as en
+from shadowhound.planning import _numbers as nums
+from shadowhound.planning import _phrases as phrases
+from shadowhound.planning import _vocabulary as vocab
+from shadowhound.planning._errors import CAPABILITIES, NotUnderstood, describe, failure
+from shadowhound.planning._text import canon
 from shadowhound.robot.go2_api import TRICKS
+
+__all__ = ["CAPABILITIES", "MAX_CHARS", "MAX_STEPS", "RulePlanner"]
 
 MAX_CHARS = 2000
 MAX_STEPS = 1000  # guards memory against "repeat 1000000 times"; motion limits live elsewhere
-FAST = 0.5
-SLOW = 0.2
 
-CAPABILITIES = (
-    "I can stand, sit, lie down, move/strafe/turn by a distance or angle, go to a position or a "
-    "named place, patrol, walk a square, wait, do tricks (hello, dance, stretch, ...), describe "
-    "what I see, report status, and stop."
-)
-
-_fmt = en.format_number
-
-
-class _NotUnderstood(Exception):
-    """A clause of a known kind that cannot be planned; the reason is shown to the user."""
-
-    def __init__(self, reason: str = "") -> None:
-        super().__init__(reason)
-        self.reason = reason
-
-
-# ---- vocabulary --------------------------------------------------------------------------------
-
-_TRICK_WORDS = {
-    "hello": "hello|hi|wave|wave hello|wave hi|wave goodbye|wave bye|say hello|say hi|say hey"
-    "|say goodbye|greet|greeting|greetings|shake|shake hands|shake hand|shake paw|paw|give paw"
-    "|high 5",
-    "stretch": "stretch|stretch out|stretch legs|stretching",
-    "dance1": "dance|dance 1|first dance|1st dance|dance number 1|dance routine|dance routine 1"
-    "|little dance|dancing|dance move",
-    "dance2": "dance 2|second dance|2nd dance|dance number 2|dance routine 2|other dance",
-    "wiggle_hips": "wiggle|wiggle hips|hip wiggle|shake hips|wiggle butt|shake butt|shake booty"
-    "|wiggle bottom|twerk",
-    "finger_heart": "heart|finger heart|heart shape|heart sign|love|make heart",
-    "scrape": "bow|scrape|bow down",
-    "content": "content|look content|be content|look happy|be happy|contentment|happy",
-    "pose": "pose|strike pose|pose for photo|pose for camera|pose for picture",
-    "wallow": "wallow|roll over|roll around|roll|wallow around|roll on ground|roll on floor",
-    "moonwalk": "moonwalk|moon walk",
-    "cross_step": "cross step|crossstep|cross steps",
-    "onesided_step": "onesided step|1 sided step|1 side step|side step in place",
-    "recovery_stand": "recover|recovery|recovery stand|recover yourself|get back on feet",
-    "front_flip": "flip|front flip|frontflip|forward flip|flip forward|flip forwards",
-    "front_jump": "jump|front jump|jump forward|jump forwards|hop|leap|jump up",
-    "front_pounce": "pounce|front pounce|pounce forward",
-    "left_flip": "left flip|flip left|flip to left|side flip left",
-    "right_flip": "right flip|flip right|flip to right|side flip right",
-    "backflip": "backflip|back flip|backwards flip|backward flip|flip backwards|flip backward"
-    "|flip back",
-    "handstand": "handstand|hand stand|stand on hands|stand on front legs|stand on front paws",
-    "bound": "bound|bounding|bound in place",
-}
-_TRICKS: dict[str, str] = {name.replace("_", " "): name for name in TRICKS}
-for _trick, _phrases in _TRICK_WORDS.items():
-    if _trick in TRICKS:  # the table in go2_api is the authority on which tricks exist
-        _TRICKS.update(dict.fromkeys(_phrases.split("|"), _trick))
-
-_POSTURE_SKILL = {"lie": "body.lie_down", "sit": "body.sit", "stand": "body.stand"}
-
-_PLACE = re.compile(r"^[^\W\d_][\w ]{0,60}$")
-_NOT_PLACES = frozenset([*en.DIRECTIONS, "front", "side", "rear", "here", "there", "me", "you"])
-
-_PATROL = re.compile(r"\b(?:patrol\w*|perimeter|laps?|circuits?)\b")
-_LAPS = re.compile(rf"(?<![0-9.])({en.NUM})\s+(?:patrol\s+)?(?:laps?|rounds?|circuits?|loops?)\b")
-_SHAPE = re.compile(r"\b(triangle|square|rectangle|pentagon|hexagon|octagon)s?\b")
-_SIDES = {"triangle": 3, "square": 4, "rectangle": 4, "pentagon": 5, "hexagon": 6, "octagon": 8}
-_SHAPE_WORDS = frozenset(
-    en.words(
-        "walk go move run drive trot jog travel do make trace draw perform complete follow"
-        " with each every side sides length lengths long wide shape shaped pattern path loop"
-        " route is that has measuring size edge edges turning turns turn triangle square"
-        " rectangle pentagon hexagon octagon triangles squares rectangles"
-    )
-)
-
-# verb -> (kind, implied direction, speed in m/s or None)
-_VERBS: dict[str, tuple[str, str, float | None]] = {
-    **dict.fromkeys(
-        en.words(
-            "go|walk|move|head|drive|proceed|step|come|travel|march|continue|scoot|jog|trot|stroll"
-            "|amble|cruise|keep going|keep walking|keep moving|carry on|make your way|take a step"
-            "|take 1 step|take a small step|take a little step|take a big step",
-            "|",
-        ),
-        ("move", "", None),
-    ),
-    **dict.fromkeys(en.words("run sprint dash hurry rush race"), ("move", "", FAST)),
-    **dict.fromkeys(en.words("creep sneak tiptoe inch"), ("move", "", SLOW)),
-    "advance": ("move", "forward", None),
-    **dict.fromkeys(
-        en.words("retreat|reverse|back up|back off|back away|backup", "|"), ("move", "back", None)
-    ),
-    **dict.fromkeys(
-        en.words("strafe|sidestep|side step|shift|slide|shuffle|crab walk|crab", "|"),
-        ("strafe", "", None),
-    ),
-    **dict.fromkeys(en.words("turn rotate spin pivot face swivel yaw twist"), ("rotate", "", None)),
-}
-_MOTION = re.compile(rf"^(?P<verb>{en.alternation(_VERBS)})(?!\w)\s*(?P<rest>.*)$")
-_LEAD_ADVERB = re.compile(rf"^(?P<adv>{en.alternation(en.ADVERBS)})\s+")
-
-
-def _describe(step: SkillCall) -> str:
-    """A short description of a step, for error messages."""
-    a: dict[str, Any] = step.args
-    if step.skill == "nav.move":
-        return (
-            f"move {'forward' if a['distance'] >= 0 else 'backward'} {_fmt(abs(a['distance']))} m"
-        )
-    if step.skill == "nav.strafe":
-        return f"step {'left' if a['distance'] >= 0 else 'right'} {_fmt(abs(a['distance']))} m"
-    if step.skill == "nav.rotate":
-        return f"turn {'left' if a['degrees'] >= 0 else 'right'} {_fmt(abs(a['degrees']))} degrees"
-    if step.skill == "nav.goto":
-        if "place" in a:
-            return {"start": "return to the start", "home": "go home"}.get(
-                a["place"], f"go to {a['place']}"
-            )
-        return f"go to ({_fmt(a['x'])}, {_fmt(a['y'])})"
-    if step.skill == "nav.patrol":
-        return f"patrol {a['laps']} lap{'s' if a['laps'] != 1 else ''}"
-    if step.skill == "body.sport":
-        return f"do the {a['trick']} trick"
-    if step.skill == "sys.wait":
-        return f"wait {_fmt(a['seconds'])} s"
-    return {
-        "nav.stop": "stop", "body.stand": "stand up", "body.sit": "sit down",
-        "body.lie_down": "lie down", "sys.status": "report status",
-        "perception.describe": "describe what I see", "perception.look_around": "look around",
-    }.get(step.skill, step.skill)  # fmt: skip
+_fmt = nums.format_number
 
 
 class RulePlanner:
@@ -186,12 +69,12 @@ class RulePlanner:
         for label in en.split_clauses(text):
             try:
                 norm, clause_notes = en.normalize(label)
-                norm, count, how = en.repetition(norm)
+                norm, count, how = phrases.repetition(norm)
                 if not norm and not how:
                     continue  # only fillers such as "please" or "hey dog"
-                if not norm or en.REPEAT_ALL.match(norm):
+                if not norm or phrases.REPEAT_ALL.match(norm):
                     if not steps:
-                        raise _NotUnderstood("there is nothing before it to repeat")
+                        raise NotUnderstood("there is nothing before it to repeat")
                     total = count + 1 if how == "more" else (count if how == "times" else 2)
                     _check_size(steps, len(steps) * total)
                     steps = steps * total
@@ -199,8 +82,8 @@ class RulePlanner:
                     continue
                 new, last_verb = self._clause(norm, label, clause_notes, last_verb)
                 if new is None:
-                    raise _NotUnderstood()
-            except _NotUnderstood as exc:
+                    raise NotUnderstood()
+            except NotUnderstood as exc:
                 failed.append((label, exc.reason))
                 last_verb = ""
                 continue
@@ -219,7 +102,7 @@ class RulePlanner:
             steps.extend(new)
             notes.extend(clause_notes)
         if failed:
-            raise _failure(steps, failed)
+            raise failure(steps, failed)
         if not steps:
             raise PlanningError(
                 f"I found no request in {text.strip()[:80]!r}. " + CAPABILITIES,
@@ -233,36 +116,36 @@ class RulePlanner:
         self, text: str, label: str, notes: list[str], last_verb: str
     ) -> tuple[list[SkillCall] | None, str]:
         """Steps for one normalised clause, or None if it is of no kind known here."""
-        if en.STOP.match(text):
+        if phrases.STOP.match(text):
             return [SkillCall("nav.stop", {}, label)], ""
-        if en.NEGATION.search(text):
-            raise _NotUnderstood("I do not plan around 'not'; say what to do instead")
+        if phrases.NEGATION.search(text):
+            raise NotUnderstood("I do not plan around 'not'; say what to do instead")
         for handler in (self._wait, self._posture, self._trick, self._goto, self._patrol):
             steps = handler(text, label, notes)
             if steps is not None:
                 return steps, ""
-        if _SHAPE.search(text):
+        if phrases.SHAPE.search(text):
             return self._shape(text, label, notes), ""
-        for pattern, replacement in en.ROTATE_PREFIXES:
+        for pattern, replacement in phrases.ROTATE_PREFIXES:
             text = pattern.sub(replacement, text, count=1)
-        m = _MOTION.match(text)
+        m = phrases.MOTION.match(text)
         if m is None:
             verb = _implied_verb(text, last_verb)
-            m = _MOTION.match(f"{verb} {text}") if verb else None
-        adverb = _LEAD_ADVERB.match(text) if m is None else None
+            m = phrases.MOTION.match(f"{verb} {text}") if verb else None
+        adverb = phrases.LEAD_ADVERB.match(text) if m is None else None
         if adverb is not None:
-            m = _MOTION.match(text[adverb.end() :])
+            m = phrases.MOTION.match(text[adverb.end() :])
         if m is not None:
-            verb = en.canon(m["verb"])
-            speed = en.ADVERBS[en.canon(adverb["adv"])] if adverb else None
+            verb = canon(m["verb"])
+            speed = vocab.ADVERBS[canon(adverb["adv"])] if adverb else None
             return self._motion(verb, m["rest"], label, notes, speed), verb
-        if en.STATUS.search(text):
+        if phrases.STATUS.search(text):
             return [SkillCall("sys.status", {}, label)], ""
-        if en.LOOK_AROUND.search(text):
+        if phrases.LOOK_AROUND.search(text):
             return [SkillCall("perception.look_around", {"question": label}, label)], ""
-        if en.DESCRIBE.search(text):
+        if phrases.DESCRIBE.search(text):
             return [SkillCall("perception.describe", {"question": label}, label)], ""
-        if en.REPORT.match(text):
+        if phrases.REPORT.match(text):
             return [SkillCall("sys.status", {}, label)], ""
         return None, ""
 
@@ -271,19 +154,19 @@ class RulePlanner:
         seconds = 0.0
         found = False
         for tok in en.scan(rest):
-            if tok.kind == "qty" and tok.unit in (en.TIME, ""):
+            if tok.kind == "qty" and tok.unit in (nums.TIME, ""):
                 if not tok.unit:
                     notes.append(f"no unit given for '{label}': took {tok.text} as seconds")
                 seconds += tok.value
                 found = True
             elif tok.kind == "qty":
-                raise _NotUnderstood("a wait takes a time such as '2 seconds'")
-            elif tok.kind not in ("fill",) and tok.text not in en.WAIT_WORDS:
-                raise _NotUnderstood(f"I can only wait for a time, not '{tok.text}'")
+                raise NotUnderstood("a wait takes a time such as '2 seconds'")
+            elif tok.kind not in ("fill",) and tok.text not in vocab.WAIT_WORDS:
+                raise NotUnderstood(f"I can only wait for a time, not '{tok.text}'")
         return seconds if found else None
 
     def _wait(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
-        m = en.WAIT.match(text)
+        m = phrases.WAIT.match(text)
         if m is None:
             return None
         seconds = self._duration(m["rest"] or "", label, notes)
@@ -293,33 +176,33 @@ class RulePlanner:
         return [SkillCall("sys.wait", {"seconds": float(seconds)}, label)]
 
     def _posture(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
-        m = en.POSTURE.match(text)
+        m = phrases.POSTURE.match(text)
         if m is None:
             return None
         kind = next(k for k in ("lie", "sit", "stand") if m[k])
-        steps = [SkillCall(_POSTURE_SKILL[kind], {}, label)]
+        steps = [SkillCall(vocab.POSTURE_SKILL[kind], {}, label)]
         if m["rest"]:
             try:
                 seconds = self._duration(m["rest"], label, notes)
-            except _NotUnderstood:
+            except NotUnderstood:
                 return None  # e.g. "stand on your front legs" is a trick, not a posture
             if seconds is not None:  # "sit for 10 seconds": sit, then stay so
                 steps.append(SkillCall("sys.wait", {"seconds": float(seconds)}, label))
         return steps
 
     def _trick(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
-        key = en.TRICK_PREFIX.sub("", text, count=1)
-        key = en.canon(en.TRICK_STOPWORDS.sub(" ", key))
-        key = en.TRICK_TAIL.sub("", key)
-        trick = _TRICKS.get(key) or _TRICKS.get(en.canon(text))
-        if trick is None and en.GREET.match(text) and "hello" in TRICKS:
+        key = phrases.TRICK_PREFIX.sub("", text, count=1)
+        key = canon(phrases.TRICK_STOPWORDS.sub(" ", key))
+        key = phrases.TRICK_TAIL.sub("", key)
+        trick = vocab.TRICK_NAMES.get(key) or vocab.TRICK_NAMES.get(canon(text))
+        if trick is None and phrases.GREET.match(text) and "hello" in TRICKS:
             trick = "hello"
         if trick is None:
             return None
         return [SkillCall("body.sport", {"trick": trick}, label)]
 
     def _goto(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
-        m = en.GOTO.match(text)
+        m = phrases.GOTO.match(text)
         if m is None:
             return None
         target, back, prep = m["target"] or "", bool(m["back"]), bool(m["prep"])
@@ -332,59 +215,59 @@ class RulePlanner:
             if m["ret"] == "return" or (back and not prep and m["verb"] != "move"):
                 return goto(place="start")
             return None
-        if en.HOME.match(target):
+        if phrases.HOME.match(target):
             return goto(place="home")
         nearby = target in ("here", "me", "us")  # only "come back here" says where to go
-        if en.START.match(target) and (back or prep or direct) and (back or not nearby):
+        if phrases.START.match(target) and (back or prep or direct) and (back or not nearby):
             return goto(place="start")
         if not (prep or direct):
             return None
-        xy = en.COORDS.match(target)
+        xy = phrases.COORDS.match(target)
         if xy is not None:
             x = en.quantity(xy["x"], xy["xu"])
             y = en.quantity(xy["y"], xy["yu"])
-            if any(q.unit not in ("", en.DISTANCE) for q in (x, y)):
-                raise _NotUnderstood("a position takes two distances, x and y")
+            if any(q.unit not in ("", nums.DISTANCE) for q in (x, y)):
+                raise NotUnderstood("a position takes two distances, x and y")
             return goto(x=float(x.value), y=float(y.value))
-        if en.POSITION_ONLY.match(target):
-            raise _NotUnderstood("a position needs two numbers, e.g. 'go to position 2, 1'")
-        words = en.canon(en.ARTICLES.sub(" ", target)).split()
-        while words and words[-1] in en.ADVERBS:
+        if phrases.POSITION_ONLY.match(target):
+            raise NotUnderstood("a position needs two numbers, e.g. 'go to position 2, 1'")
+        words = canon(phrases.ARTICLES.sub(" ", target)).split()
+        while words and words[-1] in vocab.ADVERBS:
             notes.append(f"'{words.pop()}' ignored in '{label}': go-to uses its own speed")
         place = " ".join(words)
-        if not _PLACE.match(place) or len(words) > 5 or place in _NOT_PLACES:
+        if not phrases.PLACE.match(place) or len(words) > 5 or place in phrases.NOT_PLACES:
             return None
-        if any(q.group(2) for q in en.QTY.finditer(place)):
+        if any(q.group(2) for q in nums.QTY.finditer(place)):
             return None  # "go to the left 2 meters" is a move
         return goto(place=place)
 
     def _patrol(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
-        if not _PATROL.search(text):
+        if not phrases.PATROL.search(text):
             return None
         laps = 1
-        m = _LAPS.search(text)
+        m = phrases.LAPS.search(text)
         if m is not None:
-            value = en.to_float(m.group(1))
+            value = nums.to_float(m.group(1))
             if value != int(value) or value < 1:
-                raise _NotUnderstood("a patrol takes a whole number of laps")
+                raise NotUnderstood("a patrol takes a whole number of laps")
             laps = int(value)
         return [SkillCall("nav.patrol", {"laps": laps}, label)]
 
     def _shape(self, text: str, label: str, notes: list[str]) -> list[SkillCall]:
-        shape = _SHAPE.search(text).group(1)  # type: ignore[union-attr]
+        shape = phrases.SHAPE.search(text).group(1)  # type: ignore[union-attr]
         sign, speed = 1.0, None
         sides: list[en.Token] = []
         for tok in en.scan(text):
             if tok.kind == "qty":
-                if tok.unit not in ("", en.DISTANCE):
-                    raise _NotUnderstood(f"the sides of a {shape} are distances")
+                if tok.unit not in ("", nums.DISTANCE):
+                    raise NotUnderstood(f"the sides of a {shape} are distances")
                 sides.append(tok)
             elif tok.kind == "dir" and tok.text in ("right", "cw"):
                 sign = -1.0
             elif tok.kind in ("speed", "adv"):
                 speed = tok.value
-            elif tok.kind == "word" and tok.text not in _SHAPE_WORDS:
-                raise _NotUnderstood(f"I do not know '{tok.text}' in a shape")
+            elif tok.kind == "word" and tok.text not in vocab.SHAPE_WORDS:
+                raise NotUnderstood(f"I do not know '{tok.text}' in a shape")
         named = [t.unit_name for t in sides if t.unit_name]
         if len(named) < len(sides):
             unit = named[0] if named else None  # "2 by 1 meter": the unit covers both numbers
@@ -397,12 +280,12 @@ class RulePlanner:
             lengths = [self.default_square_side] * wanted
             notes.append(f"no side length given for '{label}': used {_fmt(lengths[0])} m")
         if len(set(lengths)) != wanted and not (wanted == 2 and len(lengths) == 2):
-            raise _NotUnderstood(
+            raise NotUnderstood(
                 "a rectangle needs two side lengths, e.g. '2 by 1 meter'"
                 if wanted == 2
                 else f"a {shape} has one side length"
             )
-        n = _SIDES[shape]
+        n = vocab.SIDES[shape]
         turn = sign * 360.0 / n
         args: dict[str, Any] = {} if speed is None else {"speed": speed}
         steps = []
@@ -415,7 +298,7 @@ class RulePlanner:
     def _motion(
         self, verb: str, rest: str, label: str, notes: list[str], speed: float | None
     ) -> list[SkillCall]:
-        kind, implied, verb_speed = _VERBS[verb]
+        kind, implied, verb_speed = vocab.VERBS[verb]
         speed = speed if speed is not None else verb_speed
         dirs = [implied] if implied else []
         qtys: list[en.Token] = []
@@ -427,21 +310,21 @@ class RulePlanner:
             elif tok.kind in ("speed", "adv"):
                 speed = tok.value
             elif tok.kind == "word":
-                raise _NotUnderstood(f"'{tok.text}' does not fit a move or a turn")
+                raise NotUnderstood(f"'{tok.text}' does not fit a move or a turn")
         if kind == "rotate":
             return self._rotate(verb, dirs, qtys, label, notes)
         if verb == "come" and not dirs and not qtys:
-            raise _NotUnderstood("I do not know where you are; 'come back' returns to the start")
-        if any(q.unit not in ("", en.DISTANCE) for q in qtys):
-            raise _NotUnderstood("a move takes a distance, e.g. '2 meters'; use 'turn' to turn")
+            raise NotUnderstood("I do not know where you are; 'come back' returns to the start")
+        if any(q.unit not in ("", nums.DISTANCE) for q in qtys):
+            raise NotUnderstood("a move takes a distance, e.g. '2 meters'; use 'turn' to turn")
         if len(qtys) > 1 and any(not q.unit for q in qtys):
-            raise _NotUnderstood("I found more than one number for one move")
+            raise NotUnderstood("I found more than one number for one move")
         if any(d in ("cw", "ccw", "around") for d in dirs):
-            raise _NotUnderstood("to change heading, say 'turn left' or 'turn around'")
+            raise NotUnderstood("to change heading, say 'turn left' or 'turn around'")
         forward = {1 if d == "forward" else -1 for d in dirs if d in ("forward", "back")}
         lateral = {1 if d == "left" else -1 for d in dirs if d in ("left", "right")}
         if len(forward) > 1 or len(lateral) > 1 or (forward and (lateral or "side" in dirs)):
-            raise _NotUnderstood("the directions contradict each other; give one per step")
+            raise NotUnderstood("the directions contradict each other; give one per step")
         if qtys:
             distance = round(sum(q.value for q in qtys), 9)  # "5 feet 6 inches" without noise
             if not qtys[0].unit:
@@ -478,13 +361,13 @@ class RulePlanner:
             elif d in ("around", "back"):
                 around = True
             else:
-                raise _NotUnderstood(f"a turn goes left or right, not {d}")
+                raise NotUnderstood(f"a turn goes left or right, not {d}")
         if len(signs) > 1:
-            raise _NotUnderstood("the directions contradict each other; give one per turn")
-        if any(q.unit not in ("", en.ANGLE) for q in qtys):
-            raise _NotUnderstood("a turn takes an angle such as '90 degrees', not a distance")
+            raise NotUnderstood("the directions contradict each other; give one per turn")
+        if any(q.unit not in ("", nums.ANGLE) for q in qtys):
+            raise NotUnderstood("a turn takes an angle such as '90 degrees', not a distance")
         if len(qtys) > 1 and any(not q.unit for q in qtys):
-            raise _NotUnderstood("I found more than one number for one turn")
+            raise NotUnderstood("I found more than one number for one turn")
         if qtys:
             degrees = round(sum(q.value for q in qtys), 9)
             if not qtys[0].unit:
@@ -509,10 +392,10 @@ def _implied_verb(text: str, last_verb: str) -> str:
     if not tokens or tokens[0].kind not in ("dir", "qty"):
         return ""
     units = {t.unit for t in tokens if t.kind == "qty"}
-    rotating = bool(last_verb) and _VERBS[last_verb][0] == "rotate"
-    if en.ANGLE in units:
+    rotating = bool(last_verb) and vocab.VERBS[last_verb][0] == "rotate"
+    if nums.ANGLE in units:
         return last_verb if rotating else "turn"
-    if en.DISTANCE in units and (rotating or not last_verb):
+    if nums.DISTANCE in units and (rotating or not last_verb):
         return "move"
     return last_verb if tokens[0].kind == "dir" or last_verb else ""
 
@@ -521,19 +404,5 @@ def _check_size(steps: list[SkillCall], size: int) -> None:
     if size > MAX_STEPS:
         raise PlanningError(
             f"The plan would have {size} steps; the limit is {MAX_STEPS}. Ask for fewer repeats.",
-            understood=[_describe(s) for s in steps[:20]],
+            understood=[describe(s) for s in steps[:20]],
         )
-
-
-def _failure(steps: list[SkillCall], failed: list[tuple[str, str]]) -> PlanningError:
-    understood = [_describe(s) for s in steps]
-    shown = "; ".join(understood[:12]) + ("; ..." if len(understood) > 12 else "")
-    quoted = ", ".join(
-        f'"{label}"' + (f" ({reason})" if reason else "") for label, reason in failed
-    )
-    message = (f"I understood: {shown}. " if understood else "") + f"I did not understand {quoted}."
-    return PlanningError(
-        f"{message} {CAPABILITIES}",
-        understood=understood,
-        not_understood=[label for label, _ in failed],
-    )
