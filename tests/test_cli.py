@@ -60,8 +60,8 @@ def test_usage_and_config_errors_exit_2(tmp_path):
     bad.write_text("safety: {max_linear_speed: fast}")
     proc = shadowhound("run", "--config", str(bad), "stand up")
     assert proc.returncode == 2 and "safety.max_linear_speed" in proc.stderr
-    proc = shadowhound("run", "--backend", "openai", "stand up")
-    assert proc.returncode == 2 and "backend 'openai'" in proc.stderr
+    proc = shadowhound("run", "--backend", "openai", "stand up", env={"OPENAI_API_KEY": ""})
+    assert proc.returncode == 2 and "set the environment variable OPENAI_API_KEY" in proc.stderr
 
 
 def test_skills_listing_and_json():

@@ -20,7 +20,7 @@ from .camera import to_camera_frame
 from .config import ConfigError, ShadowHoundConfig
 from .conversation import answer_offline
 from .plan import Plan, PlanningError, SkillCall, Usage
-from .planning import FixedPlanner, Planner, make_planner
+from .planning import FixedPlanner, Planner, PlanningContext, make_planner
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing
 from .robot.base import Robot, RobotError
 from .safety import Governor
@@ -77,6 +77,9 @@ class RobotAgent:
         self._history: deque[MissionResult] = deque(
             maxlen=max(1, self.settings.agent.conversation_history_size)
         )
+        self._chat_history: deque[dict[str, str]] = deque(
+            maxlen=2 * self.settings.agent.conversation_history_size
+        )
         self._initialized = False
 
     # -- life cycle ------------------------------------------------------------------------
@@ -96,6 +99,9 @@ class RobotAgent:
             self._robot = SimRobot(self.settings.sim)
         if self._planner is None:
             self._planner = make_planner(self.settings)
+        check = getattr(self._planner, "check", None)
+        if check is not None and self.settings.llm.check_on_start:
+            check()  # raises BackendUnavailable (a ConfigError) naming the URL and the model
         self._initialized = True
         return True
 
@@ -170,6 +176,9 @@ class RobotAgent:
         robot = self.robot
         env = PlanEnv(self.settings, robot.get_state().pose)
 
+        if getattr(planner, "mode", "plan") == "react" and hasattr(planner, "react"):
+            return self._run_react(mission_id, text, started, planner, env)
+
         # 1. Plan. The planner never touches the robot.
         t = time.perf_counter()
         try:
@@ -184,39 +193,127 @@ class RobotAgent:
                                 MissionStatus.STOPPED, self._stop_reason())
 
         # 2. Validate every step and check the whole predicted path before anything moves.
-        calls, problems = self._validate(plan)
-        steps = [StepResult(i, c.skill, _plain_args(c.args), c.label)
-                 for i, c in enumerate(plan.steps, 1)]
-        refusals, _path = self.governor.check_plan(calls, env.mission_start, env)
-        problems += [str(r) for r in refusals]
+        steps, valid, problems = self._prepare(plan, env, env.mission_start, first=1)
         if problems:
-            for s in steps:
-                s.status = StepStatus.SKIPPED
             return self._finish(mission_id, text, started, timing, steps, plan,
                                 MissionStatus.FAILED, "Refused before moving: " +
                                 "; ".join(problems), refusals=problems)
-        valid = [c for c in calls if c is not None]
-        for s, c in zip(steps, valid, strict=False):
-            s.args = c.args_dict()
         self._emit(ev.PLAN_READY, mission_id, plan=plan.to_dict())
 
         # 3. Run the steps in order; the first failure stops the mission and the robot.
+        status, error = self._run_steps(mission_id, steps, valid, env, timing)
+
+        # 4. A failed step may be re-planned once, from where the robot is now.
+        replan = getattr(planner, "replan", None)
+        if status is MissionStatus.FAILED and replan and self.settings.agent.replan_on_failure:
+            done = [s.output for s in steps if s.status is StepStatus.SUCCEEDED]
+            t = time.perf_counter()
+            try:
+                again = replan(text, self._planning_context(), done, error or "")
+                plan.usage.add(again.usage)
+            except PlanningError as exc:
+                plan.usage.add(exc.usage)
+                again = None
+                error = f"{error}; re-planning failed: {exc.message}"
+            timing.agent_duration += time.perf_counter() - t
+            if again is not None and not self._cancel.is_set():
+                pose = robot.get_state().pose
+                more, more_valid, problems = self._prepare(again, env, pose, first=len(steps) + 1)
+                if problems:
+                    error = f"{error}; the new plan was refused: {'; '.join(problems)}"
+                else:
+                    plan.notes.append(f"re-planned after: {error}")
+                    plan.steps += again.steps
+                    steps += more
+                    self._set_current(steps=len(steps))
+                    status, error = self._run_steps(mission_id, more, more_valid, env, timing)
+        response = self._compose_response(status, steps, plan, error)
+        return self._finish(mission_id, text, started, timing, steps, plan, status, response,
+                            error=error)
+
+    def _prepare(self, plan: Plan, env: PlanEnv, start: Any, first: int
+                 ) -> tuple[list[StepResult], list[ValidatedCall], list[str]]:
+        """Steps for the record, validated calls, and every problem (validation and safety)."""
+        calls, problems = self._validate(plan)
+        steps = [StepResult(i, c.skill, _plain_args(c.args), c.label)
+                 for i, c in enumerate(plan.steps, first)]
+        refusals, _path = self.governor.check_plan(calls, start, env)
+        problems += [str(r).replace(f"step {r.step} ", f"step {r.step + first - 1} ", 1)
+                     for r in refusals]
+        valid = [c for c in calls if c is not None]
+        if problems:
+            for s in steps:
+                s.status = StepStatus.SKIPPED
+        else:
+            for s, c in zip(steps, valid, strict=True):
+                s.args = c.args_dict()
+        return steps, valid, problems
+
+    def _run_steps(self, mission_id: str, steps: list[StepResult], calls: list[ValidatedCall],
+                   env: PlanEnv, timing: Timing) -> tuple[MissionStatus, str | None]:
         self._set_status(MissionStatus.EXECUTING)
-        self._set_current(steps=len(steps))
-        status, error = MissionStatus.SUCCEEDED, None
-        for step, call in zip(steps, valid, strict=False):
+        self._set_current(steps=max(self._current["steps"], steps[-1].index if steps else 0))
+        for position, (step, call) in enumerate(zip(steps, calls, strict=True)):
             outcome = self._run_step(mission_id, step, call, env)
             timing.execution_duration += step.duration
             timing.robot_duration += step.robot_duration
             if outcome is not MissionStatus.SUCCEEDED:
-                status, error = outcome, step.error
-                robot.stop()
-                for later in steps[step.index:]:
+                self.robot.stop()
+                for later in steps[position + 1:]:
                     later.status = StepStatus.SKIPPED
-                break
-        response = self._compose_response(status, steps, plan, error)
-        return self._finish(mission_id, text, started, timing, steps, plan, status, response,
-                            error=error)
+                return outcome, step.error
+        return MissionStatus.SUCCEEDED, None
+
+    def _run_react(self, mission_id: str, text: str, started: float, planner: Any,
+                   env: PlanEnv) -> MissionResult:
+        """The model calls one skill at a time; each passes validation and safety first."""
+        timing = Timing()
+        steps: list[StepResult] = []
+        refusals: list[str] = []
+        self._set_status(MissionStatus.EXECUTING)
+
+        def run_step(call: SkillCall) -> str:
+            step = StepResult(len(steps) + 1, str(call.skill), _plain_args(call.args), call.label)
+            steps.append(step)
+            self._set_current(steps=len(steps))
+            try:
+                valid = self.registry.validate(call)
+            except SkillValidationError as exc:
+                step.status, step.error = StepStatus.SKIPPED, "; ".join(exc.problems)
+                return f"invalid call, not run: {step.error}"
+            found, _path = self.governor.check_plan([valid], self.robot.get_state().pose, env)
+            if found:
+                step.status, step.error = StepStatus.SKIPPED, "; ".join(r.reason for r in found)
+                refusals.append(f"step {step.index} ({valid.name}): {step.error}")
+                return f"refused by the safety limits, not run: {step.error}"
+            step.skill, step.args = valid.name, valid.args_dict()
+            outcome = self._run_step(mission_id, step, valid, env)
+            timing.execution_duration += step.duration
+            timing.robot_duration += step.robot_duration
+            if outcome is MissionStatus.STOPPED:
+                raise MissionCancelled(step.error or "mission cancelled")
+            return step.output if outcome is MissionStatus.SUCCEEDED else f"failed: {step.error}"
+
+        t = time.perf_counter()
+        usage = Usage()
+        status = MissionStatus.SUCCEEDED
+        try:
+            answer, usage, finished = planner.react(text, self._planning_context(), run_step)
+        except PlanningError as exc:
+            answer, usage, finished = exc.message, exc.usage, False
+        except MissionCancelled:
+            answer, finished, status = self._stop_reason(), False, MissionStatus.STOPPED
+        timing.agent_duration = max(0.0, time.perf_counter() - t - timing.execution_duration)
+        failed = [s for s in steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)]
+        if status is not MissionStatus.STOPPED and (not finished or failed or refusals):
+            status = MissionStatus.FAILED
+        if status is MissionStatus.SUCCEEDED and self._cancel.is_set():
+            status, answer = MissionStatus.STOPPED, self._stop_reason()
+        plan = Plan([SkillCall(s.skill, s.args, s.label) for s in steps], text=text,
+                    usage=usage, planner=getattr(planner, "name", "react"))
+        return self._finish(mission_id, text, started, timing, steps, plan, status, answer,
+                            error=None if status is MissionStatus.SUCCEEDED else answer,
+                            refusals=refusals)
 
     def _validate(self, plan: Plan) -> tuple[list[ValidatedCall | None], list[str]]:
         """Validate every step; invalid ones become None so the rest can still be checked."""
@@ -245,6 +342,7 @@ class RobotAgent:
         wall, robot_t0 = time.perf_counter(), robot.now()
         status = MissionStatus.SUCCEEDED
         ctx = SkillContext(robot, env, self._cancel, camera=self._latest_frame,
+                           vision=self._vision(),
                            on_progress=lambda f: self._step_progress(step.index, f))
         try:
             refused = self.governor.check_step(call, robot.get_state().pose, env)
@@ -333,7 +431,17 @@ class RobotAgent:
         """Answer a question about the robot and its missions. Never moves the robot."""
         if not isinstance(text, str) or not text.strip():
             return "Ask me something, for example: where are you? how is your battery?"
-        return answer_offline(text[: self.settings.agent.max_mission_chars], self)
+        text = text[: self.settings.agent.max_mission_chars]
+        llm_chat = getattr(self.planner, "chat", None)
+        if llm_chat is None:
+            return answer_offline(text, self)
+        with self._state_lock:
+            history = list(self._chat_history)
+        answer = str(llm_chat(text, self._planning_context(), history))
+        with self._state_lock:
+            self._chat_history.extend([{"role": "user", "content": text},
+                                       {"role": "assistant", "content": answer}])
+        return answer
 
     def get_diagnostics(self) -> dict[str, Any]:
         with self._state_lock:
@@ -377,12 +485,18 @@ class RobotAgent:
         """
         self._camera_frame = to_camera_frame(frame)
 
+    def _vision(self) -> Any:
+        """The planner's image describer when the model is configured as vision-capable."""
+        if not self.settings.llm.vision:
+            return None
+        return getattr(self._planner, "describe_image", None)
+
     def _latest_frame(self) -> CameraFrame | None:
         return self._camera_frame or self.robot.get_camera_frame()
 
-    def _planning_context(self) -> dict[str, Any]:
-        return {"state": self.robot.get_state(), "places": dict(self.settings.places),
-                "skills": self.registry, "history": [r.summary() for r in self._history]}
+    def _planning_context(self) -> PlanningContext:
+        return PlanningContext(self.registry, self.robot.get_state(), dict(self.settings.places),
+                               [r.summary() for r in self._history], self._cancel)
 
     # -- bookkeeping ---------------------------------------------------------------------------
 

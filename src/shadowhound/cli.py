@@ -28,7 +28,12 @@ def _common(parser: argparse.ArgumentParser, suppress: bool) -> None:
                         ") or a YAML file; default $SHADOWHOUND_CONFIG or offline")
     parser.add_argument("--backend", default=default,
                         choices=["offline", "openai", "ollama", "vllm", "llamacpp"],
-                        help="planner backend, overrides the profile")
+                        help="planner backend; without --config it also picks that profile")
+    parser.add_argument("--model", default=default, help="language model name (llm.model)")
+    parser.add_argument("--base-url", default=default, metavar="URL",
+                        help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:8000/v1")
+    parser.add_argument("--mode", default=default, choices=["plan", "react"],
+                        help="language-model planning mode (llm.mode)")
     parser.add_argument("--time-scale", type=float, metavar="S", default=default,
                         help="simulated robot: real seconds per simulated second (0 = fastest)")
     parser.add_argument("--verbose", "-v", action="count", default=argparse.SUPPRESS
@@ -67,16 +72,26 @@ def build_parser() -> argparse.ArgumentParser:
 
     show = sub.add_parser("config", help="print the effective configuration (no secrets)")
     _common(show, suppress=True)
+
+    doctor = sub.add_parser("doctor", help="check the configuration, the backend and the model")
+    _common(doctor, suppress=True)
     return parser
 
 
 def _settings(args: argparse.Namespace) -> ShadowHoundConfig:
     overrides: dict[str, Any] = {}
+    profile = args.config
     if args.backend:
         overrides["backend"] = args.backend
+        if profile is None and args.backend in available_profiles():
+            profile = args.backend  # --backend ollama alone means the ollama profile
     if args.time_scale is not None:
         overrides["sim"] = {"time_scale": args.time_scale}
-    return load_config(args.config, overrides)
+    llm = {k: v for k, v in (("model", args.model), ("base_url", args.base_url),
+                             ("mode", args.mode)) if v is not None}
+    if llm:
+        overrides["llm"] = llm
+    return load_config(profile, overrides)
 
 
 def _agent(settings: ShadowHoundConfig) -> Any:
@@ -98,11 +113,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         settings = _settings(args)
         handler = {"run": cmd_run, "skills": cmd_skills, "chat": cmd_chat, "eval": cmd_eval,
-                   "config": cmd_config}[args.command]
+                   "config": cmd_config, "doctor": cmd_doctor}[args.command]
         return handler(args, settings)
     except ConfigError as exc:
-        print(f"shadowhound: configuration error: {exc}", file=sys.stderr)
+        print(f"shadowhound: {_kind(exc)}: {exc}", file=sys.stderr)
         return EXIT_USAGE
+
+
+def _kind(exc: ConfigError) -> str:
+    return "backend unavailable" if type(exc).__name__ == "BackendUnavailable" else \
+        "configuration error"
 
 
 # -- run -----------------------------------------------------------------------------------
@@ -298,6 +318,28 @@ def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     import yaml
 
     sys.stdout.write(yaml.safe_dump(json.loads(settings.model_dump_json()), sort_keys=False))
+    return EXIT_OK
+
+
+# -- doctor --------------------------------------------------------------------------------------
+
+
+def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    print(f"ok  configuration: profile {settings.profile!r}, backend {settings.backend!r}, "
+          f"robot {settings.robot!r}")
+    s = settings.safety
+    print(f"ok  safety limits: {s.max_linear_speed:g} m/s, {s.max_angular_speed:g} rad/s, "
+          f"{s.max_step_distance:g} m per step, geofence {s.geofence_radius:g} m, risky tricks "
+          f"{'allowed' if s.allow_risky_tricks else 'refused'}")
+    if settings.backend == "offline":
+        print("ok  planner: offline rules (no network, no model)")
+        return EXIT_OK
+    from .llm import LLMBackend
+
+    for line in LLMBackend(settings.backend, settings.llm).check():
+        print(f"ok  {line}")
+    print(f"ok  planning mode {settings.llm.mode!r}, plan format {settings.llm.plan_format!r}, "
+          f"vision {'on' if settings.llm.vision else 'off'}")
     return EXIT_OK
 
 

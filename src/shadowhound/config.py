@@ -76,14 +76,29 @@ class SimConfig(_Section):
 class LLMConfig(_Section):
     """Language-model backend (used when `backend` is not offline)."""
 
-    model: str = ""
-    base_url: str = ""
-    api_key_env: str = "OPENAI_API_KEY"
-    timeout: float = Field(30.0, gt=0, le=600)
-    max_retries: int = Field(2, ge=0, le=10)
-    max_tokens: int = Field(512, ge=16, le=32768)
+    model: str = Field("", description="model name as the server knows it")
+    base_url: str = Field("", description="OpenAI-compatible endpoint, e.g. http://host:8000/v1")
+    api_key_env: str = Field(
+        "OPENAI_API_KEY", description="environment variable holding the API key ('' = none)"
+    )
+    timeout: float = Field(30.0, gt=0, le=600, description="seconds per request")
+    max_retries: int = Field(2, ge=0, le=10, description="retries with exponential backoff")
+    max_tokens: int = Field(512, ge=16, le=32768, description="completion tokens per request")
     temperature: float = Field(0.0, ge=0, le=2)
-    vision: bool = False
+    mode: Literal["plan", "react"] = Field(
+        "plan", description="plan: whole plan in one request; react: tool loop with observations"
+    )
+    plan_format: Literal["auto", "json_schema", "tools"] = Field(
+        "auto", description="how plan mode asks for a plan; auto picks json_schema"
+    )
+    repair_attempts: int = Field(1, ge=0, le=3, description="round trips to fix an invalid plan")
+    react_max_steps: int = Field(8, ge=1, le=100, description="skill calls in one react mission")
+    react_token_budget: int = Field(
+        12000, ge=500, le=1_000_000, description="prompt + completion tokens for one mission"
+    )
+    check_on_start: bool = Field(True, description="check the server and model at start-up")
+    vision: bool = Field(False, description="the model accepts images (perception.describe)")
+    vision_max_side: int = Field(512, ge=64, le=2048, description="pixels; frames are downscaled")
 
 
 class AgentConfig(_Section):

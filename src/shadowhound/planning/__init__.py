@@ -2,10 +2,27 @@
 
 from __future__ import annotations
 
-from typing import Any, Protocol, runtime_checkable
+import threading
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-from ..config import ConfigError, ShadowHoundConfig
+from ..config import ShadowHoundConfig
 from ..plan import Plan
+
+if TYPE_CHECKING:
+    from ..skills import SkillRegistry
+    from ..state import RobotState
+
+
+@dataclass
+class PlanningContext:
+    """What a planner may know: the skills, the robot now, places, and recent missions."""
+
+    registry: SkillRegistry
+    state: RobotState | None = None
+    places: dict[str, tuple[float, float]] = field(default_factory=dict)
+    history: list[str] = field(default_factory=list)
+    cancelled: threading.Event | None = None
 
 
 @runtime_checkable
@@ -30,15 +47,14 @@ class FixedPlanner:
 
 
 def make_planner(settings: ShadowHoundConfig) -> Planner:
-    """The planner for `settings.backend`."""
+    """The planner for `settings.backend`: the rule planner offline, else an LLMPlanner."""
     if settings.backend == "offline":
         from .rules import RulePlanner
 
         return RulePlanner()
-    raise ConfigError(
-        f"backend {settings.backend!r} is not available in this version of ShadowHound; "
-        "language-model planning is not implemented yet. Use backend 'offline'."
-    )
+    from .llm import LLMPlanner
+
+    return LLMPlanner(settings)
 
 
-__all__ = ["FixedPlanner", "Planner", "make_planner"]
+__all__ = ["FixedPlanner", "Planner", "PlanningContext", "make_planner"]

@@ -1,0 +1,215 @@
+"""LLMBackend: the official `openai` client against any OpenAI-compatible server.
+
+Every failure becomes a BackendError whose message names the URL, the model and what to do.
+Retries with exponential backoff are the openai client's own (`max_retries`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+import urllib.error
+import urllib.request
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..config import ConfigError, LLMConfig
+from ..plan import Usage
+
+
+class BackendError(Exception):
+    """A request to the language model failed. The message is for people."""
+
+    def __init__(self, message: str, status: int | None = None) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+class BackendUnavailable(ConfigError):
+    """The start-up check failed: the server does not answer or does not have the model."""
+
+
+@dataclass
+class Completion:
+    """One chat completion: the assistant message (as a plain dict) and what it cost."""
+
+    message: dict[str, Any]
+    usage: Usage
+    finish_reason: str | None = None
+    raw_usage: bool = True  # False when the server reported no usage and tokens were estimated
+    seconds: float = 0.0
+
+
+def estimate_tokens(payload: Any) -> int:
+    """Rough token count (about 4 characters a token) for servers that report no usage."""
+    text = payload if isinstance(payload, str) else json.dumps(payload, separators=(",", ":"))
+    return max(1, math.ceil(len(text) / 4))
+
+
+@dataclass
+class LLMBackend:
+    """A chat-completions client for one server and model."""
+
+    backend: str
+    config: LLMConfig
+    _client: Any = field(default=None, repr=False)
+
+    @property
+    def where(self) -> str:
+        return f"{self.config.base_url or '(no base_url)'} (model {self.config.model or '?'})"
+
+    def api_key(self) -> str:
+        name = self.config.api_key_env
+        key = os.environ.get(name, "") if name else ""
+        if not key and self.backend == "openai" and "api.openai.com" in self.config.base_url:
+            raise BackendUnavailable(
+                f"no API key for {self.where}: set the environment variable {name}"
+            )
+        return key or "not-needed"  # local servers accept any key
+
+    def client(self) -> Any:
+        if self._client is None:
+            if not self.config.base_url or not self.config.model:
+                raise BackendUnavailable(
+                    f"backend {self.backend!r} needs llm.base_url and llm.model "
+                    "(profile, SHADOWHOUND_LLM__BASE_URL / __MODEL, or --base-url / --model)"
+                )
+            try:
+                from openai import OpenAI
+            except ImportError as exc:
+                raise BackendUnavailable(
+                    "language-model backends need the 'llm' extra: "
+                    "pip install 'shadowhound[llm]'"
+                ) from exc
+            self._client = OpenAI(
+                base_url=self.config.base_url,
+                api_key=self.api_key(),
+                timeout=self.config.timeout,
+                max_retries=self.config.max_retries,
+            )
+        return self._client
+
+    def complete(self, messages: list[dict[str, Any]], **options: Any) -> Completion:
+        """One chat completion. Raises BackendError (never an openai exception)."""
+        import openai
+
+        request: dict[str, Any] = {
+            "model": self.config.model,
+            "messages": messages,
+            "temperature": self.config.temperature,
+            "max_tokens": self.config.max_tokens,
+            **{k: v for k, v in options.items() if v is not None},
+        }
+        started = time.perf_counter()
+        try:
+            response = self.client().chat.completions.create(**request)
+        except openai.APITimeoutError as exc:
+            raise BackendError(
+                f"the language model at {self.where} did not answer within "
+                f"{self.config.timeout:g} s (llm.timeout); is the server overloaded?"
+            ) from exc
+        except openai.APIConnectionError as exc:
+            raise BackendError(
+                f"cannot reach the language model at {self.where}: {exc.__cause__ or exc}; "
+                "is the server running and the URL right?"
+            ) from exc
+        except openai.APIStatusError as exc:
+            raise BackendError(
+                f"the language model at {self.where} answered HTTP {exc.status_code}: "
+                f"{_error_text(exc)}",
+                exc.status_code,
+            ) from exc
+        except openai.OpenAIError as exc:
+            raise BackendError(f"the language model at {self.where} failed: {exc}") from exc
+        except ValueError as exc:  # the client lets a malformed JSON body escape as-is
+            raise BackendError(
+                f"the language model at {self.where} answered something that is not a chat "
+                f"completion: {exc}"
+            ) from exc
+        seconds = time.perf_counter() - started
+        choices = getattr(response, "choices", None) or []
+        if not choices or getattr(choices[0], "message", None) is None:
+            raise BackendError(f"the language model at {self.where} returned no message")
+        message = choices[0].message.model_dump(exclude_none=True)
+        usage = getattr(response, "usage", None)
+        if usage is not None and getattr(usage, "prompt_tokens", None) is not None:
+            cost = Usage(usage.prompt_tokens or 0, usage.completion_tokens or 0, 1)
+            reported = True
+        else:
+            prompt = estimate_tokens(messages) + estimate_tokens(options.get("tools") or "")
+            cost = Usage(prompt, estimate_tokens(message), 1, estimated=True)
+            reported = False
+        return Completion(message, cost, choices[0].finish_reason, reported, seconds)
+
+    # -- start-up check ------------------------------------------------------------------------
+
+    def check(self) -> list[str]:
+        """Check that the server answers and has the model. Returns what was verified.
+
+        Raises BackendUnavailable naming the URL, the model and how to fix it.
+        """
+        cfg = self.config
+        self.client()  # validates base_url, model, the extra and the key
+        done = []
+        if self.backend == "ollama":
+            root = cfg.base_url.rstrip("/").removesuffix("/v1")
+            tags = self._get_json(f"{root}/api/tags").get("models", [])
+            names = [m.get("name", "") for m in tags if isinstance(m, dict)]
+            done.append(f"Ollama at {root} answers ({len(names)} models)")
+            if not _has_model(cfg.model, names):
+                raise BackendUnavailable(
+                    f"Ollama at {root} does not have the model {cfg.model!r} (it has: "
+                    f"{', '.join(names) or 'none'}); run: ollama pull {cfg.model}"
+                )
+        else:
+            listed = self._get_json(cfg.base_url.rstrip("/") + "/models")
+            names = [m.get("id", "") for m in listed.get("data", []) if isinstance(m, dict)]
+            done.append(f"{cfg.base_url} answers ({len(names)} models)")
+            if names and not _has_model(cfg.model, names):
+                raise BackendUnavailable(
+                    f"the server at {cfg.base_url} does not serve the model {cfg.model!r} "
+                    f"(it serves: {', '.join(names[:20])}); set llm.model or --model to one "
+                    "of them"
+                )
+        done.append(f"model {cfg.model!r} is available")
+        return done
+
+    def _get_json(self, url: str) -> dict[str, Any]:
+        request = urllib.request.Request(url, headers={"Authorization": f"Bearer {self.api_key()}"})
+        try:
+            with urllib.request.urlopen(request, timeout=self.config.timeout) as response:
+                data = json.loads(response.read().decode("utf-8"))
+        except urllib.error.HTTPError as exc:
+            raise BackendUnavailable(
+                f"{url} answered HTTP {exc.code}; check llm.base_url for backend "
+                f"{self.backend!r} (model {self.config.model!r}) and the API key"
+            ) from exc
+        except (urllib.error.URLError, TimeoutError, OSError) as exc:
+            reason = getattr(exc, "reason", exc)
+            raise BackendUnavailable(
+                f"cannot reach {url} ({reason}) within {self.config.timeout:g} s: start the "
+                f"{self.backend} server or fix llm.base_url (model {self.config.model!r})"
+            ) from exc
+        except ValueError as exc:
+            raise BackendUnavailable(f"{url} did not answer JSON: is it an OpenAI-compatible "
+                                     f"server? ({exc})") from exc
+        if not isinstance(data, dict):
+            raise BackendUnavailable(f"{url} answered {type(data).__name__}, not a JSON object")
+        return data
+
+
+def _has_model(model: str, names: list[str]) -> bool:
+    tagged = model if ":" in model else f"{model}:latest"
+    return model in names or tagged in names
+
+
+def _error_text(exc: Any) -> str:
+    body = getattr(exc, "body", None)
+    if isinstance(body, dict):
+        err = body.get("error", body)
+        if isinstance(err, dict) and err.get("message"):
+            return str(err["message"])[:500]
+        return json.dumps(body)[:500]
+    return str(exc)[:500]

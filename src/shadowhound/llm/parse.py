@@ -1,0 +1,151 @@
+"""Reading plans out of what models really send.
+
+Tool calls, a JSON plan in the content, JSON in ``` fences, <tool_call> tags, a bare list of
+steps, arguments as JSON strings, numbers as strings with units: all become SkillCalls, and
+anything unusable becomes a problem sentence that goes back to the model. Nothing here decides
+whether a call is valid; the registry and the safety governor do.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..plan import SkillCall
+
+_THINK = re.compile(r"<think>.*?</think>", re.DOTALL | re.IGNORECASE)
+_FENCE = re.compile(r"```(?:json|JSON)?\s*(.*?)```", re.DOTALL)
+_TOOL_TAG = re.compile(r"<tool_call>\s*(.*?)\s*</tool_call>", re.DOTALL)
+_NUMBER_WITH_UNIT = re.compile(
+    r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?)\s*"
+    r"(?:m|meters?|metres?|cm|deg|degrees?|°|s|sec|seconds?|rad/s|m/s)?\s*$",
+    re.IGNORECASE,
+)
+_CENTIMETRES = re.compile(r"\bcm\s*$", re.IGNORECASE)
+
+
+@dataclass
+class ParsedReply:
+    """What a model reply proposes: calls (with tool-call ids when it used tools), a text answer,
+    and problems that make (part of) it unusable."""
+
+    calls: list[SkillCall] = field(default_factory=list)
+    call_ids: list[str | None] = field(default_factory=list)
+    answer: str = ""
+    problems: list[str] = field(default_factory=list)
+    used_tools: bool = False
+
+
+def parse_reply(message: dict[str, Any]) -> ParsedReply:
+    reply = ParsedReply()
+    for i, call in enumerate(message.get("tool_calls") or [], start=1):
+        function = call.get("function") or {}
+        _add(reply, function.get("name"), function.get("arguments"), f"tool call {i}",
+             call.get("id"))
+        reply.used_tools = True
+    content = message.get("content") or ""
+    if isinstance(content, list):  # content parts
+        content = " ".join(p.get("text", "") for p in content if isinstance(p, dict))
+    content = _THINK.sub("", str(content)).strip()
+    if reply.used_tools or not content:
+        reply.answer = content
+        return reply
+    found = _json_values(content)
+    if not found:
+        reply.answer = content
+        return reply
+    for value in found:
+        _interpret(reply, value)
+    return reply
+
+
+def _json_values(content: str) -> list[Any]:
+    """JSON values in tags, fences, or the text itself (the first parseable one)."""
+    tagged = _TOOL_TAG.findall(content)
+    sources = tagged or _FENCE.findall(content) or [content]
+    values = []
+    decoder = json.JSONDecoder()
+    for source in sources:
+        text = source.strip()
+        for start in (i for i, ch in enumerate(text) if ch in "[{"):
+            try:
+                value, _end = decoder.raw_decode(text, start)
+            except ValueError:
+                continue
+            values.append(value)
+            break
+    return values
+
+
+def _interpret(reply: ParsedReply, value: Any) -> None:
+    if isinstance(value, list):
+        for item in value:
+            _step(reply, item, f"step {len(reply.calls) + 1}")
+        return
+    if not isinstance(value, dict):
+        reply.problems.append(f"expected a JSON object with 'steps', got {type(value).__name__}")
+        return
+    if isinstance(value.get("answer"), str) and value["answer"].strip():
+        reply.answer = value["answer"].strip()
+    for key in ("steps", "plan", "tool_calls", "calls", "actions"):
+        if key in value:
+            steps = value[key]
+            if not isinstance(steps, list):
+                reply.problems.append(f"'{key}' must be a list of steps, got "
+                                      f"{type(steps).__name__}")
+                return
+            for item in steps:
+                _step(reply, item, f"step {len(reply.calls) + 1}")
+            return
+    if any(k in value for k in ("skill", "name", "function", "tool")):
+        _step(reply, value, f"step {len(reply.calls) + 1}")
+    elif not reply.answer:
+        reply.problems.append("the JSON has no 'steps' list; expected "
+                              '{"steps": [{"skill": ..., "args": {...}}]}')
+
+
+def _step(reply: ParsedReply, item: Any, where: str) -> None:
+    if not isinstance(item, dict):
+        reply.problems.append(f"{where} must be an object with 'skill' and 'args', got "
+                              f"{json.dumps(item)[:80]}")
+        return
+    function: dict[str, Any] = item["function"] if isinstance(item.get("function"), dict) else {}
+    name = item.get("skill") or item.get("name") or item.get("tool") or function.get("name")
+    if name is None and isinstance(item.get("function"), str):
+        name = item["function"]
+    args = next((item[k] for k in ("args", "arguments", "parameters", "params", "input")
+                 if k in item), function.get("arguments", function.get("parameters", {})))
+    _add(reply, name, args, where, None)
+
+
+def _add(reply: ParsedReply, name: Any, args: Any, where: str, call_id: str | None) -> None:
+    if not isinstance(name, str) or not name.strip():
+        reply.problems.append(f"{where} has no skill name")
+        return
+    if isinstance(args, str):
+        try:
+            args = json.loads(args) if args.strip() else {}
+        except ValueError:
+            reply.problems.append(f"{where} ({name}): arguments are not valid JSON: {args[:80]!r}")
+            return
+    if args is None:
+        args = {}
+    if not isinstance(args, dict):
+        reply.problems.append(f"{where} ({name}): arguments must be an object, got "
+                              f"{json.dumps(args)[:80]}")
+        return
+    reply.calls.append(SkillCall(name.strip(), {k: _number(v) for k, v in args.items()}))
+    reply.call_ids.append(call_id)
+
+
+def _number(value: Any) -> Any:
+    """'1.5', '1.5 m', '90 degrees' -> float; '50 cm' -> 0.5. Anything else is left as it is."""
+    if not isinstance(value, str):
+        return value
+    m = _NUMBER_WITH_UNIT.match(value)
+    if m is None:
+        return value
+    number = float(m.group(1))
+    return number / 100.0 if _CENTIMETRES.search(value) else number

@@ -1,0 +1,139 @@
+"""Prompts and schemas generated from the skill registry: compact, so small models plan well.
+
+Plan mode sends one system prompt listing every skill on one line each, and asks for a JSON
+plan (constrained by `PLAN_SCHEMA` where the server supports it). Tool mode and react mode send
+the skills as function tools with schemas stripped to what a model needs.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from ..skills import Skill, SkillRegistry
+from ..state import RobotState
+
+_INTRO = (
+    "You plan actions for ShadowHound, a Unitree Go2 quadruped robot. Units: metres, seconds, "
+    "degrees. x is forward, y is left; positive angles turn left (counter-clockwise)."
+)
+_RULES = (
+    "Rules: use only the skills listed; one step per action, in the order asked; write a step "
+    "twice for 'twice'; give numbers as numbers; to come back, use nav.goto with place 'start'. "
+    "If the request cannot be done with these skills, return no steps and explain in 'answer'."
+)
+_PLAN_REPLY = (
+    'Reply with JSON only: {"steps": [{"skill": "nav.move", "args": {"distance": 1.0}}], '
+    '"answer": ""}'
+)
+_TOOLS_REPLY = "Call the skills as tools, all of them at once, in order."
+_REACT_REPLY = (
+    "Call one skill at a time and read its result before the next. When the request is done, "
+    "reply with a short answer for the user and no tool call."
+)
+
+
+def compact_schema(skill: Skill) -> dict[str, Any]:
+    """The skill's JSON Schema without titles and `null` branches (optional = not required)."""
+    full = skill.parameters_schema()
+    props: dict[str, Any] = {}
+    for name, prop in full.get("properties", {}).items():
+        branches = [b for b in prop.get("anyOf", [prop]) if b.get("type") != "null"]
+        slim = {k: v for k, v in branches[0].items() if k not in ("title", "default")}
+        if prop.get("description"):
+            slim["description"] = prop["description"]
+        props[name] = slim
+    schema: dict[str, Any] = {"type": "object", "properties": props}
+    if full.get("required"):
+        schema["required"] = full["required"]
+    return schema
+
+
+def skill_line(skill: Skill) -> str:
+    """`nav.move(distance: metres; + forward, speed?: m/s) - Walk straight ...`"""
+    schema = compact_schema(skill)
+    required = set(schema.get("required", []))
+    params = []
+    for name, prop in schema["properties"].items():
+        hint = prop.get("description", prop.get("type", ""))
+        if "enum" in prop:
+            hint = "one of " + "|".join(map(str, prop["enum"]))
+        params.append(f"{name}{'' if name in required else '?'}: {hint}")
+    return f"{skill.name}({', '.join(params)}) - {skill.description}"
+
+
+def tools(registry: SkillRegistry) -> list[dict[str, Any]]:
+    return [
+        {
+            "type": "function",
+            "function": {
+                "name": s.tool_name,
+                "description": s.description,
+                "parameters": compact_schema(s),
+            },
+        }
+        for s in registry
+    ]
+
+
+def plan_schema(registry: SkillRegistry) -> dict[str, Any]:
+    """JSON Schema of a whole plan, for response_format json_schema / Ollama's format."""
+    return {
+        "type": "object",
+        "properties": {
+            "steps": {
+                "type": "array",
+                "items": {
+                    "type": "object",
+                    "properties": {
+                        "skill": {"type": "string", "enum": registry.names},
+                        "args": {"type": "object"},
+                    },
+                    "required": ["skill", "args"],
+                },
+            },
+            "answer": {"type": "string"},
+        },
+        "required": ["steps"],
+    }
+
+
+def state_line(state: RobotState | None) -> str:
+    if state is None:
+        return ""
+    return (
+        f"Robot now: {state.posture.value} at x={state.x:.2f} y={state.y:.2f}, facing "
+        f"{math.degrees(state.yaw):.0f} degrees, battery {state.battery:.0f}%."
+    )
+
+
+def places_line(places: dict[str, tuple[float, float]]) -> str:
+    named = ", ".join(f"{n} ({x:g}, {y:g})" for n, (x, y) in places.items())
+    return f"Places: {named + ', ' if named else ''}start (where this mission began), home (0, 0)."
+
+
+def history_lines(history: list[str], limit: int) -> str:
+    if not history or limit <= 0:
+        return ""
+    recent = [h if len(h) <= 200 else h[:197] + "..." for h in history[-limit:]]
+    return "Recent missions:\n" + "\n".join(f"- {h}" for h in recent)
+
+
+def system_prompt(
+    registry: SkillRegistry,
+    *,
+    style: str,
+    state: RobotState | None = None,
+    places: dict[str, tuple[float, float]] | None = None,
+    history: list[str] | None = None,
+    history_size: int = 0,
+) -> str:
+    """The system message. `style` is plan (skills listed, JSON reply), tools or react."""
+    parts = [_INTRO]
+    if style == "plan":
+        parts.append("Skills:\n" + "\n".join(skill_line(s) for s in registry))
+    parts += [places_line(places or {}), state_line(state), history_lines(history or [],
+                                                                          history_size)]
+    parts.append(_RULES)
+    parts.append({"plan": _PLAN_REPLY, "tools": _TOOLS_REPLY, "react": _REACT_REPLY}[style])
+    return "\n".join(p for p in parts if p)

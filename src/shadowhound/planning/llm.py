@@ -1,0 +1,245 @@
+"""LLMPlanner: plans with a language model behind an OpenAI-compatible server.
+
+plan mode (default): one request returns the whole plan, as JSON constrained by a schema
+(`plan_format` json_schema) or as parallel tool calls (`tools`). Every call is validated
+against the registry; if any is invalid the model gets one repair round trip that says exactly
+what was wrong. Safety refusals are never "repaired": a limit is not negotiable.
+
+react mode: a bounded tool-calling loop. The model calls one skill, the agent validates,
+checks and runs it, the result goes back, and so on until the model answers in words, the step
+limit or the token budget is reached, or the mission is cancelled.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import Callable
+from typing import Any
+
+from ..config import ShadowHoundConfig
+from ..llm import prompts
+from ..llm.backend import BackendError, LLMBackend
+from ..llm.parse import ParsedReply, parse_reply
+from ..plan import Plan, PlanningError, SkillCall, Usage
+from ..skills import SkillValidationError
+from ..state import CameraFrame
+from . import PlanningContext
+
+log = logging.getLogger(__name__)
+
+StepRunner = Callable[[SkillCall], str]
+
+
+class LLMPlanner:
+    """A planner that asks a language model. Build it with the settings of one backend."""
+
+    def __init__(self, settings: ShadowHoundConfig) -> None:
+        self.settings = settings
+        self.llm = settings.llm
+        self.backend = LLMBackend(settings.backend, settings.llm)
+        self.name = f"{settings.backend}:{settings.llm.model}"
+        self.mode = settings.llm.mode
+        self._schema_ok = True  # cleared when the server rejects response_format
+
+    def check(self) -> list[str]:
+        return self.backend.check()
+
+    # -- plan mode -----------------------------------------------------------------------------
+
+    def plan(self, text: str, context: Any = None) -> Plan:
+        ctx = _context(context)
+        usage = Usage()
+        style = "tools" if self._format() == "tools" else "plan"
+        messages = [
+            {"role": "system", "content": self._system(ctx, style)},
+            {"role": "user", "content": text},
+        ]
+        for attempt in range(self.llm.repair_attempts + 1):
+            reply, raw = self._ask(messages, style, ctx, usage)
+            calls, problems = self._checked(reply, ctx)
+            if not problems and calls:
+                return Plan(calls, text=text, usage=usage, planner=self.name,
+                            notes=[reply.answer] if reply.answer else [])
+            if not problems:  # no steps: the model says why in words
+                raise PlanningError(reply.answer or "The model proposed no steps.", usage=usage)
+            if attempt < self.llm.repair_attempts:
+                messages += [raw, {"role": "user", "content": _repair_request(problems, style)}]
+        raise PlanningError(
+            "The model's plan was not valid after a repair attempt: " + "; ".join(problems),
+            not_understood=problems, usage=usage,
+        )
+
+    def replan(self, text: str, context: Any, done: list[str], failure: str) -> Plan:
+        """A new plan for the rest of the mission after a step failed."""
+        situation = (
+            f"Original request: {text}\nDone so far: {'; '.join(done) or 'nothing'}\n"
+            f"A step failed: {failure}\nPlan only the remaining steps from the robot's current "
+            "state, or return no steps and explain in 'answer' if the request cannot be "
+            "finished."
+        )
+        return self.plan(situation, context)
+
+    def _format(self) -> str:
+        fmt = self.llm.plan_format
+        if fmt == "auto":
+            return "json_schema" if self._schema_ok else "plain"
+        return fmt if fmt != "json_schema" or self._schema_ok else "plain"
+
+    def _ask(self, messages: list[dict[str, Any]], style: str, ctx: PlanningContext,
+             usage: Usage) -> tuple[ParsedReply, dict[str, Any]]:
+        options: dict[str, Any] = {}
+        fmt = self._format()
+        if style == "tools":
+            options["tools"] = prompts.tools(ctx.registry)
+            if self.settings.backend == "openai":
+                options["parallel_tool_calls"] = True
+        elif fmt == "json_schema":
+            options["response_format"] = {
+                "type": "json_schema",
+                "json_schema": {"name": "plan", "schema": prompts.plan_schema(ctx.registry),
+                                "strict": False},
+            }
+        try:
+            completion = self._complete(messages, usage, ctx, **options)
+        except BackendError as exc:
+            if exc.status not in (400, 422) or "response_format" not in options:
+                raise PlanningError(str(exc), usage=usage) from exc
+            log.warning("server rejected response_format json_schema; asking without it")
+            self._schema_ok = False
+            options.pop("response_format")
+            try:
+                completion = self._complete(messages, usage, ctx, **options)
+            except BackendError as again:
+                raise PlanningError(str(again), usage=usage) from again
+        message = completion.message
+        raw = {"role": "assistant", "content": message.get("content") or ""}
+        if message.get("tool_calls"):
+            raw["tool_calls"] = message["tool_calls"]
+        return parse_reply(message), raw
+
+    def _complete(self, messages: list[dict[str, Any]], usage: Usage, ctx: PlanningContext,
+                  **options: Any) -> Any:
+        if ctx.cancelled is not None and ctx.cancelled.is_set():
+            raise PlanningError("mission cancelled before the model was asked", usage=usage)
+        completion = self.backend.complete(messages, **options)
+        usage.add(completion.usage)
+        return completion
+
+    def _checked(self, reply: ParsedReply, ctx: PlanningContext) -> tuple[list[SkillCall],
+                                                                        list[str]]:
+        """Validate every proposed call; canonical names and parsed arguments on success."""
+        problems = list(reply.problems)
+        calls = []
+        for index, call in enumerate(reply.calls, start=1):
+            try:
+                valid = ctx.registry.validate(call)
+            except SkillValidationError as exc:
+                problems += [f"step {index}: {p}" for p in exc.problems]
+                continue
+            calls.append(SkillCall(valid.name, valid.args_dict(), call.label))
+        return calls, problems
+
+    def _system(self, ctx: PlanningContext, style: str) -> str:
+        return prompts.system_prompt(
+            ctx.registry, style=style, state=ctx.state, places=ctx.places, history=ctx.history,
+            history_size=self.settings.agent.conversation_history_size,
+        )
+
+    # -- react mode ----------------------------------------------------------------------------
+
+    def react(self, text: str, context: Any, run_step: StepRunner) -> tuple[str, Usage, bool]:
+        """Run the tool loop. Returns (answer for the user, usage, finished normally)."""
+        ctx = _context(context)
+        usage = Usage()
+        messages: list[dict[str, Any]] = [
+            {"role": "system", "content": self._system(ctx, "react")},
+            {"role": "user", "content": text},
+        ]
+        tools = prompts.tools(ctx.registry)
+        executed = 0
+        while True:
+            if usage.total_tokens >= self.llm.react_token_budget:
+                return (f"Stopped: the token budget of {self.llm.react_token_budget} "
+                        "(llm.react_token_budget) is used up.", usage, False)
+            try:
+                completion = self._complete(messages, usage, ctx, tools=tools)
+            except BackendError as exc:
+                raise PlanningError(str(exc), usage=usage) from exc
+            reply = parse_reply(completion.message)
+            if reply.problems and not reply.calls:
+                messages += [{"role": "assistant", "content": completion.message.get("content")
+                              or ""},
+                             {"role": "user", "content": _repair_request(reply.problems, "react")}]
+                continue
+            if not reply.calls:
+                return reply.answer or "Done.", usage, True
+            messages.append(_assistant_turn(completion.message, reply))
+            for call, call_id in zip(reply.calls, reply.call_ids, strict=True):
+                if executed >= self.llm.react_max_steps:
+                    return (f"Stopped after {executed} skill calls (llm.react_max_steps).",
+                            usage, False)
+                observation = run_step(call)
+                executed += 1
+                messages.append(_observation(call, call_id, observation))
+
+    # -- chat and vision ---------------------------------------------------------------------
+
+    def chat(self, text: str, context: Any, history: list[dict[str, str]]) -> str:
+        """Answer in words from the robot's state and missions. No tools: it cannot move."""
+        ctx = _context(context)
+        system = "\n".join(p for p in (
+            "You are ShadowHound, a Unitree Go2 quadruped robot, answering your operator "
+            "briefly. You cannot move in this conversation; missions are run separately.",
+            prompts.state_line(ctx.state), prompts.places_line(ctx.places),
+            prompts.history_lines(ctx.history, self.settings.agent.conversation_history_size),
+        ) if p)
+        try:
+            completion = self.backend.complete(
+                [{"role": "system", "content": system}, *history,
+                 {"role": "user", "content": text}])
+        except BackendError as exc:
+            return f"I cannot answer right now: {exc}"
+        return str(completion.message.get("content") or "").strip() or "(no answer)"
+
+    def describe_image(self, frame: CameraFrame, question: str) -> str:
+        """Ask the (vision-capable) model about a downscaled JPEG of the frame."""
+        from ..llm.vision import jpeg_data_url
+
+        try:
+            url = jpeg_data_url(frame, self.llm.vision_max_side)
+            completion = self.backend.complete([{"role": "user", "content": [
+                {"type": "text", "text": question},
+                {"type": "image_url", "image_url": {"url": url}},
+            ]}])
+        except (BackendError, ValueError) as exc:
+            return f"I could not look at the image: {exc}"
+        return str(completion.message.get("content") or "").strip() or "(no answer)"
+
+
+def _context(context: Any) -> PlanningContext:
+    if isinstance(context, PlanningContext):
+        return context
+    from ..skills import default_registry
+
+    return PlanningContext(registry=default_registry())
+
+
+def _repair_request(problems: list[str], style: str) -> str:
+    how = "Call the tools again" if style in ("tools", "react") else "Reply with the JSON plan"
+    return ("Your plan cannot be used: " + "; ".join(problems) +
+            f". {how}, corrected, and nothing else.")
+
+
+def _assistant_turn(message: dict[str, Any], reply: ParsedReply) -> dict[str, Any]:
+    if reply.used_tools:
+        return {"role": "assistant", "content": message.get("content") or "",
+                "tool_calls": message["tool_calls"]}
+    return {"role": "assistant", "content": json.dumps(
+        {"steps": [{"skill": c.skill, "args": c.args} for c in reply.calls]})}
+
+
+def _observation(call: SkillCall, call_id: str | None, observation: str) -> dict[str, Any]:
+    if call_id is not None:
+        return {"role": "tool", "tool_call_id": call_id, "content": observation}
+    return {"role": "user", "content": f"Result of {call.skill}: {observation}"}

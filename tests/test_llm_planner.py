@@ -1,0 +1,359 @@
+"""Language-model planning end to end: the real `openai` client against a real HTTP server on
+loopback that answers with scripted replies. No bad answer may move the robot."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import subprocess
+import sys
+import time
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, load_config
+from shadowhound.config import ConfigError
+from shadowhound.llm.backend import estimate_tokens
+from shadowhound.llm.parse import parse_reply
+from shadowhound.llm.prompts import system_prompt, tools
+from shadowhound.skills import SkillValidationError, default_registry
+from tests.llm_server import (
+    ScriptedLLM,
+    delay,
+    drop,
+    garbage,
+    json_plan,
+    status,
+    text,
+    tool_calls,
+)
+
+MOVE_1 = [{"skill": "nav.move", "args": {"distance": 1.0}}]
+
+
+@pytest.fixture
+def srv():
+    with ScriptedLLM(models=("test-model",), ollama_tags=["qwen2.5:7b-instruct"]) as server:
+        yield server
+
+
+def make_agent(srv, robot=None, **llm):
+    settings = load_config("llamacpp", {"llm": {"base_url": srv.url, "model": "test-model",
+                                                "max_retries": 0, "timeout": 5, **llm}},
+                           environ={})
+    robot = robot or SimRobot(time_scale=0.0)
+    agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
+    agent.initialize()
+    return agent, robot
+
+
+# -- plan mode -------------------------------------------------------------------------------
+
+
+def test_json_plan_in_one_round_trip(srv):
+    agent, robot = make_agent(srv)
+    srv.script(json_plan([{"skill": "body.stand", "args": {}}, *MOVE_1]))
+    result = agent.execute_mission("stand up and walk forward 1 meter")
+    assert result.success, result.response
+    assert robot.get_state().x == pytest.approx(1.0, abs=0.003)
+    assert result.usage.round_trips == 1
+    assert (result.usage.prompt_tokens, result.usage.completion_tokens) == (50, 10)
+    request = srv.requests[0]
+    assert request["model"] == "test-model" and request["temperature"] == 0
+    assert request["response_format"]["type"] == "json_schema"
+    enum = request["response_format"]["json_schema"]["schema"]["properties"]["steps"]["items"]
+    assert "nav.move" in enum["properties"]["skill"]["enum"]
+    system = request["messages"][0]["content"]
+    assert "nav.move(distance" in system and "Robot now: standing at x=0.00" in system
+    assert request["messages"][1] == {"role": "user",
+                                      "content": "stand up and walk forward 1 meter"}
+
+
+def test_parallel_tool_calls_in_tools_format(srv):
+    agent, robot = make_agent(srv, plan_format="tools")
+    srv.script(tool_calls(("nav_rotate", {"degrees": 90}), ("nav_move", '{"distance": "0.5"}')))
+    result = agent.execute_mission("turn left and walk half a meter")
+    assert result.success, result.response
+    assert [s.skill for s in result.steps] == ["nav.rotate", "nav.move"]
+    st_ = robot.get_state()
+    assert (st_.x, st_.y) == (pytest.approx(0, abs=0.005), pytest.approx(0.5, abs=0.005))
+    names = {t["function"]["name"] for t in srv.requests[0]["tools"]}
+    assert {"nav_move", "body_sport", "perception_describe"} <= names
+
+
+@pytest.mark.parametrize("content", [
+    '```json\n{"steps": [{"skill": "nav.move", "args": {"distance": 1}}]}\n```',
+    'Sure! Here is the plan: [{"skill": "nav.move", "args": {"distance": "1 m"}}] Enjoy.',
+    '<tool_call>\n{"name": "nav_move", "arguments": {"distance": 1.0}}\n</tool_call>',
+    '{"name": "nav.move", "arguments": "{\\"distance\\": 1}"}',
+    '<think>the user wants to walk</think>{"steps": [{"skill": "nav.move", '
+    '"args": {"distance": "100 cm"}}]}',
+])
+def test_what_local_models_really_emit(srv, content):
+    agent, robot = make_agent(srv)
+    srv.script(text(content))
+    result = agent.execute_mission("walk forward 1 meter")
+    assert result.success, result.response
+    assert robot.get_state().x == pytest.approx(1.0, abs=0.003)
+
+
+def test_unknown_skill_gets_one_repair_round_trip(srv):
+    agent, robot = make_agent(srv)
+    srv.script(json_plan([{"skill": "nav.walk", "args": {"meters": 1}}]), json_plan(MOVE_1))
+    result = agent.execute_mission("walk forward 1 meter")
+    assert result.success and result.usage.round_trips == 2
+    repair = srv.requests[1]["messages"][-1]["content"]
+    assert "unknown skill 'nav.walk'" in repair and "nav.move" in repair
+    assert srv.requests[1]["messages"][-2]["role"] == "assistant"
+
+
+def test_invalid_after_repair_fails_without_moving(srv):
+    agent, robot = make_agent(srv)
+    bad = json_plan([{"skill": "nav.move", "args": {"distance": "far", "turbo": 1}}])
+    srv.script(bad, bad)
+    result = agent.execute_mission("walk forward")
+    assert not result.success and result.usage.round_trips == 2
+    assert "'distance'" in result.response and "unknown argument 'turbo'" in result.response
+    assert not robot.received_motion
+
+
+def test_out_of_range_is_refused_not_repaired(srv):
+    agent, robot = make_agent(srv)
+    srv.script(json_plan([{"skill": "nav.move", "args": {"distance": 500}}]))
+    result = agent.execute_mission("walk forward 500 meters")
+    assert not result.success and result.usage.round_trips == 1
+    assert "Refused before moving" in result.response and "geofence" in result.response
+    assert not robot.received_motion
+
+
+def test_words_instead_of_a_plan_fail_with_the_models_words(srv):
+    agent, robot = make_agent(srv)
+    srv.script(text("I am a robot dog and cannot fly, sorry."))
+    result = agent.execute_mission("fly to the moon")
+    assert not result.success and result.response == "I am a robot dog and cannot fly, sorry."
+    assert not robot.received_motion
+
+
+def test_empty_steps_with_answer(srv):
+    agent, robot = make_agent(srv)
+    srv.script(text(json.dumps({"steps": [], "answer": "There is no kitchen sink skill."})))
+    result = agent.execute_mission("wash the dishes")
+    assert not result.success and "kitchen sink" in result.response
+
+
+@pytest.mark.parametrize(("reply", "message"), [
+    (status(500), "answered HTTP 500"),
+    (status(401, "bad key"), "answered HTTP 401: bad key"),
+    (drop(), "cannot reach the language model at http://127.0.0.1"),
+    (garbage(b"{not json"), "not a chat completion"),
+    (garbage(b'{"choices": []}'), "returned no message"),
+    (delay(3.0, text("too late")), "did not answer within 0.5 s"),
+])
+def test_backend_failures_are_clear_and_never_move(srv, reply, message):
+    agent, robot = make_agent(srv, timeout=0.5)
+    srv.script(reply)
+    t0 = time.monotonic()
+    result = agent.execute_mission("walk forward 1 meter")
+    assert not result.success and message in result.response
+    assert "model test-model" in result.response or "garbage" in message
+    assert not robot.received_motion
+    assert time.monotonic() - t0 < 2.5  # bounded by the configured time-out
+
+
+def test_retries_with_backoff_recover(srv):
+    agent, robot = make_agent(srv, max_retries=2)
+    srv.script(status(500, retry_after_ms=10), status(503, retry_after_ms=10), json_plan(MOVE_1))
+    result = agent.execute_mission("walk forward 1 meter")
+    assert result.success and len(srv.requests) == 3
+
+
+def test_server_without_usage_gets_estimated_tokens(srv):
+    agent, _ = make_agent(srv)
+    srv.script(json_plan(MOVE_1, usage=None))
+    result = agent.execute_mission("walk forward 1 meter")
+    assert result.success and result.usage.estimated
+    assert result.usage.prompt_tokens > 100 and result.usage.completion_tokens > 5
+
+
+def test_server_rejecting_response_format_falls_back(srv):
+    agent, _ = make_agent(srv)
+    srv.script(status(400, "response_format json_schema is not supported"), json_plan(MOVE_1))
+    result = agent.execute_mission("walk forward 1 meter")
+    assert result.success and "response_format" not in srv.requests[1]
+
+
+def test_replans_once_after_a_failed_step(srv):
+    robot = SimRobot(time_scale=0.0)
+    agent, _ = make_agent(srv, robot=robot)
+    real_send = robot.send_velocity
+    robot.send_velocity = lambda *a: None  # motors dead for the first move: it stalls
+    def revive(event):
+        if event.kind == "step_finished":
+            robot.send_velocity = real_send
+    agent.add_listener(revive)
+    srv.script(json_plan(MOVE_1), json_plan([{"skill": "nav.strafe", "args": {"distance": 0.5}}]))
+    result = agent.execute_mission("walk forward 1 meter")
+    assert result.success, result.response
+    assert [s.status.value for s in result.steps] == ["failed", "succeeded"]
+    assert "A step failed: no progress" in srv.requests[1]["messages"][1]["content"]
+    assert robot.get_state().y == pytest.approx(0.5, abs=0.005)
+    assert result.usage.round_trips == 2
+
+
+# -- react mode ------------------------------------------------------------------------------
+
+
+def test_react_loop_observes_and_answers(srv):
+    agent, robot = make_agent(srv, mode="react")
+    srv.script(tool_calls(("nav_rotate", {"degrees": 90})),
+               tool_calls(("perception_describe", {"question": "anyone there?"})),
+               text("I turned left and I see a blue box; nobody is there."))
+    result = agent.execute_mission("turn left and tell me if someone is there")
+    assert result.success and result.response.startswith("I turned left")
+    assert [s.skill for s in result.steps] == ["nav.rotate", "perception.describe"]
+    second = srv.requests[1]["messages"]
+    assert second[-1]["role"] == "tool" and "turned 90.0 degrees" in second[-1]["content"]
+    assert second[-2]["tool_calls"][0]["function"]["name"] == "nav_rotate"
+    assert result.usage.round_trips == 3
+
+
+def test_react_invalid_and_refused_calls_are_observations(srv):
+    agent, robot = make_agent(srv, mode="react")
+    srv.script(tool_calls(("nav_fly", {})), tool_calls(("nav_move", {"distance": 60})),
+               text("I cannot go that far."))
+    result = agent.execute_mission("walk 60 meters")
+    assert not result.success and result.refusals
+    observations = [m["content"] for m in srv.requests[-1]["messages"] if m["role"] == "tool"]
+    assert "invalid call, not run: unknown skill 'nav_fly'" in observations[0]
+    assert "refused by the safety limits" in observations[1]
+    assert not robot.received_motion
+
+
+def test_react_is_bounded(srv):
+    agent, robot = make_agent(srv, mode="react", react_max_steps=3)
+    for _ in range(10):
+        srv.script(tool_calls(("nav_rotate", {"degrees": 10})))
+    result = agent.execute_mission("keep turning")
+    assert not result.success and "llm.react_max_steps" in result.response
+    assert len(result.steps) == 3
+
+
+def test_react_token_budget(srv):
+    agent, _ = make_agent(srv, mode="react", react_token_budget=500)
+    for _ in range(10):
+        srv.script(tool_calls(("sys_status", {}), usage=(400, 50)))
+    result = agent.execute_mission("status forever")
+    assert not result.success and "token budget" in result.response
+    assert result.usage.round_trips == 2
+
+
+# -- start-up check, CLI -----------------------------------------------------------------------
+
+
+def test_startup_check_names_url_model_and_fix(srv):
+    with pytest.raises(ConfigError, match="does not serve the model 'nope'.*test-model"):
+        make_agent(srv, model="nope")
+    settings = load_config("ollama", {"llm": {"base_url": srv.url, "model": "llama3"}},
+                           environ={})
+    with pytest.raises(ConfigError, match="ollama pull llama3"):
+        RobotAgent(settings).initialize()
+    settings = load_config("ollama", {"llm": {"base_url": srv.url}}, environ={})
+    assert RobotAgent(settings).initialize()  # qwen2.5:7b-instruct is in /api/tags
+
+
+def cli(*args, env=None):
+    full = {**os.environ, "OPENAI_API_KEY": "test-key", **(env or {})}
+    full.pop("SHADOWHOUND_CONFIG", None)
+    return subprocess.run([sys.executable, "-m", "shadowhound", *args], capture_output=True,
+                          text=True, timeout=60, env=full)
+
+
+def test_cli_run_with_a_scripted_openai_server(srv):
+    srv.script(json_plan([{"skill": "nav.rotate", "args": {"degrees": 90}}]))
+    proc = cli("run", "--backend", "openai", "--base-url", srv.url, "--model", "test-model",
+               "--json", "turn left")
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["success"] and out["robot"]["yaw"] == 1.5708
+    assert out["usage"]["round_trips"] == 1 and out["usage"]["prompt_tokens"] == 50
+    assert "test-key" not in proc.stdout + proc.stderr
+
+
+def test_cli_unreachable_backend_exits_2(srv):
+    url = srv.url
+    srv.stop()
+    t0 = time.monotonic()
+    proc = cli("run", "--backend", "vllm", "--base-url", url, "--model", "m", "stand up",
+               env={"SHADOWHOUND_LLM__TIMEOUT": "2"})
+    assert proc.returncode == 2 and time.monotonic() - t0 < 20
+    assert "backend unavailable: cannot reach " + url in proc.stderr and "'m'" in proc.stderr
+    doctor = cli("doctor", "--backend", "vllm", "--base-url", url, "--model", "m")
+    assert doctor.returncode == 2
+
+
+def test_cli_doctor_ok(srv):
+    proc = cli("doctor", "--backend", "llamacpp", "--base-url", srv.url, "--model", "test-model")
+    assert proc.returncode == 0, proc.stderr
+    assert "model 'test-model' is available" in proc.stdout
+
+
+# -- chat and vision -------------------------------------------------------------------------
+
+
+def test_chat_uses_state_and_never_moves(srv):
+    agent, robot = make_agent(srv, max_tokens=64)
+    srv.script(text("I am standing at the origin."), text("Still here."))
+    assert agent.chat("where are you?") == "I am standing at the origin."
+    assert agent.chat("and now?") == "Still here."
+    second = srv.requests[1]
+    assert "tools" not in second and "Robot now: standing" in second["messages"][0]["content"]
+    assert [m["role"] for m in second["messages"][1:]] == ["user", "assistant", "user"]
+    assert not robot.received_motion
+
+
+def test_vision_sends_a_downscaled_jpeg(srv):
+    agent, _ = make_agent(srv, vision=True, vision_max_side=64)
+    srv.script(json_plan([{"skill": "perception.describe", "args": {"question": "what?"}}]),
+               text("A red ball on a grey floor."))
+    result = agent.execute_mission("what do you see?")
+    assert result.success and "A red ball on a grey floor." in result.response
+    content = srv.requests[1]["messages"][0]["content"]
+    assert content[0] == {"type": "text", "text": "what?"}
+    assert content[1]["image_url"]["url"].startswith("data:image/jpeg;base64,")
+
+
+def test_without_vision_describe_is_honest(srv):
+    agent, _ = make_agent(srv)
+    srv.script(json_plan([{"skill": "perception.describe", "args": {}}]))
+    result = agent.execute_mission("what do you see?")
+    assert "No vision model is configured" in result.response and len(srv.requests) == 1
+
+
+# -- prompt size and parser robustness ---------------------------------------------------------
+
+
+def test_plan_prompt_with_every_skill_is_compact():
+    registry = default_registry()
+    prompt = system_prompt(registry, style="plan")
+    assert estimate_tokens(prompt) + estimate_tokens("stand up and walk forward 1 meter") < 1500
+    assert estimate_tokens(tools(registry)) < 1500
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.one_of(
+    st.text(max_size=300),
+    st.recursive(st.none() | st.booleans() | st.floats() | st.text(max_size=20),
+                 lambda c: st.lists(c, max_size=4) | st.dictionaries(st.text(max_size=8), c,
+                                                                      max_size=4),
+                 max_leaves=12).map(json.dumps),
+))
+def test_parser_never_raises_on_any_model_output(content):
+    reply = parse_reply({"role": "assistant", "content": content})
+    assert isinstance(reply.problems, list) and isinstance(reply.answer, str)
+    registry = default_registry()
+    for call in reply.calls:  # validation may refuse a call, never crash on it
+        with contextlib.suppress(SkillValidationError):
+            registry.validate(call)
