@@ -75,6 +75,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     doctor = sub.add_parser("doctor", help="check the configuration, the backend and the model")
     _common(doctor, suppress=True)
+
+    sub.add_parser("node", help="run the ROS 2 MissionNode (needs the 'ros' extra): "
+                                "shadowhound node --ros-args -p name:=value ...",
+                   add_help=False)
     return parser
 
 
@@ -103,6 +107,9 @@ def _agent(settings: ShadowHoundConfig) -> Any:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["node"]:  # ROS owns the rest of the command line (--ros-args ...)
+        return cmd_node(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)],
@@ -319,6 +326,20 @@ def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
     sys.stdout.write(yaml.safe_dump(json.loads(settings.model_dump_json()), sort_keys=False))
     return EXIT_OK
+
+
+# -- node ----------------------------------------------------------------------------------------
+
+
+def cmd_node(ros_argv: list[str]) -> int:
+    try:
+        from .ros.node import main as node_main
+    except ImportError as exc:
+        print(f"shadowhound: the ROS 2 node needs rclpy and the shadowhound_interfaces package "
+              f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
+              file=sys.stderr)
+        return EXIT_USAGE
+    return node_main(ros_argv)
 
 
 # -- doctor --------------------------------------------------------------------------------------
