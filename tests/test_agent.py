@@ -227,3 +227,15 @@ def test_square_returns_to_start(agent):
     st = result.robot
     assert result.success and math.hypot(st.x, st.y) < 0.01
     assert st.distance_travelled == pytest.approx(8.0, abs=0.02)
+
+
+def test_dry_run_predicts_without_moving(agent, robot):
+    result = agent.dry_run("walk forward 2 meters, turn left and walk 1 meter")
+    assert result.success and result.dry_run
+    end = result.predicted_path[-1]
+    assert (end.x, end.y) == (pytest.approx(2.0), pytest.approx(1.0))
+    assert [s.skill for s in result.steps] == ["nav.move", "nav.rotate", "nav.move"]
+    assert not robot.received_motion and robot.commands == []
+    refused = agent.dry_run("walk forward 4 meters three times")
+    assert not refused.success and "geofence" in refused.response
+    assert not agent.dry_run("blorp").success

@@ -117,3 +117,12 @@ def test_config_command_shows_no_secrets():
     proc = shadowhound("config", env={"OPENAI_API_KEY": "sk-secret-123"})
     assert proc.returncode == 0 and "max_linear_speed: 0.5" in proc.stdout
     assert "sk-secret-123" not in proc.stdout
+
+
+def test_run_dry_run_shows_plan_and_path_without_moving():
+    proc = shadowhound("run", "--dry-run", "walk forward 1 meter then come back")
+    assert proc.returncode == 0
+    assert "[1] nav.move(distance=1.0)" in proc.stdout and "predicted path:" in proc.stdout
+    assert "nothing moved" in proc.stdout
+    out = json.loads(shadowhound("run", "--dry-run", "--json", "walk forward 9 meters").stdout)
+    assert out["dry_run"] and not out["success"] and out["robot"]["distance_travelled"] == 0

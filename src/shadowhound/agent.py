@@ -139,6 +139,33 @@ class RobotAgent:
         plan = Plan(list(calls), text=text or "explicit plan", planner="explicit")
         return self._execute(plan.text, FixedPlanner(plan))
 
+    def dry_run(self, text: str) -> MissionResult:
+        """Plan and check `text` without moving: the plan, the predicted path, any refusals."""
+        self.initialize()
+        mission_id = uuid.uuid4().hex[:12]
+        started = time.perf_counter()
+        if not isinstance(text, str) or not text.strip():
+            return self._refuse(mission_id, str(text)[:200], started,
+                                "the mission is empty; say what the robot should do", False)
+        timing = Timing()
+        env = PlanEnv(self.settings, self.robot.get_state().pose)
+        try:
+            plan = self.planner.plan(text[: self.settings.agent.max_mission_chars],
+                                     self._planning_context())
+        except PlanningError as exc:
+            return self._refuse(mission_id, text, started, exc.message, False)
+        timing.agent_duration = timing.total_duration = time.perf_counter() - started
+        steps, _valid, problems, path = self._prepare(plan, env, env.mission_start, first=1)
+        end = path[-1]
+        if problems:
+            response = "Dry run: the plan would be refused: " + "; ".join(problems)
+        else:
+            response = (f"Dry run: {len(steps)} step(s) would run and end near x={end.x:.2f} m, "
+                        f"y={end.y:.2f} m; nothing moved.")
+        return MissionResult(mission_id, text, not problems, response, MissionStatus.IDLE,
+                             steps, self.robot.get_state(), timing, plan.usage, plan,
+                             problems, None if not problems else response, True, path)
+
     def _execute(self, text: str, planner: Planner) -> MissionResult:
         self.initialize()
         mission_id = uuid.uuid4().hex[:12]
@@ -193,7 +220,7 @@ class RobotAgent:
                                 MissionStatus.STOPPED, self._stop_reason())
 
         # 2. Validate every step and check the whole predicted path before anything moves.
-        steps, valid, problems = self._prepare(plan, env, env.mission_start, first=1)
+        steps, valid, problems, _path = self._prepare(plan, env, env.mission_start, first=1)
         if problems:
             return self._finish(mission_id, text, started, timing, steps, plan,
                                 MissionStatus.FAILED, "Refused before moving: " +
@@ -218,7 +245,8 @@ class RobotAgent:
             timing.agent_duration += time.perf_counter() - t
             if again is not None and not self._cancel.is_set():
                 pose = robot.get_state().pose
-                more, more_valid, problems = self._prepare(again, env, pose, first=len(steps) + 1)
+                more, more_valid, problems, _path = self._prepare(again, env, pose,
+                                                                  first=len(steps) + 1)
                 if problems:
                     error = f"{error}; the new plan was refused: {'; '.join(problems)}"
                 else:
@@ -232,12 +260,13 @@ class RobotAgent:
                             error=error)
 
     def _prepare(self, plan: Plan, env: PlanEnv, start: Any, first: int
-                 ) -> tuple[list[StepResult], list[ValidatedCall], list[str]]:
-        """Steps for the record, validated calls, and every problem (validation and safety)."""
+                 ) -> tuple[list[StepResult], list[ValidatedCall], list[str], list[Any]]:
+        """Steps for the record, validated calls, every problem (validation and safety), and
+        the predicted path."""
         calls, problems = self._validate(plan)
         steps = [StepResult(i, c.skill, _plain_args(c.args), c.label)
                  for i, c in enumerate(plan.steps, first)]
-        refusals, _path = self.governor.check_plan(calls, start, env)
+        refusals, path = self.governor.check_plan(calls, start, env)
         problems += [str(r).replace(f"step {r.step} ", f"step {r.step + first - 1} ", 1)
                      for r in refusals]
         valid = [c for c in calls if c is not None]
@@ -247,7 +276,7 @@ class RobotAgent:
         else:
             for s, c in zip(steps, valid, strict=True):
                 s.args = c.args_dict()
-        return steps, valid, problems
+        return steps, valid, problems, path
 
     def _run_steps(self, mission_id: str, steps: list[StepResult], calls: list[ValidatedCall],
                    env: PlanEnv, timing: Timing) -> tuple[MissionStatus, str | None]:

@@ -57,6 +57,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--json", action="store_true",
                      help="print exactly one JSON object with the result on stdout")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress on stderr")
+    run.add_argument("--dry-run", action="store_true",
+                     help="plan and check only: show the plan and predicted path, move nothing")
 
     skills = sub.add_parser("skills", help="list the skills with their argument schemas")
     _common(skills, suppress=True)
@@ -159,6 +161,8 @@ def _progress(stream: TextIO) -> ev.Listener:
 
 def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     agent = _agent(settings)
+    if args.dry_run:
+        return _dry_run(agent, args)
     if not args.quiet:
         agent.add_listener(_progress(sys.stderr))
     box: dict[str, Any] = {}
@@ -191,6 +195,23 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
               f"battery={st.battery:.1f}%")
     if interrupted:
         return EXIT_INTERRUPTED
+    return EXIT_OK if result.success else EXIT_FAILED
+
+
+def _dry_run(agent: Any, args: argparse.Namespace) -> int:
+    result = agent.dry_run(args.mission)
+    agent.cleanup()
+    if args.json:
+        json.dump(result.to_dict(), sys.stdout, separators=(",", ":"))
+        sys.stdout.write("\n")
+    else:
+        for step in result.steps:
+            params = ", ".join(f"{k}={v}" for k, v in step.args.items())
+            print(f"  [{step.index}] {step.skill}({params})")
+        path = " -> ".join(f"({p.x:.2f}, {p.y:.2f})" for p in result.predicted_path)
+        if path:
+            print(f"predicted path: {path}")
+        print(result.response)
     return EXIT_OK if result.success else EXIT_FAILED
 
 

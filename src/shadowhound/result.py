@@ -8,7 +8,7 @@ from enum import Enum
 from typing import Any
 
 from .plan import Plan, Usage
-from .state import RobotState
+from .state import Pose2D, RobotState
 
 
 class StepStatus(str, Enum):
@@ -105,6 +105,8 @@ class MissionResult:
     plan: Plan | None = None
     refusals: list[str] = field(default_factory=list)
     error: str | None = None
+    dry_run: bool = False
+    predicted_path: list[Pose2D] = field(default_factory=list)  # dry runs: poses, start first
 
     def __iter__(self) -> Iterator[Any]:
         yield self.response
@@ -119,6 +121,9 @@ class MissionResult:
             "response": self.response,
             "error": self.error,
             "refusals": list(self.refusals),
+            "dry_run": self.dry_run,
+            "predicted_path": [{"x": round(p.x, 4), "y": round(p.y, 4), "yaw": round(p.yaw, 4)}
+                               for p in self.predicted_path],
             "plan": self.plan.to_dict() if self.plan else None,
             "steps": [s.to_dict() for s in self.steps],
             "robot": self.robot.to_dict() if self.robot else None,
