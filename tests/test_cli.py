@@ -126,3 +126,10 @@ def test_run_dry_run_shows_plan_and_path_without_moving():
     assert "nothing moved" in proc.stdout
     out = json.loads(shadowhound("run", "--dry-run", "--json", "walk forward 9 meters").stdout)
     assert out["dry_run"] and not out["success"] and out["robot"]["distance_travelled"] == 0
+
+
+def test_risky_trick_needs_approval_on_the_command_line():
+    refused = shadowhound("run", "-q", "do a backflip")  # no terminal: nobody to ask
+    assert refused.returncode == 1 and "no interface that can ask a person" in refused.stdout
+    approved = shadowhound("run", "-q", "--yes", "do a backflip")
+    assert approved.returncode == 0 and "performed backflip" in approved.stdout

@@ -8,6 +8,7 @@ time; `estop`, `cancel`, `get_diagnostics` and `update_camera_image` are safe fr
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 import uuid
@@ -16,6 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from . import events as ev
+from .approval import ApprovalDesk, ApprovalRequest
 from .camera import to_camera_frame
 from .config import ConfigError, ShadowHoundConfig
 from .conversation import answer_offline
@@ -23,7 +25,7 @@ from .plan import Plan, PlanningError, SkillCall, Usage
 from .planning import FixedPlanner, Planner, PlanningContext, make_planner
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing
 from .robot.base import Robot, RobotError
-from .safety import Governor
+from .safety import Governor, Watchdog
 from .skills import (
     MissionCancelled,
     PlanEnv,
@@ -34,7 +36,7 @@ from .skills import (
     ValidatedCall,
     default_registry,
 )
-from .state import CameraFrame, RobotState
+from .state import CameraFrame, RobotState, normalize_angle
 
 log = logging.getLogger(__name__)
 
@@ -61,7 +63,11 @@ class RobotAgent:
         self.config = config or RobotAgentConfig()
         self.settings = self.config.settings
         self.registry = self.config.registry or default_registry()
-        self.governor = Governor(self.settings.safety)
+        self.governor = Governor(self.settings.safety, self.settings.motion.auto_stand)
+        self._approvals = ApprovalDesk()
+        self.approvals_enabled = False
+        self._watchdog: Watchdog | None = None
+        self._stop_cause: str | None = None  # set when the agent itself stops a mission
         self._robot = self.config.robot
         self._planner = self.config.planner
         self._events = ev.EventBus()
@@ -155,16 +161,18 @@ class RobotAgent:
         except PlanningError as exc:
             return self._refuse(mission_id, text, started, exc.message, False)
         timing.agent_duration = timing.total_duration = time.perf_counter() - started
-        steps, _valid, problems, path = self._prepare(plan, env, env.mission_start, first=1)
-        end = path[-1]
+        checked = self._prepare(plan, env, self.robot.get_state(), first=1)
+        end, problems = checked.path[-1], checked.problems
         if problems:
             response = "Dry run: the plan would be refused: " + "; ".join(problems)
         else:
-            response = (f"Dry run: {len(steps)} step(s) would run and end near x={end.x:.2f} m, "
-                        f"y={end.y:.2f} m; nothing moved.")
+            response = (f"Dry run: {len(checked.steps)} step(s) would run and end near "
+                        f"x={end.x:.2f} m, y={end.y:.2f} m; nothing moved.")
+            if checked.approvals:
+                response += " It needs approval: " + "; ".join(checked.approvals) + "."
         return MissionResult(mission_id, text, not problems, response, MissionStatus.IDLE,
-                             steps, self.robot.get_state(), timing, plan.usage, plan,
-                             problems, None if not problems else response, True, path)
+                             checked.steps, self.robot.get_state(), timing, plan.usage, plan,
+                             problems, None if not problems else response, True, checked.path)
 
     def _execute(self, text: str, planner: Planner) -> MissionResult:
         self.initialize()
@@ -195,6 +203,7 @@ class RobotAgent:
                                 f"the mission is {len(text)} characters long; the limit is "
                                 f"{limit} (agent.max_mission_chars)")
         self._cancel.clear()
+        self._stop_cause = None
         self._set_current(mission_id=mission_id, mission=text, skill=None, step=0, steps=0,
                           progress=0.0)
         self._set_status(MissionStatus.PLANNING)
@@ -219,12 +228,24 @@ class RobotAgent:
             return self._finish(mission_id, text, started, timing, [], plan,
                                 MissionStatus.STOPPED, self._stop_reason())
 
-        # 2. Validate every step and check the whole predicted path before anything moves.
-        steps, valid, problems, _path = self._prepare(plan, env, env.mission_start, first=1)
+        # 2. Validate every step and check the whole predicted path before anything moves;
+        #    risky plans wait for a person's approval.
+        checked = self._prepare(plan, env, robot.get_state(), first=1)
+        steps, valid, problems = checked.steps, checked.calls, checked.problems
+        if not problems and checked.approvals:
+            refused = self._await_approval(mission_id, text, steps, checked.approvals)
+            problems = [refused] if refused else []
+        elif problems:
+            problems += checked.approvals  # say everything that stands in the way at once
         if problems:
+            for s in steps:
+                s.status = StepStatus.SKIPPED
+            stopped = self._cancel.is_set()
             return self._finish(mission_id, text, started, timing, steps, plan,
-                                MissionStatus.FAILED, "Refused before moving: " +
-                                "; ".join(problems), refusals=problems)
+                                MissionStatus.STOPPED if stopped else MissionStatus.FAILED,
+                                self._stop_reason() if stopped else
+                                "Refused before moving: " + "; ".join(problems),
+                                refusals=problems)
         self._emit(ev.PLAN_READY, mission_id, plan=plan.to_dict())
 
         # 3. Run the steps in order; the first failure stops the mission and the robot.
@@ -244,9 +265,10 @@ class RobotAgent:
                 error = f"{error}; re-planning failed: {exc.message}"
             timing.agent_duration += time.perf_counter() - t
             if again is not None and not self._cancel.is_set():
-                pose = robot.get_state().pose
-                more, more_valid, problems, _path = self._prepare(again, env, pose,
-                                                                  first=len(steps) + 1)
+                more_checked = self._prepare(again, env, robot.get_state(), first=len(steps) + 1)
+                more, more_valid = more_checked.steps, more_checked.calls
+                problems = more_checked.problems + [f"needs approval: {a}"
+                                                    for a in more_checked.approvals]
                 if problems:
                     error = f"{error}; the new plan was refused: {'; '.join(problems)}"
                 else:
@@ -259,16 +281,20 @@ class RobotAgent:
         return self._finish(mission_id, text, started, timing, steps, plan, status, response,
                             error=error)
 
-    def _prepare(self, plan: Plan, env: PlanEnv, start: Any, first: int
-                 ) -> tuple[list[StepResult], list[ValidatedCall], list[str], list[Any]]:
-        """Steps for the record, validated calls, every problem (validation and safety), and
-        the predicted path."""
+    def _prepare(self, plan: Plan, env: PlanEnv, start: RobotState, first: int) -> _Checked:
+        """Validate every step and run the governor over the whole plan from `start`."""
         calls, problems = self._validate(plan)
         steps = [StepResult(i, c.skill, _plain_args(c.args), c.label)
                  for i, c in enumerate(plan.steps, first)]
-        refusals, path = self.governor.check_plan(calls, start, env)
-        problems += [str(r).replace(f"step {r.step} ", f"step {r.step + first - 1} ", 1)
-                     for r in refusals]
+        verdict = self.governor.check_plan(calls, start, env)
+
+        def renumber(r: Any) -> str:
+            return str(r).replace(f"step {r.step} ", f"step {r.step + first - 1} ", 1)
+
+        problems += [renumber(r) for r in verdict.refusals]
+        approvals = [renumber(r) for r in verdict.approvals]
+        if self.settings.safety.require_approval:
+            approvals.append("every plan needs approval (safety.require_approval)")
         valid = [c for c in calls if c is not None]
         if problems:
             for s in steps:
@@ -276,7 +302,36 @@ class RobotAgent:
         else:
             for s, c in zip(steps, valid, strict=True):
                 s.args = c.args_dict()
-        return steps, valid, problems, path
+        return _Checked(steps, valid, problems, approvals, verdict.path)
+
+    def _await_approval(self, mission_id: str, text: str, steps: list[StepResult],
+                        reasons: list[str]) -> str | None:
+        """None when a person approved; otherwise the refusal."""
+        if not self.approvals_enabled:
+            return ("needs approval, and no interface that can ask a person is attached: "
+                    + "; ".join(reasons))
+        request = ApprovalRequest(mission_id, text, [s.to_dict() for s in steps], reasons,
+                                  self.settings.safety.approval_timeout)
+        self._approvals.open(request)  # before the event, so an instant answer finds it
+        self._emit(ev.APPROVAL_REQUIRED, mission_id, request=request.to_dict())
+        refused = self._approvals.wait(request, self._cancel)
+        self._emit(ev.APPROVAL_DECIDED, mission_id, approved=refused is None, reason=refused)
+        return None if refused is None else f"not approved ({refused}): " + "; ".join(reasons)
+
+    def enable_approvals(self, enabled: bool = True) -> None:
+        """Say that an interface can ask a person to approve risky plans."""
+        self.approvals_enabled = enabled
+
+    def approve(self, request_id: str | None = None) -> bool:
+        """Approve the pending plan (or the one with this request or mission id)."""
+        return self._approvals.decide(True, request_id)
+
+    def reject(self, request_id: str | None = None, reason: str = "") -> bool:
+        return self._approvals.decide(False, request_id, reason)
+
+    def pending_approval(self) -> dict[str, Any] | None:
+        request = self._approvals.pending()
+        return request.to_dict() if request else None
 
     def _run_steps(self, mission_id: str, steps: list[StepResult], calls: list[ValidatedCall],
                    env: PlanEnv, timing: Timing) -> tuple[MissionStatus, str | None]:
@@ -310,7 +365,12 @@ class RobotAgent:
             except SkillValidationError as exc:
                 step.status, step.error = StepStatus.SKIPPED, "; ".join(exc.problems)
                 return f"invalid call, not run: {step.error}"
-            found, _path = self.governor.check_plan([valid], self.robot.get_state().pose, env)
+            verdict = self.governor.check_plan([valid], self.robot.get_state(), env)
+            found = verdict.refusals
+            if not found and verdict.approvals:
+                refused = self._await_approval(mission_id, text, [step],
+                                               [r.reason for r in verdict.approvals])
+                found = [] if refused is None else verdict.approvals
             if found:
                 step.status, step.error = StepStatus.SKIPPED, "; ".join(r.reason for r in found)
                 refusals.append(f"step {step.index} ({valid.name}): {step.error}")
@@ -370,16 +430,20 @@ class RobotAgent:
         self._emit(ev.STEP_STARTED, mission_id, step=step.to_dict())
         wall, robot_t0 = time.perf_counter(), robot.now()
         status = MissionStatus.SUCCEEDED
+        watchdog = self._arm_watchdog()
         ctx = SkillContext(robot, env, self._cancel, camera=self._latest_frame,
                            vision=self._vision(),
-                           on_progress=lambda f: self._step_progress(step.index, f))
+                           on_progress=lambda f: self._step_progress(step.index, f),
+                           heartbeat=watchdog.beat if watchdog else lambda _moving: None)
         try:
-            refused = self.governor.check_step(call, robot.get_state().pose, env)
+            before = robot.get_state()
+            refused = self.governor.check_step(call, before, env)
             if refused:
                 raise SkillError("refused by the safety governor: " + "; ".join(refused))
             ctx.start_clock(call.skill.timeout_for(call.args, env))
             ctx.check()
             output = call.skill.run(ctx, call.args)
+            self._check_outcome(call, before, env)
             step.output = "; ".join([*ctx.notes, output])
             step.status = StepStatus.SUCCEEDED
         except MissionCancelled:
@@ -395,11 +459,50 @@ class RobotAgent:
             robot.stop()
             step.status, step.error = StepStatus.FAILED, f"internal error: {exc!r}"
             status = MissionStatus.FAILED
+        if watchdog:
+            watchdog.disarm()
         step.duration = time.perf_counter() - wall
         step.robot_duration = robot.now() - robot_t0
         self._step_progress(step.index, 1.0)
         self._emit(ev.STEP_FINISHED, mission_id, step=step.to_dict())
         return status
+
+    def _check_outcome(self, call: ValidatedCall, before: RobotState, env: PlanEnv) -> None:
+        """A motion step is done only if the robot measurably ended where it was meant to."""
+        if not call.skill.moves or call.skill.predict is None:
+            return
+        expected = call.skill.predict(before.pose, call.args, env)
+        if not expected:
+            return
+        want, got = expected[-1], self.robot.get_state()
+        off = math.hypot(got.x - want.x, got.y - want.y)
+        turn = abs(math.degrees(normalize_angle(got.yaw - want.yaw)))
+        lim = self.settings.safety
+        if off > lim.outcome_tolerance or turn > lim.outcome_tolerance_deg:
+            raise SkillError(
+                f"outcome check failed: expected to end at ({want.x:.2f}, {want.y:.2f}, "
+                f"{math.degrees(want.yaw):.0f} deg) but measured ({got.x:.2f}, {got.y:.2f}, "
+                f"{math.degrees(got.yaw):.0f} deg): {off:.2f} m and {turn:.0f} degrees off "
+                "(safety.outcome_tolerance, outcome_tolerance_deg)"
+            )
+
+    def _arm_watchdog(self) -> Watchdog | None:
+        """Watch robots whose clock runs in real time (a simulator at time scale 0 only moves
+        when the loop ticks, so there is nothing to guard)."""
+        scale = float(getattr(self.robot, "time_scale", 1.0))
+        if scale <= 0:
+            return None
+        if self._watchdog is None:
+            self._watchdog = Watchdog(self.robot.stop, self._watchdog_tripped)
+        period = 1.0 / self.settings.motion.control_rate_hz
+        self._watchdog.arm(max(self.settings.safety.watchdog_timeout, 3 * period * scale))
+        return self._watchdog
+
+    def _watchdog_tripped(self, message: str) -> None:
+        log.error(message)
+        self._errors.append(message)
+        self._stop_cause = message
+        self._cancel.set()  # the hung skill fails as soon as it ticks again
 
     def _compose_response(self, status: MissionStatus, steps: list[StepResult], plan: Plan,
                           error: str | None) -> str:
@@ -452,7 +555,9 @@ class RobotAgent:
         return self._estop_latched
 
     def _stop_reason(self) -> str:
-        return "e-stop pressed" if self._estop_latched else "mission cancelled"
+        if self._estop_latched:
+            return "e-stop pressed"
+        return self._stop_cause or "mission cancelled"
 
     # -- information -------------------------------------------------------------------------
 
@@ -491,6 +596,8 @@ class RobotAgent:
             "backend": self.settings.backend,
             "robot": self.get_robot_status(),
             "last_mission": last.summary() if last else None,
+            "refusals": list(last.refusals) if last else [],
+            "pending_approval": self.pending_approval(),
             "limits": self.settings.safety.model_dump(),
         }
 
@@ -579,6 +686,17 @@ class RobotAgent:
             self._set_current(skill=None)
         self._emit(ev.MISSION_FINISHED, mission_id, result=result.to_dict())
         return result
+
+
+@dataclass
+class _Checked:
+    """A plan after validation and the governor: what runs, what is wrong, what needs a yes."""
+
+    steps: list[StepResult]
+    calls: list[ValidatedCall]
+    problems: list[str]
+    approvals: list[str]
+    path: list[Any]
 
 
 def _plain_args(args: Any) -> dict[str, Any]:

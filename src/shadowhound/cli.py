@@ -57,6 +57,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--json", action="store_true",
                      help="print exactly one JSON object with the result on stdout")
     run.add_argument("--quiet", "-q", action="store_true", help="no progress on stderr")
+    run.add_argument("--yes", action="store_true",
+                     help="approve plans that need approval (risky tricks) without asking")
     run.add_argument("--dry-run", action="store_true",
                      help="plan and check only: show the plan and predicted path, move nothing")
 
@@ -159,12 +161,39 @@ def _progress(stream: TextIO) -> ev.Listener:
     return show
 
 
+def _approver(agent: Any, ask: bool) -> ev.Listener:
+    """Answer approval requests: with --yes at once, else by asking on the terminal."""
+
+    def decide(request: dict[str, Any]) -> None:
+        if not ask:
+            agent.approve(request["request_id"])
+            return
+        print("approval needed: " + "; ".join(request["reasons"]), file=sys.stderr)
+        print(f"approve within {request['timeout']:g} s? [y/N] ", end="", file=sys.stderr,
+              flush=True)
+        answer = sys.stdin.readline().strip().lower()
+        if answer in ("y", "yes"):
+            agent.approve(request["request_id"])
+        else:
+            agent.reject(request["request_id"], "declined at the terminal")
+
+    def on_event(event: ev.MissionEvent) -> None:
+        if event.kind == ev.APPROVAL_REQUIRED:
+            # Ask on another thread: the mission thread waits with its time-out meanwhile.
+            threading.Thread(target=decide, args=(event.data["request"],), daemon=True).start()
+
+    return on_event
+
+
 def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     agent = _agent(settings)
     if args.dry_run:
         return _dry_run(agent, args)
     if not args.quiet:
         agent.add_listener(_progress(sys.stderr))
+    if args.yes or sys.stdin.isatty():
+        agent.enable_approvals()
+        agent.add_listener(_approver(agent, ask=not args.yes))
     box: dict[str, Any] = {}
     # The mission runs on a worker so that Ctrl-C here can stop the robot at once.
     worker = threading.Thread(target=lambda: box.update(result=agent.execute_mission(

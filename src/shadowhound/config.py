@@ -25,6 +25,15 @@ class ConfigError(Exception):
     """A profile, file or value is wrong. The message says which and what is allowed."""
 
 
+def _finite_pair(value: Any) -> tuple[float, float]:
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise ValueError("must be a pair [x, y] in metres")
+    x, y = (float(v) for v in value)
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ValueError("must be finite numbers")
+    return (x, y)
+
+
 class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
@@ -38,8 +47,45 @@ class SafetyConfig(_Section):
     geofence_radius: float = Field(
         10.0, gt=0, le=1000, description="metres around the odom origin the robot must stay in"
     )
-    allow_risky_tricks: bool = Field(False, description="allow flips, jumps, pounce, handstand")
+    geofence_polygon: list[tuple[float, float]] | None = Field(
+        None, description="optional polygon [[x, y], ...] in the odom frame the robot must stay in"
+    )
+    max_linear_accel: float = Field(1.0, gt=0, le=10, description="m/s^2 cap on commands")
+    max_angular_accel: float = Field(3.0, gt=0, le=20, description="rad/s^2 cap on commands")
+    max_mission_distance: float = Field(
+        50.0, gt=0, le=10_000, description="metres one mission may travel in all"
+    )
+    battery_floor: float = Field(
+        15.0, ge=0, le=100, description="percent below which only stop, sit, lie down, status"
+    )
+    allow_skills: list[str] | None = Field(
+        None, description="only these skills (glob patterns such as 'body.*'); None = all"
+    )
+    deny_skills: list[str] = Field(default_factory=list, description="never these skills")
+    allow_risky_tricks: bool = Field(
+        False, description="run flips, jumps, pounce, handstand, bound without approval"
+    )
+    require_approval: bool = Field(False, description="every plan waits for approval")
+    approval_timeout: float = Field(60.0, gt=0, le=3600, description="seconds to wait for it")
     max_wait: float = Field(300.0, gt=0, le=3600, description="longest sys.wait in seconds")
+    watchdog_timeout: float = Field(
+        0.25, gt=0, le=5, description="seconds without a control tick before zero velocity"
+    )
+    outcome_tolerance: float = Field(
+        0.10, gt=0, le=5, description="metres a motion step may end away from its target"
+    )
+    outcome_tolerance_deg: float = Field(
+        5.0, gt=0, le=180, description="degrees a motion step may end away from its heading"
+    )
+
+    @field_validator("geofence_polygon", mode="before")
+    @classmethod
+    def _polygon(cls, value: Any) -> list[tuple[float, float]] | None:
+        if value is None:
+            return None
+        if not isinstance(value, (list, tuple)) or len(value) < 3:
+            raise ValueError("must be a list of at least 3 [x, y] vertices")
+        return [_finite_pair(v) for v in value]
 
 
 class MotionConfig(_Section):
@@ -108,15 +154,6 @@ class AgentConfig(_Section):
     max_steps: int = Field(50, ge=1, le=1000)
     conversation_history_size: int = Field(10, ge=0, le=1000)
     replan_on_failure: bool = True
-
-
-def _finite_pair(value: Any) -> tuple[float, float]:
-    if not isinstance(value, (list, tuple)) or len(value) != 2:
-        raise ValueError("must be a pair [x, y] in metres")
-    x, y = (float(v) for v in value)
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise ValueError("must be finite numbers")
-    return (x, y)
 
 
 class ShadowHoundConfig(_Section):

@@ -17,6 +17,8 @@ STEP_STARTED = "step_started"
 STEP_FINISHED = "step_finished"
 MISSION_FINISHED = "mission_finished"
 ESTOP = "estop"
+APPROVAL_REQUIRED = "approval_required"
+APPROVAL_DECIDED = "approval_decided"
 
 
 @dataclass(frozen=True)

@@ -61,6 +61,7 @@ class SkillContext:
         camera: Callable[[], CameraFrame | None] = lambda: None,
         vision: Callable[[CameraFrame, str], str] | None = None,
         on_progress: Callable[[float], None] = lambda _fraction: None,
+        heartbeat: Callable[[bool | None], None] = lambda _moving: None,
     ) -> None:
         self.robot = robot
         self.env = env
@@ -69,7 +70,9 @@ class SkillContext:
         self._camera = camera
         self.vision = vision
         self.on_progress = on_progress
+        self.heartbeat = heartbeat
         self.period = 1.0 / self.config.motion.control_rate_hz
+        self._last_command = (0.0, 0.0, 0.0)
         self.deadline = math.inf
         self.notes: list[str] = []
 
@@ -86,15 +89,29 @@ class SkillContext:
 
     def tick(self) -> None:
         """Wait one control period, then check cancellation and the time-out."""
+        self.heartbeat(None)
         self.robot.sleep(self.period)
+        self.heartbeat(None)
         self.check()
 
     def drive(self, vx: float, vy: float, wz: float) -> None:
-        """Send body-frame velocity within the safety caps (defence behind the plan check)."""
+        """Send body-frame velocity within the safety caps (defence behind the plan check).
+
+        Speeds are capped, and so is the change from the last command (acceleration caps);
+        a command to stop is always sent at once.
+        """
         s = self.config.safety
         vx, vy = _cap_vector(vx, vy, s.max_linear_speed)
         wz = max(-s.max_angular_speed, min(s.max_angular_speed, wz))
+        if vx or vy or wz:
+            lx, ly, lw = self._last_command
+            dx, dy = _cap_vector(vx - lx, vy - ly, s.max_linear_accel * self.period)
+            dw = max(-s.max_angular_accel * self.period,
+                     min(s.max_angular_accel * self.period, wz - lw))
+            vx, vy, wz = lx + dx, ly + dy, lw + dw
         self.check()
+        self._last_command = (vx, vy, wz)
+        self.heartbeat(bool(vx or vy or wz))
         self.robot.send_velocity(vx, vy, wz)
 
     def ensure_standing(self) -> None:

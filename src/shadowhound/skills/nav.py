@@ -137,12 +137,18 @@ def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     return f"reached {where} at x={st.x:.2f} m, y={st.y:.2f} m"
 
 
+def _arrive(pose: Pose2D, x: float, y: float, env: PlanEnv) -> Pose2D:
+    """Where motion.go_to leaves the robot: facing along the leg it walked (if it walked)."""
+    if pose.distance_to(x, y) < env.config.motion.position_tolerance:
+        return Pose2D(x, y, pose.yaw)
+    return Pose2D(x, y, math.atan2(y - pose.y, x - pose.x))
+
+
 def _predict_goto(pose: Pose2D, a: GotoArgs, env: PlanEnv) -> list[Pose2D]:
-    x, y = _goto_target(a, env)
-    yaw = math.atan2(y - pose.y, x - pose.x) if pose.distance_to(x, y) > 1e-6 else pose.yaw
+    end = _arrive(pose, *_goto_target(a, env), env)
     if a.heading_degrees is not None:
-        yaw = normalize_angle(math.radians(a.heading_degrees))
-    return [Pose2D(x, y, yaw)]
+        end = Pose2D(end.x, end.y, normalize_angle(math.radians(a.heading_degrees)))
+    return [end]
 
 
 def _goto_timeout(a: GotoArgs, env: PlanEnv) -> float:
@@ -174,7 +180,11 @@ def _run_patrol(ctx: SkillContext, a: PatrolArgs) -> str:
 
 
 def _predict_patrol(pose: Pose2D, a: PatrolArgs, env: PlanEnv) -> list[Pose2D]:
-    return [Pose2D(x, y, pose.yaw) for x, y in _patrol_points(pose, env)]
+    poses: list[Pose2D] = []
+    for _ in range(a.laps):
+        for x, y in _patrol_points(pose, env):
+            poses.append(_arrive(poses[-1] if poses else pose, x, y, env))
+    return poses
 
 
 def _patrol_timeout(a: PatrolArgs, env: PlanEnv) -> float:
