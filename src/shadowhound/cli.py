@@ -195,9 +195,16 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         agent.enable_approvals()
         agent.add_listener(_approver(agent, ask=not args.yes))
     box: dict[str, Any] = {}
+
+    def work() -> None:
+        try:
+            box["result"] = agent.execute_mission(args.mission)
+        except Exception as exc:  # a bug, not a mission failure: say so, never hide it
+            logging.getLogger(__name__).exception("the mission crashed")
+            box["crash"] = exc
+
     # The mission runs on a worker so that Ctrl-C here can stop the robot at once.
-    worker = threading.Thread(target=lambda: box.update(result=agent.execute_mission(
-        args.mission)), name="shadowhound-mission", daemon=True)
+    worker = threading.Thread(target=work, name="shadowhound-mission", daemon=True)
     worker.start()
     interrupted = False
     try:
@@ -209,6 +216,10 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         worker.join(5.0)
     result = box.get("result")
     agent.cleanup()
+    if "crash" in box:
+        print(f"shadowhound: internal error: {box['crash']!r}; the robot was stopped",
+              file=sys.stderr)
+        return EXIT_FAILED
     if result is None:
         print("shadowhound: interrupted; the robot was stopped", file=sys.stderr)
         return EXIT_INTERRUPTED

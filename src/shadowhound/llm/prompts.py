@@ -7,6 +7,7 @@ the skills as function tools with schemas stripped to what a model needs.
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -28,13 +29,18 @@ _PLAN_REPLY = (
 )
 _TOOLS_REPLY = "Call the skills as tools, all of them at once, in order."
 _REACT_REPLY = (
-    "Call one skill at a time and read its result before the next. When the request is done, "
-    "reply with a short answer for the user and no tool call."
+    "Call one skill at a time and read its result before the next. If you cannot call tools, "
+    'reply with JSON only: {"skill": "nav.move", "args": {"distance": 1.0}}. When the '
+    "request is done, reply with a short answer for the user and no skill call."
 )
 
 
+@functools.lru_cache(maxsize=256)
 def compact_schema(skill: Skill) -> dict[str, Any]:
-    """The skill's JSON Schema without titles and `null` branches (optional = not required)."""
+    """The skill's JSON Schema without titles and `null` branches (optional = not required).
+
+    Cached (schema generation is the costliest part of a request): treat it as read-only.
+    """
     full = skill.parameters_schema()
     props: dict[str, Any] = {}
     for name, prop in full.get("properties", {}).items():
@@ -49,6 +55,7 @@ def compact_schema(skill: Skill) -> dict[str, Any]:
     return schema
 
 
+@functools.lru_cache(maxsize=256)
 def skill_line(skill: Skill) -> str:
     """`nav.move(distance: metres; + forward, speed?: m/s) - Walk straight ...`"""
     schema = compact_schema(skill)
@@ -130,7 +137,9 @@ def system_prompt(
 ) -> str:
     """The system message. `style` is plan (skills listed, JSON reply), tools or react."""
     parts = [_INTRO]
-    if style == "plan":
+    # React also lists the skills: some servers drop `tools` (llama-cpp-python's default chat
+    # format does), and the model must still know what it may call.
+    if style in ("plan", "react"):
         parts.append("Skills:\n" + "\n".join(skill_line(s) for s in registry))
     parts += [places_line(places or {}), state_line(state), history_lines(history or [],
                                                                           history_size)]

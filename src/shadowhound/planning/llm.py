@@ -95,15 +95,15 @@ class LLMPlanner:
             if self.settings.backend == "openai":
                 options["parallel_tool_calls"] = True
         elif fmt == "json_schema":
-            options["response_format"] = {
-                "type": "json_schema",
-                "json_schema": {"name": "plan", "schema": prompts.plan_schema(ctx.registry),
-                                "strict": False},
-            }
+            options["response_format"] = _response_format(self.settings.backend,
+                                                          prompts.plan_schema(ctx.registry))
         try:
             completion = self._complete(messages, usage, ctx, **options)
         except BackendError as exc:
-            if exc.status not in (400, 422) or "response_format" not in options:
+            # Servers say "not supported" in different ways: 400/422, or a 500 naming the field.
+            rejected = exc.status in (400, 422) or (exc.status == 500 and
+                                                    "response_format" in str(exc))
+            if not rejected or "response_format" not in options:
                 raise PlanningError(str(exc), usage=usage) from exc
             log.warning("server rejected response_format json_schema; asking without it")
             self._schema_ok = False
@@ -122,7 +122,11 @@ class LLMPlanner:
                   **options: Any) -> Any:
         if ctx.cancelled is not None and ctx.cancelled.is_set():
             raise PlanningError("mission cancelled before the model was asked", usage=usage)
-        completion = self.backend.complete(messages, **options)
+        try:
+            completion = self.backend.complete(messages, **options)
+        except BackendError:
+            usage.round_trips += 1  # a failed request is still a round trip
+            raise
         usage.add(completion.usage)
         return completion
 
@@ -167,6 +171,9 @@ class LLMPlanner:
             except BackendError as exc:
                 raise PlanningError(str(exc), usage=usage) from exc
             reply = parse_reply(completion.message)
+            if not reply.calls and completion.finish_reason == "length":
+                return (f"Stopped: the model's answer was cut off at {self.llm.max_tokens} "
+                        "tokens (llm.max_tokens).", usage, False)
             if reply.problems and not reply.calls:
                 messages += [{"role": "assistant", "content": completion.message.get("content")
                               or ""},
@@ -215,6 +222,15 @@ class LLMPlanner:
         except (BackendError, ValueError) as exc:
             return f"I could not look at the image: {exc}"
         return str(completion.message.get("content") or "").strip() or "(no answer)"
+
+
+def _response_format(backend: str, schema: dict[str, Any]) -> dict[str, Any]:
+    """A plan-constrained response format in the dialect the server speaks."""
+    if backend == "llamacpp":
+        # llama.cpp (llama-server and llama-cpp-python) constrain json_object with a schema.
+        return {"type": "json_object", "schema": schema}
+    return {"type": "json_schema", "json_schema": {"name": "plan", "schema": schema,
+                                                   "strict": False}}
 
 
 def _context(context: Any) -> PlanningContext:
