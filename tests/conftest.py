@@ -21,3 +21,13 @@ def agent(robot: SimRobot, settings: ShadowHoundConfig) -> RobotAgent:
     a.initialize()
     yield a
     a.cleanup()
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _memory_in_a_temporary_directory(tmp_path_factory):
+    """Profiles keep history in ~/.shadowhound; tests (and the CLI processes they start) must
+    not touch the developer's real history."""
+    import os
+
+    os.environ["SHADOWHOUND_MEMORY__DATA_DIR"] = str(tmp_path_factory.mktemp("memory"))
+    yield

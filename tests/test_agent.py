@@ -239,3 +239,10 @@ def test_dry_run_predicts_without_moving(agent, robot):
     refused = agent.dry_run("walk forward 4 meters three times")
     assert not refused.success and "geofence" in refused.response
     assert not agent.dry_run("blorp").success
+
+
+def test_interfaces_may_name_missions(agent):
+    assert agent.execute_mission("stand up", mission_id="web-1").mission_id == "web-1"
+    assert agent.dry_run("sit down", mission_id="web_2").mission_id == "web_2"
+    with pytest.raises(ValueError, match="a mission id must be 1 to 64"):
+        agent.execute_mission("stand up", mission_id="no spaces allowed")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 import threading
 import time
 import uuid
@@ -21,6 +22,7 @@ from .approval import ApprovalDesk, ApprovalRequest
 from .camera import to_camera_frame
 from .config import ConfigError, ShadowHoundConfig
 from .conversation import answer_offline
+from .memory.service import AgentMemory
 from .plan import Plan, PlanningError, SkillCall, Usage
 from .planning import FixedPlanner, Planner, PlanningContext, make_planner
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing
@@ -68,6 +70,7 @@ class RobotAgent:
         self.approvals_enabled = False
         self._watchdog: Watchdog | None = None
         self._stop_cause: str | None = None  # set when the agent itself stops a mission
+        self._memory = AgentMemory(self.settings)  # places for this process until initialize()
         self._robot = self.config.robot
         self._planner = self.config.planner
         self._events = ev.EventBus()
@@ -108,6 +111,10 @@ class RobotAgent:
         check = getattr(self._planner, "check", None)
         if check is not None and self.settings.llm.check_on_start:
             check()  # raises BackendUnavailable (a ConfigError) naming the URL and the model
+        memory = self.settings.memory
+        if memory.enabled or memory.enable_rag:
+            self._memory = AgentMemory.open(self.settings, getattr(self._planner, "backend", None))
+            self.add_listener(self._memory.on_event)
         self._initialized = True
         return True
 
@@ -117,6 +124,7 @@ class RobotAgent:
         if self._robot is not None:
             self._robot.stop()
             self._robot.close()
+        self._memory.close()
 
     @property
     def robot(self) -> Robot:
@@ -136,25 +144,29 @@ class RobotAgent:
 
     # -- missions ----------------------------------------------------------------------------
 
-    def execute_mission(self, text: str) -> MissionResult:
-        """Plan `text`, check every step, run it. Never raises for bad input or robot faults."""
-        return self._execute(text, self.planner)
+    def execute_mission(self, text: str, mission_id: str | None = None) -> MissionResult:
+        """Plan `text`, check every step, run it. Never raises for bad input or robot faults.
 
-    def run_plan(self, calls: list[SkillCall], text: str = "") -> MissionResult:
+        `mission_id` lets an interface name the mission before it starts (default: a new id).
+        """
+        return self._execute(text, self.planner, mission_id)
+
+    def run_plan(self, calls: list[SkillCall], text: str = "",
+                 mission_id: str | None = None) -> MissionResult:
         """Run explicit skill calls (from the web, a test, a script) through the same checks."""
         plan = Plan(list(calls), text=text or "explicit plan", planner="explicit")
-        return self._execute(plan.text, FixedPlanner(plan))
+        return self._execute(plan.text, FixedPlanner(plan), mission_id)
 
-    def dry_run(self, text: str) -> MissionResult:
+    def dry_run(self, text: str, mission_id: str | None = None) -> MissionResult:
         """Plan and check `text` without moving: the plan, the predicted path, any refusals."""
         self.initialize()
-        mission_id = uuid.uuid4().hex[:12]
+        mission_id = _mission_id(mission_id)
         started = time.perf_counter()
         if not isinstance(text, str) or not text.strip():
             return self._refuse(mission_id, str(text)[:200], started,
                                 "the mission is empty; say what the robot should do", False)
         timing = Timing()
-        env = PlanEnv(self.settings, self.robot.get_state().pose)
+        env = self._plan_env()
         try:
             plan = self.planner.plan(text[: self.settings.agent.max_mission_chars],
                                      self._planning_context())
@@ -174,9 +186,9 @@ class RobotAgent:
                              checked.steps, self.robot.get_state(), timing, plan.usage, plan,
                              problems, None if not problems else response, True, checked.path)
 
-    def _execute(self, text: str, planner: Planner) -> MissionResult:
+    def _execute(self, text: str, planner: Planner, mission_id: str | None) -> MissionResult:
         self.initialize()
-        mission_id = uuid.uuid4().hex[:12]
+        mission_id = _mission_id(mission_id)
         started = time.perf_counter()
         if not isinstance(text, str):
             return self._refuse(mission_id, repr(text)[:200], started,
@@ -210,7 +222,7 @@ class RobotAgent:
         self._emit(ev.MISSION_STARTED, mission_id, mission=text)
         timing = Timing()
         robot = self.robot
-        env = PlanEnv(self.settings, robot.get_state().pose)
+        env = self._plan_env()
 
         if getattr(planner, "mode", "plan") == "react" and hasattr(planner, "react"):
             return self._run_react(mission_id, text, started, planner, env)
@@ -218,7 +230,7 @@ class RobotAgent:
         # 1. Plan. The planner never touches the robot.
         t = time.perf_counter()
         try:
-            plan = planner.plan(text, self._planning_context())
+            plan = planner.plan(text, self._planning_context(text))
         except PlanningError as exc:
             timing.agent_duration = time.perf_counter() - t
             return self._finish(mission_id, text, started, timing, [], None,
@@ -387,7 +399,7 @@ class RobotAgent:
         usage = Usage()
         status = MissionStatus.SUCCEEDED
         try:
-            answer, usage, finished = planner.react(text, self._planning_context(), run_step)
+            answer, usage, finished = planner.react(text, self._planning_context(text), run_step)
         except PlanningError as exc:
             answer, usage, finished = exc.message, exc.usage, False
         except MissionCancelled:
@@ -431,8 +443,8 @@ class RobotAgent:
         wall, robot_t0 = time.perf_counter(), robot.now()
         status = MissionStatus.SUCCEEDED
         watchdog = self._arm_watchdog()
-        ctx = SkillContext(robot, env, self._cancel, camera=self._latest_frame,
-                           vision=self._vision(),
+        ctx = SkillContext(robot, env, self._cancel, camera=self.latest_frame,
+                           vision=self._vision(), memory=self._memory,
                            on_progress=lambda f: self._step_progress(step.index, f),
                            heartbeat=watchdog.beat if watchdog else lambda _moving: None)
         try:
@@ -463,7 +475,8 @@ class RobotAgent:
             watchdog.disarm()
         step.duration = time.perf_counter() - wall
         step.robot_duration = robot.now() - robot_t0
-        self._step_progress(step.index, 1.0)
+        if step.status is StepStatus.SUCCEEDED:  # a stopped step keeps the progress it made
+            self._step_progress(step.index, 1.0)
         self._emit(ev.STEP_FINISHED, mission_id, step=step.to_dict())
         return status
 
@@ -571,7 +584,7 @@ class RobotAgent:
             return answer_offline(text, self)
         with self._state_lock:
             history = list(self._chat_history)
-        answer = str(llm_chat(text, self._planning_context(), history))
+        answer = str(llm_chat(text, self._planning_context(text), history))
         with self._state_lock:
             self._chat_history.extend([{"role": "user", "content": text},
                                        {"role": "assistant", "content": answer}])
@@ -627,12 +640,40 @@ class RobotAgent:
             return None
         return getattr(self._planner, "describe_image", None)
 
-    def _latest_frame(self) -> CameraFrame | None:
+    def latest_frame(self) -> CameraFrame | None:
+        """The latest camera frame: the one an interface gave, else the robot's own camera."""
         return self._camera_frame or self.robot.get_camera_frame()
 
-    def _planning_context(self) -> PlanningContext:
-        return PlanningContext(self.registry, self.robot.get_state(), dict(self.settings.places),
-                               [r.summary() for r in self._history], self._cancel)
+
+    def _plan_env(self) -> PlanEnv:
+        taught = {n: (x, y) for n, (x, y, _yaw) in self._memory.places.all().items()}
+        return PlanEnv(self.settings, self.robot.get_state().pose, taught)
+
+    def _planning_context(self, text: str = "") -> PlanningContext:
+        rag = self.settings.memory.enable_rag and self.settings.backend != "offline"
+        return PlanningContext(self.registry, self.robot.get_state(), self._plan_env().places,
+                               self.recent_summaries(), self._cancel,
+                               self._memory.search(text) if rag and text else [])
+
+    @property
+    def memory(self) -> AgentMemory:
+        """History, taught places and retrieval memory (see shadowhound.memory)."""
+        return self._memory
+
+    def recent_missions(self, limit: int = 10) -> list[dict[str, Any]]:
+        """Newest first: id, mission, status, success, response, started_at. From the history
+        database when memory is enabled (so it survives restarts), else from this process."""
+        rows = self._memory.recent_missions(limit)
+        if rows or self._memory.history is not None:
+            return rows
+        return [{"id": r.mission_id, "mission": r.mission, "status": r.status.value,
+                 "success": r.success, "response": r.response, "started_at": None,
+                 "finished_at": None} for r in reversed(self._history)][:limit]
+
+    def recent_summaries(self) -> list[str]:
+        """Oldest first, as one line each, for prompts and chat."""
+        rows = self.recent_missions(self.settings.agent.conversation_history_size)
+        return [f"{r['status']}: {r['mission']!r} -> {r['response']}" for r in reversed(rows)]
 
     # -- bookkeeping ---------------------------------------------------------------------------
 
@@ -697,6 +738,18 @@ class _Checked:
     problems: list[str]
     approvals: list[str]
     path: list[Any]
+
+
+_ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
+
+
+def _mission_id(given: str | None) -> str:
+    if given is None:
+        return uuid.uuid4().hex[:12]
+    if not isinstance(given, str) or not _ID.match(given):
+        raise ValueError(f"a mission id must be 1 to 64 letters, digits, '-' or '_', "
+                         f"got {given!r}")
+    return given
 
 
 def _plain_args(args: Any) -> dict[str, Any]:

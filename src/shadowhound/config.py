@@ -147,6 +147,24 @@ class LLMConfig(_Section):
     vision_max_side: int = Field(512, ge=64, le=2048, description="pixels; frames are downscaled")
 
 
+class MemoryConfig(_Section):
+    """Mission history, taught places and retrieval memory."""
+
+    enabled: bool = Field(False, description="keep history and taught places in data_dir")
+    data_dir: str = Field("~/.shadowhound", description="where history.db and recall/ live")
+    retention_days: float | None = Field(
+        90.0, gt=0, description="delete missions older than this at start-up (None = keep)"
+    )
+    max_missions: int | None = Field(10000, ge=1, description="keep at most this many missions")
+    enable_rag: bool = Field(False, description="retrieval memory (Chroma; 'memory' extra)")
+    embedding: Literal["minilm", "backend"] = Field(
+        "minilm", description="offline all-MiniLM-L6-v2, or the LLM server's /v1/embeddings"
+    )
+    embedding_model: str = Field("", description="model for embedding: backend")
+    rag_top_k: int = Field(3, ge=1, le=20, description="memories given to planner and chat")
+    rag_max_chars: int = Field(800, ge=100, le=20000, description="prompt space for memories")
+
+
 class AgentConfig(_Section):
     """Behaviour of the mission loop."""
 
@@ -167,6 +185,7 @@ class ShadowHoundConfig(_Section):
     sim: SimConfig = Field(default_factory=SimConfig)
     llm: LLMConfig = Field(default_factory=LLMConfig)
     agent: AgentConfig = Field(default_factory=AgentConfig)
+    memory: MemoryConfig = Field(default_factory=MemoryConfig)
     places: dict[str, tuple[float, float]] = Field(
         default_factory=lambda: {"kitchen": (3.0, 2.0), "charging dock": (-2.4, -1.0)},
         description="named places in the odom frame, metres",

@@ -13,6 +13,8 @@ if TYPE_CHECKING:
     from .agent import RobotAgent
 
 _TOPICS: list[tuple[str, re.Pattern[str]]] = [
+    ("recall", re.compile(r"\b(did you see|have you seen|saw|remember|earlier|this morning|"
+                          r"yesterday|last time|where is|where are the)\b")),
     ("see", re.compile(r"\b(see|seeing|look|view|camera|in front|ahead of you|surround)")),
     ("battery", re.compile(r"\b(battery|charge|charged|power|energy)\b")),
     ("where", re.compile(r"\b(where|position|pose|location|located|heading|facing)\b")),
@@ -27,6 +29,8 @@ def answer_offline(text: str, agent: RobotAgent) -> str:
     """Pick the topics a question is about and answer each from the agent's own records."""
     question = text.strip().lower()
     topics = [name for name, pattern in _TOPICS if pattern.search(question)]
+    if "recall" in topics:  # a question about the past is not about the camera now
+        topics = [t for t in topics if t not in ("see", "where")]
     if not topics or topics == ["status"] and _is_command(text, agent):
         if _is_command(text, agent):
             return ("That sounds like a mission. I only move when a mission is run: use "
@@ -39,8 +43,12 @@ def answer_offline(text: str, agent: RobotAgent) -> str:
     for topic in dict.fromkeys(topics):
         if topic == "greet":
             answers.append("Hello! I am ShadowHound.")
+        elif topic == "recall":
+            found = agent.memory.search(text)
+            answers.append("I remember: " + " | ".join(found) if found else
+                           "I remember nothing about that.")
         elif topic == "see":
-            answers.append(describe_frame(agent._latest_frame(), text))
+            answers.append(describe_frame(agent.latest_frame(), text))
         elif topic == "battery":
             answers.append(f"My battery is at {st.battery:.1f}%.")
         elif topic == "where":
@@ -67,8 +75,8 @@ def _is_command(text: str, agent: RobotAgent) -> bool:
 
 
 def _history(agent: RobotAgent) -> str:
-    history = agent.history
-    if not history:
+    recent = agent.recent_missions(3)  # from the history database when memory is enabled
+    if not recent:
         return "I have not run any mission yet."
-    lines = [f"{r.mission!r}: {r.status.value} ({r.response})" for r in history[-3:]]
-    return f"My last {len(lines)} mission(s): " + " | ".join(lines)
+    lines = [f"{r['mission']!r}: {r['status']} ({r['response']})" for r in reversed(recent)]
+    return f"My last {len(lines)} mission(s), oldest first: " + " | ".join(lines)

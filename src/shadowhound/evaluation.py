@@ -17,7 +17,7 @@ from typing import Any
 import yaml
 
 from .agent import RobotAgent, RobotAgentConfig
-from .config import ShadowHoundConfig
+from .config import MemoryConfig, ShadowHoundConfig
 from .robot.sim import SimRobot
 
 POSITION_TOLERANCE = 0.05  # metres
@@ -89,6 +89,8 @@ def load_cases(path: str | Path) -> list[MissionCase]:
 
 def run_case(case: MissionCase, settings: ShadowHoundConfig) -> CaseOutcome:
     """Run one case on a fresh simulated robot at the origin, standing, time scale 0."""
+    # Every case starts fresh: no history, no taught places from earlier runs.
+    settings = settings.model_copy(update={"memory": MemoryConfig()})
     robot = SimRobot(settings.sim, time_scale=0.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
     result = agent.execute_mission(case.mission)

@@ -126,6 +126,10 @@ def history_lines(history: list[str], limit: int) -> str:
     return "Recent missions:\n" + "\n".join(f"- {h}" for h in recent)
 
 
+def memory_lines(memories: list[str]) -> str:
+    return ("Relevant memories:\n" + "\n".join(f"- {m}" for m in memories)) if memories else ""
+
+
 def system_prompt(
     registry: SkillRegistry,
     *,
@@ -134,6 +138,7 @@ def system_prompt(
     places: dict[str, tuple[float, float]] | None = None,
     history: list[str] | None = None,
     history_size: int = 0,
+    memories: list[str] | None = None,
 ) -> str:
     """The system message. `style` is plan (skills listed, JSON reply), tools or react."""
     parts = [_INTRO]
@@ -141,8 +146,8 @@ def system_prompt(
     # format does), and the model must still know what it may call.
     if style in ("plan", "react"):
         parts.append("Skills:\n" + "\n".join(skill_line(s) for s in registry))
-    parts += [places_line(places or {}), state_line(state), history_lines(history or [],
-                                                                          history_size)]
+    parts += [places_line(places or {}), state_line(state),
+              history_lines(history or [], history_size), memory_lines(memories or [])]
     parts.append(_RULES)
     parts.append({"plan": _PLAN_REPLY, "tools": _TOOLS_REPLY, "react": _REACT_REPLY}[style])
     return "\n".join(p for p in parts if p)

@@ -23,6 +23,7 @@ class PlanningContext:
     places: dict[str, tuple[float, float]] = field(default_factory=dict)
     history: list[str] = field(default_factory=list)
     cancelled: threading.Event | None = None
+    memories: list[str] = field(default_factory=list)  # relevant memories, bounded
 
 
 @runtime_checkable

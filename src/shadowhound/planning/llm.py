@@ -147,7 +147,7 @@ class LLMPlanner:
     def _system(self, ctx: PlanningContext, style: str) -> str:
         return prompts.system_prompt(
             ctx.registry, style=style, state=ctx.state, places=ctx.places, history=ctx.history,
-            history_size=self.settings.agent.conversation_history_size,
+            history_size=self.settings.agent.conversation_history_size, memories=ctx.memories,
         )
 
     # -- react mode ----------------------------------------------------------------------------
@@ -200,6 +200,7 @@ class LLMPlanner:
             "briefly. You cannot move in this conversation; missions are run separately.",
             prompts.state_line(ctx.state), prompts.places_line(ctx.places),
             prompts.history_lines(ctx.history, self.settings.agent.conversation_history_size),
+            prompts.memory_lines(ctx.memories),
         ) if p)
         try:
             completion = self.backend.complete(

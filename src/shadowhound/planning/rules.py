@@ -19,6 +19,7 @@ from shadowhound.planning import _numbers as nums
 from shadowhound.planning import _phrases as phrases
 from shadowhound.planning import _vocabulary as vocab
 from shadowhound.planning._errors import CAPABILITIES, NotUnderstood, describe, failure
+from shadowhound.planning._memory_phrases import memory_steps
 from shadowhound.planning._text import canon
 from shadowhound.robot.go2_api import TRICKS
 
@@ -67,6 +68,11 @@ class RulePlanner:
         failed: list[tuple[str, str]] = []
         last_verb = ""
         for label in en.split_clauses(text):
+            remembered = memory_steps(label)
+            if remembered is not None:
+                steps.extend(remembered)
+                last_verb = ""
+                continue
             try:
                 norm, clause_notes = en.normalize(label)
                 norm, count, how = phrases.repetition(norm)

@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from . import body, nav, sense
+from . import body, memory, nav, sense
 from .context import MissionCancelled, PlanEnv, PlanProblem, SkillContext, SkillError, SkillTimeout
 from .registry import NoArgs, Skill, SkillArgs, SkillRegistry, SkillValidationError, ValidatedCall
 
 
 def default_registry() -> SkillRegistry:
     """A fresh registry with every built-in skill."""
-    return SkillRegistry([*nav.SKILLS, *body.SKILLS, *sense.SKILLS])
+    return SkillRegistry([*nav.SKILLS, *body.SKILLS, *sense.SKILLS, *memory.SKILLS])
 
 
 __all__ = [

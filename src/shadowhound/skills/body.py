@@ -16,9 +16,7 @@ TrickName = Literal[tuple(TRICKS)]  # type: ignore[valid-type]
 
 class SportArgs(SkillArgs):
     trick: TrickName = Field(  # type: ignore[valid-type]
-        description="one of: " + ", ".join(
-            f"{t.name}{' (risky)' if t.risky else ''}" for t in TRICKS.values()
-        )
+        description="trick name; risky: " + ", ".join(t.name for t in TRICKS.values() if t.risky)
     )
 
 

@@ -6,6 +6,7 @@ import math
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from ..config import ShadowHoundConfig
 from ..robot.base import Robot
@@ -30,22 +31,30 @@ class PlanProblem(ValueError):
 
 @dataclass
 class PlanEnv:
-    """What predictions and checks know before anything moves."""
+    """What predictions and checks know before anything moves.
+
+    `places` are the named places of this mission: the profile's, then taught ones. Skills that
+    teach or forget a place update it, so later steps of the same plan see the change.
+    """
 
     config: ShadowHoundConfig
     mission_start: Pose2D = field(default_factory=Pose2D)
+    places: dict[str, tuple[float, float]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.places = {**self.config.places, **self.places}
 
     def resolve_place(self, name: str) -> tuple[float, float]:
         key = " ".join(name.strip().lower().split())
         if key.startswith("the "):
             key = key[4:]
-        if key in self.config.places:
-            return self.config.places[key]
+        if key in self.places:
+            return self.places[key]
         if key in ("start", "mission start", "where i started", "starting point"):
             return (self.mission_start.x, self.mission_start.y)
         if key in ("home", "origin"):
             return (0.0, 0.0)
-        known = ", ".join([*self.config.places, "start", "home"])
+        known = ", ".join([*self.places, "start", "home"])
         raise PlanProblem(f"unknown place {name!r}; known places: {known}")
 
 
@@ -62,6 +71,7 @@ class SkillContext:
         vision: Callable[[CameraFrame, str], str] | None = None,
         on_progress: Callable[[float], None] = lambda _fraction: None,
         heartbeat: Callable[[bool | None], None] = lambda _moving: None,
+        memory: Any = None,
     ) -> None:
         self.robot = robot
         self.env = env
@@ -71,6 +81,7 @@ class SkillContext:
         self.vision = vision
         self.on_progress = on_progress
         self.heartbeat = heartbeat
+        self.memory = memory  # AgentMemory: places, recall
         self.period = 1.0 / self.config.motion.control_rate_hz
         self._last_command = (0.0, 0.0, 0.0)
         self.deadline = math.inf

@@ -1,0 +1,9 @@
+"""Memory: persistent mission history and places (SQLite, standard library), and retrieval
+memory (Chroma with offline MiniLM embeddings, the `memory` extra, imported lazily)."""
+
+from __future__ import annotations
+
+from .history import MemoryStoreError, MissionHistory
+from .places import PlaceBook
+
+__all__ = ["MemoryStoreError", "MissionHistory", "PlaceBook"]

@@ -1,0 +1,188 @@
+"""MissionHistory: every mission, its plan, steps, timing, result and refusals, in SQLite.
+
+One file (`history.db` in the data directory), WAL mode so the web and ROS threads and other
+processes can read while one writes. A mission is written when it starts (status `running`)
+and again when it finishes; rows still `running` when a process opens the file belong to a
+process that died, and are marked `interrupted`. A write that fails (the file is locked past
+the busy time-out, the disk is full) is kept in memory and retried with the next write, so no
+record is lost while the process lives.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import sqlite3
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+log = logging.getLogger(__name__)
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS missions (
+    id TEXT PRIMARY KEY,
+    mission TEXT NOT NULL,
+    status TEXT NOT NULL,
+    success INTEGER,
+    response TEXT,
+    started_at REAL NOT NULL,
+    finished_at REAL,
+    record TEXT
+);
+CREATE INDEX IF NOT EXISTS missions_started ON missions (started_at);
+CREATE TABLE IF NOT EXISTS places (
+    name TEXT PRIMARY KEY,
+    x REAL NOT NULL,
+    y REAL NOT NULL,
+    yaw REAL NOT NULL,
+    created_at REAL NOT NULL
+);
+"""
+
+
+class MemoryStoreError(Exception):
+    """The history database cannot be used. The message names the file and what to do."""
+
+
+class MissionHistory:
+    """Thread-safe access to the history database at `path`."""
+
+    def __init__(self, path: str | Path, *, busy_timeout: float = 5.0) -> None:
+        self.path = Path(path).expanduser()
+        self._lock = threading.Lock()
+        self._backlog: list[tuple[str, tuple[Any, ...]]] = []
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._db = sqlite3.connect(str(self.path), timeout=busy_timeout,
+                                       check_same_thread=False, isolation_level=None)
+            self._db.execute(f"PRAGMA busy_timeout = {int(busy_timeout * 1000)}")
+            self._db.execute("PRAGMA journal_mode = WAL")
+            self._db.executescript(_SCHEMA)
+            self.interrupted = self._db.execute(
+                "UPDATE missions SET status = 'interrupted', finished_at = ? "
+                "WHERE status = 'running'", (time.time(),)).rowcount
+        except sqlite3.DatabaseError as exc:
+            raise MemoryStoreError(_explain(self.path, exc)) from exc
+        except OSError as exc:
+            raise MemoryStoreError(f"cannot open the history database {str(self.path)!r}: "
+                                   f"{exc}; check memory.data_dir") from exc
+
+    def close(self) -> None:
+        with self._lock:
+            self._flush()
+            self._db.close()
+
+    # -- writing ----------------------------------------------------------------------------
+
+    def mission_started(self, mission_id: str, mission: str, started_at: float) -> None:
+        self._write("INSERT OR REPLACE INTO missions (id, mission, status, started_at) "
+                    "VALUES (?, ?, 'running', ?)", (mission_id, mission, started_at))
+
+    def mission_finished(self, record: dict[str, Any], finished_at: float) -> None:
+        """Store a finished mission (`MissionResult.to_dict()`), also one that never started."""
+        self._write(
+            "INSERT INTO missions (id, mission, status, success, response, started_at, "
+            "finished_at, record) VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT(id) DO UPDATE SET "
+            "status = excluded.status, success = excluded.success, "
+            "response = excluded.response, finished_at = excluded.finished_at, "
+            "record = excluded.record",
+            (record["mission_id"], record["mission"], record["status"], int(record["success"]),
+             record["response"], finished_at - record["timing"]["total_duration"], finished_at,
+             json.dumps(record, default=str)),
+        )
+
+    def prune(self, *, max_age_days: float | None, max_missions: int | None) -> int:
+        """Delete old missions. Returns how many were deleted."""
+        deleted = 0
+        with self._lock:
+            try:
+                if max_age_days is not None:
+                    cutoff = time.time() - max_age_days * 86400
+                    deleted += self._db.execute("DELETE FROM missions WHERE started_at < ?",
+                                                (cutoff,)).rowcount
+                if max_missions is not None:
+                    deleted += self._db.execute(
+                        "DELETE FROM missions WHERE id NOT IN (SELECT id FROM missions "
+                        "ORDER BY started_at DESC LIMIT ?)", (max_missions,)).rowcount
+            except sqlite3.DatabaseError as exc:
+                log.error("pruning the mission history failed: %s", _explain(self.path, exc))
+        return deleted
+
+    def _write(self, sql: str, params: tuple[Any, ...]) -> None:
+        with self._lock:
+            self._backlog.append((sql, params))
+            self._flush()
+
+    def _flush(self) -> None:
+        while self._backlog:
+            sql, params = self._backlog[0]
+            try:
+                self._db.execute(sql, params)
+            except sqlite3.DatabaseError as exc:
+                log.error("mission history write failed, kept in memory for a retry "
+                          "(%d waiting): %s", len(self._backlog), _explain(self.path, exc))
+                return
+            self._backlog.pop(0)
+
+    @property
+    def unsaved(self) -> int:
+        """Records waiting to be written because the database refused them."""
+        with self._lock:
+            return len(self._backlog)
+
+    # -- reading ----------------------------------------------------------------------------
+
+    def recent(self, limit: int = 20, offset: int = 0) -> list[dict[str, Any]]:
+        """Newest first: id, mission, status, success, response, started_at, finished_at."""
+        rows = self._query("SELECT id, mission, status, success, response, started_at, "
+                           "finished_at FROM missions ORDER BY started_at DESC LIMIT ? OFFSET ?",
+                           (limit, offset))
+        keys = ("id", "mission", "status", "success", "response", "started_at", "finished_at")
+        return [dict(zip(keys, row, strict=True)) for row in rows]
+
+    def get(self, mission_id: str) -> dict[str, Any] | None:
+        """The full record of one mission (plan, steps, timing, usage, refusals, robot)."""
+        rows = self._query("SELECT id, mission, status, started_at, finished_at, record "
+                           "FROM missions WHERE id = ?", (mission_id,))
+        if not rows:
+            return None
+        mission_id, mission, status, started, finished, record = rows[0]
+        full = json.loads(record) if record else {"mission_id": mission_id, "mission": mission}
+        full.update(status=status, started_at=started, finished_at=finished)
+        return full
+
+    def count(self) -> int:
+        return int(self._query("SELECT COUNT(*) FROM missions", ())[0][0])
+
+    def _query(self, sql: str, params: tuple[Any, ...]) -> list[tuple[Any, ...]]:
+        with self._lock:
+            try:
+                return self._db.execute(sql, params).fetchall()
+            except sqlite3.DatabaseError as exc:
+                raise MemoryStoreError(_explain(self.path, exc)) from exc
+
+    # -- places (same file) -----------------------------------------------------------------
+
+    def save_place(self, name: str, x: float, y: float, yaw: float) -> None:
+        self._write("INSERT OR REPLACE INTO places (name, x, y, yaw, created_at) "
+                    "VALUES (?, ?, ?, ?, ?)", (name, x, y, yaw, time.time()))
+
+    def delete_place(self, name: str) -> None:
+        self._write("DELETE FROM places WHERE name = ?", (name,))
+
+    def load_places(self) -> dict[str, tuple[float, float, float]]:
+        rows = self._query("SELECT name, x, y, yaw FROM places ORDER BY name", ())
+        return {name: (x, y, yaw) for name, x, y, yaw in rows}
+
+
+def _explain(path: Path, exc: sqlite3.DatabaseError) -> str:
+    text = str(exc)
+    if "locked" in text or "busy" in text:
+        return (f"the history database {str(path)!r} is locked by another process ({text}); "
+                "wait for it, or give this process its own memory.data_dir")
+    if "not a database" in text or "malformed" in text or "corrupt" in text:
+        return (f"the history database {str(path)!r} is corrupt ({text}); move it aside to "
+                "keep it for inspection, and a new one will be created")
+    return f"the history database {str(path)!r} failed: {text}"

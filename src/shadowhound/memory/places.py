@@ -1,0 +1,53 @@
+"""PlaceBook: named places taught at run time ("remember this spot as the kitchen").
+
+Places from the profile are fixed; taught places live here, in the history database when
+memory is enabled (so they survive restarts), else for the life of the process.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Mapping
+
+from .history import MissionHistory
+
+
+def normalize_place(name: str) -> str:
+    key = " ".join(name.strip().lower().split())
+    return key[4:] if key.startswith("the ") else key
+
+
+class PlaceBook:
+    """Taught places, name -> (x, y, yaw) in the odom frame."""
+
+    def __init__(self, store: MissionHistory | None = None) -> None:
+        self._store = store
+        self._lock = threading.Lock()
+        self._places: dict[str, tuple[float, float, float]] = (
+            store.load_places() if store is not None else {})
+
+    @property
+    def persistent(self) -> bool:
+        return self._store is not None
+
+    def remember(self, name: str, x: float, y: float, yaw: float) -> str:
+        key = normalize_place(name)
+        if not key:
+            raise ValueError("a place needs a name")
+        with self._lock:
+            self._places[key] = (x, y, yaw)
+        if self._store is not None:
+            self._store.save_place(key, x, y, yaw)
+        return key
+
+    def forget(self, name: str) -> bool:
+        key = normalize_place(name)
+        with self._lock:
+            known = self._places.pop(key, None) is not None
+        if known and self._store is not None:
+            self._store.delete_place(key)
+        return known
+
+    def all(self) -> Mapping[str, tuple[float, float, float]]:
+        with self._lock:
+            return dict(self._places)

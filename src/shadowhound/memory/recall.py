@@ -1,0 +1,111 @@
+"""RecallMemory: retrieval memory in an embedded Chroma store (the `memory` extra).
+
+It keeps mission summaries, facts people teach ("remember that the fridge is in the kitchen")
+and observations (answers of perception.describe, with pose and time). `search` returns the
+closest memories by meaning. Vectors come from our own embedder (offline MiniLM, or the
+backend's /v1/embeddings) and are handed to Chroma directly, so Chroma never tries to fetch an
+embedding model. Telemetry is off.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+KINDS = ("mission", "fact", "observation")
+
+
+class Embedder(Protocol):
+    name: str
+
+    def embed(self, texts: list[str]) -> Any: ...
+
+
+@dataclass(frozen=True)
+class Memory:
+    """One remembered text. `score` is the cosine similarity to the query (1 = same)."""
+
+    text: str
+    kind: str
+    created: float
+    score: float = 0.0
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def line(self) -> str:
+        when = time.strftime("%Y-%m-%d %H:%M", time.localtime(self.created))
+        return f"[{self.kind}, {when}] {self.text}"
+
+
+class RecallMemory:
+    """Semantic memory at `path` (a directory). Thread-safe."""
+
+    def __init__(self, path: str | Path, embedder: Embedder) -> None:
+        try:
+            import chromadb
+            from chromadb.config import Settings
+        except ImportError as exc:
+            raise ImportError("retrieval memory needs chromadb: "
+                              "pip install 'shadowhound[memory]'") from exc
+        self.path = Path(path).expanduser()
+        self.path.mkdir(parents=True, exist_ok=True)
+        self.embedder = embedder
+        self._lock = threading.Lock()
+        client = chromadb.PersistentClient(path=str(self.path),
+                                           settings=Settings(anonymized_telemetry=False))
+        # The collection name carries the embedder: vectors of different models never mix.
+        name = "shadowhound-" + "".join(c if c.isalnum() else "-" for c in embedder.name)[:40]
+        self._collection = client.get_or_create_collection(
+            name.strip("-"), embedding_function=None, metadata={"hnsw:space": "cosine"})
+
+    def add(self, text: str, kind: str, **meta: Any) -> str:
+        if kind not in KINDS:
+            raise ValueError(f"memory kind must be one of {', '.join(KINDS)}, got {kind!r}")
+        text = text.strip()
+        if not text:
+            raise ValueError("nothing to remember: the text is empty")
+        return self.add_many([(text, kind, meta)])[0]
+
+    def add_many(self, items: list[tuple[str, str, dict[str, Any]]]) -> list[str]:
+        ids = [uuid.uuid4().hex for _ in items]
+        vectors = self.embedder.embed([text for text, _, _ in items])
+        metadatas = [{"kind": kind, "created": time.time(),
+                      **{k: v for k, v in meta.items() if isinstance(v, (str, int, float, bool))}}
+                     for _, kind, meta in items]
+        with self._lock:
+            self._collection.add(
+                ids=ids, documents=[t for t, _, _ in items], embeddings=list(vectors),
+                metadatas=metadatas,  # type: ignore[arg-type]
+            )
+        return ids
+
+    def search(self, query: str, k: int = 3, kind: str | None = None) -> list[Memory]:
+        if not query.strip() or k <= 0:
+            return []
+        vector = self.embedder.embed([query])[0]
+        with self._lock:
+            total = self._collection.count()
+            if total == 0:
+                return []
+            found = self._collection.query(
+                query_embeddings=[vector], n_results=min(k, total),
+                where={"kind": kind} if kind else None,
+                include=["documents", "metadatas", "distances"])
+        documents = (found.get("documents") or [[]])[0]
+        metadatas = (found.get("metadatas") or [[]])[0]
+        distances = (found.get("distances") or [[]])[0]
+        memories = []
+        for text, meta, distance in zip(documents, metadatas, distances, strict=False):
+            meta = dict(meta or {})
+            created = meta.pop("created", 0.0)
+            kind_ = str(meta.pop("kind", "?"))
+            created = float(created) if isinstance(created, (int, float)) else 0.0
+            memories.append(Memory(text or "", kind_, created, 1.0 - float(distance), meta))
+        return memories
+
+    def count(self) -> int:
+        with self._lock:
+            return self._collection.count()

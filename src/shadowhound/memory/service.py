@@ -1,0 +1,153 @@
+"""AgentMemory: what one agent remembers, fed by its events.
+
+History (SQLite) records every mission; taught places live beside it; retrieval memory
+(optional) keeps mission summaries, taught facts and observations for semantic search.
+Without `memory.enabled`, places last for the process and nothing is written to disk.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import time
+from pathlib import Path
+from typing import Any
+
+from ..config import ConfigError, ShadowHoundConfig
+from ..events import MISSION_FINISHED, MISSION_STARTED, STEP_FINISHED, MissionEvent
+from .history import MemoryStoreError, MissionHistory
+from .places import PlaceBook
+
+log = logging.getLogger(__name__)
+_WORD = re.compile(r"[a-z0-9]+")
+_STOPWORDS = frozenset((
+    "a", "an", "the", "is", "are", "was", "were", "i", "you", "me", "my", "your", "it", "in",
+    "on", "at", "to", "of", "and", "or", "what", "did", "do", "does", "have", "has", "see",
+    "saw", "seen", "this", "that", "there",
+))
+
+
+class AgentMemory:
+    """History, places and (optionally) recall for one agent."""
+
+    def __init__(self, settings: ShadowHoundConfig, history: MissionHistory | None = None,
+                 recall: Any = None) -> None:
+        self.settings = settings
+        self.history = history
+        self.places = PlaceBook(history)
+        self.recall = recall
+
+    @classmethod
+    def open(cls, settings: ShadowHoundConfig, backend: Any = None) -> AgentMemory:
+        """Open what `settings.memory` asks for. Raises ConfigError with what to do."""
+        cfg = settings.memory
+        if not cfg.enabled and not cfg.enable_rag:
+            return cls(settings)
+        data = Path(cfg.data_dir).expanduser()
+        history = None
+        if cfg.enabled:
+            try:
+                history = MissionHistory(data / "history.db")
+            except MemoryStoreError as exc:
+                raise ConfigError(str(exc)) from exc
+            if history.interrupted:
+                log.warning("%d mission(s) were running when the last process stopped; marked "
+                            "interrupted", history.interrupted)
+            history.prune(max_age_days=cfg.retention_days, max_missions=cfg.max_missions)
+        recall = cls._open_recall(settings, data, backend) if cfg.enable_rag else None
+        return cls(settings, history, recall)
+
+    @staticmethod
+    def _open_recall(settings: ShadowHoundConfig, data: Path, backend: Any) -> Any:
+        cfg = settings.memory
+        try:
+            from .embedding import BackendEmbedder, MiniLMEmbedder
+            from .recall import RecallMemory
+
+            if cfg.embedding == "backend":
+                if backend is None or not cfg.embedding_model:
+                    raise ConfigError("memory.embedding: backend needs a language-model backend "
+                                      "and memory.embedding_model")
+                embedder: Any = BackendEmbedder(backend, cfg.embedding_model)
+            else:
+                embedder = MiniLMEmbedder()
+            return RecallMemory(data / "recall", embedder)
+        except ImportError as exc:
+            raise ConfigError(f"memory.enable_rag is on but {exc}") from exc
+
+    def close(self) -> None:
+        if self.history is not None:
+            self.history.close()
+
+    # -- recording (agent events) ------------------------------------------------------------
+
+    def on_event(self, event: MissionEvent) -> None:
+        if event.kind == MISSION_STARTED and self.history is not None:
+            self.history.mission_started(event.mission_id, event.data["mission"], event.time)
+        elif event.kind == STEP_FINISHED and self.recall is not None:
+            step = event.data["step"]
+            if step["skill"] == "perception.describe" and step["status"] == "succeeded":
+                self._remember_safely(step["output"], "observation", mission=event.mission_id)
+        elif event.kind == MISSION_FINISHED:
+            result = event.data["result"]
+            if self.history is not None:
+                self.history.mission_finished(result, event.time)
+            if self.recall is not None and result.get("plan"):
+                robot = result.get("robot") or {}
+                summary = (f"Mission '{result['mission']}' {result['status']}: "
+                           f"{result['response']}")
+                self._remember_safely(summary, "mission", x=robot.get("x", 0.0),
+                                      y=robot.get("y", 0.0), mission=result["mission_id"])
+
+    def _remember_safely(self, text: str, kind: str, **meta: Any) -> None:
+        try:
+            self.recall.add(text[:2000], kind, **meta)
+        except Exception:  # memory must never break a mission; the history still has it
+            log.exception("could not add a %s to retrieval memory", kind)
+
+    # -- reading -----------------------------------------------------------------------------
+
+    def recent_missions(self, limit: int) -> list[dict[str, Any]]:
+        """Newest first, from the history database (empty when history is off)."""
+        if self.history is None or limit <= 0:
+            return []
+        try:
+            return self.history.recent(limit)
+        except MemoryStoreError as exc:
+            log.error("%s", exc)
+            return []
+
+    def search(self, query: str, k: int | None = None) -> list[str]:
+        """Memories relevant to `query`, as lines, within the prompt budget.
+
+        Semantic with retrieval memory; otherwise shared words with recent missions.
+        """
+        cfg = self.settings.memory
+        k = k or cfg.rag_top_k
+        if self.recall is not None:
+            lines = [m.line() for m in self.recall.search(query, k)]
+        else:
+            lines = self._keyword_search(query, k)
+        kept, used = [], 0
+        for line in lines:
+            if used + len(line) > cfg.rag_max_chars:
+                break
+            kept.append(line)
+            used += len(line)
+        return kept
+
+    def _keyword_search(self, query: str, k: int) -> list[str]:
+        wanted = set(_WORD.findall(query.lower())) - _STOPWORDS
+        if not wanted:
+            return []
+        scored = []
+        for row in self.recent_missions(200):
+            text = f"{row['mission']} {row['response'] or ''}"
+            overlap = len(wanted & set(_WORD.findall(text.lower())))
+            if overlap:
+                when = time.strftime("%Y-%m-%d %H:%M", time.localtime(row["started_at"]))
+                scored.append((overlap, row["started_at"],
+                               f"[mission, {when}] {row['mission']!r} {row['status']}: "
+                               f"{row['response'] or ''}"))
+        scored.sort(reverse=True)
+        return [line for _, _, line in scored[:k]]

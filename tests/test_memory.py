@@ -1,0 +1,248 @@
+"""Memory: persistent history and places (SQLite) and retrieval memory (Chroma, MiniLM)."""
+
+from __future__ import annotations
+
+import json
+import os
+import sqlite3
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, load_config
+from shadowhound.config import ConfigError
+from shadowhound.memory import MemoryStoreError, MissionHistory
+
+try:
+    import chromadb  # noqa: F401
+
+    from shadowhound.memory.embedding import model_dir
+
+    model_dir()
+    HAVE_RAG = True
+except ImportError:
+    HAVE_RAG = False
+needs_rag = pytest.mark.skipif(not HAVE_RAG and not os.environ.get("CI")
+                               or sys.version_info < (3, 11) and not HAVE_RAG,
+                               reason="retrieval memory needs the 'memory' extra")
+
+
+def agent_with_memory(data: Path, **memory) -> RobotAgent:
+    settings = load_config("offline", {"memory": {"enabled": True, "data_dir": str(data),
+                                                  **memory}}, environ={})
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
+    agent.initialize()
+    return agent
+
+
+def cli(data: Path, *args: str, stdin: str | None = None) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "SHADOWHOUND_MEMORY__DATA_DIR": str(data)}
+    env.pop("SHADOWHOUND_CONFIG", None)
+    return subprocess.run([sys.executable, "-m", "shadowhound", *args], capture_output=True,
+                          text=True, timeout=120, env=env, input=stdin)
+
+
+# -- history ------------------------------------------------------------------------------------
+
+
+def test_history_survives_process_restarts(tmp_path):
+    assert cli(tmp_path, "run", "-q", "walk forward 1 meter").returncode == 0
+    assert cli(tmp_path, "run", "-q", "walk forward 500 meters").returncode == 1
+    listed = json.loads(cli(tmp_path, "history", "--json").stdout)
+    assert [r["mission"] for r in listed] == ["walk forward 500 meters", "walk forward 1 meter"]
+    assert [r["status"] for r in listed] == ["failed", "succeeded"]
+    full = json.loads(cli(tmp_path, "history", listed[1]["id"]).stdout)
+    assert full["steps"][0]["skill"] == "nav.move" and full["steps"][0]["status"] == "succeeded"
+    assert full["timing"]["total_duration"] > 0 and full["usage"]["round_trips"] == 0
+    refused = json.loads(cli(tmp_path, "history", listed[0]["id"]).stdout)
+    assert refused["refusals"] and "geofence" in " ".join(refused["refusals"])
+    chat = cli(tmp_path, "chat", stdin="what did you do last?\n")
+    assert "walk forward 1 meter" in chat.stdout and "walk forward 500 meters" in chat.stdout
+
+
+def test_a_mission_running_when_the_process_died_is_marked_interrupted(tmp_path):
+    store = MissionHistory(tmp_path / "history.db")
+    store.mission_started("dead1", "walk forward 3 meters", time.time())
+    store.close()  # the process "dies" here: no mission_finished
+    again = MissionHistory(tmp_path / "history.db")
+    assert again.interrupted == 1
+    assert again.get("dead1")["status"] == "interrupted"
+
+
+def test_concurrent_writers_in_threads_and_processes(tmp_path):
+    path = tmp_path / "history.db"
+    store = MissionHistory(path)
+    other = subprocess.Popen([sys.executable, "-c", (
+        "import sys, time; sys.path.insert(0, 'src');"
+        "from shadowhound.memory import MissionHistory;"
+        f"s = MissionHistory({str(path)!r});"
+        "[s.mission_started(f'proc{i}', 'from another process', time.time()) for i in range(50)];"
+        "s.close()")], cwd=Path(__file__).parent.parent)
+
+    def writer(n: int) -> None:
+        for i in range(25):
+            store.mission_started(f"t{n}-{i}", f"thread {n}", time.time())
+
+    threads = [threading.Thread(target=writer, args=(n,)) for n in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert other.wait(60) == 0
+    assert store.count() == 150 and store.unsaved == 0
+
+
+def test_a_locked_database_loses_no_record(tmp_path):
+    path = tmp_path / "history.db"
+    agent = agent_with_memory(tmp_path)
+    agent.memory.history._db.execute("PRAGMA busy_timeout = 50")
+    blocker = sqlite3.connect(str(path), timeout=0)
+    blocker.execute("BEGIN EXCLUSIVE")  # another process holds the write lock
+    result = agent.execute_mission("walk forward 1 meter")
+    assert result.success  # the robot's mission does not depend on the history file
+    assert agent.memory.history.unsaved == 2  # started + finished, kept for a retry
+    blocker.rollback()
+    blocker.close()
+    agent.execute_mission("turn left")
+    assert agent.memory.history.unsaved == 0
+    assert [r["mission"] for r in agent.recent_missions(5)] == ["turn left",
+                                                                "walk forward 1 meter"]
+
+
+def test_a_corrupt_database_is_a_clear_error_and_is_kept(tmp_path):
+    path = tmp_path / "history.db"
+    path.write_bytes(b"this is not a database" * 100)
+    with pytest.raises(ConfigError, match="is corrupt .* move it aside"):
+        agent_with_memory(tmp_path)
+    proc = cli(tmp_path, "run", "stand up")
+    assert proc.returncode == 2 and "is corrupt" in proc.stderr
+    assert path.read_bytes() == b"this is not a database" * 100
+    with pytest.raises(MemoryStoreError, match="corrupt"):
+        MissionHistory(path)
+
+
+def test_retention_prunes_old_missions(tmp_path):
+    store = MissionHistory(tmp_path / "history.db")
+    for i in range(5):
+        store.mission_started(f"old{i}", "long ago", time.time() - 200 * 86400)
+    for i in range(5):
+        store.mission_started(f"new{i}", "today", time.time())
+    assert store.prune(max_age_days=90, max_missions=3) == 7
+    assert [r["mission"] for r in store.recent()] == ["today"] * 3
+
+
+# -- places -------------------------------------------------------------------------------------
+
+
+def test_teach_a_place_restart_and_go_there(tmp_path):
+    taught = cli(tmp_path, "run", "-q", "walk forward 2 meters, turn left and walk 1 meter, "
+                 "then remember this spot as the desk")
+    assert taught.returncode == 0 and "remembered this spot as the desk" in taught.stdout
+    places = json.loads(cli(tmp_path, "places", "--json").stdout)
+    assert places["desk"]["source"] == "taught"
+    assert places["desk"]["x"] == pytest.approx(2.0, abs=0.01)
+    went = json.loads(cli(tmp_path, "run", "--json", "go to the desk").stdout)
+    assert went["success"]
+    assert (went["robot"]["x"], went["robot"]["y"]) == (pytest.approx(2.0, abs=0.01),
+                                                        pytest.approx(1.0, abs=0.01))
+    assert cli(tmp_path, "run", "-q", "forget the desk").returncode == 0
+    gone = cli(tmp_path, "run", "-q", "go to the desk")
+    assert gone.returncode == 1 and "unknown place 'desk'" in gone.stdout
+
+
+def test_a_place_taught_in_a_plan_is_usable_later_in_the_same_plan(tmp_path):
+    agent = agent_with_memory(tmp_path)
+    result = agent.execute_mission("walk forward 1 meter, remember this spot as the door, "
+                                   "walk forward 1 meter, then go to the door")
+    assert result.success, result.response
+    assert agent.robot.get_state().x == pytest.approx(1.0, abs=0.01)
+
+
+def test_places_without_memory_last_for_the_process():
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0)))
+    result = agent.execute_mission("remember this spot as the dock")
+    assert result.success and "for this session" in result.response
+    assert not agent.execute_mission("forget the lab").success
+
+
+# -- retrieval memory ---------------------------------------------------------------------------
+
+
+@needs_rag
+def test_retrieval_is_semantic_and_persistent(tmp_path):
+    from shadowhound.memory.embedding import MiniLMEmbedder
+    from shadowhound.memory.recall import RecallMemory
+
+    embedder = MiniLMEmbedder()
+    memory = RecallMemory(tmp_path / "recall", embedder)
+    memory.add("the fridge is in the kitchen", "fact")
+    noise = ["the charging dock is next to the sofa", "the red ball rolled under the table",
+             "it rained in the afternoon", "the door to the garden is blue",
+             "the operator prefers slow walking", "battery was at 80% after the patrol",
+             "a person stood in the hallway", "the plant needs water"]
+    memory.add_many([(text, "observation", {}) for text in noise])
+    top = memory.search("where is the fridge?", k=3)
+    assert top[0].text == "the fridge is in the kitchen" and top[0].score > top[1].score
+    again = RecallMemory(tmp_path / "recall", embedder)  # a new process would do this
+    assert again.count() == 9
+    assert again.search("where is the fridge?", k=1)[0].kind == "fact"
+
+
+@needs_rag
+def test_agent_learns_facts_and_observations(tmp_path):
+    agent = agent_with_memory(tmp_path, enable_rag=True)
+    assert agent.execute_mission("remember that the fridge is in the kitchen").success
+    agent.execute_mission("what do you see?")
+    answer = agent.execute_mission("where is the fridge?")
+    assert answer.success and "the fridge is in the kitchen" in answer.response
+    seen = agent.chat("what did you see earlier?")
+    assert "red ball" in seen
+
+
+@needs_rag
+def test_language_model_gets_relevant_memories(tmp_path):
+    from tests.llm_server import ScriptedLLM, json_plan
+
+    with ScriptedLLM(models=("m",)) as srv:
+        settings = load_config("llamacpp", {
+            "llm": {"base_url": srv.url, "model": "m"},
+            "memory": {"enabled": True, "enable_rag": True, "data_dir": str(tmp_path)}},
+            environ={})
+        agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
+        agent.initialize()
+        agent.memory.recall.add("the charging dock is behind the sofa", "fact")
+        srv.script(json_plan([{"skill": "sys.status", "args": {}}]))
+        agent.execute_mission("where is the charging dock?")
+        system = srv.requests[0]["messages"][0]["content"]
+        assert "Relevant memories:" in system and "behind the sofa" in system
+
+
+def test_rag_without_the_extra_says_what_to_install(tmp_path):
+    code = ("import sys; sys.modules['chromadb'] = None\n"
+            "from shadowhound import RobotAgent, load_config\n"
+            f"s = load_config('offline', {{'memory': {{'enable_rag': True, 'data_dir': "
+            f"{str(tmp_path)!r}}}}})\n"
+            "try:\n    RobotAgent(s).initialize()\n"
+            "except Exception as e:\n    print(type(e).__name__, e)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60).stdout
+    assert out.startswith("ConfigError") and "pip install 'shadowhound[memory]'" in out
+
+
+@needs_rag
+def test_numpy_minilm_matches_sentence_transformers():
+    """Reference vectors were computed once with sentence-transformers and torch (see the
+    file's `source`); the NumPy encoder must give the same embeddings."""
+    import numpy as np
+
+    from shadowhound.memory.embedding import MiniLMEmbedder
+
+    reference = json.loads((Path(__file__).parent / "data" / "minilm_reference.json").read_text())
+    ours = MiniLMEmbedder().embed(reference["texts"])
+    expected = np.array(reference["embeddings"], dtype=np.float32)
+    assert ours.shape == (4, 384)
+    assert np.abs(ours - expected).max() < 1e-5
