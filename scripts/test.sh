@@ -12,6 +12,12 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 "$VENV/bin/python" -m pip install --quiet --upgrade pip
 "$VENV/bin/python" -m pip install --quiet -e ".[dev]"
+# The browser test (tests/web/test_browser.py) drives Debian's Chromium with Playwright
+# ("playwright install" cannot download browsers here). As root, install it when missing.
+if ! command -v chromium >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+  echo "== chromium for the browser test"
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+fi
 # The real-model test (tests/test_llm_llamacpp.py) needs llama.cpp's OpenAI-compatible server and
 # SmolLM2-135M. The first install compiles llama.cpp (about 6 min on 2 cores; pip caches the
 # wheel). SKIP_LLAMACPP=1 skips it for quick local runs (the real-model test skips without them).

@@ -11,12 +11,14 @@ import json
 import logging
 import sys
 import threading
+import time
 from collections.abc import Sequence
 from typing import Any, TextIO
 
 from . import __version__
 from . import events as ev
 from .config import ConfigError, ShadowHoundConfig, available_profiles, load_config
+from .memory.history import MemoryStoreError
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -80,6 +82,31 @@ def build_parser() -> argparse.ArgumentParser:
     doctor = sub.add_parser("doctor", help="check the configuration, the backend and the model")
     _common(doctor, suppress=True)
 
+    history = sub.add_parser("history", help="list past missions, or show one (memory.enabled)")
+    _common(history, suppress=True)
+    history.add_argument("mission_id", nargs="?", help="show this mission in full")
+    history.add_argument("--limit", type=int, default=20, help="how many to list (default 20)")
+    history.add_argument("--json", action="store_true", help="print JSON")
+
+    places = sub.add_parser("places", help="list the known places, or forget a taught one")
+    _common(places, suppress=True)
+    places.add_argument("--forget", metavar="NAME", help="forget a taught place")
+    places.add_argument("--json", action="store_true", help="print JSON")
+
+    recall = sub.add_parser("recall", help="search retrieval memory (memory.enable_rag)")
+    _common(recall, suppress=True)
+    recall.add_argument("query", help="what to look for, e.g. 'where is the fridge?'")
+
+    serve = sub.add_parser("serve", help="run the web dashboard and HTTP API (needs the 'web' "
+                                         "extra)")
+    _common(serve, suppress=True)
+    serve.add_argument("--host", default="127.0.0.1",
+                       help="address to listen on; anything but loopback needs a token")
+    serve.add_argument("--port", type=int, default=8080, help="TCP port (default 8080)")
+    serve.add_argument("--token", default=None,
+                       help="bearer token the API requires (default $SHADOWHOUND_TOKEN; the "
+                            "environment is safer: a command line is visible in ps)")
+
     sub.add_parser("node", help="run the ROS 2 MissionNode (needs the 'ros' extra): "
                                 "shadowhound node --ros-args -p name:=value ...",
                    add_help=False)
@@ -124,10 +151,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         settings = _settings(args)
         handler = {"run": cmd_run, "skills": cmd_skills, "chat": cmd_chat, "eval": cmd_eval,
-                   "config": cmd_config, "doctor": cmd_doctor}[args.command]
+                   "config": cmd_config, "doctor": cmd_doctor, "history": cmd_history,
+                   "places": cmd_places, "recall": cmd_recall, "serve": cmd_serve}[args.command]
         return handler(args, settings)
     except ConfigError as exc:
         print(f"shadowhound: {_kind(exc)}: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except MemoryStoreError as exc:
+        print(f"shadowhound: memory error: {exc}", file=sys.stderr)
         return EXIT_USAGE
 
 
@@ -387,6 +418,91 @@ def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
     sys.stdout.write(yaml.safe_dump(json.loads(settings.model_dump_json()), sort_keys=False))
     return EXIT_OK
+
+
+# -- memory --------------------------------------------------------------------------------------
+
+
+def _memory(settings: ShadowHoundConfig) -> Any:
+    from .memory.service import AgentMemory
+
+    return AgentMemory.open(settings)
+
+
+def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    if not settings.memory.enabled:
+        print("shadowhound: mission history is off (memory.enabled: false)", file=sys.stderr)
+        return EXIT_USAGE
+    memory = _memory(settings)
+    assert memory.history is not None
+    try:
+        if args.mission_id:
+            record = memory.history.get(args.mission_id)
+            if record is None:
+                print(f"shadowhound: no mission {args.mission_id!r} in "
+                      f"{memory.history.path}", file=sys.stderr)
+                return EXIT_FAILED
+            json.dump(record, sys.stdout, indent=2, default=str)
+            sys.stdout.write("\n")
+            return EXIT_OK
+        rows = memory.history.recent(max(1, args.limit))
+        if args.json:
+            json.dump(rows, sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        for row in [] if args.json else rows:
+            when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(row["started_at"]))
+            print(f"{row['id']}  {when}  {row['status']:<11} {row['mission'][:60]!r}")
+        return EXIT_OK
+    finally:
+        memory.close()
+
+
+def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    memory = _memory(settings)
+    try:
+        if args.forget:
+            if not memory.places.forget(args.forget):
+                print(f"shadowhound: no taught place {args.forget!r}", file=sys.stderr)
+                return EXIT_FAILED
+            print(f"forgot {args.forget!r}")
+            return EXIT_OK
+        taught = memory.places.all()
+        listing = {**{n: {"x": x, "y": y, "source": "profile"}
+                      for n, (x, y) in settings.places.items()},
+                   **{n: {"x": x, "y": y, "yaw": yaw, "source": "taught"}
+                      for n, (x, y, yaw) in taught.items()}}
+        if args.json:
+            json.dump(listing, sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        else:
+            for name, place in listing.items():
+                print(f"{name:<20} x={place['x']:7.2f} y={place['y']:7.2f}  {place['source']}")
+        return EXIT_OK
+    finally:
+        memory.close()
+
+
+def cmd_recall(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    memory = _memory(settings)
+    try:
+        found = memory.search(args.query)
+        print("\n".join(found) if found else "nothing remembered about that")
+        return EXIT_OK
+    finally:
+        memory.close()
+
+
+# -- serve ---------------------------------------------------------------------------------------
+
+
+def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    try:
+        from .web import serve_main
+    except ImportError as exc:
+        print(f"shadowhound: the web dashboard needs the 'web' extra "
+              f"(pip install 'shadowhound[web]'): {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    return int(serve_main(settings, args.host, args.port, args.token))
 
 
 # -- node ----------------------------------------------------------------------------------------

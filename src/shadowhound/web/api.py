@@ -1,0 +1,225 @@
+"""JSON routes: missions, e-stop, approvals, chat, status, diagnostics, skills, map.
+
+Routes are thin: they validate, call the agent's public API or the mission desk, and shape the
+answer. Fast calls (status, e-stop) run in the event loop so nothing queues in front of them;
+chat may wait on a language model, so it runs in a worker thread.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Body, HTTPException, Query, Request
+from fastapi.responses import JSONResponse
+
+from .. import __version__
+from ..agent import RobotAgent
+from .desk import MissionDesk, WebMission
+from .feed import EventFeed
+from .frames import FrameCache
+from .models import (
+    ChatAnswer,
+    ChatRequest,
+    EstopAnswer,
+    MissionAccepted,
+    MissionRequest,
+    Problem,
+    RejectRequest,
+)
+
+
+@dataclass
+class WebContext:
+    """What the routes share; kept on `app.state.web`."""
+
+    agent: RobotAgent
+    desk: MissionDesk
+    feed: EventFeed
+    frames: FrameCache
+    auth: bool
+
+
+def ctx(request: Request) -> WebContext:
+    context: WebContext = request.app.state.web
+    return context
+
+
+router = APIRouter(prefix="/api")
+_ERRORS: dict[int | str, dict[str, Any]] = {
+    code: {"model": Problem} for code in (400, 401, 403, 404, 409, 413, 422, 429)
+}
+
+
+@router.get("/health", tags=["status"])
+async def health(request: Request) -> dict[str, Any]:
+    """Liveness; open even when a token is set (the original answer plus a few keys)."""
+    agent = ctx(request).agent
+    return {"status": "healthy", "service": "shadowhound-web", "version": __version__,
+            "estop": agent.estop_latched}
+
+
+@router.post("/mission", status_code=202, response_model=MissionAccepted, responses=_ERRORS,
+             tags=["missions"])
+async def submit_mission(request: Request, body: MissionRequest
+                         ) -> MissionAccepted | JSONResponse:
+    """Queue a mission (or a dry run). 202 with its id; follow it on /ws/status or /api/events."""
+    web = ctx(request)
+    limit = web.agent.settings.agent.max_mission_chars
+    if not body.command.strip():
+        raise HTTPException(422, "the command is empty; say what the robot should do, e.g. "
+                                 "'walk forward 1 meter'")
+    if len(body.command) > limit:
+        raise HTTPException(422, f"the command is {len(body.command)} characters long; the "
+                                 f"limit is {limit} (agent.max_mission_chars)")
+    ahead = web.desk.queued() + (1 if web.desk.worker.busy else 0)
+    record, refused = web.desk.submit(body.command, body.dry_run)
+    if record is None:
+        status = 409 if "e-stop" in (refused or "") else 429
+        return JSONResponse({"detail": refused, "success": False, "message": f"Refused: "
+                             f"{refused}.", "command": body.command}, status_code=status)
+    what = "dry run" if body.dry_run else "mission"
+    where = "starts now" if not ahead else f"waits behind {ahead} mission(s)"
+    return MissionAccepted(success=True, message=f"{what} accepted; it {where}",
+                           command=body.command, mission_id=record.id, state=record.state,
+                           dry_run=body.dry_run, queued_ahead=ahead,
+                           url=f"/api/missions/{record.id}")
+
+
+@router.get("/missions", tags=["missions"])
+async def list_missions(request: Request, limit: int = Query(50, ge=1, le=500)
+                        ) -> dict[str, Any]:
+    """Recent missions, newest first (web missions, then other interfaces' from the agent)."""
+    return {"missions": ctx(request).desk.missions(limit)}
+
+
+def _record(request: Request, mission_id: str) -> WebMission:
+    record = ctx(request).desk.get(mission_id)
+    if record is None:
+        raise HTTPException(404, f"no mission {mission_id!r} (the dashboard keeps the last "
+                                 "200 web missions)")
+    return record
+
+
+@router.get("/missions/{mission_id}", responses=_ERRORS, tags=["missions"])
+async def get_mission(request: Request, mission_id: str) -> dict[str, Any]:
+    """One mission: its state and, once finished, the full result with every step."""
+    return _record(request, mission_id).to_dict()
+
+
+@router.post("/missions/{mission_id}/cancel", responses=_ERRORS, tags=["missions"])
+async def cancel_mission(request: Request, mission_id: str) -> dict[str, Any]:
+    """Cancel a waiting or running mission; a running one stops within one control tick."""
+    record, outcome = ctx(request).desk.cancel(mission_id)
+    if record is None:
+        raise HTTPException(404, f"no mission {mission_id!r}")
+    if outcome == "finished":
+        raise HTTPException(409, f"mission {mission_id!r} has already finished "
+                                 f"({record.to_dict(False)['status']})")
+    return {"mission_id": record.id, "cancelled": True, "state": record.state}
+
+
+@router.post("/estop", response_model=EstopAnswer, responses=_ERRORS, tags=["safety"])
+async def estop(request: Request) -> EstopAnswer:
+    """Emergency stop: the robot stops before this answers; latched until released."""
+    web = ctx(request)
+    dropped = web.desk.estop()
+    return EstopAnswer(estop=True, dropped=dropped, robot=web.agent.get_robot_status(),
+                       message="e-stop latched: the robot is stopped"
+                               + (f" and {dropped} waiting mission(s) dropped" if dropped
+                                  else "") + "; release it to run missions again")
+
+
+@router.post("/estop/release", response_model=EstopAnswer, responses=_ERRORS, tags=["safety"])
+async def release_estop(request: Request) -> EstopAnswer:
+    agent = ctx(request).agent
+    agent.release_estop()
+    return EstopAnswer(estop=agent.estop_latched, message="e-stop released",
+                       robot=agent.get_robot_status())
+
+
+@router.get("/approval", tags=["safety"])
+async def pending_approval(request: Request) -> dict[str, Any]:
+    """The plan waiting for a person's approval, if any."""
+    return {"pending": ctx(request).agent.pending_approval()}
+
+
+@router.post("/approval/{request_id}/approve", responses=_ERRORS, tags=["safety"])
+async def approve(request: Request, request_id: str) -> dict[str, Any]:
+    if not ctx(request).agent.approve(request_id):
+        raise HTTPException(404, f"no pending approval {request_id!r}")
+    return {"request_id": request_id, "approved": True}
+
+
+@router.post("/approval/{request_id}/reject", responses=_ERRORS, tags=["safety"])
+async def reject(request: Request, request_id: str,
+                 body: Annotated[RejectRequest | None, Body()] = None) -> dict[str, Any]:
+    reason = body.reason if body else ""
+    if not ctx(request).agent.reject(request_id, reason or "rejected on the dashboard"):
+        raise HTTPException(404, f"no pending approval {request_id!r}")
+    return {"request_id": request_id, "approved": False}
+
+
+@router.post("/chat", response_model=ChatAnswer, responses=_ERRORS, tags=["chat"])
+def chat(request: Request, body: ChatRequest) -> ChatAnswer:
+    """Ask about the robot and its missions; never moves the robot."""
+    agent = ctx(request).agent
+    text = body.text[: agent.settings.agent.max_mission_chars]
+    try:
+        answer = agent.chat(text)
+    except Exception as exc:  # a model or network failure is an answer, not a 500
+        answer = f"Sorry, I could not answer: {exc}"
+    return ChatAnswer(question=text, answer=answer)
+
+
+@router.get("/status", tags=["status"])
+async def status(request: Request) -> dict[str, Any]:
+    """What the robot and the mission are doing now (small and fast; polled by dashboards)."""
+    web = ctx(request)
+    return current_status(web)
+
+
+def current_status(web: WebContext) -> dict[str, Any]:
+    d = web.agent.get_diagnostics()
+    running = web.desk.running()
+    agent_id = d["mission_id"]
+    return {
+        "status": d["status"], "mission_id": web.desk.web_id(agent_id) if agent_id else None,
+        "agent_mission_id": agent_id, "mission": d["mission"], "current_skill":
+        d["current_skill"], "step": d["step"], "steps": d["steps"], "progress": d["progress"],
+        "estop": d["estop"], "busy": web.desk.worker.busy, "running": running.id if running
+        else None, "queued": web.desk.queued(), "pending_approval": d["pending_approval"],
+        "robot": d["robot"], "time": time.time(),
+    }
+
+
+@router.get("/diagnostics", tags=["status"])
+async def diagnostics(request: Request) -> dict[str, Any]:
+    """The agent's diagnostics, the original dashboard's keys, and the web server's own."""
+    web = ctx(request)
+    d = web.agent.get_diagnostics()
+    settings = web.agent.settings
+    d.update(agent_backend=settings.backend, agent_model=settings.llm.model or "offline",
+             robot_mode=d["robot"].get("posture"), last_update=time.time(),
+             web={"clients": web.feed.clients, "busy": web.desk.worker.busy,
+                  "queued": web.desk.queued(), "auth": web.auth,
+                  "approvals_enabled": web.agent.approvals_enabled})
+    return d
+
+
+@router.get("/skills", tags=["status"])
+async def skills(request: Request) -> dict[str, Any]:
+    """Every skill with its argument schema (the registry is the one source of truth)."""
+    return {"skills": ctx(request).agent.get_available_skills()}
+
+
+@router.get("/map", tags=["status"])
+async def world_map(request: Request) -> dict[str, Any]:
+    """What the dashboard's map draws besides the robot: places, route and geofence."""
+    settings = ctx(request).agent.settings
+    return {"places": {k: list(v) for k, v in settings.places.items()},
+            "patrol_route": [list(p) for p in settings.patrol_route],
+            "geofence_radius": settings.safety.geofence_radius,
+            "geofence_polygon": [list(p) for p in settings.safety.geofence_polygon or []],
+            "robot": ctx(request).agent.get_robot_status()}

@@ -1,0 +1,114 @@
+"""`create_app(agent)`: the dashboard page and the HTTP API around one RobotAgent.
+
+The app drives the agent only through its public API and one `MissionWorker` (through the
+mission desk). It never binds a socket itself; `serve()` (server.py) or a host (the ROS node)
+runs it with uvicorn.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import AsyncIterator, Iterable
+from pathlib import Path
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse, JSONResponse
+from fastapi.staticfiles import StaticFiles
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from .. import __version__
+from ..agent import RobotAgent
+from ..worker import MissionWorker
+from . import api, live
+from .desk import MissionDesk
+from .feed import EventFeed
+from .frames import FrameCache
+from .security import LOOPBACK_HOSTS, Gate, scrubber, secret_values
+
+log = logging.getLogger(__name__)
+
+STATIC_DIR = Path(__file__).resolve().parent / "static"
+MAX_BODY = 16 * 1024
+# The page loads only its own files; images may be data: or blob: URLs drawn by the script.
+_PAGE_POLICY = ("default-src 'self'; img-src 'self' data: blob:; connect-src 'self'; "
+                "style-src 'self'; script-src 'self'; frame-ancestors 'none'; base-uri 'none'")
+
+
+def create_app(agent: RobotAgent, *, token: str | None = None,
+               worker: MissionWorker | None = None,
+               allowed_hosts: Iterable[str] | None = LOOPBACK_HOSTS,
+               max_body: int = MAX_BODY, approvals: bool = True, state_hz: float = 5.0,
+               secrets: Iterable[str] = ()) -> FastAPI:
+    """The FastAPI app for `agent` (initialized here if it is not yet).
+
+    - `token`: required on every /api/ and /ws/ request but `GET /api/health` (see security.py).
+    - `worker`: an existing MissionWorker to share (forward its hooks to the desk: see
+      `MissionDesk`); by default the app makes one and stops it at shutdown.
+    - `allowed_hosts`: Host names accepted without a token (None: any).
+    - `approvals`: the page can approve risky plans, so the agent may ask instead of refusing.
+    - `secrets`: further values to mask in answers (the token and the API key always are).
+    """
+    agent.initialize()
+    if approvals:
+        agent.enable_approvals()
+    hidden = [*secret_values(token, agent.settings.llm.api_key_env), *secrets]
+    feed = EventFeed(scrub=scrubber(hidden))
+    desk = MissionDesk(agent, feed, worker=worker)
+    web = api.WebContext(agent, desk, feed, FrameCache(agent), auth=token is not None)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
+        ticker = asyncio.create_task(live.publish_state(web, state_hz))
+        try:
+            yield
+        finally:
+            ticker.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await ticker
+            desk.close()
+
+    app = FastAPI(title="ShadowHound", version=__version__, lifespan=lifespan,
+                  description="Missions, live progress, camera, map and e-stop for a "
+                              "quadruped robot. Mutating requests need `Authorization: Bearer "
+                              "<token>` when the server has a token.")
+    app.state.web = web
+    app.include_router(api.router)
+    app.include_router(live.router)
+    app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
+    _add_page(app)
+    _add_error_handlers(app)
+    app.add_middleware(Gate, token=token, allowed_hosts=allowed_hosts,
+                       max_body=max_body, secrets=hidden)
+    return app
+
+
+def _add_page(app: FastAPI) -> None:
+    @app.get("/", include_in_schema=False)
+    async def index() -> FileResponse:
+        return FileResponse(STATIC_DIR / "index.html", headers={
+            "Content-Security-Policy": _PAGE_POLICY, "Cache-Control": "no-cache"})
+
+
+def _add_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(RequestValidationError)
+    async def invalid(_request: Request, exc: RequestValidationError) -> JSONResponse:
+        # Say what was wrong without echoing the input back (it may be large or private).
+        problems = [{"where": ".".join(str(p) for p in e.get("loc", ())), "problem": e["msg"]}
+                    for e in exc.errors()]
+        text = "; ".join(f"{p['where']}: {p['problem']}" for p in problems)
+        return JSONResponse({"detail": f"invalid request: {text}", "problems": problems},
+                            status_code=422)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def http_error(_request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        return JSONResponse({"detail": exc.detail}, status_code=exc.status_code,
+                            headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(Exception)
+    async def crashed(request: Request, exc: Exception) -> JSONResponse:
+        log.exception("request %s %s failed", request.method, request.url.path)
+        return JSONResponse({"detail": "internal error; the server log has the details"},
+                            status_code=500)

@@ -1,0 +1,210 @@
+"""The web app's gate: token, host and origin checks, and a body size limit (one ASGI layer).
+
+- Token (when one is configured): `Authorization: Bearer <token>` on every /api/ and /ws/
+  request except `GET /api/health`. Browsers cannot set headers on EventSource, <img> or
+  WebSocket, so GET requests and WebSockets may give `?token=` instead, and WebSockets may
+  offer the subprotocol `bearer.<token>` (next to `shadowhound`). Mutating requests need the
+  header, so a token never has to travel in a URL to move the robot.
+- Host (without a token): only loopback names, so a web page cannot reach the robot through
+  DNS rebinding.
+- Origin: a request that changes something, and every WebSocket, must come from the page's own
+  origin (no cross-site requests; there is no CORS at all).
+- Bodies over `max_body` bytes get 413 before any route sees them.
+- Secrets (the token, the model's API key) are masked in every JSON answer, whatever put them
+  there (an error message quoting a URL, say).
+"""
+
+from __future__ import annotations
+
+import hmac
+import json
+import os
+from collections.abc import Awaitable, Callable, Iterable, MutableMapping
+from typing import Any
+from urllib.parse import parse_qs, urlsplit
+
+Scope = MutableMapping[str, Any]
+Message = MutableMapping[str, Any]
+Receive = Callable[[], Awaitable[Message]]
+Send = Callable[[Message], Awaitable[None]]
+ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
+
+LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
+WS_PROTOCOL = "shadowhound"
+_SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
+_OPEN_PATHS = {"/api/health"}
+_HEADERS = [(b"x-content-type-options", b"nosniff"), (b"x-frame-options", b"DENY"),
+            (b"referrer-policy", b"no-referrer")]
+
+
+def is_loopback(host: str) -> bool:
+    return host in LOOPBACK_HOSTS or host.startswith("127.")
+
+
+def secret_values(token: str | None, api_key_env: str | None = None) -> list[str]:
+    """Values that must never appear in an answer: the token and the model's API key."""
+    values = [token] if token else []
+    key = os.environ.get(api_key_env) if api_key_env else None
+    if key and len(key) >= 8:  # a short value would mask ordinary words
+        values.append(key)
+    return values
+
+
+def scrubber(secrets: Iterable[str]) -> Callable[[str], str]:
+    masked = [s for s in secrets if s]
+
+    def scrub(text: str) -> str:
+        for secret in masked:
+            if secret in text:
+                text = text.replace(secret, "***")
+        return text
+
+    return scrub
+
+
+class Gate:
+    """ASGI middleware applying the checks above to HTTP requests and WebSockets."""
+
+    def __init__(self, app: ASGIApp, *, token: str | None, allowed_hosts: Iterable[str] | None,
+                 max_body: int, secrets: Iterable[str] = ()) -> None:
+        self.app = app
+        self.secrets = [s.encode() for s in secrets if s]
+        self.token = token
+        self.allowed_hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts}
+        self.max_body = max_body
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] not in ("http", "websocket"):
+            await self.app(scope, receive, send)
+            return
+        headers = {k.decode("latin-1").lower(): v.decode("latin-1")
+                   for k, v in scope.get("headers", [])}
+        problem = self._check(scope, headers)
+        if problem is not None:
+            await self._refuse(scope, receive, send, *problem)
+            return
+        if scope["type"] == "http" and scope["method"] not in _SAFE_METHODS:
+            body = await self._read_body(receive, headers)
+            if body is None:
+                await _send_json(send, 413, f"the request body is larger than {self.max_body} "
+                                            "bytes")
+                return
+            receive = _replay(body, receive)
+        if scope["type"] == "http":
+            send = self._guard_send(send)
+        await self.app(scope, receive, send)
+
+    def _guard_send(self, send: Send) -> Send:
+        """Add protective headers; mask secrets in JSON bodies (buffered: they are small)."""
+        start: Message | None = None
+        chunks: list[bytes] = []
+
+        async def guarded(message: Message) -> None:
+            nonlocal start
+            if message["type"] == "http.response.start":
+                message["headers"] = [*message.get("headers", []), *_HEADERS]
+                ctype = dict(message["headers"]).get(b"content-type", b"")
+                if self.secrets and ctype.startswith(b"application/json"):
+                    start = message  # held until the body is known
+                    return
+            elif message["type"] == "http.response.body" and start is not None:
+                chunks.append(message.get("body", b""))
+                if message.get("more_body", False):
+                    return
+                body = b"".join(chunks)
+                for secret in self.secrets:
+                    body = body.replace(secret, b"***")
+                start["headers"] = [(k, v) for k, v in start["headers"]
+                                    if k != b"content-length"]
+                start["headers"].append((b"content-length", str(len(body)).encode()))
+                await send(start)
+                message = {"type": "http.response.body", "body": body}
+            await send(message)
+
+        return guarded
+
+    def _check(self, scope: Scope, headers: dict[str, str]) -> tuple[int, str] | None:
+        host = _hostname(headers.get("host", ""))
+        if self.allowed_hosts is not None and self.token is None \
+                and host not in self.allowed_hosts:
+            return 400, (f"host {host!r} is not allowed: without a token the dashboard answers "
+                         "only on loopback names (set a token to serve other hosts)")
+        websocket = scope["type"] == "websocket"
+        origin = headers.get("origin")
+        if origin is not None and (websocket or scope["method"] not in _SAFE_METHODS):
+            parts = urlsplit(origin)
+            if parts.netloc.lower() != headers.get("host", "").lower():
+                return 403, "cross-origin requests are not allowed; use the dashboard's own page"
+        path = scope.get("path", "")
+        if self.token is None or path in _OPEN_PATHS or not path.startswith(("/api/", "/ws/")):
+            return None
+        if self._token_ok(scope, headers, websocket):
+            return None
+        return 401, ("a valid token is required: send 'Authorization: Bearer <token>' "
+                     "(GET requests and WebSockets may use ?token=<token>)")
+
+    def _token_ok(self, scope: Scope, headers: dict[str, str], websocket: bool) -> bool:
+        assert self.token is not None
+        offered: list[str] = []
+        auth = headers.get("authorization", "")
+        if auth[:7].lower() == "bearer ":
+            offered.append(auth[7:].strip())
+        if websocket or scope.get("method") in _SAFE_METHODS:
+            query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+            offered += query.get("token", [])[:1]
+        if websocket:
+            offered += [p[len("bearer."):] for p in scope.get("subprotocols", [])
+                        if p.startswith("bearer.")][:1]
+        expected = self.token.encode()
+        return any(hmac.compare_digest(o.encode(), expected) for o in offered)
+
+    async def _read_body(self, receive: Receive, headers: dict[str, str]) -> list[Message] | None:
+        """Every body message, or None once the body passes the limit."""
+        declared = headers.get("content-length", "")
+        if declared.isdigit() and int(declared) > self.max_body:
+            return None
+        messages, size = [], 0
+        while True:
+            message = await receive()
+            messages.append(message)
+            if message["type"] != "http.request":
+                return messages  # the client went away; let the app see it
+            size += len(message.get("body", b""))
+            if size > self.max_body:
+                return None
+            if not message.get("more_body", False):
+                return messages
+
+    async def _refuse(self, scope: Scope, receive: Receive, send: Send, status: int,
+                      detail: str) -> None:
+        if scope["type"] == "websocket":
+            await receive()  # websocket.connect
+            await send({"type": "websocket.close", "code": 1008, "reason": detail[:120]})
+            return
+        extra = [(b"www-authenticate", b"Bearer")] if status == 401 else []
+        await _send_json(send, status, detail, extra)
+
+
+def _hostname(host: str) -> str:
+    host = host.strip().lower()
+    if host.startswith("["):  # [::1]:8080
+        return host[1:host.find("]")] if "]" in host else host
+    return host.rsplit(":", 1)[0] if host.count(":") == 1 else host
+
+
+def _replay(messages: list[Message], receive: Receive) -> Receive:
+    pending = list(messages)
+
+    async def replay() -> Message:
+        return pending.pop(0) if pending else await receive()
+
+    return replay
+
+
+async def _send_json(send: Send, status: int, detail: str,
+                     headers: list[tuple[bytes, bytes]] | None = None) -> None:
+    body = json.dumps({"detail": detail}).encode()
+    await send({"type": "http.response.start", "status": status,
+                "headers": [(b"content-type", b"application/json"),
+                            (b"content-length", str(len(body)).encode()), *(headers or [])]})
+    await send({"type": "http.response.body", "body": body})

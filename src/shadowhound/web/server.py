@@ -1,0 +1,156 @@
+"""Running the app with uvicorn: `serve()` in the foreground (the CLI) or `WebServer` in a
+background thread (the ROS node, tests, benchmarks)."""
+
+from __future__ import annotations
+
+import logging
+import signal
+import socket
+import sys
+import threading
+import time
+from collections.abc import Iterable
+from typing import Any
+
+import uvicorn
+from fastapi import FastAPI
+
+from ..agent import RobotAgent
+from ..config import ConfigError, ShadowHoundConfig
+from .app import create_app
+from .security import LOOPBACK_HOSTS, is_loopback
+
+log = logging.getLogger(__name__)
+
+MIN_TOKEN_CHARS = 16
+_TOKEN_HINT = ("for example: export SHADOWHOUND_TOKEN=$(python3 -c "
+               "'import secrets; print(secrets.token_urlsafe(24))')")
+
+
+class ServeError(Exception):
+    """The server cannot start as asked. The message says why and what to do."""
+
+
+def check_binding(host: str, token: str | None) -> None:
+    """Refuse to listen beyond loopback without a strong enough token. Raises ServeError."""
+    if not is_loopback(host) and not token:
+        raise ServeError(f"refusing to listen on {host}: beyond loopback (127.0.0.1) the "
+                         "dashboard needs a token; set SHADOWHOUND_TOKEN or pass --token, "
+                         + _TOKEN_HINT)
+    if token is not None and len(token) < MIN_TOKEN_CHARS:
+        raise ServeError(f"the token is {len(token)} characters long; use at least "
+                         f"{MIN_TOKEN_CHARS}, " + _TOKEN_HINT)
+    if token is not None and not all(c.isalnum() or c in "-._~" for c in token):
+        raise ServeError("the token may contain only letters, digits and - . _ ~ (it travels "
+                         "in headers, URLs and WebSocket subprotocols), " + _TOKEN_HINT)
+
+
+def bind(host: str, port: int) -> socket.socket:
+    """A listening socket (port 0 picks a free one). Raises ServeError when it cannot."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+        sock.listen(128)
+    except (OSError, OverflowError) as exc:  # OverflowError: a port outside 0-65535
+        sock.close()
+        why = getattr(exc, "strerror", None) or str(exc)
+        raise ServeError(f"cannot listen on {host}:{port}: {why}") from exc
+    sock.set_inheritable(True)
+    return sock
+
+
+def hosts_for(host: str) -> list[str]:
+    """Host names the app answers to without a token: loopback and the one it binds."""
+    return [*LOOPBACK_HOSTS, host] if host not in ("0.0.0.0", "::") else list(LOOPBACK_HOSTS)
+
+
+def _config(app: FastAPI, log_level: str) -> uvicorn.Config:
+    # No access log: GET requests from the page may carry ?token= in their URL.
+    return uvicorn.Config(app, log_level=log_level, access_log=False, lifespan="on",
+                          timeout_graceful_shutdown=2, ws_ping_interval=20)
+
+
+class WebServer:
+    """Runs an app in a background thread: `start()` returns once it accepts connections."""
+
+    def __init__(self, app: FastAPI, host: str = "127.0.0.1", port: int = 0,
+                 log_level: str = "warning") -> None:
+        self.app = app
+        self._sock = bind(host, port)
+        self.host, self.port = self._sock.getsockname()[:2]
+        self._server = uvicorn.Server(_config(app, log_level))
+        self._thread = threading.Thread(target=self._run, name="shadowhound-web", daemon=True)
+
+    @property
+    def url(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"http://{host}:{self.port}"
+
+    def start(self, timeout: float = 10.0) -> WebServer:
+        self._thread.start()
+        deadline = time.monotonic() + timeout
+        while not self._server.started:
+            if not self._thread.is_alive() or time.monotonic() > deadline:
+                raise ServeError(f"the web server did not start within {timeout:g} s")
+            time.sleep(0.01)
+        return self
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self._server.should_exit = True
+        self._thread.join(timeout)
+        self._sock.close()
+
+    def _run(self) -> None:
+        self._server.run(sockets=[self._sock])
+
+
+def serve(settings: ShadowHoundConfig, host: str = "127.0.0.1", port: int = 8080,
+          token: str | None = None, *, agent: RobotAgent | None = None,
+          allowed_hosts: Iterable[str] | None = None, log_level: str = "warning",
+          out: Any = None) -> int:
+    """Run the dashboard until Ctrl-C or SIGTERM. Returns an exit code (0 after a stop, 2 when
+    it cannot start).
+
+    The simulated robot runs in real time here: a time scale of 0 would finish a mission before
+    the page could show it, so 0 (the profiles' default) becomes 1.
+    """
+    out = out or sys.stderr
+    token = token or None
+    try:
+        check_binding(host, token)
+        if agent is None:
+            if settings.robot == "sim" and settings.sim.time_scale == 0:
+                sim = settings.sim.model_copy(update={"time_scale": 1.0})
+                settings = settings.model_copy(update={"sim": sim})
+            agent = RobotAgent(settings)
+        agent.initialize()
+        sock = bind(host, port)
+    except (ServeError, ConfigError) as exc:
+        print(f"shadowhound serve: {exc}", file=out)
+        return 2
+    app = create_app(agent, token=token,
+                     allowed_hosts=hosts_for(host) if allowed_hosts is None else allowed_hosts)
+    shown = f"[{host}]" if ":" in host else host
+    print(f"ShadowHound dashboard on http://{shown}:{sock.getsockname()[1]}/ (robot "
+          f"{agent.robot.name}, backend {agent.settings.backend}"
+          + (", token required" if token else "") + "); Ctrl-C stops", file=out, flush=True)
+    # uvicorn shuts down gracefully on SIGINT/SIGTERM and then raises the signal again with
+    # the previous handlers; make SIGTERM an exception too so the robot is always released.
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _raise_interrupt) if main else None
+    try:
+        uvicorn.Server(_config(app, log_level)).run(sockets=[sock])
+    except KeyboardInterrupt:
+        print("shadowhound serve: stopped; the robot is stopped", file=out)
+    finally:
+        if main:
+            signal.signal(signal.SIGTERM, previous)
+        agent.cleanup()
+        sock.close()
+    return 0
+
+
+def _raise_interrupt(_signum: int, _frame: Any) -> None:
+    raise KeyboardInterrupt

@@ -1,0 +1,407 @@
+// ShadowHound dashboard: plain JavaScript modules, no build step. Talks to the app's own /api and
+// /ws/status; every robot action goes through the HTTP API (the WebSocket only reports).
+import { drawMap as draw } from "./map.js";
+import { renderHistory, renderKv, renderSteps, updateStep } from "./render.js";
+
+const $ = (selector) => document.querySelector(selector);
+const TOKEN_KEY = "shadowhound.token";
+const RECENT_KEY = "shadowhound.recent";
+
+const view = {
+  token: localStorage.getItem(TOKEN_KEY) || "",
+  estop: false,
+  current: null, // web mission id the step list follows
+  shown: null, // web mission id the step list was last drawn for
+  pose: { x: 0, y: 0, yaw: 0 },
+  trail: [{ x: 0, y: 0 }],
+  predicted: [],
+  world: { places: {}, patrol_route: [], geofence_radius: 10, geofence_polygon: [] },
+  approval: null,
+  socketFailures: 0,
+};
+
+// A token can arrive in the URL fragment (never sent to the server): #token=...
+if (location.hash.startsWith("#token=")) {
+  view.token = decodeURIComponent(location.hash.slice(7));
+  localStorage.setItem(TOKEN_KEY, view.token);
+  history.replaceState(null, "", location.pathname);
+}
+
+// -- HTTP ---------------------------------------------------------------------------------
+
+async function api(method, path, body) {
+  const headers = { Accept: "application/json" };
+  if (body !== undefined) headers["Content-Type"] = "application/json";
+  if (view.token) headers.Authorization = "Bearer " + view.token;
+  let response;
+  try {
+    response = await fetch(path, {
+      method, headers, body: body === undefined ? undefined : JSON.stringify(body),
+    });
+  } catch (error) {
+    return { ok: false, status: 0, data: { detail: "the dashboard server is not reachable" } };
+  }
+  let data = null;
+  try { data = await response.json(); } catch (error) { data = null; }
+  if (response.status === 401) $("#auth").hidden = false;
+  return { ok: response.ok, status: response.status, data };
+}
+
+function detail(data) {
+  if (!data) return "no answer from the server";
+  if (typeof data.detail === "string") return data.detail;
+  return JSON.stringify(data.detail !== undefined ? data.detail : data);
+}
+
+function withToken(path) {
+  if (!view.token) return path;
+  return path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(view.token);
+}
+
+function say(selector, text, kind) {
+  const element = $(selector);
+  element.textContent = text;
+  element.dataset.kind = kind || "info";
+}
+
+// -- missions -----------------------------------------------------------------------------
+
+async function submitMission(dryRun) {
+  const command = $("#command").value.trim();
+  if (!command) {
+    say("#mission-msg", "Type a mission first, for example: walk forward 1 meter", "error");
+    return;
+  }
+  const reply = await api("POST", "/api/mission", { command, dry_run: dryRun });
+  if (reply.status === 202) {
+    remember(command);
+    view.current = reply.data.mission_id;
+    // Its events may have overtaken this answer: keep the steps they already drew.
+    if (view.shown !== view.current) showCurrent(command + (dryRun ? " (dry run)" : ""), []);
+    say("#mission-msg", reply.data.message, "info");
+  } else {
+    say("#mission-msg", "Refused: " + detail(reply.data), "error");
+  }
+}
+
+function showCurrent(text, steps) {
+  view.shown = view.current;
+  $("#current").hidden = false;
+  $("#current-text").textContent = text;
+  $("#progress").value = 0;
+  $("#result").textContent = "";
+  $("#result").dataset.kind = "";
+  renderSteps($("#steps"), steps);
+}
+
+function showResult(record) {
+  const result = record.result || record;
+  for (const step of result.steps || []) updateStep($("#steps"), step);
+  const text = record.response || result.response || record.error || "no result";
+  $("#result").textContent = text;
+  $("#result").dataset.kind = record.success || result.success ? "ok" : "error";
+  if (result.success) $("#progress").value = 1;
+  if (result.dry_run) {
+    view.predicted = (result.predicted_path || []).map((p) => ({ x: p.x, y: p.y }));
+    drawMap();
+  }
+}
+
+function remember(command) {
+  let recent = JSON.parse(localStorage.getItem(RECENT_KEY) || "[]");
+  recent = [command, ...recent.filter((c) => c !== command)].slice(0, 8);
+  localStorage.setItem(RECENT_KEY, JSON.stringify(recent));
+  renderRecent();
+}
+
+function renderRecent() {
+  const recent = JSON.parse(localStorage.getItem(RECENT_KEY) || "[]");
+  $("#recent").replaceChildren(...recent.map((c) => new Option(c)));
+  $("#recent-list").replaceChildren(...recent.map((command) => {
+    const chip = document.createElement("button");
+    chip.type = "button";
+    chip.className = "chip";
+    chip.textContent = command;
+    chip.addEventListener("click", () => { $("#command").value = command; $("#command").focus(); });
+    return chip;
+  }));
+}
+
+async function refreshHistory() {
+  const reply = await api("GET", "/api/missions?limit=30");
+  if (reply.ok) renderHistory($("#history"), reply.data.missions);
+}
+
+// -- e-stop and approvals -----------------------------------------------------------------
+
+async function pressEstop() {
+  setEstop(true); // show it at once; the answer confirms
+  const reply = await api("POST", "/api/estop");
+  if (!reply.ok) {
+    say("#mission-msg", "E-stop request failed: " + detail(reply.data), "error");
+    return;
+  }
+  say("#mission-msg", reply.data.message, "error");
+  renderRobot(reply.data.robot); // the robot as it was once stopped, before the next tick
+}
+
+async function releaseEstop() {
+  const reply = await api("POST", "/api/estop/release");
+  if (reply.ok) setEstop(reply.data.estop);
+  else say("#mission-msg", "Release failed: " + detail(reply.data), "error");
+}
+
+function setEstop(latched) {
+  view.estop = latched;
+  $("#estop-banner").hidden = !latched;
+  $("#release").hidden = !latched;
+  document.body.classList.toggle("estopped", latched);
+}
+
+function showApproval(request) {
+  view.approval = request;
+  $("#approval").hidden = !request;
+  if (!request) return;
+  $("#approval-text").textContent = "“" + request.mission + "” waits for your decision.";
+  $("#approval-reasons").replaceChildren(...request.reasons.map((r) => {
+    const item = document.createElement("li");
+    item.textContent = r;
+    return item;
+  }));
+}
+
+async function decide(approve) {
+  if (!view.approval) return;
+  const path = "/api/approval/" + view.approval.request_id + (approve ? "/approve" : "/reject");
+  const reply = await api("POST", path);
+  if (!reply.ok) say("#mission-msg", detail(reply.data), "error");
+  showApproval(null);
+}
+
+// -- live state ---------------------------------------------------------------------------
+
+function applyStatus(status) {
+  if (!status) return;
+  $("#status-pill").textContent = status.status + (status.current_skill ? " · " +
+    status.current_skill : "");
+  $("#status-pill").dataset.status = status.status;
+  if (status.estop !== view.estop) setEstop(status.estop);
+  if (status.mission_id && status.mission_id === view.current) {
+    $("#progress").value = status.progress || 0;
+  }
+  if ((status.pending_approval || null) !== null && !view.approval) {
+    showApproval(status.pending_approval);
+  } else if (!status.pending_approval && view.approval) {
+    showApproval(null);
+  }
+  if (status.robot) renderRobot(status.robot);
+}
+
+function renderRobot(robot) {
+  renderKv($("#robot"), {
+    posture: robot.posture, battery: robot.battery + " %", moving: robot.moving,
+    "e-stop": robot.estopped, travelled: robot.distance_travelled + " m",
+    connected: robot.connected,
+  });
+  movePose(robot);
+}
+
+function movePose(robot) {
+  view.pose = { x: robot.x, y: robot.y, yaw: robot.yaw };
+  const last = view.trail[view.trail.length - 1];
+  if (!last || Math.hypot(robot.x - last.x, robot.y - last.y) > 0.01) {
+    view.trail.push({ x: robot.x, y: robot.y });
+    if (view.trail.length > 2000) view.trail.shift();
+  }
+  const map = $("#map");
+  map.dataset.x = robot.x.toFixed(3);
+  map.dataset.y = robot.y.toFixed(3);
+  map.dataset.yaw = robot.yaw.toFixed(3);
+  $("#pose").textContent = "x " + robot.x.toFixed(2) + " m · y " + robot.y.toFixed(2) +
+    " m · " + Math.round(robot.yaw_deg) + "°";
+  drawMap();
+}
+
+function onEvent(message) {
+  switch (message.kind) {
+    case "snapshot":
+      applyStatus(message.status);
+      renderHistory($("#history"), message.missions || []);
+      break;
+    case "state":
+      applyStatus(message);
+      break;
+    case "mission_started":
+      if (!view.current || message.mission_id !== view.current) {
+        view.current = message.mission_id; // a mission from another client or interface
+      }
+      showCurrent(message.mission, []);
+      break;
+    case "plan_ready":
+      if (message.mission_id === view.current) renderSteps($("#steps"), message.plan.steps);
+      break;
+    case "step_started":
+    case "step_finished":
+      if (message.mission_id === view.current) updateStep($("#steps"), message.step);
+      break;
+    case "mission_finished":
+      if (message.mission_id === view.current) showResult(message.result);
+      refreshHistory();
+      break;
+    case "mission_record":
+      if (message.mission_id === view.current) showResult(message);
+      refreshHistory();
+      loadDiagnostics();
+      break;
+    case "mission_queued":
+      refreshHistory();
+      break;
+    case "estop":
+      setEstop(message.latched);
+      break;
+    case "approval_required":
+      showApproval(message.request);
+      break;
+    case "approval_decided":
+      showApproval(null);
+      break;
+    default:
+      break;
+  }
+}
+
+function connect() {
+  const scheme = location.protocol === "https:" ? "wss://" : "ws://";
+  const protocols = ["shadowhound"];
+  if (view.token) protocols.push("bearer." + view.token);
+  const socket = new WebSocket(scheme + location.host + "/ws/status", protocols);
+  socket.onopen = () => { view.socketFailures = 0; setConn("live"); };
+  socket.onmessage = (event) => {
+    try { onEvent(JSON.parse(event.data)); } catch (error) { console.error(error); }
+  };
+  socket.onclose = () => {
+    view.socketFailures += 1;
+    setConn("offline");
+    // Back off up to 5 s; meanwhile poll the status so the page stays roughly current.
+    setTimeout(connect, Math.min(5000, 250 * 2 ** view.socketFailures));
+    pollStatus();
+  };
+}
+
+async function pollStatus() {
+  const reply = await api("GET", "/api/status");
+  if (reply.ok) applyStatus(reply.data);
+}
+
+function setConn(state) {
+  $("#conn").dataset.state = state;
+  $("#conn").textContent = state;
+}
+
+function drawMap() {
+  draw($("#map"), view);
+}
+
+// -- panels fetched once or now and then --------------------------------------------------
+
+async function loadWorld() {
+  const reply = await api("GET", "/api/map");
+  if (!reply.ok) return;
+  view.world = reply.data;
+  view.trail = [{ x: reply.data.robot.x, y: reply.data.robot.y }];
+  movePose(reply.data.robot);
+}
+
+async function loadSkills() {
+  const reply = await api("GET", "/api/skills");
+  if (!reply.ok) return;
+  $("#skills").replaceChildren(...reply.data.skills.map((s) => {
+    const item = document.createElement("li");
+    const name = document.createElement("code");
+    name.textContent = s.name;
+    item.append(name, " " + s.description);
+    return item;
+  }));
+}
+
+async function loadDiagnostics() {
+  if (document.hidden) return;
+  const reply = await api("GET", "/api/diagnostics");
+  if (!reply.ok) return;
+  const d = reply.data;
+  renderKv($("#diag"), {
+    status: d.status, backend: d.agent_backend, model: d.agent_model,
+    "last mission": d.last_mission || "none", errors: (d.errors || []).slice(-3).join(" | ") ||
+      "none", refusals: (d.refusals || []).join(" | ") || "none",
+    "live clients": d.web.clients, queued: d.web.queued,
+  });
+}
+
+function startCamera() {
+  const img = $("#camera");
+  img.onerror = () => {
+    say("#camera-msg", "no camera image yet; retrying", "info");
+    setTimeout(() => { img.src = withToken("/api/camera/stream?fps=5&t=" + Date.now()); }, 3000);
+  };
+  img.onload = () => say("#camera-msg", "", "info");
+  img.src = withToken("/api/camera/stream?fps=5");
+}
+
+async function chat(event) {
+  event.preventDefault();
+  const text = $("#chat-text").value.trim();
+  if (!text) return;
+  $("#chat-text").value = "";
+  addChat("you", text);
+  const reply = await api("POST", "/api/chat", { text });
+  addChat("robot", reply.ok ? reply.data.answer : "(" + detail(reply.data) + ")");
+}
+
+function addChat(who, text) {
+  const line = document.createElement("p");
+  line.dataset.who = who;
+  line.textContent = text;
+  $("#chat-log").append(line);
+  $("#chat-log").scrollTop = $("#chat-log").scrollHeight;
+}
+
+// -- start --------------------------------------------------------------------------------
+
+function start() {
+  $("#mission-form").addEventListener("submit", (event) => {
+    event.preventDefault();
+    submitMission(false);
+  });
+  $("#dry-run").addEventListener("click", () => submitMission(true));
+  $("#cancel").addEventListener("click", async () => {
+    if (!view.current) return;
+    const reply = await api("POST", "/api/missions/" + view.current + "/cancel");
+    if (!reply.ok) say("#mission-msg", detail(reply.data), "error");
+  });
+  $("#estop").addEventListener("click", pressEstop);
+  $("#release").addEventListener("click", releaseEstop);
+  $("#approve").addEventListener("click", () => decide(true));
+  $("#reject").addEventListener("click", () => decide(false));
+  $("#chat-form").addEventListener("submit", chat);
+  $("#auth").addEventListener("submit", (event) => {
+    event.preventDefault();
+    view.token = $("#token").value.trim();
+    localStorage.setItem(TOKEN_KEY, view.token);
+    location.reload();
+  });
+  document.addEventListener("keydown", (event) => {
+    // Esc stops the robot, except while typing (Esc also closes the input's suggestions).
+    if (event.key === "Escape" && event.target.tagName !== "INPUT") pressEstop();
+  });
+  renderRecent();
+  drawMap();
+  loadWorld();
+  loadSkills();
+  refreshHistory();
+  loadDiagnostics();
+  setInterval(loadDiagnostics, 3000);
+  connect();
+  startCamera();
+}
+
+start();

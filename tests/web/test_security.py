@@ -1,0 +1,124 @@
+"""Token, host and origin checks, CORS, secrets, and refusing to serve beyond loopback."""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Iterator
+
+import pytest
+from fastapi.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+from shadowhound import RobotAgent, ShadowHoundConfig
+from shadowhound.web import create_app, serve_main
+from shadowhound.web.server import ServeError, check_binding, serve
+from tests.web.conftest import TOKEN, make_agent
+
+AUTH = {"Authorization": f"Bearer {TOKEN}"}
+
+
+@pytest.fixture
+def secured(agent: RobotAgent) -> Iterator[TestClient]:
+    with TestClient(create_app(agent, token=TOKEN), base_url="http://127.0.0.1") as c:
+        yield c
+
+
+def test_token_is_required_on_api_and_mutations(secured: TestClient) -> None:
+    assert secured.get("/api/health").status_code == 200  # liveness stays open
+    assert secured.get("/").status_code == 200  # the page itself, to enter the token
+    for method, path in [("POST", "/api/estop"), ("POST", "/api/mission"),
+                         ("POST", "/api/estop/release"), ("GET", "/api/status"),
+                         ("GET", "/api/missions"), ("GET", "/api/camera/latest")]:
+        reply = secured.request(method, path, json={"command": "stand"})
+        assert reply.status_code == 401, (method, path)
+        assert reply.headers["www-authenticate"] == "Bearer"
+        assert "Bearer" in reply.json()["detail"]
+    wrong = secured.post("/api/estop", headers={"Authorization": "Bearer nope"})
+    assert wrong.status_code == 401
+    assert secured.post("/api/estop", headers=AUTH).status_code == 200
+    assert secured.post("/api/estop/release", headers=AUTH).status_code == 200
+
+
+def test_query_token_works_for_reads_only(secured: TestClient) -> None:
+    assert secured.get(f"/api/status?token={TOKEN}").status_code == 200
+    assert secured.post(f"/api/estop?token={TOKEN}").status_code == 401
+
+
+def test_websocket_needs_the_token(secured: TestClient) -> None:
+    with pytest.raises(WebSocketDisconnect), secured.websocket_connect("/ws/status"):
+        pass
+    with secured.websocket_connect(f"/ws/status?token={TOKEN}") as ws:
+        assert ws.receive_json()["kind"] == "snapshot"
+    with secured.websocket_connect("/ws/status",
+                                   subprotocols=["shadowhound", f"bearer.{TOKEN}"]) as ws:
+        assert ws.accepted_subprotocol == "shadowhound"
+        assert ws.receive_json()["kind"] == "snapshot"
+
+
+def test_secrets_never_appear_in_answers(agent: RobotAgent,
+                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    key = "sk-test-secret-value-1234567890"
+    monkeypatch.setenv("OPENAI_API_KEY", key)
+    app = create_app(agent, token=TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", headers=AUTH) as client:
+        # Put both secrets where answers quote the user's own words.
+        client.post("/api/mission", json={"command": f"say {key} and {TOKEN}"})
+        client.post("/api/chat", json={"text": f"what is {key}?"})
+        texts = [client.get(p).text for p in ("/api/missions", "/api/diagnostics",
+                                              "/api/status", "/openapi.json")]
+        texts.append(client.post("/api/mission", json={"command": "x" * 3000, "k": key}).text)
+        with client.websocket_connect("/ws/status") as ws:
+            texts.append(ws.receive_text())
+    for text in texts:
+        assert key not in text and TOKEN not in text
+
+
+def test_foreign_hosts_and_cross_origin_requests_are_refused(client: TestClient) -> None:
+    assert client.get("/api/status", headers={"host": "attacker.example"}).status_code == 400
+    assert client.get("/api/status", headers={"host": "localhost:8080"}).status_code == 200
+    cross = client.post("/api/estop", headers={"origin": "http://attacker.example"})
+    assert cross.status_code == 403 and "cross-origin" in cross.json()["detail"]
+    same = client.post("/api/estop", headers={"origin": "http://127.0.0.1"})
+    assert same.status_code == 200
+    with pytest.raises(WebSocketDisconnect), client.websocket_connect(
+            "/ws/status", headers={"origin": "http://attacker.example"}):
+        pass
+
+
+def test_no_cors_headers_for_other_sites(client: TestClient) -> None:
+    preflight = client.options("/api/mission", headers={
+        "origin": "http://attacker.example", "access-control-request-method": "POST"})
+    assert "access-control-allow-origin" not in preflight.headers
+    reply = client.get("/api/status", headers={"origin": "http://attacker.example"})
+    assert "access-control-allow-origin" not in reply.headers
+
+
+def test_binding_beyond_loopback_needs_a_strong_token() -> None:
+    check_binding("127.0.0.1", None)
+    with pytest.raises(ServeError, match="needs a token"):
+        check_binding("0.0.0.0", None)
+    with pytest.raises(ServeError, match="at least 16"):
+        check_binding("0.0.0.0", "short")
+    with pytest.raises(ServeError, match="may contain only"):
+        check_binding("0.0.0.0", "a token with spaces in it!!")
+    check_binding("0.0.0.0", TOKEN)
+
+
+def test_serve_refuses_with_a_clear_message_and_exit_2(monkeypatch: pytest.MonkeyPatch,
+                                                       capsys: pytest.CaptureFixture[str]
+                                                       ) -> None:
+    monkeypatch.delenv("SHADOWHOUND_TOKEN", raising=False)
+    assert serve_main(ShadowHoundConfig(), host="0.0.0.0", port=0) == 2
+    assert "needs a token" in capsys.readouterr().err
+    out = io.StringIO()
+    agent = make_agent()
+    from shadowhound.web.server import bind
+
+    taken = bind("127.0.0.1", 0)
+    try:
+        code = serve(ShadowHoundConfig(), "127.0.0.1", taken.getsockname()[1], agent=agent,
+                     out=out)
+    finally:
+        taken.close()
+        agent.cleanup()
+    assert code == 2 and "cannot listen" in out.getvalue()
