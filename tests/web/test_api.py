@@ -33,9 +33,18 @@ def test_mission_is_accepted_with_an_id_and_runs(client: TestClient, agent: Robo
     assert abs(agent.get_robot_state().x - 1.0) < 0.05
     listed = client.get("/api/missions").json()["missions"]
     assert listed[0]["mission_id"] == body["mission_id"]
-    # The agent's own id finds the same record.
-    assert client.get(f"/api/missions/{record['agent_mission_id']}").json()["mission_id"] == \
-        body["mission_id"]
+    # The web id is the agent's id: its history has the mission under the same id.
+    assert agent.history[-1].mission_id == body["mission_id"]
+
+
+def test_missions_from_other_interfaces_are_listed(client: TestClient, agent: RobotAgent) -> None:
+    web = client.post("/api/mission", json={"command": "stand up"}).json()["mission_id"]
+    finished(client, web)
+    other = agent.execute_mission("sit down", mission_id="ros-topic-1")  # e.g. a ROS topic
+    listed = client.get("/api/missions").json()["missions"]
+    assert [(m["mission_id"], m["source"]) for m in listed] == [(web, "web"),
+                                                               (other.mission_id, "agent")]
+    assert listed[1]["command"] == "sit down" and listed[1]["success"] is True
 
 
 def test_original_body_with_priority_is_accepted(client: TestClient) -> None:

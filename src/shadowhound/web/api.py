@@ -176,21 +176,18 @@ def chat(request: Request, body: ChatRequest) -> ChatAnswer:
 @router.get("/status", tags=["status"])
 async def status(request: Request) -> dict[str, Any]:
     """What the robot and the mission are doing now (small and fast; polled by dashboards)."""
-    web = ctx(request)
-    return current_status(web)
+    return current_status(ctx(request))
 
 
 def current_status(web: WebContext) -> dict[str, Any]:
     d = web.agent.get_diagnostics()
     running = web.desk.running()
-    agent_id = d["mission_id"]
     return {
-        "status": d["status"], "mission_id": web.desk.web_id(agent_id) if agent_id else None,
-        "agent_mission_id": agent_id, "mission": d["mission"], "current_skill":
-        d["current_skill"], "step": d["step"], "steps": d["steps"], "progress": d["progress"],
-        "estop": d["estop"], "busy": web.desk.worker.busy, "running": running.id if running
-        else None, "queued": web.desk.queued(), "pending_approval": d["pending_approval"],
-        "robot": d["robot"], "time": time.time(),
+        "status": d["status"], "mission_id": d["mission_id"], "mission": d["mission"],
+        "current_skill": d["current_skill"], "step": d["step"], "steps": d["steps"],
+        "progress": d["progress"], "estop": d["estop"], "busy": web.desk.worker.busy,
+        "running": running.id if running else None, "queued": web.desk.queued(),
+        "pending_approval": d["pending_approval"], "robot": d["robot"], "time": time.time(),
     }
 
 

@@ -1,28 +1,22 @@
 """The mission desk: missions from the web, run on the one mission worker, with their records.
 
 Pure Python (no FastAPI): the routes call this, and it calls only the agent's public API and
-`MissionWorker`. Each web mission gets an id at once (the HTTP answer needs it before the agent
-starts the mission and picks its own id); the two are linked when the mission starts, and
-events and records carry the web id, with the agent's as `agent_mission_id`.
+`MissionWorker`. A web mission's id is chosen here, answered at once, and given to the agent, so
+records, events and the agent's results all carry the same `mission_id`.
 """
 
 from __future__ import annotations
 
-import logging
 import threading
 import time
-import uuid
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
-from .. import events as ev
 from ..agent import RobotAgent
 from ..events import MissionEvent
 from ..worker import MissionJob, MissionWorker
 from .feed import EventFeed
-
-log = logging.getLogger(__name__)
 
 ESTOP_DROP_REASON = "the e-stop was pressed before it started"
 
@@ -31,12 +25,14 @@ ESTOP_DROP_REASON = "the e-stop was pressed before it started"
 class WebMission:
     """A mission submitted through the web, from queued to its result."""
 
-    id: str
     job: MissionJob
     submitted: float = field(default_factory=time.time)
-    agent_id: str | None = None
     started: float | None = None
     finished: float | None = None
+
+    @property
+    def id(self) -> str:
+        return self.job.mission_id
 
     @property
     def state(self) -> str:
@@ -49,7 +45,6 @@ class WebMission:
         job, result = self.job, self.job.result
         out: dict[str, Any] = {
             "mission_id": self.id,
-            "agent_mission_id": self.agent_id or (result.mission_id if result else None),
             "command": job.command,
             "dry_run": job.dry_run,
             "source": "web",
@@ -60,18 +55,11 @@ class WebMission:
             "status": result.status.value if result else self.state,
             "success": result.success if result else None,
             "response": result.response if result else job.dropped,
-            "error": (result.error if result else job.dropped),
+            "error": result.error if result else job.dropped,
         }
         if full:
-            out["result"] = _as_web(result.to_dict(), self.id) if result else None
+            out["result"] = result.to_dict() if result else None
         return out
-
-
-def _as_web(data: dict[str, Any], web_id: str) -> dict[str, Any]:
-    """A result or event payload with the web mission id in front and the agent's kept."""
-    if data.get("mission_id") and data["mission_id"] != web_id:
-        data = {**data, "agent_mission_id": data["mission_id"], "mission_id": web_id}
-    return data
 
 
 class MissionDesk:
@@ -89,8 +77,6 @@ class MissionDesk:
         self._keep = keep
         self._lock = threading.Lock()
         self._records: OrderedDict[str, WebMission] = OrderedDict()
-        self._by_job: dict[int, WebMission] = {}
-        self._by_agent_id: dict[str, str] = {}
         self._own_worker = worker is None
         self.worker = worker or MissionWorker(agent, on_start=self.job_started,
                                               on_finish=self.job_finished, max_queue=max_queue)
@@ -102,40 +88,32 @@ class MissionDesk:
         """Queue a mission. Returns (record, None), or (None, why it was refused)."""
         if self.agent.estop_latched and not dry_run:
             return None, "the e-stop is latched; release it before running missions"
-        record = WebMission(uuid.uuid4().hex[:12], MissionJob(command, source="web",
-                                                              dry_run=dry_run))
+        record = WebMission(MissionJob(command, source="web", dry_run=dry_run))
         with self._lock:
             self._records[record.id] = record
-            self._by_job[id(record.job)] = record
         refused = self.worker.submit(record.job)
         if refused:
             with self._lock:
                 self._records.pop(record.id, None)
-                self._by_job.pop(id(record.job), None)
             return None, refused
         self._trim()
         self.feed.publish("mission_queued", record.to_dict(full=False))
         return record, None
 
     def get(self, mission_id: str) -> WebMission | None:
-        """A web mission by its web id or by the agent's id."""
         with self._lock:
-            record = self._records.get(mission_id)
-            if record is None and mission_id in self._by_agent_id:
-                record = self._records.get(self._by_agent_id[mission_id])
-            return record
+            return self._records.get(mission_id)
 
     def missions(self, limit: int = 50) -> list[dict[str, Any]]:
         """Newest first: web missions, then missions the agent ran for other interfaces."""
         with self._lock:
             records = list(self._records.values())
-            known = set(self._by_agent_id)
+        known = {r.id for r in records}
         out = [r.to_dict(full=False) for r in reversed(records)]
         for result in reversed(self.agent.history):
             if result.mission_id not in known:  # e.g. a ROS topic mission on the same agent
-                out.append({"mission_id": result.mission_id, "agent_mission_id":
-                            result.mission_id, "command": result.mission, "dry_run":
-                            result.dry_run, "source": "agent", "state": "finished",
+                out.append({"mission_id": result.mission_id, "command": result.mission,
+                            "dry_run": result.dry_run, "source": "agent", "state": "finished",
                             "status": result.status.value, "success": result.success,
                             "response": result.response, "error": result.error})
         return out[:limit]
@@ -159,15 +137,11 @@ class MissionDesk:
 
     def running(self) -> WebMission | None:
         job = self.worker.current
-        return None if job is None else self._by_job.get(id(job))
+        return None if job is None else self._record_of(job)
 
     def queued(self) -> int:
         with self._lock:
             return sum(1 for r in self._records.values() if r.state == "queued")
-
-    def web_id(self, agent_id: str) -> str:
-        with self._lock:
-            return self._by_agent_id.get(agent_id, agent_id)
 
     def close(self) -> None:
         self._unsubscribe()
@@ -177,39 +151,27 @@ class MissionDesk:
     # -- worker hooks (on the worker's thread) ------------------------------------------------
 
     def job_started(self, job: MissionJob) -> None:
-        record = self._by_job.get(id(job))
+        record = self._record_of(job)
         if record is not None:
             record.started = time.time()
 
     def job_finished(self, job: MissionJob) -> None:
-        record = self._by_job.get(id(job))
-        if record is None:
-            return
-        record.finished = time.time()
-        if job.result is not None:
-            with self._lock:
-                record.agent_id = record.agent_id or job.result.mission_id
-                self._by_agent_id[record.agent_id] = record.id
-        self.feed.publish("mission_record", record.to_dict())
+        record = self._record_of(job)
+        if record is not None:
+            record.finished = time.time()
+            self.feed.publish("mission_record", record.to_dict())
 
-    # -- events ----------------------------------------------------------------------------
+    # -- internals -------------------------------------------------------------------------
+
+    def _record_of(self, job: MissionJob) -> WebMission | None:
+        """The desk's record of `job`; None for another interface's job on a shared worker."""
+        record = self.get(job.mission_id)
+        return record if record is not None and record.job is job else None
 
     def _on_event(self, event: MissionEvent) -> None:
         """Runs on the emitting thread (the worker's, or the one that pressed the e-stop)."""
-        if event.kind == ev.MISSION_STARTED:
-            job = self.worker.current
-            record = self._by_job.get(id(job)) if job is not None else None
-            if record is not None and record.agent_id is None:
-                with self._lock:
-                    record.agent_id = event.mission_id
-                    self._by_agent_id[event.mission_id] = record.id
-        data = dict(event.data)
-        if "result" in data:
-            data["result"] = _as_web(data["result"], self.web_id(event.mission_id))
-        web_id = self.web_id(event.mission_id) if event.mission_id else None
-        data.update(mission_id=web_id, agent_mission_id=event.mission_id or None,
-                    event_time=event.time)
-        self.feed.publish(event.kind, data)
+        self.feed.publish(event.kind, {**event.data, "mission_id": event.mission_id or None,
+                                       "event_time": event.time})
 
     def _trim(self) -> None:
         """Forget the oldest finished records beyond `keep` (persistent history comes later)."""
@@ -219,6 +181,3 @@ class MissionDesk:
                 if not oldest.job.done.is_set():
                     break
                 self._records.pop(oldest.id)
-                self._by_job.pop(id(oldest.job), None)
-                if oldest.agent_id:
-                    self._by_agent_id.pop(oldest.agent_id, None)

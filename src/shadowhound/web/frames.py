@@ -40,12 +40,6 @@ class WebFrame:
     source: str
 
 
-def latest_frame(agent: RobotAgent) -> CameraFrame | None:
-    """The agent's latest camera frame (from an interface, else the robot's own camera)."""
-    frame = agent.latest_frame()
-    return frame if isinstance(frame, CameraFrame) else None
-
-
 def to_browser_image(frame: CameraFrame, quality: int = 80) -> tuple[bytes, str]:
     """(bytes, content type): JPEG as is; anything else JPEG-encoded (or PNG without Pillow)."""
     if frame.encoding == "jpeg":
@@ -96,7 +90,7 @@ class FrameCache:
             if self._ready is not None and now - self._asked < max_age:
                 return self._ready
             self._asked = now
-            frame = latest_frame(self._agent)
+            frame = self._agent.latest_frame()
             if frame is None:
                 raise FrameUnavailable("no camera frame yet")
             if frame is not self._frame or self._ready is None:

@@ -103,10 +103,8 @@ async def _sse(web: WebContext, subscription: Subscription,
             message = await subscription.next(timeout=15.0)
             if message is None:
                 yield ": keep-alive\n\n"  # lets proxies and clients see the stream is alive
-            elif "seq" in message:
+            else:  # every feed message is numbered (only WebSocket pongs are not)
                 yield f"id: {message['seq']}\ndata: {web.feed.encode(message)}\n\n"
-            else:
-                yield f"data: {web.feed.encode(message)}\n\n"
     finally:
         subscription.close()
 
