@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .agent import RobotAgent
-from .events import MissionEvent
+from .events import MISSION_STARTED, MissionEvent
 from .result import MissionResult
 
 log = logging.getLogger(__name__)
@@ -37,6 +37,7 @@ class MissionJob:
     dropped: str | None = None  # why it never ran
     done: threading.Event = field(default_factory=threading.Event)
     cancelled: threading.Event = field(default_factory=threading.Event)
+    on_done: Callable[[MissionJob], None] | None = None  # after `done` is set
 
 
 class MissionWorker:
@@ -140,9 +141,14 @@ class MissionWorker:
             with self._lock:
                 self._pending -= 1
             job.done.set()
+            if job.on_done is not None:
+                job.on_done(job)
 
     def _forward(self, event: MissionEvent) -> None:
         job = self._current
-        if job is not None and job.on_event is not None \
-                and threading.current_thread() is self._thread:
+        if job is None or threading.current_thread() is not self._thread:
+            return
+        if event.kind == MISSION_STARTED and job.cancelled.is_set():
+            self._agent.cancel()  # a cancel that came before the agent cleared its flag
+        if job.on_event is not None:
             job.on_event(event)

@@ -1,0 +1,39 @@
+"""Launch the ShadowHound mission agent: ros2 launch shadowhound mission_node.launch.py
+backend_config:=ollama camera_topic:=/camera/compressed
+
+(Not exercised in ShadowHound's own tests: launch and launch_ros are not on PyPI. The tests run
+the same node through its entry point, `shadowhound node --ros-args ...`.)
+"""
+
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import Node
+
+ARGUMENTS = {
+    "backend_config": "offline",
+    "robot": "sim",
+    "time_scale": "1.0",
+    "camera_topic": "/camera/image_raw",
+    "camera_type": "auto",
+    "mission_topic": "mission_command",
+    "status_topic": "mission_status",
+    "robot_status_topic": "/shadowhound/robot_status",
+    "diagnostics_topic": "/shadowhound/diagnostics",
+    "web_interface_port": "8080",
+    "enable_web_ui": "false",
+}
+
+
+def generate_launch_description() -> LaunchDescription:
+    declared = [DeclareLaunchArgument(name, default_value=default)
+                for name, default in ARGUMENTS.items()]
+    node = Node(
+        package="shadowhound",
+        executable="mission_node",
+        name="shadowhound_mission_agent",
+        output="screen",
+        emulate_tty=True,
+        parameters=[{name: LaunchConfiguration(name) for name in ARGUMENTS}],
+    )
+    return LaunchDescription([*declared, node])

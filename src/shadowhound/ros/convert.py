@@ -1,0 +1,112 @@
+"""Converting between ROS message fields and the agent's types. Pure Python (no rclpy).
+
+The node unpacks messages into plain values and calls these, so the rules (which encodings,
+how row padding is removed, which diagnostic level a status gets) are testable anywhere.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from typing import Any
+
+from ..state import CameraFrame
+
+RAW_ENCODINGS = {"rgb8": 3, "bgr8": 3, "mono8": 1}
+_MAX_SIDE = 10_000
+
+# diagnostic_msgs/DiagnosticStatus levels
+OK, WARN, ERROR, STALE = 0, 1, 2, 3
+_LEVEL_OF_STATUS = {"idle": OK, "planning": OK, "executing": OK, "succeeded": OK,
+                    "failed": WARN, "stopped": WARN}
+
+
+def raw_image_frame(data: bytes | bytearray | memoryview, width: int, height: int,
+                    encoding: str, step: int, source: str = "camera") -> CameraFrame:
+    """A sensor_msgs/Image (rgb8, bgr8, mono8) as a CameraFrame; row padding is removed.
+
+    Raises ValueError naming what is wrong (encoding, sizes, data length).
+    """
+    channels = RAW_ENCODINGS.get(encoding)
+    if channels is None:
+        raise ValueError(f"unsupported image encoding {encoding!r}; supported: "
+                         f"{', '.join(RAW_ENCODINGS)} (or send sensor_msgs/CompressedImage)")
+    if not (0 < width <= _MAX_SIDE and 0 < height <= _MAX_SIDE):
+        raise ValueError(f"image size {width}x{height} is out of range (1..{_MAX_SIDE} a side)")
+    row = width * channels
+    if step < row:
+        raise ValueError(f"image step {step} is smaller than a {encoding} row of {width} "
+                         f"pixels ({row} bytes)")
+    if len(data) != step * height:
+        raise ValueError(f"image data has {len(data)} bytes; {height} rows of step {step} "
+                         f"need {step * height}")
+    view = memoryview(data)
+    if step == row:
+        pixels = bytes(view)
+    else:
+        pixels = b"".join(view[r * step: r * step + row] for r in range(height))
+    return CameraFrame(pixels, width, height, encoding, stamp=time.time(), source=source)
+
+
+def diagnostic_level(diagnostics: dict[str, Any]) -> int:
+    """OK while idle/planning/executing/succeeded, WARN after failed/stopped, ERROR on e-stop."""
+    if diagnostics.get("estop"):
+        return ERROR
+    return _LEVEL_OF_STATUS.get(str(diagnostics.get("status")), WARN)
+
+
+def diagnostic_message(diagnostics: dict[str, Any]) -> str:
+    """One line for rqt_robot_monitor's message column."""
+    if diagnostics.get("estop"):
+        return "e-stop latched"
+    status = str(diagnostics.get("status"))
+    if status in ("executing", "planning") and diagnostics.get("current_skill"):
+        return (f"{status} {diagnostics['current_skill']} (step {diagnostics.get('step')}/"
+                f"{diagnostics.get('steps')})")
+    errors = diagnostics.get("errors") or []
+    if status in ("failed", "stopped") and errors:
+        return f"{status}: {errors[-1]}"
+    return status
+
+
+def diagnostic_values(diagnostics: dict[str, Any],
+                      extra: dict[str, Any] | None = None) -> list[tuple[str, str]]:
+    """Key-values of the agent's diagnostics as strings (what DiagnosticStatus carries)."""
+    robot = diagnostics.get("robot") or {}
+    errors = list(diagnostics.get("errors") or [])
+    values: dict[str, Any] = {
+        "status": diagnostics.get("status"),
+        "mission": diagnostics.get("mission") or "",
+        "current_skill": diagnostics.get("current_skill") or "",
+        "step": f"{diagnostics.get('step', 0)}/{diagnostics.get('steps', 0)}",
+        "progress": f"{float(diagnostics.get('progress') or 0.0):.3f}",
+        "errors": "; ".join(errors[-3:]),
+        "error_count": len(errors),
+        "backend": diagnostics.get("backend"),
+        "estop": bool(diagnostics.get("estop")),
+        "pose_x": robot.get("x"),
+        "pose_y": robot.get("y"),
+        "pose_yaw": robot.get("yaw"),
+        "battery": robot.get("battery"),
+        "posture": robot.get("posture"),
+        "moving": robot.get("moving"),
+    }
+    values.update(extra or {})
+    return [(k, _text(v)) for k, v in values.items()]
+
+
+def _text(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return "" if value is None else str(value)
+
+
+def robot_status_json(robot: dict[str, Any]) -> str:
+    """The robot state (RobotState.to_dict) as compact JSON."""
+    return json.dumps(robot, separators=(",", ":"), sort_keys=True)
+
+
+def shorten(text: str, limit: int = 200) -> str:
+    """Text for a status line: one line, at most `limit` characters."""
+    flat = " ".join(text.split())
+    return flat if len(flat) <= limit else flat[: limit - 3] + "..."

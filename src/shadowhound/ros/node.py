@@ -1,0 +1,465 @@
+"""MissionNode: the ROS 2 shell around RobotAgent (parse ROS input, call the agent, render).
+
+Interfaces (names relative to the node's namespace unless absolute):
+- subscribes `mission_command` (std_msgs/String), `/shadowhound/estop` and
+  `/shadowhound/estop_release` (std_msgs/Empty), the camera (sensor_msgs/Image or
+  CompressedImage, best effort, depth 1);
+- publishes `mission_status` (std_msgs/String), `/shadowhound/diagnostics`
+  (diagnostic_msgs/DiagnosticArray, 1 Hz), `/shadowhound/robot_status` (std_msgs/String JSON,
+  5 Hz);
+- serves the `execute_mission` action (shadowhound_interfaces/ExecuteMission) and the `chat`
+  service (shadowhound_interfaces/Chat) when the interface package is installed.
+
+Missions run on one worker thread (see worker.py) and chat answers on another; every ROS
+callback is short, so one SingleThreadedExecutor serves them all (the action's execute
+callback and the chat service are coroutines that await the other threads). Topic missions
+queue, action goals are rejected while a mission runs or waits.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import signal
+import sys
+import threading
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
+from rclpy.utilities import remove_ros_args
+from sensor_msgs.msg import CompressedImage, Image
+from std_msgs.msg import Empty, String
+
+from .. import events as ev
+from ..agent import RobotAgent
+from ..camera import to_camera_frame
+from ..config import ConfigError
+from ..result import MissionResult
+from ..worker import MissionJob, MissionWorker
+from .convert import (
+    diagnostic_level,
+    diagnostic_message,
+    diagnostic_values,
+    raw_image_frame,
+    robot_status_json,
+    shorten,
+)
+from .params import NODE_NAME, PARAMETERS, ParameterError, describe_parameters, parse_parameters
+
+try:  # built by scripts/build_ros.sh (ros2/shadowhound_interfaces)
+    from shadowhound_interfaces.action import ExecuteMission
+    from shadowhound_interfaces.srv import Chat
+except ImportError:  # the node still runs its topics; the action and service are off
+    ExecuteMission = Chat = None
+
+ESTOP_TOPIC = "/shadowhound/estop"
+ESTOP_RELEASE_TOPIC = "/shadowhound/estop_release"
+ACTION_NAME = "execute_mission"
+CHAT_SERVICE = "chat"
+ROBOT_STATUS_HZ = 5.0
+DIAGNOSTICS_NAME = "shadowhound: mission agent"
+EXIT_OK, EXIT_USAGE = 0, 2
+
+_COMMANDS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+_CAMERA = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                     reliability=ReliabilityPolicy.BEST_EFFORT)
+_FEEDBACK_EVENTS = (ev.PLAN_READY, ev.STEP_STARTED, ev.STEP_FINISHED)
+
+
+class MissionNode(Node):
+    """The mission agent on ROS 2. Give `agent` to drive an existing RobotAgent (its own
+    settings then win over `backend_config`, `robot` and `time_scale`).
+
+    Raises ParameterError (a ConfigError) for invalid parameters, ConfigError for a bad
+    profile or an unavailable backend.
+    """
+
+    def __init__(self, agent: RobotAgent | None = None, *, node_name: str = NODE_NAME,
+                 **node_kwargs: Any) -> None:
+        super().__init__(node_name, **node_kwargs)
+        self.settings = parse_parameters(self._declare_parameters())
+        if agent is None:
+            agent = RobotAgent(self.settings.agent_settings())
+        agent.initialize()
+        self.agent = agent
+        self._frames = {"received": 0, "dropped": 0}
+        self._last_frame = ""
+        self._last_camera_error = ""
+        self._worker = MissionWorker(agent, on_start=self._on_mission_start,
+                                     on_finish=self._on_mission_finish)
+        self._chat_thread = ThreadPoolExecutor(1, thread_name_prefix="shadowhound-chat")
+        self._web: Any = None
+        self._build_interfaces()
+        if self.settings.enable_web_ui:
+            self._start_web()
+        self._report_startup()
+
+    # -- set-up --------------------------------------------------------------------------
+
+    def _declare_parameters(self) -> dict[str, Any]:
+        known = set(PARAMETERS) | {"use_sim_time"}
+        unknown = sorted(set(getattr(self, "_parameter_overrides", {})) - known)
+        if unknown:
+            raise ParameterError(f"unknown ROS parameter(s): {', '.join(unknown)}; known: "
+                                 f"{', '.join(PARAMETERS)}")
+        values = {}
+        for name, (default, text) in PARAMETERS.items():
+            descriptor = ParameterDescriptor(description=text, dynamic_typing=True)
+            values[name] = self.declare_parameter(name, default, descriptor).value
+        return values
+
+    def _build_interfaces(self) -> None:
+        s = self.settings
+        try:
+            self._status_pub = self.create_publisher(String, s.status_topic, _COMMANDS)
+            self._robot_pub = self.create_publisher(String, s.robot_status_topic, 10)
+            self._diag_pub = self.create_publisher(DiagnosticArray, s.diagnostics_topic, 10)
+            self.create_subscription(String, s.mission_topic, self._on_mission, _COMMANDS)
+            self.create_subscription(Empty, ESTOP_TOPIC, self._on_estop, _COMMANDS)
+            self.create_subscription(Empty, ESTOP_RELEASE_TOPIC, self._on_estop_release,
+                                     _COMMANDS)
+            if s.camera_compressed:
+                self.create_subscription(CompressedImage, s.camera_topic, self._on_compressed,
+                                         _CAMERA)
+            else:
+                self.create_subscription(Image, s.camera_topic, self._on_image, _CAMERA)
+        except Exception as exc:  # rclpy raises several types for bad names
+            raise ParameterError(f"cannot create the node's topics: {exc}") from exc
+        self.create_timer(1.0, self._publish_diagnostics)
+        self.create_timer(1.0 / ROBOT_STATUS_HZ, self._publish_robot_status)
+        self._goals: dict[bytes, MissionJob] = {}
+        if ExecuteMission is not None and Chat is not None:
+            self._action = ActionServer(self, ExecuteMission, ACTION_NAME, self._execute_goal,
+                                        goal_callback=self._on_goal,
+                                        cancel_callback=self._on_cancel)
+            self.create_service(Chat, CHAT_SERVICE, self._on_chat)
+
+    def _report_startup(self) -> None:
+        s, log = self.settings, self.get_logger()
+        log.info(f"mission agent ready: backend {self.agent.settings.backend} "
+                 f"(profile {self.agent.settings.profile}), robot {self.agent.robot.name}, "
+                 f"missions on {self.resolve_topic_name(s.mission_topic)}, camera "
+                 f"{s.camera_topic} ({'compressed' if s.camera_compressed else 'raw'})")
+        if ExecuteMission is None:
+            log.warning("shadowhound_interfaces is not installed: the execute_mission action "
+                        "and the chat service are off (build it with scripts/build_ros.sh)")
+        if self._web is not None:
+            log.info(f"web dashboard on {self._web.url}")
+
+    def _start_web(self) -> None:
+        """The dashboard on 127.0.0.1:web_interface_port, sharing this node's mission worker
+        (one mission at a time whether it came from a topic, an action or the page)."""
+        try:
+            from ..web.app import create_app
+            from ..web.server import ServeError, WebServer
+        except ImportError as exc:
+            raise ParameterError(f"enable_web_ui needs the 'web' extra (pip install "
+                                 f"'shadowhound[web]'): {exc}") from exc
+        app = create_app(self.agent, worker=self._worker)
+        self._desk = app.state.web.desk
+        try:
+            self._web = WebServer(app, "127.0.0.1", self.settings.web_interface_port).start()
+        except ServeError as exc:
+            raise ParameterError(f"enable_web_ui: {exc}") from exc
+
+    def shutdown(self) -> None:
+        """Cancel the mission, stop the robot, end the worker. Safe to call twice."""
+        if self._web is not None:
+            self._web.stop()
+            self._web = None
+        self._worker.stop()
+        self._chat_thread.shutdown(wait=False, cancel_futures=True)
+        self.agent.cleanup()
+
+    # -- missions from the topic -----------------------------------------------------------
+
+    def _on_mission(self, msg: String) -> None:
+        refused = self._worker.submit(MissionJob(msg.data, source="topic"))
+        if refused:
+            self._publish_status(f"FAILED: {refused}")
+
+    def _on_mission_start(self, job: MissionJob) -> None:
+        if self._web is not None:
+            self._desk.job_started(job)
+        if not job.dry_run:
+            self._publish_status(f"EXECUTING: {shorten(job.command)}")
+
+    def _on_mission_finish(self, job: MissionJob) -> None:
+        if self._web is not None:
+            self._desk.job_finished(job)
+        if job.dry_run:
+            return
+        if job.dropped or job.result is None:
+            self._publish_status(f"FAILED: not run: {job.dropped or 'no result'}")
+        elif job.result.success:
+            self._publish_status(f"COMPLETED: {job.result.response}")
+        else:
+            self._publish_status(f"FAILED: {job.result.response}")
+
+    def _publish_status(self, text: str) -> None:
+        self._status_pub.publish(String(data=text))
+
+    # -- e-stop ------------------------------------------------------------------------------
+
+    def _on_estop(self, _msg: Empty) -> None:
+        self.agent.estop()
+        dropped = self._worker.drop_queued("the e-stop was pressed before it started")
+        self.get_logger().warning(f"E-STOP latched: robot stopped, {len(dropped)} waiting "
+                                  f"mission(s) dropped; publish on {ESTOP_RELEASE_TOPIC} to "
+                                  "release")
+
+    def _on_estop_release(self, _msg: Empty) -> None:
+        self.agent.release_estop()
+        self.get_logger().info("e-stop released")
+
+    # -- the ExecuteMission action -----------------------------------------------------------
+
+    def _on_goal(self, _request: Any) -> GoalResponse:
+        if self._worker.busy:
+            self.get_logger().info("rejected an ExecuteMission goal: a mission is running")
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def _on_cancel(self, goal_handle: Any) -> CancelResponse:
+        job = self._goals.get(bytes(goal_handle.goal_id.uuid))
+        if job is not None:
+            self._cancel(job)
+        return CancelResponse.ACCEPT
+
+    def _cancel(self, job: MissionJob) -> None:
+        job.cancelled.set()
+        if self._worker.current is job:
+            self.agent.cancel()
+
+    async def _execute_goal(self, goal_handle: Any) -> Any:
+        request = goal_handle.request
+        key = bytes(goal_handle.goal_id.uuid)
+        finished = Future()
+        job = MissionJob(request.command, source="action", dry_run=request.dry_run,
+                         on_event=lambda event: self._send_feedback(goal_handle, event),
+                         on_done=lambda _job: self._resolve(finished, True))
+        self._goals[key] = job
+        try:
+            refused = self._worker.start_now(job)
+            if refused:
+                goal_handle.abort()
+                return ExecuteMission.Result(success=False, response=f"Refused: {refused}.")
+            await finished  # the executor keeps serving everything else meanwhile
+        finally:
+            self._goals.pop(key, None)
+        result = _action_result(job)
+        if goal_handle.is_cancel_requested and not result.success:
+            goal_handle.canceled()
+        elif result.success:
+            goal_handle.succeed()
+        else:
+            goal_handle.abort()
+        return result
+
+    def _resolve(self, future: Future, value: Any) -> None:
+        """Complete `future` from another thread and wake the executor to resume its awaiter."""
+        future.set_result(value)
+        executor = self.executor
+        if executor is not None:
+            executor.wake()
+
+    def _send_feedback(self, goal_handle: Any, event: ev.MissionEvent) -> None:
+        if event.kind not in _FEEDBACK_EVENTS:
+            return
+        diagnostics = self.agent.get_diagnostics()
+        step = event.data.get("step") or {}
+        count = (len(event.data["plan"]["steps"]) if event.kind == ev.PLAN_READY
+                 else int(diagnostics.get("steps") or 0))
+        goal_handle.publish_feedback(ExecuteMission.Feedback(
+            current_skill=str(step.get("skill") or ""), step_index=int(step.get("index") or 0),
+            step_count=count, progress=float(diagnostics.get("progress") or 0.0)))
+
+    # -- chat ------------------------------------------------------------------------------
+
+    async def _on_chat(self, request: Any, response: Any) -> Any:
+        answered = Future()
+        self._chat_thread.submit(self._answer, request.text, answered)
+        response.answer = await answered
+        return response
+
+    def _answer(self, text: str, answered: Future) -> None:
+        try:
+            answer = self.agent.chat(text)
+        except Exception as exc:  # a model or network failure is an answer, not a crash
+            self.get_logger().error(f"chat failed: {exc!r}")
+            answer = f"Sorry, I could not answer: {exc}"
+        self._resolve(answered, answer)
+
+    # -- camera ----------------------------------------------------------------------------
+
+    def _on_image(self, msg: Image) -> None:
+        try:
+            frame = raw_image_frame(msg.data, msg.width, msg.height, msg.encoding, msg.step)
+            self.agent.update_camera_image(frame)
+        except ValueError as exc:
+            self._drop_frame(exc)
+        else:
+            self._take_frame(f"{frame.width}x{frame.height} {frame.encoding}")
+
+    def _on_compressed(self, msg: CompressedImage) -> None:
+        try:
+            frame = to_camera_frame(bytes(msg.data))  # JPEG or PNG, told apart by content
+            self.agent.update_camera_image(frame)
+        except ValueError as exc:
+            self._drop_frame(exc)
+        else:
+            self._take_frame(f"{frame.width}x{frame.height} {frame.encoding}")
+
+    def _take_frame(self, what: str) -> None:
+        self._frames["received"] += 1
+        self._last_frame = what
+
+    def _drop_frame(self, exc: ValueError) -> None:
+        self._frames["dropped"] += 1
+        self._last_camera_error = str(exc)
+        self.get_logger().warning(f"dropped a camera frame on {self.settings.camera_topic}: "
+                                  f"{exc}", throttle_duration_sec=5.0)
+
+    # -- status out ------------------------------------------------------------------------
+
+    def _publish_diagnostics(self) -> None:
+        self._diag_pub.publish(self.diagnostics_message())
+
+    def diagnostics_message(self) -> DiagnosticArray:
+        """The agent's diagnostics as one DiagnosticStatus (what is published at 1 Hz)."""
+        diagnostics = self.agent.get_diagnostics()
+        extra = {"node": self.get_fully_qualified_name(), "robot": self.agent.robot.name,
+                 "camera_frames": self._frames["received"],
+                 "camera_dropped": self._frames["dropped"],
+                 "camera_last_frame": self._last_frame,
+                 "camera_last_error": self._last_camera_error,
+                 "busy": self._worker.busy}
+        name = DIAGNOSTICS_NAME
+        if self.get_fully_qualified_name() != f"/{NODE_NAME}":  # keep several agents apart
+            name += f" ({self.get_fully_qualified_name()})"
+        status = DiagnosticStatus(
+            level=bytes([diagnostic_level(diagnostics)]), name=name,
+            message=diagnostic_message(diagnostics), hardware_id=self.agent.robot.name,
+            values=[KeyValue(key=k, value=v) for k, v in diagnostic_values(diagnostics, extra)])
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        return array
+
+    def _publish_robot_status(self) -> None:
+        self._robot_pub.publish(String(data=robot_status_json(self.agent.get_robot_status())))
+
+
+MissionAgentNode = MissionNode
+
+
+def _action_result(job: MissionJob) -> Any:
+    result = job.result
+    if isinstance(result, MissionResult):
+        steps = [s.to_dict() for s in result.steps]
+        return ExecuteMission.Result(success=result.success, response=result.response,
+                                     steps_json=json.dumps(steps))
+    return ExecuteMission.Result(success=False, steps_json="[]",
+                                 response=f"Not run: {job.dropped or 'no result'}.")
+
+
+class _RosLogHandler(logging.Handler):
+    """Forwards the package's `logging` records to the node's ROS logger."""
+
+    def __init__(self, node: Node) -> None:
+        super().__init__()
+        self._logger = node.get_logger()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        text = f"{record.name}: {self.format(record)}"
+        if record.levelno >= logging.ERROR:
+            self._logger.error(text)
+        elif record.levelno >= logging.WARNING:
+            self._logger.warning(text)
+        else:
+            self._logger.info(text)
+
+
+_USAGE = f"""usage: shadowhound node [--ros-args -p NAME:=VALUE ...]
+
+Run the ShadowHound mission agent as the ROS 2 node '{NODE_NAME}'. Parameters:
+{describe_parameters()}
+Exit codes: 0 after Ctrl-C / SIGTERM (the robot is stopped first), 2 for invalid parameters.
+"""
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """`shadowhound node --ros-args -p name:=value ...` (also the `mission_node` script)."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    prog = "shadowhound node"
+    try:
+        extra = remove_ros_args(["mission_node", *args])[1:]
+    except Exception as exc:  # rcl reports malformed --ros-args this way
+        print(f"{prog}: invalid ROS arguments: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    if any(a in ("-h", "--help") for a in extra):
+        print(_USAGE)
+        return EXIT_OK
+    if extra:
+        print(f"{prog}: unexpected arguments {extra}; give parameters as --ros-args -p "
+              f"NAME:=VALUE (see --help)", file=sys.stderr)
+        return EXIT_USAGE
+    stop = threading.Event()
+    try:
+        rclpy.init(args=["mission_node", *args], signal_handler_options=SignalHandlerOptions.NO)
+    except Exception as exc:
+        print(f"{prog}: cannot start ROS 2: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    node: MissionNode | None = None
+    try:
+        node = MissionNode()
+    except ConfigError as exc:
+        print(f"{prog}: {exc}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return EXIT_USAGE
+    handler = _RosLogHandler(node)
+    package_log = logging.getLogger("shadowhound")
+    package_log.addHandler(handler)
+    package_log.setLevel(logging.INFO)
+    executor = SingleThreadedExecutor()  # callbacks are short; slow work runs on other threads
+    executor.add_node(node)
+    spinner = threading.Thread(target=_spin, args=(executor, stop), name="ros-executor")
+    spinner.start()
+    try:
+        while not stop.wait(0.5):  # the main thread stays free for the signal handlers
+            pass
+    except KeyboardInterrupt:
+        pass
+    finally:
+        node.get_logger().info("shutting down: cancelling the mission and stopping the robot")
+        node.shutdown()
+        package_log.removeHandler(handler)
+        executor.shutdown(timeout_sec=2.0)
+        spinner.join(2.0)
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return EXIT_OK
+
+
+def _spin(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
+    try:
+        executor.spin()
+    except ExternalShutdownException:
+        pass
+    finally:
+        stop.set()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

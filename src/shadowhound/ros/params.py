@@ -1,0 +1,134 @@
+"""The node's ROS parameters: names, defaults, and checking them into typed settings.
+
+Pure Python (no rclpy): the node reads raw parameter values and hands them to
+`parse_parameters`, which reports every problem at once with what is allowed.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any
+
+from ..config import ConfigError, ShadowHoundConfig, load_config
+
+NODE_NAME = "shadowhound_mission_agent"
+
+# Name -> (default, help). The default also fixes the expected type.
+PARAMETERS: dict[str, tuple[Any, str]] = {
+    "backend_config": ("offline", "config profile name (offline, openai, ollama, vllm, "
+                                  "llamacpp) or a path to a YAML file"),
+    "robot": ("sim", "sim (simulated Go2); go2 is not available yet"),
+    "time_scale": (1.0, "simulated robot: real seconds per simulated second (1 = real time, "
+                        "0 = as fast as possible)"),
+    "camera_topic": ("/camera/image_raw", "camera images the agent looks at"),
+    "camera_type": ("auto", "raw (sensor_msgs/Image), compressed (sensor_msgs/CompressedImage) "
+                            "or auto (compressed when the topic name ends in 'compressed')"),
+    "mission_topic": ("mission_command", "std_msgs/String missions to run"),
+    "status_topic": ("mission_status", "std_msgs/String EXECUTING/COMPLETED/FAILED reports"),
+    "robot_status_topic": ("/shadowhound/robot_status", "std_msgs/String JSON robot state, 5 Hz"),
+    "diagnostics_topic": ("/shadowhound/diagnostics", "diagnostic_msgs/DiagnosticArray, 1 Hz"),
+    "web_interface_port": (8080, "port of the web dashboard (1..65535)"),
+    "enable_web_ui": (False, "serve the web dashboard on 127.0.0.1:web_interface_port"),
+}
+
+CAMERA_TYPES = ("auto", "raw", "compressed")
+ROBOTS = ("sim", "go2")
+_TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
+
+
+class ParameterError(ConfigError):
+    """One or more ROS parameters are invalid. The message lists each and what is allowed."""
+
+
+@dataclass(frozen=True)
+class NodeSettings:
+    """Checked parameter values."""
+
+    backend_config: str = "offline"
+    robot: str = "sim"
+    time_scale: float = 1.0
+    camera_topic: str = "/camera/image_raw"
+    camera_type: str = "auto"
+    mission_topic: str = "mission_command"
+    status_topic: str = "mission_status"
+    robot_status_topic: str = "/shadowhound/robot_status"
+    diagnostics_topic: str = "/shadowhound/diagnostics"
+    web_interface_port: int = 8080
+    enable_web_ui: bool = False
+
+    @property
+    def camera_compressed(self) -> bool:
+        if self.camera_type == "auto":
+            return self.camera_topic.rstrip("/").endswith("compressed")
+        return self.camera_type == "compressed"
+
+    def agent_settings(self) -> ShadowHoundConfig:
+        """The agent's configuration: the profile, then these parameters on top."""
+        return load_config(self.backend_config,
+                           {"robot": self.robot, "sim": {"time_scale": self.time_scale}})
+
+
+_WANTED = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
+
+
+def _kind(value: Any) -> str:
+    return "bool" if isinstance(value, bool) else type(value).__name__
+
+
+def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
+    """Check raw parameter values (missing ones take their defaults). Raises ParameterError."""
+    problems: list[str] = []
+    out: dict[str, Any] = {}
+    for f in fields(NodeSettings):
+        default, _help = PARAMETERS[f.name]
+        value = values.get(f.name, default)
+        if isinstance(default, bool):
+            ok = isinstance(value, bool)
+        elif isinstance(default, int):
+            ok = isinstance(value, int) and not isinstance(value, bool)
+        elif isinstance(default, float):
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+            value = float(value) if ok else value
+        else:
+            ok = isinstance(value, str)
+        if not ok:
+            problems.append(f"{f.name} must be {_WANTED[type(default)]}, got {_kind(value)} "
+                            f"{value!r}")
+            continue
+        out[f.name] = value
+    unknown_topics = [n for n in ("camera_topic", "mission_topic", "status_topic",
+                                  "robot_status_topic", "diagnostics_topic")
+                      if n in out and not _TOPIC.match(out[n])]
+    problems += [f"{n} {out[n]!r} is not a valid ROS topic name (letters, digits, '_' and "
+                 "'/' separators, not starting with a digit)" for n in unknown_topics]
+    if "camera_type" in out and out["camera_type"] not in CAMERA_TYPES:
+        problems.append(f"camera_type must be one of {', '.join(CAMERA_TYPES)}, got "
+                        f"{out['camera_type']!r}")
+    if "robot" in out:
+        if out["robot"] == "go2":
+            problems.append("robot 'go2' is not available yet (the Go2 ROS 2 driver bridge is "
+                            "planned), use robot:=sim")
+        elif out["robot"] not in ROBOTS:
+            problems.append(f"robot must be sim (go2 planned), got {out['robot']!r}")
+    port = out.get("web_interface_port")
+    if port is not None and not 1 <= port <= 65535:
+        problems.append(f"web_interface_port must be in 1..65535, got {port}")
+    scale = out.get("time_scale")
+    if scale is not None and not (math.isfinite(scale) and 0 <= scale <= 100):
+        problems.append(f"time_scale must be a number in 0..100 (1 = real time, 0 = as fast as "
+                        f"possible), got {scale}")
+    if "backend_config" in out and not out["backend_config"].strip():
+        problems.append("backend_config must name a profile or a YAML file, got ''")
+    if problems:
+        raise ParameterError("invalid ROS parameters: " + "; ".join(problems))
+    return NodeSettings(**out)
+
+
+def describe_parameters() -> str:
+    """Help text: every parameter with its default."""
+    lines = [f"  {name} (default {default!r}): {text}"
+             for name, (default, text) in PARAMETERS.items()]
+    return "\n".join(lines)

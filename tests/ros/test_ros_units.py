@@ -1,0 +1,263 @@
+"""The ROS node's pure-Python parts: parameters, conversions, the mission worker, DDS env.
+
+No rclpy needed: these run on every interpreter, also where ROS 2 is not installed.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+from xml.etree import ElementTree
+
+import pytest
+
+from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
+from shadowhound.ros import convert
+from shadowhound.ros.dds import LOOPBACK_PROFILE, loopback_env, session_domain_id
+from shadowhound.ros.params import NodeSettings, ParameterError, parse_parameters
+from shadowhound.worker import MissionJob, MissionWorker
+
+# -- parameters --------------------------------------------------------------------------
+
+
+def test_defaults_match_the_original_node() -> None:
+    s = parse_parameters({})
+    assert s == NodeSettings()
+    assert (s.mission_topic, s.status_topic, s.diagnostics_topic) == (
+        "mission_command", "mission_status", "/shadowhound/diagnostics")
+    assert s.web_interface_port == 8080 and s.time_scale == 1.0 and not s.camera_compressed
+
+
+def test_camera_type_auto_follows_the_topic_name() -> None:
+    assert parse_parameters({"camera_topic": "/camera/compressed"}).camera_compressed
+    assert not parse_parameters({"camera_topic": "/camera/compressed",
+                                 "camera_type": "raw"}).camera_compressed
+    assert parse_parameters({"camera_type": "compressed"}).camera_compressed
+
+
+def test_integers_are_accepted_for_time_scale() -> None:
+    assert parse_parameters({"time_scale": 0}).time_scale == 0.0
+
+
+@pytest.mark.parametrize(("values", "message"), [
+    ({"web_interface_port": 0}, "web_interface_port must be in 1..65535, got 0"),
+    ({"web_interface_port": True}, "web_interface_port must be an integer, got bool True"),
+    ({"enable_web_ui": "yes"}, "enable_web_ui must be true or false, got str 'yes'"),
+    ({"time_scale": -1.0}, "time_scale must be a number in 0..100"),
+    ({"time_scale": float("nan")}, "time_scale must be a number in 0..100"),
+    ({"robot": "go2"}, "robot 'go2' is not available yet"),
+    ({"robot": "spot"}, "robot must be sim (go2 planned), got 'spot'"),
+    ({"camera_type": "h264"}, "camera_type must be one of auto, raw, compressed"),
+    ({"status_topic": ""}, "status_topic '' is not a valid ROS topic name"),
+    ({"backend_config": " "}, "backend_config must name a profile or a YAML file"),
+])
+def test_invalid_parameters_are_explained(values: dict, message: str) -> None:
+    with pytest.raises(ParameterError, match="invalid ROS parameters") as info:
+        parse_parameters(values)
+    assert message in str(info.value)
+
+
+def test_every_problem_is_reported_at_once() -> None:
+    with pytest.raises(ParameterError) as info:
+        parse_parameters({"web_interface_port": 99999, "robot": "go2", "time_scale": "x"})
+    message = str(info.value)
+    assert message.count(";") == 2
+    for part in ("web_interface_port must be in 1..65535", "robot 'go2'",
+                 "time_scale must be a number, got str 'x'"):
+        assert part in message
+
+
+def test_agent_settings_take_the_profile_then_the_parameters() -> None:
+    settings = parse_parameters({"backend_config": "offline", "time_scale": 0.5})
+    config = settings.agent_settings()
+    assert config.backend == "offline" and config.sim.time_scale == 0.5 and config.robot == "sim"
+    with pytest.raises(Exception, match="unknown config profile 'nope'"):
+        parse_parameters({"backend_config": "nope"}).agent_settings()
+
+
+# -- conversions ---------------------------------------------------------------------------
+
+
+def test_raw_frame_row_padding_is_removed() -> None:
+    rows = [bytes([r]) * 6 + b"\xee\xee" for r in range(3)]  # 2 px rgb8 + 2 bytes padding
+    frame = convert.raw_image_frame(b"".join(rows), 2, 3, "rgb8", 8)
+    assert (frame.width, frame.height, frame.encoding) == (2, 3, "rgb8")
+    assert frame.data == b"\x00" * 6 + b"\x01" * 6 + b"\x02" * 6
+
+
+def test_raw_frame_without_padding_keeps_its_bytes() -> None:
+    frame = convert.raw_image_frame(bytearray(range(12)), 4, 3, "mono8", 4)
+    assert frame.data == bytes(range(12)) and frame.encoding == "mono8"
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    ((b"\0" * 12, 2, 2, "yuv422", 6), "unsupported image encoding 'yuv422'"),
+    ((b"\0" * 12, 2, 2, "rgb8", 5), "step 5 is smaller than a rgb8 row"),
+    ((b"\0" * 11, 2, 2, "rgb8", 6), "image data has 11 bytes"),
+    ((b"", 0, 0, "mono8", 0), "image size 0x0 is out of range"),
+])
+def test_bad_raw_frames_are_refused(args: tuple, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        convert.raw_image_frame(*args)
+
+
+@pytest.mark.parametrize(("diagnostics", "level"), [
+    ({"status": "idle"}, convert.OK), ({"status": "executing"}, convert.OK),
+    ({"status": "succeeded"}, convert.OK), ({"status": "failed"}, convert.WARN),
+    ({"status": "stopped"}, convert.WARN), ({"status": "idle", "estop": True}, convert.ERROR),
+])
+def test_diagnostic_level_follows_the_agent_status(diagnostics: dict, level: int) -> None:
+    assert convert.diagnostic_level(diagnostics) == level
+
+
+def test_diagnostic_values_are_strings_with_the_documented_keys() -> None:
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0)))
+    values = dict(convert.diagnostic_values(agent.get_diagnostics(), {"robot": "sim-go2"}))
+    assert all(isinstance(v, str) for v in values.values())
+    assert values["status"] == "idle" and values["estop"] == "false"
+    assert float(values["battery"]) == pytest.approx(100.0)
+    assert {"current_skill", "progress", "errors", "backend", "pose_x", "pose_y",
+            "pose_yaw", "robot"} <= set(values)
+    assert convert.diagnostic_message({"status": "failed", "errors": ["a", "b"]}) == "failed: b"
+
+
+def test_shorten_keeps_status_lines_short() -> None:
+    assert convert.shorten("a\nb") == "a b"
+    assert len(convert.shorten("x" * 1000)) == 200
+
+
+# -- the mission worker --------------------------------------------------------------------
+
+
+class _Recorder:
+    def __init__(self) -> None:
+        self.started: list[str] = []
+        self.finished: list[MissionJob] = []
+
+    def start(self, job: MissionJob) -> None:
+        self.started.append(job.command)
+
+    def finish(self, job: MissionJob) -> None:
+        self.finished.append(job)
+
+
+@pytest.fixture
+def worker_agent() -> RobotAgent:
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0),
+                                        settings=ShadowHoundConfig()))
+    agent.initialize()
+    return agent
+
+
+def test_topic_missions_queue_and_run_in_order(worker_agent: RobotAgent) -> None:
+    seen = _Recorder()
+    worker = MissionWorker(worker_agent, on_start=seen.start, on_finish=seen.finish)
+    jobs = [MissionJob(c) for c in ("turn left 10 degrees", "", "turn right 10 degrees")]
+    assert all(worker.submit(j) is None for j in jobs)
+    for job in jobs:
+        assert job.done.wait(10)
+    worker.stop()
+    assert seen.started == [j.command for j in jobs]
+    assert [j.result.success for j in jobs] == [True, False, True]
+
+
+def test_action_jobs_start_only_when_idle_and_the_estop_drops_waiting_ones(
+        worker_agent: RobotAgent) -> None:
+    gate = threading.Event()
+    seen = _Recorder()
+
+    def slow_start(job: MissionJob) -> None:
+        seen.start(job)
+        gate.wait(10)
+
+    worker = MissionWorker(worker_agent, on_start=slow_start, on_finish=seen.finish,
+                           max_queue=1)
+    first, waiting = MissionJob("turn left 10 degrees"), MissionJob("turn left 20 degrees")
+    assert worker.submit(first) is None and worker.submit(waiting) is None
+    for _ in range(1000):  # until the worker holds the first job
+        if seen.started:
+            break
+        threading.Event().wait(0.01)
+    assert "already waiting" in (worker.submit(MissionJob("sit down")) or "")
+    assert "another mission is running" in (worker.start_now(MissionJob("x")) or "")
+    assert worker.drop_queued("e-stop") == [waiting]
+    assert waiting.done.is_set() and waiting.dropped == "e-stop" and waiting.result is None
+    gate.set()
+    assert first.done.wait(10) and first.result is not None and first.result.success
+    idle = MissionJob("walk forward 0.5 meters", source="action", dry_run=True)
+    assert worker.start_now(idle) is None and idle.done.wait(10)
+    assert idle.result is not None and idle.result.success
+    assert not worker_agent.robot.get_state().distance_travelled  # the dry run never moved
+    worker.stop()
+
+
+def test_events_reach_only_the_running_job(worker_agent: RobotAgent) -> None:
+    kinds: list[str] = []
+    worker = MissionWorker(worker_agent, on_start=lambda j: None, on_finish=lambda j: None)
+    job = MissionJob("turn left 10 degrees", on_event=lambda e: kinds.append(e.kind))
+    worker.submit(job)
+    assert job.done.wait(10)
+    worker_agent.estop()  # emitted from this thread, not part of the job
+    worker.stop()
+    assert kinds[0] == "mission_started" and kinds[-1] == "mission_finished"
+    assert "estop" not in kinds
+
+
+def test_a_job_cancelled_before_it_starts_never_runs(worker_agent: RobotAgent) -> None:
+    worker = MissionWorker(worker_agent, on_start=lambda j: None, on_finish=lambda j: None)
+    job = MissionJob("turn left 10 degrees")
+    job.cancelled.set()
+    worker.submit(job)
+    assert job.done.wait(10) and job.dropped == "cancelled before it started"
+    worker.stop()
+
+
+def test_a_cancel_between_pick_up_and_start_still_stops_the_mission(
+        worker_agent: RobotAgent) -> None:
+    def cancel_now(job: MissionJob) -> None:  # as if the cancel arrived right here
+        job.cancelled.set()
+
+    worker = MissionWorker(worker_agent, on_start=cancel_now, on_finish=lambda j: None)
+    job = MissionJob("walk forward 1 meter")
+    worker.submit(job)
+    assert job.done.wait(10) and job.result is not None
+    worker.stop()
+    assert job.result.status.value == "stopped" and not job.result.success
+    assert not worker_agent.robot.get_state().distance_travelled
+
+
+# -- DDS environment -----------------------------------------------------------------------
+
+
+def test_loopback_environment_keeps_dds_on_this_machine() -> None:
+    env = loopback_env(42)
+    assert env["ROS_DOMAIN_ID"] == "42" and env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    assert env["FASTRTPS_DEFAULT_PROFILES_FILE"] == str(LOOPBACK_PROFILE)
+    xml = ElementTree.parse(LOOPBACK_PROFILE).getroot().iter()
+    tags = {e.tag.split("}")[1]: (e.text or "").strip() for e in xml}
+    assert tags["useBuiltinTransports"] == "false" and tags["address"] == "127.0.0.1"
+    assert 1 <= session_domain_id() <= 100
+
+
+def test_importing_the_ros_package_does_not_import_rclpy() -> None:
+    code = ("import sys, shadowhound, shadowhound.ros, shadowhound.ros.params, "
+            "shadowhound.ros.convert; assert 'rclpy' not in sys.modules")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
+
+
+def test_the_launch_file_declares_every_parameter_with_its_default() -> None:
+    import ast
+    from pathlib import Path
+
+    from shadowhound.ros.params import PARAMETERS
+
+    launch = Path(__file__).resolve().parents[2] / "ros2/shadowhound/launch/mission_node.launch.py"
+    tree = ast.parse(launch.read_text(encoding="utf-8"))
+    found = next(n.value for n in tree.body if isinstance(n, ast.Assign)
+                 and getattr(n.targets[0], "id", "") == "ARGUMENTS")
+    arguments = ast.literal_eval(found)
+    assert set(arguments) == set(PARAMETERS)
+    for name, (default, _help) in PARAMETERS.items():
+        assert arguments[name] == str(default).lower() if isinstance(default, bool) \
+            else arguments[name] == str(default), name
