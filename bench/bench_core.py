@@ -16,13 +16,13 @@ import time
 import timeit
 from pathlib import Path
 
+from results import write_section
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, SkillCall, default_registry
 from shadowhound.planning.rules import RulePlanner
 from shadowhound.skills import NoArgs, Skill
 
 FIVE_STEPS = ("stand up, walk forward 2 meters, turn left 90 degrees, "
               "then walk forward one and a half meters and sit down")
-RESULTS = Path(__file__).with_name("RESULTS.md")
 
 
 def bench_planning() -> dict[str, float]:
@@ -104,13 +104,7 @@ def main() -> None:
     section = "\n".join(lines)
     print(section)
     if args.write:
-        text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n\n"
-        if "<!-- core:start -->" in text:
-            head, rest = text.split("<!-- core:start -->", 1)
-            text = head + section + rest.split("<!-- core:end -->", 1)[1]
-        else:
-            text = text.rstrip() + "\n\n" + section + "\n"
-        RESULTS.write_text(text)
+        write_section("core", section)
 
 
 if __name__ == "__main__":

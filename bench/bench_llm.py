@@ -27,6 +27,7 @@ from openai import OpenAI
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # tests.llm_server, tests.test_llm_llamacpp
 
+from results import write_section  # noqa: E402
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot  # noqa: E402
 from shadowhound.config import ShadowHoundConfig, load_config  # noqa: E402
 from shadowhound.evaluation import load_cases  # noqa: E402
@@ -43,7 +44,6 @@ from tests.test_llm_llamacpp import (  # noqa: E402
     missing_requirements,
 )
 
-RESULTS = Path(__file__).with_name("RESULTS.md")
 CASES = ROOT / "tests" / "data" / "missions_public.yaml"
 TARGET = "stand up and walk forward 1 meter"
 FULL = ("stand up, walk forward 2 meters, turn left 90 degrees, "
@@ -258,13 +258,7 @@ def main() -> None:
     section = "\n".join(lines)
     print(section)
     if args.write:
-        text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n\n"
-        if "<!-- llm:start -->" in text:
-            head, rest = text.split("<!-- llm:start -->", 1)
-            text = head + section + rest.split("<!-- llm:end -->", 1)[1]
-        else:
-            text = text.rstrip() + "\n\n" + section + "\n"
-        RESULTS.write_text(text)
+        write_section("llm", section)
 
 
 if __name__ == "__main__":

@@ -18,12 +18,12 @@ import tempfile
 import time
 from pathlib import Path
 
+from results import write_section
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot
 from shadowhound.memory import MissionHistory
 from shadowhound.memory.embedding import MiniLMEmbedder
 from shadowhound.memory.recall import RecallMemory
 
-RESULTS = Path(__file__).with_name("RESULTS.md")
 THINGS = ["fridge", "charging dock", "red ball", "blue box", "sofa", "door", "plant", "chair",
           "person", "table", "window", "stairs", "cat", "shoe", "backpack", "lamp"]
 ROOMS = ["kitchen", "hallway", "living room", "garage", "office", "bedroom", "garden", "lab"]
@@ -113,13 +113,7 @@ def main() -> None:
     section = "\n".join(lines)
     print(section)
     if args.write:
-        text = RESULTS.read_text()
-        if "<!-- memory:start -->" in text:
-            head, rest = text.split("<!-- memory:start -->", 1)
-            text = head + section + rest.split("<!-- memory:end -->", 1)[1]
-        else:
-            text = text.rstrip() + "\n\n" + section + "\n"
-        RESULTS.write_text(text)
+        write_section("memory", section)
 
 
 if __name__ == "__main__":

@@ -43,10 +43,10 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import CompressedImage, Image  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
+from results import write_section
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot  # noqa: E402
 from shadowhound.ros.node import ESTOP_TOPIC, MissionNode  # noqa: E402
 
-RESULTS = Path(__file__).with_name("RESULTS.md")
 ROOT = Path(__file__).resolve().parents[1]
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 
@@ -325,13 +325,7 @@ def main() -> None:
     ])
     print(section)
     if args.write:
-        text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n\n"
-        if "<!-- ros:start -->" in text:
-            head, rest = text.split("<!-- ros:start -->", 1)
-            text = head + section + rest.split("<!-- ros:end -->", 1)[1]
-        else:
-            text = text.rstrip("\n") + "\n\n" + section + "\n"
-        RESULTS.write_text(text)
+        write_section("ros", section)
 
 
 if __name__ == "__main__":

@@ -17,12 +17,10 @@ import random
 import statistics
 import threading
 import time
-from pathlib import Path
 
+from results import write_section
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, SkillCall, default_registry
 from shadowhound.skills import NoArgs, Skill
-
-RESULTS = Path(__file__).with_name("RESULTS.md")
 
 
 def p99(values: list[float]) -> float:
@@ -115,13 +113,7 @@ def main() -> None:
     section = "\n".join(lines)
     print(section)
     if args.write:
-        text = RESULTS.read_text()
-        if "<!-- safety:start -->" in text:
-            head, rest = text.split("<!-- safety:start -->", 1)
-            text = head + section + rest.split("<!-- safety:end -->", 1)[1]
-        else:
-            text = text.rstrip() + "\n\n" + section + "\n"
-        RESULTS.write_text(text)
+        write_section("safety", section)
 
 
 if __name__ == "__main__":

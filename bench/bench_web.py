@@ -35,6 +35,8 @@ from typing import Any
 
 import httpx
 
+from results import write_section
+
 RESULTS = Path(__file__).with_name("RESULTS.md")
 MISSIONS = ("walk forward 3 meters", "walk backward 3 meters")  # stays inside the geofence
 
@@ -284,14 +286,7 @@ def write(rows: list[tuple[str, str, str, str]]) -> None:
         "Pillow.",
         "<!-- web:end -->",
     ]
-    section = "\n".join(lines)
-    text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n\n"
-    if "<!-- web:start -->" in text:
-        head, rest = text.split("<!-- web:start -->", 1)
-        text = head + section + rest.split("<!-- web:end -->", 1)[1]
-    else:
-        text = text.rstrip("\n") + "\n\n" + section + "\n"
-    RESULTS.write_text(text)
+    write_section("web", "\n".join(lines))
 
 
 if __name__ == "__main__":
