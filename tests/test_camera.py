@@ -42,3 +42,19 @@ def test_arrays_become_raw_frames():
 def test_frames_pass_through():
     frame = CameraFrame(b"x", 1, 1, "mono8")
     assert to_camera_frame(frame) is frame
+
+
+def test_encode_jpeg_converts_and_downscales():
+    pytest.importorskip("PIL")
+    from shadowhound.camera import encode_jpeg
+
+    png = encode_png(render(DEFAULT_WORLD, Pose2D(), 160, 120), 160, 120)
+    frame = to_camera_frame(png)
+    jpeg = encode_jpeg(frame, max_side=64)
+    assert image_size(jpeg) == ("jpeg", 64, 48)
+    raw = CameraFrame(bytes(range(12)) * 4, 4, 4, "bgr8")
+    assert image_size(encode_jpeg(raw)) == ("jpeg", 4, 4)
+    same = to_camera_frame(jpeg)
+    assert encode_jpeg(same) is same.data  # a JPEG that fits is passed through
+    with pytest.raises(ValueError, match="could not be decoded"):
+        encode_jpeg(CameraFrame(b"\x89PNG\r\n\x1a\nbroken", 4, 4, "png"))

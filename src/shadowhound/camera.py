@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import struct
 from typing import Any
 
@@ -67,3 +68,41 @@ def to_camera_frame(frame: Any, source: str = "camera") -> CameraFrame:
         f"unsupported camera frame {type(frame).__name__}: give JPEG/PNG bytes, a CameraFrame, "
         "or a uint8 array of shape HxWx3 or HxW"
     )
+
+
+_PIL_MODES = {"rgb8": "RGB", "bgr8": "RGB", "mono8": "L"}
+
+
+def encode_jpeg(frame: CameraFrame, max_side: int | None = None, quality: int = 80) -> bytes:
+    """The frame as JPEG bytes, its longest side at most `max_side` pixels.
+
+    A JPEG that needs no downscaling is returned as it is (no re-encoding). Needs Pillow
+    (the `llm` or `web` extra): raises ImportError without it, ValueError for data that is not
+    a decodable image of the frame's encoding.
+    """
+    small_enough = max_side is None or max(frame.width, frame.height) <= max_side
+    if frame.encoding == "jpeg" and small_enough:
+        return frame.data
+    from PIL import Image  # imported here: only callers that show or send images need it
+
+    image: Image.Image
+    try:
+        if frame.encoding in ("jpeg", "png"):
+            image = Image.open(io.BytesIO(frame.data))
+            image.load()
+        elif frame.encoding in _PIL_MODES:
+            image = Image.frombytes(_PIL_MODES[frame.encoding], (frame.width, frame.height),
+                                    frame.data)
+            if frame.encoding == "bgr8":
+                blue, green, red = image.split()
+                image = Image.merge("RGB", (red, green, blue))
+        else:
+            raise ValueError(f"camera frames in {frame.encoding!r} cannot be converted")
+        image = image.convert("RGB")
+        if max_side is not None:
+            image.thumbnail((max_side, max_side))
+        out = io.BytesIO()
+        image.save(out, format="JPEG", quality=quality)
+    except OSError as exc:  # Pillow's "cannot identify image file" and truncated data
+        raise ValueError(f"the camera frame could not be decoded: {exc}") from exc
+    return out.getvalue()

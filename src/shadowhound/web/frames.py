@@ -8,7 +8,6 @@ too) and a raw frame cannot be shown.
 
 from __future__ import annotations
 
-import io
 import logging
 import threading
 import time
@@ -16,12 +15,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..agent import RobotAgent
+from ..camera import encode_jpeg
 from ..state import CameraFrame
 
 log = logging.getLogger(__name__)
 
 BOUNDARY = "shadowhound-frame"
-_RAW_MODES = {"rgb8": "RGB", "bgr8": "RGB", "mono8": "L"}
 
 
 class FrameUnavailable(Exception):
@@ -42,31 +41,15 @@ class WebFrame:
 
 def to_browser_image(frame: CameraFrame, quality: int = 80) -> tuple[bytes, str]:
     """(bytes, content type): JPEG as is; anything else JPEG-encoded (or PNG without Pillow)."""
-    if frame.encoding == "jpeg":
-        return frame.data, "image/jpeg"
     try:
-        from PIL import Image
+        return encode_jpeg(frame, quality=quality), "image/jpeg"
     except ImportError:
         if frame.encoding == "png":
             return frame.data, "image/png"
         raise FrameUnavailable(f"a raw {frame.encoding} frame needs Pillow to be shown "
                                "(pip install 'shadowhound[web]')") from None
-    try:
-        if frame.encoding == "png":
-            image = Image.open(io.BytesIO(frame.data)).convert("RGB")
-        elif frame.encoding in _RAW_MODES:
-            image = Image.frombytes(_RAW_MODES[frame.encoding], (frame.width, frame.height),
-                                    frame.data)
-            if frame.encoding == "bgr8":
-                blue, green, red = image.split()
-                image = Image.merge("RGB", (red, green, blue))
-        else:
-            raise FrameUnavailable(f"camera frames in {frame.encoding!r} cannot be shown")
-        out = io.BytesIO()
-        image.save(out, "JPEG", quality=quality)
-    except (OSError, ValueError) as exc:
-        raise FrameUnavailable(f"the camera frame could not be converted: {exc}") from exc
-    return out.getvalue(), "image/jpeg"
+    except ValueError as exc:
+        raise FrameUnavailable(str(exc)) from exc
 
 
 class FrameCache:
