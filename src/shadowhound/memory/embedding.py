@@ -44,6 +44,9 @@ class MiniLMEmbedder:
         tokenizers = _need("tokenizers")
         safetensors_numpy = _need("safetensors.numpy")
         self._np = np
+        # Small matrices: one BLAS thread is fastest, and spinning BLAS threads would steal the
+        # CPU from the control loop and the other interfaces on a 2-core robot computer.
+        self._one_thread = _need("threadpoolctl").threadpool_limits
         folder = Path(path) if path else model_dir()
         config = json.loads((folder / "config.json").read_text())
         self.heads = int(config["num_attention_heads"])
@@ -52,11 +55,20 @@ class MiniLMEmbedder:
         self.tokenizer = tokenizers.Tokenizer.from_file(str(folder / "tokenizer.json"))
         self.tokenizer.enable_truncation(max_length=max_tokens)
         self.tokenizer.enable_padding(pad_id=int(config.get("pad_token_id", 0)))
-        self.w = {k: v.astype(np.float32) for k, v in
-                  safetensors_numpy.load_file(str(folder / "model.safetensors")).items()
-                  if not k.endswith("position_ids")}
+        weights = safetensors_numpy.load_file(str(folder / "model.safetensors"))
+        # Dense weights are stored transposed and contiguous once, so every layer is one
+        # plain 2-D BLAS call (a stacked (b, n, d) @ W.T is many times slower in NumPy).
+        self.w = {k: np.ascontiguousarray(v.T if k.endswith("dense.weight") or
+                                          k.endswith(("query.weight", "key.weight",
+                                                      "value.weight")) else v,
+                                          dtype=np.float32)
+                  for k, v in weights.items() if not k.endswith("position_ids")}
 
     def embed(self, texts: list[str]) -> Any:
+        with self._one_thread(limits=1, user_api="blas"):
+            return self._embed(texts)
+
+    def _embed(self, texts: list[str]) -> Any:
         np, w = self._np, self.w
         if not texts:
             return np.zeros((0, self.dimensions), dtype=np.float32)
@@ -95,7 +107,9 @@ class MiniLMEmbedder:
         return self._norm(x + self._dense(hidden, p + "output.dense"), p + "output.LayerNorm")
 
     def _dense(self, x: Any, name: str) -> Any:
-        return x @ self.w[name + ".weight"].T + self.w[name + ".bias"]
+        weight = self.w[name + ".weight"]  # already (in, out)
+        flat = x.reshape(-1, x.shape[-1]) @ weight + self.w[name + ".bias"]
+        return flat.reshape(*x.shape[:-1], weight.shape[1])
 
     def _norm(self, x: Any, name: str) -> Any:
         mean = x.mean(axis=-1, keepdims=True)

@@ -59,6 +59,9 @@ class MissionHistory:
                                        check_same_thread=False, isolation_level=None)
             self._db.execute(f"PRAGMA busy_timeout = {int(busy_timeout * 1000)}")
             self._db.execute("PRAGMA journal_mode = WAL")
+            # In WAL mode NORMAL never corrupts the file and survives a crashed process; only a
+            # power cut may drop the last commits. FULL would fsync every mission (slower).
+            self._db.execute("PRAGMA synchronous = NORMAL")
             self._db.executescript(_SCHEMA)
             self.interrupted = self._db.execute(
                 "UPDATE missions SET status = 'interrupted', finished_at = ? "
