@@ -60,7 +60,10 @@ TARGET_PLAN = [{"skill": "body.stand", "args": {}},
 
 
 def _settings(url: str, model: str, **llm: Any) -> ShadowHoundConfig:
-    return load_config("llamacpp", {"llm": {"base_url": url, "model": model, **llm}})
+    # No memory: every mission starts fresh (no "recent missions" in the prompt), and the
+    # benchmark never touches the user's history in ~/.shadowhound.
+    return load_config("llamacpp", {"llm": {"base_url": url, "model": model, **llm},
+                                     "memory": {"enabled": False}})
 
 
 def _mission(settings: ShadowHoundConfig, text: str,
