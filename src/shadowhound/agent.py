@@ -8,11 +8,8 @@ time; `estop`, `cancel`, `get_diagnostics` and `update_camera_image` are safe fr
 from __future__ import annotations
 
 import logging
-import math
-import re
 import threading
 import time
-import uuid
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -20,12 +17,20 @@ from typing import Any
 from . import events as ev
 from .approval import ApprovalDesk, ApprovalRequest
 from .camera import to_camera_frame
+from .checking import CheckedPlan, check_plan, new_mission_id, plain_args
 from .config import ConfigError, ShadowHoundConfig
 from .conversation import answer_offline
 from .memory.service import AgentMemory
 from .plan import Plan, PlanningError, SkillCall, Usage
 from .planning import FixedPlanner, Planner, PlanningContext, make_planner
-from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing
+from .result import (
+    MissionResult,
+    MissionStatus,
+    StepResult,
+    StepStatus,
+    Timing,
+    compose_response,
+)
 from .robot.base import Robot, RobotError
 from .safety import Governor, Watchdog
 from .skills import (
@@ -38,12 +43,10 @@ from .skills import (
     ValidatedCall,
     default_registry,
 )
-from .state import CameraFrame, RobotState, normalize_angle
+from .state import CameraFrame, RobotState
 
 log = logging.getLogger(__name__)
 
-# Skills whose output is an answer for the user rather than a record of motion.
-_REPORTING_SKILLS = frozenset({"perception.describe", "perception.look_around", "sys.status"})
 
 
 @dataclass
@@ -160,7 +163,7 @@ class RobotAgent:
     def dry_run(self, text: str, mission_id: str | None = None) -> MissionResult:
         """Plan and check `text` without moving: the plan, the predicted path, any refusals."""
         self.initialize()
-        mission_id = _mission_id(mission_id)
+        mission_id = new_mission_id(mission_id)
         started = time.perf_counter()
         if not isinstance(text, str) or not text.strip():
             return self._refuse(mission_id, str(text)[:200], started,
@@ -188,7 +191,7 @@ class RobotAgent:
 
     def _execute(self, text: str, planner: Planner, mission_id: str | None) -> MissionResult:
         self.initialize()
-        mission_id = _mission_id(mission_id)
+        mission_id = new_mission_id(mission_id)
         started = time.perf_counter()
         if not isinstance(text, str):
             return self._refuse(mission_id, repr(text)[:200], started,
@@ -289,32 +292,12 @@ class RobotAgent:
                     steps += more
                     self._set_current(steps=len(steps))
                     status, error = self._run_steps(mission_id, more, more_valid, env, timing)
-        response = self._compose_response(status, steps, plan, error)
+        response = compose_response(status, steps, plan, error)
         return self._finish(mission_id, text, started, timing, steps, plan, status, response,
                             error=error)
 
-    def _prepare(self, plan: Plan, env: PlanEnv, start: RobotState, first: int) -> _Checked:
-        """Validate every step and run the governor over the whole plan from `start`."""
-        calls, problems = self._validate(plan)
-        steps = [StepResult(i, c.skill, _plain_args(c.args), c.label)
-                 for i, c in enumerate(plan.steps, first)]
-        verdict = self.governor.check_plan(calls, start, env)
-
-        def renumber(r: Any) -> str:
-            return str(r).replace(f"step {r.step} ", f"step {r.step + first - 1} ", 1)
-
-        problems += [renumber(r) for r in verdict.refusals]
-        approvals = [renumber(r) for r in verdict.approvals]
-        if self.settings.safety.require_approval:
-            approvals.append("every plan needs approval (safety.require_approval)")
-        valid = [c for c in calls if c is not None]
-        if problems:
-            for s in steps:
-                s.status = StepStatus.SKIPPED
-        else:
-            for s, c in zip(steps, valid, strict=True):
-                s.args = c.args_dict()
-        return _Checked(steps, valid, problems, approvals, verdict.path)
+    def _prepare(self, plan: Plan, env: PlanEnv, start: RobotState, first: int) -> CheckedPlan:
+        return check_plan(plan, self.registry, self.governor, self.settings, env, start, first)
 
     def _await_approval(self, mission_id: str, text: str, steps: list[StepResult],
                         reasons: list[str]) -> str | None:
@@ -369,7 +352,7 @@ class RobotAgent:
         self._set_status(MissionStatus.EXECUTING)
 
         def run_step(call: SkillCall) -> str:
-            step = StepResult(len(steps) + 1, str(call.skill), _plain_args(call.args), call.label)
+            step = StepResult(len(steps) + 1, str(call.skill), plain_args(call.args), call.label)
             steps.append(step)
             self._set_current(steps=len(steps))
             try:
@@ -416,23 +399,6 @@ class RobotAgent:
                             error=None if status is MissionStatus.SUCCEEDED else answer,
                             refusals=refusals)
 
-    def _validate(self, plan: Plan) -> tuple[list[ValidatedCall | None], list[str]]:
-        """Validate every step; invalid ones become None so the rest can still be checked."""
-        problems: list[str] = []
-        calls: list[ValidatedCall | None] = []
-        if not plan.steps:
-            problems.append("the plan has no steps")
-        if len(plan.steps) > self.settings.agent.max_steps:
-            problems.append(f"the plan has {len(plan.steps)} steps; at most "
-                            f"{self.settings.agent.max_steps} are allowed (agent.max_steps)")
-        for index, call in enumerate(plan.steps, start=1):
-            try:
-                calls.append(self.registry.validate(call))
-            except SkillValidationError as exc:
-                calls.append(None)
-                problems.extend(f"step {index}: {p}" for p in exc.problems)
-        return calls, problems
-
     def _run_step(self, mission_id: str, step: StepResult, call: ValidatedCall,
                   env: PlanEnv) -> MissionStatus:
         robot = self.robot
@@ -455,7 +421,9 @@ class RobotAgent:
             ctx.start_clock(call.skill.timeout_for(call.args, env))
             ctx.check()
             output = call.skill.run(ctx, call.args)
-            self._check_outcome(call, before, env)
+            off_target = self.governor.check_outcome(call, before, robot.get_state(), env)
+            if off_target:
+                raise SkillError(off_target)
             step.output = "; ".join([*ctx.notes, output])
             step.status = StepStatus.SUCCEEDED
         except MissionCancelled:
@@ -480,25 +448,6 @@ class RobotAgent:
         self._emit(ev.STEP_FINISHED, mission_id, step=step.to_dict())
         return status
 
-    def _check_outcome(self, call: ValidatedCall, before: RobotState, env: PlanEnv) -> None:
-        """A motion step is done only if the robot measurably ended where it was meant to."""
-        if not call.skill.moves or call.skill.predict is None:
-            return
-        expected = call.skill.predict(before.pose, call.args, env)
-        if not expected:
-            return
-        want, got = expected[-1], self.robot.get_state()
-        off = math.hypot(got.x - want.x, got.y - want.y)
-        turn = abs(math.degrees(normalize_angle(got.yaw - want.yaw)))
-        lim = self.settings.safety
-        if off > lim.outcome_tolerance or turn > lim.outcome_tolerance_deg:
-            raise SkillError(
-                f"outcome check failed: expected to end at ({want.x:.2f}, {want.y:.2f}, "
-                f"{math.degrees(want.yaw):.0f} deg) but measured ({got.x:.2f}, {got.y:.2f}, "
-                f"{math.degrees(got.yaw):.0f} deg): {off:.2f} m and {turn:.0f} degrees off "
-                "(safety.outcome_tolerance, outcome_tolerance_deg)"
-            )
-
     def _arm_watchdog(self) -> Watchdog | None:
         """Watch robots whose clock runs in real time (a simulator at time scale 0 only moves
         when the loop ticks, so there is nothing to guard)."""
@@ -516,26 +465,6 @@ class RobotAgent:
         self._errors.append(message)
         self._stop_cause = message
         self._cancel.set()  # the hung skill fails as soon as it ticks again
-
-    def _compose_response(self, status: MissionStatus, steps: list[StepResult], plan: Plan,
-                          error: str | None) -> str:
-        done = [s.output for s in steps if s.status is StepStatus.SUCCEEDED and s.output]
-        if status is MissionStatus.SUCCEEDED:
-            reports = [s.output for s in steps if s.skill in _REPORTING_SKILLS]
-            actions = [s.output for s in steps if s.skill not in _REPORTING_SKILLS and s.output]
-            parts = ["Done: " + "; ".join(actions) + "."] if actions else []
-            parts += [o[0].upper() + o[1:] + ("" if o.endswith(".") else ".") for o in reports]
-            if plan.notes:
-                parts.append("(" + "; ".join(plan.notes) + ")")
-            return " ".join(parts)
-        failed = next((s for s in steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)),
-                      None)
-        where = f" at step {failed.index} ({failed.skill})" if failed else ""
-        verb = "Stopped" if status is MissionStatus.STOPPED else "Failed"
-        text = f"{verb}{where}: {error}."
-        if done:
-            text += " Completed before that: " + "; ".join(done) + "."
-        return text + " The robot is stopped."
 
     # -- control from any thread -----------------------------------------------------------
 
@@ -727,34 +656,6 @@ class RobotAgent:
             self._set_current(skill=None)
         self._emit(ev.MISSION_FINISHED, mission_id, result=result.to_dict())
         return result
-
-
-@dataclass
-class _Checked:
-    """A plan after validation and the governor: what runs, what is wrong, what needs a yes."""
-
-    steps: list[StepResult]
-    calls: list[ValidatedCall]
-    problems: list[str]
-    approvals: list[str]
-    path: list[Any]
-
-
-_ID = re.compile(r"^[A-Za-z0-9_-]{1,64}$")
-
-
-def _mission_id(given: str | None) -> str:
-    if given is None:
-        return uuid.uuid4().hex[:12]
-    if not isinstance(given, str) or not _ID.match(given):
-        raise ValueError(f"a mission id must be 1 to 64 letters, digits, '-' or '_', "
-                         f"got {given!r}")
-    return given
-
-
-def _plain_args(args: Any) -> dict[str, Any]:
-    """Proposed arguments as given, for the record (a model may send anything)."""
-    return dict(args) if isinstance(args, dict) else {"_invalid": repr(args)}
 
 
 MissionExecutor = RobotAgent

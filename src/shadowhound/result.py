@@ -133,3 +133,30 @@ class MissionResult:
 
     def summary(self) -> str:
         return f"{self.status.value}: {self.mission!r} -> {self.response}"
+
+
+# Skills whose output is an answer for the user rather than a record of motion.
+_REPORTING_SKILLS = frozenset({"perception.describe", "perception.look_around", "sys.status",
+                               "places.list", "memory.recall"})
+
+
+def compose_response(status: MissionStatus, steps: list[StepResult], plan: Plan,
+                     error: str | None) -> str:
+    """The sentence a person reads: what was done and, for reports, the answers themselves."""
+    done = [s.output for s in steps if s.status is StepStatus.SUCCEEDED and s.output]
+    if status is MissionStatus.SUCCEEDED:
+        reports = [s.output for s in steps if s.skill in _REPORTING_SKILLS]
+        actions = [s.output for s in steps if s.skill not in _REPORTING_SKILLS and s.output]
+        parts = ["Done: " + "; ".join(actions) + "."] if actions else []
+        parts += [o[0].upper() + o[1:] + ("" if o.endswith(".") else ".") for o in reports]
+        if plan.notes:
+            parts.append("(" + "; ".join(plan.notes) + ")")
+        return " ".join(parts)
+    failed = next((s for s in steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)),
+                  None)
+    where = f" at step {failed.index} ({failed.skill})" if failed else ""
+    verb = "Stopped" if status is MissionStatus.STOPPED else "Failed"
+    text = f"{verb}{where}: {error}."
+    if done:
+        text += " Completed before that: " + "; ".join(done) + "."
+    return text + " The robot is stopped."

@@ -20,7 +20,7 @@ from .config import SafetyConfig
 from .robot.go2_api import TRICKS
 from .skills.context import PlanEnv, PlanProblem
 from .skills.registry import ValidatedCall
-from .state import Pose2D, Posture, RobotState
+from .state import Pose2D, Posture, RobotState, normalize_angle
 
 # What may still run when the battery is below the floor: nothing that walks.
 LOW_BATTERY_SKILLS = ("nav.stop", "body.sit", "body.lie_down", "sys.status")
@@ -87,6 +87,29 @@ class Governor:
             posture = _POSTURE_OF.get(call.name, Posture.STANDING if call.skill.moves or
                                       call.name == "body.sport" else posture)
         return check
+
+    def check_outcome(self, call: ValidatedCall, before: RobotState, after: RobotState,
+                      env: PlanEnv) -> str:
+        """Compare where a motion step should have ended with where the robot measurably is.
+
+        Returns why the outcome is off ("" when it is within tolerance): a step whose robot did
+        not get there is reported failed, never as done.
+        """
+        if not call.skill.moves or call.skill.predict is None:
+            return ""
+        expected = call.skill.predict(before.pose, call.args, env)
+        if not expected:
+            return ""
+        want = expected[-1]
+        off = math.hypot(after.x - want.x, after.y - want.y)
+        turn = abs(math.degrees(normalize_angle(after.yaw - want.yaw)))
+        lim = self.limits
+        if off <= lim.outcome_tolerance and turn <= lim.outcome_tolerance_deg:
+            return ""
+        return (f"outcome check failed: expected to end at ({want.x:.2f}, {want.y:.2f}, "
+                f"{math.degrees(want.yaw):.0f} deg) but measured ({after.x:.2f}, {after.y:.2f}, "
+                f"{math.degrees(after.yaw):.0f} deg): {off:.2f} m and {turn:.0f} degrees off "
+                "(safety.outcome_tolerance, outcome_tolerance_deg)")
 
     def check_step(self, call: ValidatedCall, state: RobotState, env: PlanEnv) -> list[str]:
         """Re-check one step from the measured state just before it runs."""

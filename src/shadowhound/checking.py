@@ -1,0 +1,89 @@
+"""Checking a plan before anything moves: every step validated, then the governor's verdict.
+
+Pure: it reads the registry, the governor and the settings, and touches no robot.
+"""
+
+from __future__ import annotations
+
+import uuid
+from dataclasses import dataclass
+from typing import Any
+
+from .config import ShadowHoundConfig
+from .plan import Plan
+from .result import StepResult, StepStatus
+from .safety import Governor
+from .skills import PlanEnv, SkillRegistry, SkillValidationError, ValidatedCall
+from .state import Pose2D, RobotState
+
+
+@dataclass
+class CheckedPlan:
+    """A plan after validation and the governor: what runs, what is wrong, what needs a yes."""
+
+    steps: list[StepResult]  # one record per proposed step, numbered from `first`
+    calls: list[ValidatedCall]  # the valid calls (all of them when `problems` is empty)
+    problems: list[str]  # validation errors and refusals: any one refuses the plan
+    approvals: list[str]  # why a person must approve before it runs
+    path: list[Pose2D]  # predicted poses, the start first
+
+
+def check_plan(plan: Plan, registry: SkillRegistry, governor: Governor,
+               settings: ShadowHoundConfig, env: PlanEnv, start: RobotState,
+               first: int = 1) -> CheckedPlan:
+    """Validate every step and run the governor over the whole plan from `start`."""
+    calls, problems = _validate(plan, registry, settings)
+    steps = [StepResult(i, c.skill, plain_args(c.args), c.label)
+             for i, c in enumerate(plan.steps, first)]
+    verdict = governor.check_plan(calls, start, env)
+
+    def renumber(r: Any) -> str:
+        return str(r).replace(f"step {r.step} ", f"step {r.step + first - 1} ", 1)
+
+    problems += [renumber(r) for r in verdict.refusals]
+    approvals = [renumber(r) for r in verdict.approvals]
+    if settings.safety.require_approval:
+        approvals.append("every plan needs approval (safety.require_approval)")
+    valid = [c for c in calls if c is not None]
+    if problems:
+        for s in steps:
+            s.status = StepStatus.SKIPPED
+    else:
+        for s, c in zip(steps, valid, strict=True):
+            s.args = c.args_dict()
+    return CheckedPlan(steps, valid, problems, approvals, verdict.path)
+
+
+def _validate(plan: Plan, registry: SkillRegistry, settings: ShadowHoundConfig
+              ) -> tuple[list[ValidatedCall | None], list[str]]:
+    """Validate every step; invalid ones become None so the rest can still be checked."""
+    problems: list[str] = []
+    calls: list[ValidatedCall | None] = []
+    if not plan.steps:
+        problems.append("the plan has no steps")
+    if len(plan.steps) > settings.agent.max_steps:
+        problems.append(f"the plan has {len(plan.steps)} steps; at most "
+                        f"{settings.agent.max_steps} are allowed (agent.max_steps)")
+    for index, call in enumerate(plan.steps, start=1):
+        try:
+            calls.append(registry.validate(call))
+        except SkillValidationError as exc:
+            calls.append(None)
+            problems.extend(f"step {index}: {p}" for p in exc.problems)
+    return calls, problems
+
+
+def plain_args(args: Any) -> dict[str, Any]:
+    """Proposed arguments as given, for the record (a model may send anything)."""
+    return dict(args) if isinstance(args, dict) else {"_invalid": repr(args)}
+
+
+def new_mission_id(given: str | None = None) -> str:
+    """`given` if it is a valid id (1-64 of [A-Za-z0-9_-]), else a fresh one when None."""
+    if given is None:
+        return uuid.uuid4().hex[:12]
+    if not isinstance(given, str) or not (0 < len(given) <= 64) or not all(
+            c.isascii() and (c.isalnum() or c in "-_") for c in given):
+        raise ValueError(f"a mission id must be 1 to 64 letters, digits, '-' or '_', "
+                         f"got {given!r}")
+    return given
