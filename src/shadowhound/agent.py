@@ -462,7 +462,7 @@ class RobotAgent:
 
     def _watchdog_tripped(self, message: str) -> None:
         log.error(message)
-        self._errors.append(message)
+        self._note_error(message)
         self._stop_cause = message
         self._cancel.set()  # the hung skill fails as soon as it ticks again
 
@@ -482,7 +482,7 @@ class RobotAgent:
         if robot is not None:
             hard_stop = getattr(robot, "emergency_stop", None)
             (hard_stop or robot.stop)()
-        self._errors.append("e-stop pressed")
+        self._note_error("e-stop pressed")
         self._emit(ev.ESTOP, self._current.get("mission_id") or "", latched=True)
 
     def release_estop(self) -> None:
@@ -606,6 +606,12 @@ class RobotAgent:
 
     # -- bookkeeping ---------------------------------------------------------------------------
 
+    def _note_error(self, text: str) -> None:
+        """Remember an error for diagnostics (the same one twice in a row is kept once)."""
+        with self._state_lock:
+            if not self._errors or self._errors[-1] != text:
+                self._errors.append(text)
+
     def _set_status(self, status: MissionStatus) -> None:
         with self._state_lock:
             self._status = status
@@ -629,7 +635,7 @@ class RobotAgent:
                                refusals=[reason])
         result.timing.total_duration = time.perf_counter() - started
         if record:
-            self._errors.append(reason)
+            self._note_error(reason)
             self._history.append(result)
             self._set_status(MissionStatus.FAILED)
         return result
@@ -641,7 +647,7 @@ class RobotAgent:
         if status is not MissionStatus.SUCCEEDED:
             self.robot.stop()
             error = error or response
-            self._errors.append(error)
+            self._note_error(error)
         timing.total_duration = time.perf_counter() - started
         result = MissionResult(
             mission_id, text, status is MissionStatus.SUCCEEDED, response, status, steps,
