@@ -246,3 +246,18 @@ def test_interfaces_may_name_missions(agent):
     assert agent.dry_run("sit down", mission_id="web_2").mission_id == "web_2"
     with pytest.raises(ValueError, match="a mission id must be 1 to 64"):
         agent.execute_mission("stand up", mission_id="no spaces allowed")
+
+
+def test_a_robot_that_cannot_report_its_state_is_refused_clearly(agent, robot):
+    from shadowhound import RobotError
+
+    def no_odometry():
+        raise RobotError("no odometry on /odom for 0.8 s")
+
+    robot.get_state = no_odometry
+    result = agent.execute_mission("walk forward 1 meter")
+    assert not result.success and result.robot is None
+    assert "the robot cannot report its state: no odometry" in result.response
+    assert not robot.received_motion
+    assert agent.get_diagnostics()["robot"] == {"connected": False,
+                                                "error": "no odometry on /odom for 0.8 s"}

@@ -217,6 +217,11 @@ class RobotAgent:
             return self._refuse(mission_id, text[:200] + "...", started,
                                 f"the mission is {len(text)} characters long; the limit is "
                                 f"{limit} (agent.max_mission_chars)")
+        try:
+            start_state = self.robot.get_state()
+        except RobotError as exc:  # e.g. no odometry from a real robot: do not plan blind
+            return self._refuse(mission_id, text, started,
+                                f"the robot cannot report its state: {exc}")
         self._cancel.clear()
         self._stop_cause = None
         self._set_current(mission_id=mission_id, mission=text, skill=None, step=0, steps=0,
@@ -224,7 +229,6 @@ class RobotAgent:
         self._set_status(MissionStatus.PLANNING)
         self._emit(ev.MISSION_STARTED, mission_id, mission=text)
         timing = Timing()
-        robot = self.robot
         env = self._plan_env()
 
         if getattr(planner, "mode", "plan") == "react" and hasattr(planner, "react"):
@@ -245,7 +249,7 @@ class RobotAgent:
 
         # 2. Validate every step and check the whole predicted path before anything moves;
         #    risky plans wait for a person's approval.
-        checked = self._prepare(plan, env, robot.get_state(), first=1)
+        checked = self._prepare(plan, env, start_state, first=1)
         steps, valid, problems = checked.steps, checked.calls, checked.problems
         if not problems and checked.approvals:
             refused = self._await_approval(mission_id, text, steps, checked.approvals)
@@ -279,8 +283,9 @@ class RobotAgent:
                 again = None
                 error = f"{error}; re-planning failed: {exc.message}"
             timing.agent_duration += time.perf_counter() - t
-            if again is not None and not self._cancel.is_set():
-                more_checked = self._prepare(again, env, robot.get_state(), first=len(steps) + 1)
+            now = self._state_or_none()
+            if again is not None and now is not None and not self._cancel.is_set():
+                more_checked = self._prepare(again, env, now, first=len(steps) + 1)
                 more, more_valid = more_checked.steps, more_checked.calls
                 problems = more_checked.problems + [f"needs approval: {a}"
                                                     for a in more_checked.approvals]
@@ -387,6 +392,8 @@ class RobotAgent:
             answer, usage, finished = exc.message, exc.usage, False
         except MissionCancelled:
             answer, finished, status = self._stop_reason(), False, MissionStatus.STOPPED
+        except RobotError as exc:
+            answer, finished = f"the robot cannot report its state: {exc}", False
         timing.agent_duration = max(0.0, time.perf_counter() - t - timing.execution_duration)
         failed = [s for s in steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)]
         if status is not MissionStatus.STOPPED and (not finished or failed or refusals):
@@ -544,7 +551,11 @@ class RobotAgent:
         }
 
     def get_robot_status(self) -> dict[str, Any]:
-        return self.robot.get_state().to_dict()
+        """The robot's state as JSON; `connected: false` with the reason when it cannot say."""
+        try:
+            return self.robot.get_state().to_dict()
+        except RobotError as exc:
+            return {"connected": False, "error": str(exc)}
 
     def get_robot_state(self) -> RobotState:
         return self.robot.get_state()
@@ -606,6 +617,14 @@ class RobotAgent:
 
     # -- bookkeeping ---------------------------------------------------------------------------
 
+    def _state_or_none(self) -> RobotState | None:
+        """The robot's state for a record; None when the robot cannot say (never raises)."""
+        try:
+            return self.robot.get_state()
+        except RobotError as exc:
+            log.warning("robot state unavailable: %s", exc)
+            return None
+
     def _note_error(self, text: str) -> None:
         """Remember an error for diagnostics (the same one twice in a row is kept once)."""
         with self._state_lock:
@@ -631,7 +650,7 @@ class RobotAgent:
     def _refuse(self, mission_id: str, text: str, started: float, reason: str,
                 record: bool = True) -> MissionResult:
         result = MissionResult(mission_id, text, False, f"Refused: {reason}.",
-                               MissionStatus.FAILED, robot=self.robot.get_state(), error=reason,
+                               MissionStatus.FAILED, robot=self._state_or_none(), error=reason,
                                refusals=[reason])
         result.timing.total_duration = time.perf_counter() - started
         if record:
@@ -651,7 +670,7 @@ class RobotAgent:
         timing.total_duration = time.perf_counter() - started
         result = MissionResult(
             mission_id, text, status is MissionStatus.SUCCEEDED, response, status, steps,
-            self.robot.get_state(), timing, usage or (plan.usage if plan else Usage()), plan,
+            self._state_or_none(), timing, usage or (plan.usage if plan else Usage()), plan,
             refusals or [], error,
         )
         self._history.append(result)
