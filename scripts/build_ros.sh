@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Install ROS 2 Jazzy (rclpy and the message packages, from PyPI) into a virtual environment and
-# build + install the project's interface package (ros2/shadowhound_interfaces) into it.
+# build + install the project's interface packages into it: ros2/shadowhound_interfaces, and
+# ros2/go2_interfaces (go2_ros2_sdk's WebRtcReq and Go2State) unless a go2_interfaces with those
+# messages is already importable from another workspace (a sourced go2_ros2_sdk install).
 #
 #   bash scripts/build_ros.sh [VENV]        # default VENV: .venv (or $VENV)
 #
-# Idempotent: pip skips what is installed, and the interface package is rebuilt only when its
+# Idempotent: pip skips what is installed, and an interface package is rebuilt only when its
 # sources change. Quiet unless something fails; then it says what and where the log is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,9 +14,6 @@ cd "$(dirname "$0")/.."
 VENV=${1:-${VENV:-.venv}}
 VENV=$(cd "$VENV" 2>/dev/null && pwd) || { echo "build_ros: no virtual environment at '${1:-${VENV}}'" >&2; exit 1; }
 PY="$VENV/bin/python"
-PKG=ros2/shadowhound_interfaces
-BUILD="$VENV/build/shadowhound_interfaces"
-STAMP="$VENV/share/shadowhound_interfaces/source.sha256"
 LOG="$VENV/build/build_ros.log"
 
 fail() {
@@ -45,21 +44,39 @@ BUILD_TOOLS=(
 "$PY" -m pip install --quiet "${RUNTIME[@]}" "${BUILD_TOOLS[@]}" >>"$LOG" 2>&1 \
   || fail "pip could not install the ROS 2 Jazzy packages into $VENV"
 
-hash=$(cat "$PKG/package.xml" "$PKG/CMakeLists.txt" "$PKG"/action/* "$PKG"/srv/* | sha256sum | cut -d' ' -f1)
-if [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$hash" ] \
-    && (cd /tmp && "$PY" -c 'import shadowhound_interfaces.action, shadowhound_interfaces.srv') 2>/dev/null; then
-  exit 0  # built from these sources already
+# build_pkg NAME PYTHON_CHECK: cmake-build ros2/NAME into the venv unless this source is built.
+build_pkg() {
+  local name=$1 check=$2
+  local pkg="ros2/$name" build="$VENV/build/$name" stamp="$VENV/share/$name/source.sha256" hash
+  hash=$(find "$pkg" -type f \( -name '*.msg' -o -name '*.srv' -o -name '*.action' \
+      -o -name package.xml -o -name CMakeLists.txt \) | LC_ALL=C sort | xargs cat | sha256sum | cut -d' ' -f1)
+  if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$hash" ] \
+      && (cd /tmp && "$PY" -c "$check") 2>/dev/null; then
+    return 0  # built from these sources already
+  fi
+  (
+    export AMENT_PREFIX_PATH="$VENV" CMAKE_PREFIX_PATH="$VENV" PATH="$VENV/bin:$PATH"
+    cmake -S "$pkg" -B "$build" -DCMAKE_INSTALL_PREFIX="$VENV" -DBUILD_TESTING=OFF \
+      -DPython3_EXECUTABLE="$PY" -DPYTHON_EXECUTABLE="$PY" &&
+    cmake --build "$build" -j "$(nproc 2>/dev/null || echo 2)" &&
+    cmake --install "$build"
+  ) >>"$LOG" 2>&1 || fail "building $pkg failed"
+  (cd /tmp && "$PY" -c "$check") >>"$LOG" 2>&1 \
+    || fail "$name was installed into $VENV but does not import"
+  echo "$hash" > "$stamp"
+  echo "build_ros: $name built and installed into $VENV"
+}
+
+build_pkg shadowhound_interfaces \
+  'from shadowhound_interfaces.action import ExecuteMission; from shadowhound_interfaces.srv import Chat'
+
+# go2_ros2_sdk's own go2_interfaces wins when it is importable from elsewhere (the user's
+# workspace); ours is only a stand-in with the same message names and fields.
+GO2_CHECK='from go2_interfaces.msg import WebRtcReq, Go2State'
+go2_origin=$(cd /tmp && "$PY" -c "$GO2_CHECK
+import go2_interfaces, os; print(os.path.dirname(go2_interfaces.__file__))" 2>/dev/null || true)
+if [ -n "$go2_origin" ] && [ "${go2_origin#"$VENV"/}" = "$go2_origin" ]; then
+  echo "build_ros: using go2_interfaces from $go2_origin (not building ros2/go2_interfaces)" >&2
+else
+  build_pkg go2_interfaces "$GO2_CHECK"
 fi
-
-export AMENT_PREFIX_PATH="$VENV" CMAKE_PREFIX_PATH="$VENV" PATH="$VENV/bin:$PATH"
-{
-  cmake -S "$PKG" -B "$BUILD" -DCMAKE_INSTALL_PREFIX="$VENV" -DBUILD_TESTING=OFF \
-    -DPython3_EXECUTABLE="$PY" -DPYTHON_EXECUTABLE="$PY" &&
-  cmake --build "$BUILD" -j "$(nproc 2>/dev/null || echo 2)" &&
-  cmake --install "$BUILD"
-} >>"$LOG" 2>&1 || fail "building $PKG failed"
-
-(cd /tmp && "$PY" -c 'from shadowhound_interfaces.action import ExecuteMission; from shadowhound_interfaces.srv import Chat') >>"$LOG" 2>&1 \
-  || fail "shadowhound_interfaces was installed into $VENV but does not import"
-echo "$hash" > "$STAMP"
-echo "build_ros: shadowhound_interfaces built and installed into $VENV"

@@ -110,6 +110,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser("node", help="run the ROS 2 MissionNode (needs the 'ros' extra): "
                                 "shadowhound node --ros-args -p name:=value ...",
                    add_help=False)
+    sub.add_parser("sim-driver", help="run a simulated Go2 with go2_ros2_sdk's ROS 2 topics "
+                                      "(for robot:=go2 without a robot): shadowhound sim-driver "
+                                      "--ros-args ...", add_help=False)
     return parser
 
 
@@ -141,6 +144,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["node"]:  # ROS owns the rest of the command line (--ros-args ...)
         return cmd_node(argv[1:])
+    if argv[:1] == ["sim-driver"]:
+        return cmd_sim_driver(argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)],
@@ -517,6 +522,17 @@ def cmd_node(ros_argv: list[str]) -> int:
               file=sys.stderr)
         return EXIT_USAGE
     return node_main(ros_argv)
+
+
+def cmd_sim_driver(ros_argv: list[str]) -> int:
+    try:
+        from .ros.sim_driver import main as driver_main
+    except ImportError as exc:
+        print(f"shadowhound: the simulated Go2 driver needs rclpy and the go2_interfaces package "
+              f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
+              file=sys.stderr)
+        return EXIT_USAGE
+    return driver_main(ros_argv)
 
 
 # -- doctor --------------------------------------------------------------------------------------

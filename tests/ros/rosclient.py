@@ -163,15 +163,18 @@ class Agent:
 
 
 class NodeProcess:
-    """`python -m shadowhound node --ros-args ...` in a child process, output in a file."""
+    """`python -m shadowhound node --ros-args ...` in a child process, output in a file.
 
-    def __init__(self, *ros_args: str) -> None:
-        fd, name = tempfile.mkstemp(prefix="mission_node_", suffix=".log")
+    `command="sim-driver"` starts the simulated Go2 driver instead."""
+
+    def __init__(self, *ros_args: str, command: str = "node") -> None:
+        self.command = command
+        fd, name = tempfile.mkstemp(prefix=f"{command.replace('-', '_')}_", suffix=".log")
         self.log = Path(name)
         env = dict(os.environ, PYTHONUNBUFFERED="1", RCUTILS_LOGGING_BUFFERED_STREAM="0")
         with os.fdopen(fd, "w") as log:
             self.proc = subprocess.Popen(
-                [sys.executable, "-m", "shadowhound", "node", "--ros-args", *ros_args],
+                [sys.executable, "-m", "shadowhound", command, "--ros-args", *ros_args],
                 stdout=log, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
             )
 
@@ -180,7 +183,7 @@ class NodeProcess:
 
     def check_alive(self) -> None:
         if self.proc.poll() is not None:
-            raise AssertionError(f"mission node exited with {self.proc.returncode}:\n"
+            raise AssertionError(f"{self.command} exited with {self.proc.returncode}:\n"
                                  f"{self.output()}")
 
     def stop(self, sig: int = signal.SIGINT, timeout: float = 15.0) -> int:
@@ -191,7 +194,7 @@ class NodeProcess:
         except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait(5)
-            raise AssertionError(f"mission node did not exit within {timeout} s after "
+            raise AssertionError(f"{self.command} did not exit within {timeout} s after "
                                  f"{signal.Signals(sig).name}:\n{self.output()}") from None
 
     def wait(self, timeout: float = 30.0) -> int:

@@ -46,8 +46,10 @@ def test_integers_are_accepted_for_time_scale() -> None:
     ({"enable_web_ui": "yes"}, "enable_web_ui must be true or false, got str 'yes'"),
     ({"time_scale": -1.0}, "time_scale must be a number in 0..100"),
     ({"time_scale": float("nan")}, "time_scale must be a number in 0..100"),
-    ({"robot": "go2"}, "robot 'go2' is not available yet"),
-    ({"robot": "spot"}, "robot must be sim (go2 planned), got 'spot'"),
+    ({"robot": "spot"}, "robot must be sim or go2, got 'spot'"),
+    ({"odom_timeout": 0.0}, "odom_timeout must be a number of seconds in 0.05..10, got 0.0"),
+    ({"robot_namespace": "robot 0"}, "robot_namespace 'robot 0' is not a valid ROS namespace"),
+    ({"cmd_vel_topic": "cmd vel"}, "cmd_vel_topic 'cmd vel' is not a valid ROS topic name"),
     ({"camera_type": "h264"}, "camera_type must be one of auto, raw, compressed"),
     ({"status_topic": ""}, "status_topic '' is not a valid ROS topic name"),
     ({"backend_config": " "}, "backend_config must name a profile or a YAML file"),
@@ -60,10 +62,10 @@ def test_invalid_parameters_are_explained(values: dict, message: str) -> None:
 
 def test_every_problem_is_reported_at_once() -> None:
     with pytest.raises(ParameterError) as info:
-        parse_parameters({"web_interface_port": 99999, "robot": "go2", "time_scale": "x"})
+        parse_parameters({"web_interface_port": 99999, "robot": "spot", "time_scale": "x"})
     message = str(info.value)
     assert message.count(";") == 2
-    for part in ("web_interface_port must be in 1..65535", "robot 'go2'",
+    for part in ("web_interface_port must be in 1..65535", "robot must be sim or go2",
                  "time_scale must be a number, got str 'x'"):
         assert part in message
 

@@ -1,6 +1,8 @@
 """Launch the ShadowHound mission agent: ros2 launch shadowhound mission_node.launch.py
 backend_config:=ollama camera_topic:=/camera/compressed
 
+With a Go2 through go2_ros2_sdk: ros2 launch shadowhound mission_node.launch.py robot:=go2
+
 (Not exercised in ShadowHound's own tests: launch and launch_ros are not on PyPI. The tests run
 the same node through its entry point, `shadowhound node --ros-args ...`.)
 """
@@ -22,6 +24,12 @@ ARGUMENTS = {
     "diagnostics_topic": "/shadowhound/diagnostics",
     "web_interface_port": "8080",
     "enable_web_ui": "false",
+    "robot_namespace": "",
+    "cmd_vel_topic": "cmd_vel",
+    "webrtc_topic": "webrtc_req",
+    "odom_topic": "odom",
+    "go2_states_topic": "go2_states",
+    "odom_timeout": "0.5",
 }
 
 

@@ -41,10 +41,11 @@ from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Empty, String
 
 from .. import events as ev
-from ..agent import RobotAgent
+from ..agent import RobotAgent, RobotAgentConfig
 from ..camera import to_camera_frame
 from ..config import ConfigError
 from ..result import MissionResult
+from ..robot.base import RobotError
 from ..worker import MissionJob, MissionWorker
 from .convert import (
     diagnostic_level,
@@ -89,7 +90,9 @@ class MissionNode(Node):
         super().__init__(node_name, **node_kwargs)
         self.settings = parse_parameters(self._declare_parameters())
         if agent is None:
-            agent = RobotAgent(self.settings.agent_settings())
+            settings = self.settings.agent_settings()
+            robot = self._make_go2_robot() if self.settings.robot == "go2" else None
+            agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
         agent.initialize()
         self.agent = agent
         self._frames = {"received": 0, "dropped": 0}
@@ -117,6 +120,21 @@ class MissionNode(Node):
             descriptor = ParameterDescriptor(description=text, dynamic_typing=True)
             values[name] = self.declare_parameter(name, default, descriptor).value
         return values
+
+    def _make_go2_robot(self) -> Any:
+        """A Go2RosRobot on this node's context. Its camera is off: the node's own camera
+        subscription (`camera_topic`) gives the agent its frames."""
+        try:
+            from ..robot.go2_ros import Go2RosConfig, Go2RosRobot
+        except ImportError as exc:
+            raise ParameterError(f"robot go2 needs the go2_interfaces package: source your "
+                                 f"go2_ros2_sdk workspace or run scripts/build_ros.sh ({exc})"
+                                 ) from exc
+        try:
+            return Go2RosRobot(Go2RosConfig(**self.settings.go2_options(), camera_topic=""),
+                               context=self.context)
+        except RobotError as exc:
+            raise ParameterError(f"robot go2: {exc}") from exc
 
     def _build_interfaces(self) -> None:
         s = self.settings
@@ -150,6 +168,11 @@ class MissionNode(Node):
                  f"(profile {self.agent.settings.profile}), robot {self.agent.robot.name}, "
                  f"missions on {self.resolve_topic_name(s.mission_topic)}, camera "
                  f"{s.camera_topic} ({'compressed' if s.camera_compressed else 'raw'})")
+        topic = getattr(self.agent.robot, "topic", None)
+        if s.robot == "go2" and topic is not None:
+            log.info(f"Go2 through go2_ros2_sdk: velocity on {topic(s.cmd_vel_topic)}, sport "
+                     f"commands on {topic(s.webrtc_topic)}, odometry from "
+                     f"{topic(s.odom_topic)}, state from {topic(s.go2_states_topic)}")
         if ExecuteMission is None:
             log.warning("shadowhound_interfaces is not installed: the execute_mission action "
                         "and the chat service are off (build it with scripts/build_ros.sh)")
@@ -276,7 +299,7 @@ class MissionNode(Node):
     def _send_feedback(self, goal_handle: Any, event: ev.MissionEvent) -> None:
         if event.kind not in _FEEDBACK_EVENTS:
             return
-        diagnostics = self.agent.get_diagnostics()
+        diagnostics = self._diagnostics()
         step = event.data.get("step") or {}
         count = (len(event.data["plan"]["steps"]) if event.kind == ev.PLAN_READY
                  else int(diagnostics.get("steps") or 0))
@@ -337,7 +360,7 @@ class MissionNode(Node):
 
     def diagnostics_message(self) -> DiagnosticArray:
         """The agent's diagnostics as one DiagnosticStatus (what is published at 1 Hz)."""
-        diagnostics = self.agent.get_diagnostics()
+        diagnostics = self._diagnostics()
         extra = {"node": self.get_fully_qualified_name(), "robot": self.agent.robot.name,
                  "camera_frames": self._frames["received"],
                  "camera_dropped": self._frames["dropped"],
@@ -356,7 +379,24 @@ class MissionNode(Node):
         return array
 
     def _publish_robot_status(self) -> None:
-        self._robot_pub.publish(String(data=robot_status_json(self.agent.get_robot_status())))
+        try:
+            state = self.agent.get_robot_status()
+        except RobotError:  # a Go2 whose odometry stopped: its last state, connected false
+            state = self._last_robot_state()
+        self._robot_pub.publish(String(data=robot_status_json(state)))
+
+    def _diagnostics(self) -> dict[str, Any]:
+        """The agent's diagnostics; when the robot cannot say where it is (RobotError, e.g.
+        lost odometry) a WARN report with the reason, so the node keeps reporting."""
+        try:
+            return self.agent.get_diagnostics()
+        except RobotError as exc:
+            return {"status": "failed", "errors": [str(exc)], "estop": self.agent.estop_latched,
+                    "backend": self.agent.settings.backend, "robot": self._last_robot_state()}
+
+    def _last_robot_state(self) -> dict[str, Any]:
+        last = getattr(self.agent.robot, "last_state", None)
+        return last().to_dict() if last is not None else {"connected": False}
 
 
 MissionAgentNode = MissionNode

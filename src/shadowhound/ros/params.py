@@ -20,7 +20,8 @@ NODE_NAME = "shadowhound_mission_agent"
 PARAMETERS: dict[str, tuple[Any, str]] = {
     "backend_config": ("offline", "config profile name (offline, openai, ollama, vllm, "
                                   "llamacpp) or a path to a YAML file"),
-    "robot": ("sim", "sim (simulated Go2); go2 is not available yet"),
+    "robot": ("sim", "sim (simulated Go2 in this process) or go2 (a Go2 through go2_ros2_sdk's "
+                     "topics, or `shadowhound sim-driver`)"),
     "time_scale": (1.0, "simulated robot: real seconds per simulated second (1 = real time, "
                         "0 = as fast as possible)"),
     "camera_topic": ("/camera/image_raw", "camera images the agent looks at"),
@@ -32,7 +33,21 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     "diagnostics_topic": ("/shadowhound/diagnostics", "diagnostic_msgs/DiagnosticArray, 1 Hz"),
     "web_interface_port": (8080, "port of the web dashboard (1..65535)"),
     "enable_web_ui": (False, "serve the web dashboard on 127.0.0.1:web_interface_port"),
+    "robot_namespace": ("", "go2: go2_ros2_sdk's robot namespace, e.g. robot0 ('' = none); "
+                            "the Go2 topics below are relative to it"),
+    "cmd_vel_topic": ("cmd_vel", "go2: geometry_msgs/Twist velocity out"),
+    "webrtc_topic": ("webrtc_req", "go2: go2_interfaces/WebRtcReq sport commands out"),
+    "odom_topic": ("odom", "go2: nav_msgs/Odometry in"),
+    "go2_states_topic": ("go2_states", "go2: go2_interfaces/Go2State in"),
+    "odom_timeout": (0.5, "go2: seconds without odometry before a motion step fails "
+                          "(0.05..10)"),
 }
+
+# Motion control for real odometry, used with robot go2 for every field the profile (or the
+# environment) does not set: the simulator's defaults (2 mm, 0.001 degrees, 20 Hz) are exact
+# only for the exact simulator; odometry over DDS arrives late and noisy.
+GO2_MOTION = {"position_tolerance": 0.02, "yaw_tolerance": math.radians(0.5),
+              "control_rate_hz": 10.0}
 
 CAMERA_TYPES = ("auto", "raw", "compressed")
 ROBOTS = ("sim", "go2")
@@ -58,6 +73,12 @@ class NodeSettings:
     diagnostics_topic: str = "/shadowhound/diagnostics"
     web_interface_port: int = 8080
     enable_web_ui: bool = False
+    robot_namespace: str = ""
+    cmd_vel_topic: str = "cmd_vel"
+    webrtc_topic: str = "webrtc_req"
+    odom_topic: str = "odom"
+    go2_states_topic: str = "go2_states"
+    odom_timeout: float = 0.5
 
     @property
     def camera_compressed(self) -> bool:
@@ -66,9 +87,21 @@ class NodeSettings:
         return self.camera_type == "compressed"
 
     def agent_settings(self) -> ShadowHoundConfig:
-        """The agent's configuration: the profile, then these parameters on top."""
-        return load_config(self.backend_config,
-                           {"robot": self.robot, "sim": {"time_scale": self.time_scale}})
+        """The agent's configuration: the profile, then these parameters on top; for go2,
+        GO2_MOTION fills the motion settings the profile and environment leave unset."""
+        config = load_config(self.backend_config,
+                             {"robot": self.robot, "sim": {"time_scale": self.time_scale}})
+        if self.robot == "go2":
+            unset = {k: v for k, v in GO2_MOTION.items()
+                     if k not in config.motion.model_fields_set}
+            config.motion = config.motion.model_copy(update=unset)
+        return config
+
+    def go2_options(self) -> dict[str, Any]:
+        """Keyword arguments for Go2RosConfig."""
+        return {"namespace": self.robot_namespace, "cmd_vel_topic": self.cmd_vel_topic,
+                "webrtc_topic": self.webrtc_topic, "odom_topic": self.odom_topic,
+                "state_topic": self.go2_states_topic, "odom_timeout": self.odom_timeout}
 
 
 _WANTED = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
@@ -100,19 +133,23 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
             continue
         out[f.name] = value
     unknown_topics = [n for n in ("camera_topic", "mission_topic", "status_topic",
-                                  "robot_status_topic", "diagnostics_topic")
+                                  "robot_status_topic", "diagnostics_topic", "cmd_vel_topic",
+                                  "webrtc_topic", "odom_topic", "go2_states_topic")
                       if n in out and not _TOPIC.match(out[n])]
     problems += [f"{n} {out[n]!r} is not a valid ROS topic name (letters, digits, '_' and "
                  "'/' separators, not starting with a digit)" for n in unknown_topics]
     if "camera_type" in out and out["camera_type"] not in CAMERA_TYPES:
         problems.append(f"camera_type must be one of {', '.join(CAMERA_TYPES)}, got "
                         f"{out['camera_type']!r}")
-    if "robot" in out:
-        if out["robot"] == "go2":
-            problems.append("robot 'go2' is not available yet (the Go2 ROS 2 driver bridge is "
-                            "planned), use robot:=sim")
-        elif out["robot"] not in ROBOTS:
-            problems.append(f"robot must be sim (go2 planned), got {out['robot']!r}")
+    if "robot" in out and out["robot"] not in ROBOTS:
+        problems.append(f"robot must be sim or go2, got {out['robot']!r}")
+    namespace = out.get("robot_namespace", "")
+    if namespace.strip("/") and not _TOPIC.match(namespace.strip("/")):
+        problems.append(f"robot_namespace {namespace!r} is not a valid ROS namespace (e.g. "
+                        "robot0)")
+    timeout = out.get("odom_timeout")
+    if timeout is not None and not (math.isfinite(timeout) and 0.05 <= timeout <= 10):
+        problems.append(f"odom_timeout must be a number of seconds in 0.05..10, got {timeout}")
     port = out.get("web_interface_port")
     if port is not None and not 1 <= port <= 65535:
         problems.append(f"web_interface_port must be in 1..65535, got {port}")
@@ -132,3 +169,50 @@ def describe_parameters() -> str:
     lines = [f"  {name} (default {default!r}): {text}"
              for name, (default, text) in PARAMETERS.items()]
     return "\n".join(lines)
+
+
+# -- shadowhound sim-driver ------------------------------------------------------------------
+
+# Name -> (default, help). The default also fixes the expected type.
+DRIVER_PARAMETERS: dict[str, tuple[Any, str]] = {
+    "odom_rate_hz": (50.0, "odom publishing rate (1..200)"),
+    "state_rate_hz": (10.0, "go2_states publishing rate (1..100)"),
+    "camera_rate_hz": (5.0, "camera/image_raw rate (0 = no camera, up to 30)"),
+    "camera_width": (160, "camera image width in pixels (16..640)"),
+    "camera_height": (120, "camera image height in pixels (12..480)"),
+    "cmd_vel_timeout": (0.5, "seconds without cmd_vel before the velocity returns to zero "
+                             "(0.05..5)"),
+}
+_RANGES = {"odom_rate_hz": (1, 200), "state_rate_hz": (1, 100), "camera_rate_hz": (0, 30),
+           "camera_width": (16, 640), "camera_height": (12, 480), "cmd_vel_timeout": (0.05, 5)}
+
+
+@dataclass(frozen=True)
+class DriverSettings:
+    """Checked driver parameters."""
+
+    odom_rate_hz: float = 50.0
+    state_rate_hz: float = 10.0
+    camera_rate_hz: float = 5.0
+    camera_width: int = 160
+    camera_height: int = 120
+    cmd_vel_timeout: float = 0.5
+
+
+def parse_driver(values: dict[str, Any]) -> DriverSettings:
+    """Check raw parameter values; raises ParameterError listing every problem at once."""
+    problems, out = [], {}
+    for name, (default, _help) in DRIVER_PARAMETERS.items():
+        value = values.get(name, default)
+        wanted = (int,) if isinstance(default, int) else (int, float)
+        low, high = _RANGES[name]
+        if isinstance(value, bool) or not isinstance(value, wanted):
+            problems.append(f"{name} must be {'an integer' if wanted == (int,) else 'a number'}"
+                            f", got {type(value).__name__} {value!r}")
+        elif not (math.isfinite(value) and low <= value <= high):
+            problems.append(f"{name} must be in {low}..{high}, got {value}")
+        else:
+            out[name] = type(default)(value)
+    if problems:
+        raise ParameterError("invalid ROS parameters: " + "; ".join(problems))
+    return DriverSettings(**out)

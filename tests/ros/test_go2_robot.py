@@ -1,0 +1,159 @@
+"""Go2RosRobot against the simulated driver, both in this process (one DDS context), plus the
+driver's fault messages and its command line. Skipped without rclpy or go2_interfaces unless
+SHADOWHOUND_REQUIRE_ROS=1 (then it fails)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+from collections.abc import Iterator
+
+import pytest
+
+_MISSING = [m for m in ("rclpy", "shadowhound_interfaces", "go2_interfaces")
+            if importlib.util.find_spec(m) is None]
+if _MISSING:
+    _WHY = (f"Go2 ROS 2 tests need {' and '.join(_MISSING)}: install the 'ros' extra and run "
+            "bash scripts/build_ros.sh")
+    if os.environ.get("SHADOWHOUND_REQUIRE_ROS") == "1":
+        raise RuntimeError(_WHY)
+    pytest.skip(_WHY, allow_module_level=True)
+
+from geometry_msgs.msg import Twist  # noqa: E402
+from std_msgs.msg import String  # noqa: E402
+
+from shadowhound.robot.base import RobotError  # noqa: E402
+from shadowhound.robot.go2_ros import Go2RosConfig, Go2RosRobot  # noqa: E402
+from shadowhound.ros.sim_driver import Faults, SimDriver  # noqa: E402
+from shadowhound.state import Posture  # noqa: E402
+from tests.ros.rosclient import ROOT, RosClient, wait_until  # noqa: E402
+
+pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
+NS = "/inproc"
+
+
+@pytest.fixture(scope="module")
+def client() -> Iterator[RosClient]:
+    c = RosClient("shadowhound_go2_robot_test")
+    yield c
+    c.close()
+
+
+@pytest.fixture(scope="module")
+def driver(client: RosClient) -> Iterator[SimDriver]:
+    d = SimDriver(context=client.context, namespace=NS)
+    client.executor.add_node(d)
+    yield d
+    client.executor.remove_node(d)
+    d.close()
+    d.destroy_node()
+
+
+@pytest.fixture(scope="module")
+def robot(client: RosClient, driver: SimDriver) -> Iterator[Go2RosRobot]:
+    r = Go2RosRobot(Go2RosConfig(namespace=NS[1:]), context=client.context)
+    wait_until(lambda: r.last_state().connected, 30, "odometry from the in-process driver")
+    yield r
+    r.close()
+
+
+def test_state_camera_caps_and_the_10_hz_keep_alive(client: RosClient, driver: SimDriver,
+                                                     robot: Go2RosRobot) -> None:
+    twists = client.subscribe(Twist, f"{NS}/cmd_vel")
+    requests = client.subscribe(String, f"{NS}/sim_driver/requests")
+    wait_until(lambda: twists.subscription.get_publisher_count() > 0, 10, "the robot's cmd_vel")
+    state = robot.get_state()
+    assert state.connected and state.posture is Posture.STANDING
+    frame = wait_until(robot.get_camera_frame, 10, "a camera frame")
+    assert (frame.encoding, frame.width, frame.height) == ("rgb8", 160, 120)
+    robot.send_velocity(5.0, 0.0, 9.0)  # beyond the Go2 caps (1 m/s, 2 rad/s)
+    try:
+        first = twists.wait_for(lambda m: m.linear.x > 0, 5, "a Twist")
+        assert (first.linear.x, first.angular.z) == (1.0, 2.0)
+        # No further calls: the keep-alive repeats the command (go2_ros2_sdk needs a stream).
+        wait_until(lambda: sum(m.linear.x == 1.0 for m in twists.items) >= 4, 5, "keep-alive")
+    finally:
+        robot.stop()
+    mark = twists.mark()
+    twists.wait_for(lambda m: m.linear.x == 0 and m.angular.z == 0, 5, "a zero Twist")
+    requests.wait_for(lambda m: json.loads(m.data)["api_id"] == 1003, 5, "StopMove")
+    wait_until(lambda: not driver.sim.get_state().is_moving, 10, "the simulator to stop")
+    assert all(m.linear.x == 0 for m in twists.since(mark))  # the keep-alive went quiet
+
+
+def test_postures_wait_for_the_driver_and_tricks_need_standing(driver: SimDriver,
+                                                               robot: Go2RosRobot) -> None:
+    robot.set_posture(Posture.SITTING)  # returns once go2_states.progress is back to 0
+    assert driver.sim.get_state().posture is Posture.SITTING
+    assert robot.get_state().posture is Posture.SITTING
+    with pytest.raises(RobotError, match="cannot perform hello while the robot is sitting"):
+        robot.perform("hello")
+    robot.set_posture(Posture.STANDING)
+    assert driver.sim.get_state().posture is Posture.STANDING
+
+
+def test_the_estop_refuses_motion_until_released(client: RosClient, robot: Go2RosRobot) -> None:
+    twists = client.subscribe(Twist, f"{NS}/cmd_vel")
+    wait_until(lambda: twists.subscription.get_publisher_count() > 0, 10, "the robot's cmd_vel")
+    robot.emergency_stop()
+    try:
+        assert robot.get_state().estopped
+        robot.send_velocity(0.3, 0.0, 0.0)  # ignored, like the simulator
+        with pytest.raises(RobotError, match="e-stop is latched"):
+            robot.set_posture(Posture.SITTING)
+        twists.wait_for(lambda m: m.linear.x == 0, 5, "the e-stop's zero Twist")
+        assert all(m.linear.x == 0 for m in twists.items)
+    finally:
+        robot.release_estop()
+    robot.send_velocity(0.1, 0.0, 0.0)
+    robot.stop()
+    twists.wait_for(lambda m: m.linear.x == 0.1, 5, "motion after the release")
+
+
+def test_without_a_driver_commands_time_out_and_motion_is_refused(client: RosClient) -> None:
+    lonely = Go2RosRobot(Go2RosConfig(namespace="nobody", command_timeout=0.3, settle=0.1),
+                         context=client.context)
+    try:
+        state = lonely.get_state()  # at rest: the last (here: no) state, marked disconnected
+        assert state.connected is False
+        with pytest.raises(RobotError, match="no odometry received on /nobody/odom"):
+            lonely.send_velocity(0.2, 0.0, 0.0)
+        with pytest.raises(RobotError, match="/nobody/go2_states no messages"):
+            lonely.set_posture(Posture.SITTING)
+    finally:
+        lonely.close()
+
+
+@pytest.mark.parametrize(("text", "expected"), [
+    ("{}", Faults()),
+    ('{"odom": false, "delay_ms": 250}', Faults(odom=False, delay=0.25)),
+    ('{"drop_commands": true}', Faults(drop_commands=True)),
+])
+def test_fault_messages(text: str, expected: Faults) -> None:
+    assert Faults.from_json(text) == expected
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ('{"lidar": false}', "unknown fault(s) ['lidar']"),
+    ('{"odom": "no"}', "take true or false"),
+    ('{"delay_ms": -5}', "delay_ms must be a number of milliseconds in 0..10000"),
+    ("[1]", "must be a JSON object"),
+])
+def test_bad_fault_messages_are_explained(text: str, message: str) -> None:
+    with pytest.raises(ValueError) as info:
+        Faults.from_json(text)
+    assert message in str(info.value)
+
+
+def test_the_driver_rejects_bad_parameters_with_exit_code_2() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "shadowhound", "sim-driver", "--ros-args", "-p",
+         "odom_rate_hz:=0", "-p", "camera_width:=wide"],
+        capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert "odom_rate_hz must be in 1..200, got 0" in done.stderr
+    assert "camera_width must be an integer, got str 'wide'" in done.stderr
+    assert "Traceback" not in done.stderr

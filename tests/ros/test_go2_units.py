@@ -1,0 +1,47 @@
+"""The go2 robot's and the simulated driver's parameters. Pure Python: runs without rclpy."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from shadowhound.ros.params import (
+    GO2_MOTION,
+    DriverSettings,
+    ParameterError,
+    parse_driver,
+    parse_parameters,
+)
+
+
+def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
+    settings = parse_parameters({"robot": "go2", "robot_namespace": "robot0",
+                                 "odom_topic": "/robot0/odom", "odom_timeout": 1})
+    assert settings.go2_options() == {
+        "namespace": "robot0", "cmd_vel_topic": "cmd_vel", "webrtc_topic": "webrtc_req",
+        "odom_topic": "/robot0/odom", "state_topic": "go2_states", "odom_timeout": 1.0}
+
+
+def test_go2_gets_motion_settings_for_real_odometry_unless_the_profile_sets_them(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    sim = parse_parameters({"robot": "sim"}).agent_settings().motion
+    assert sim.position_tolerance == 0.002 and sim.control_rate_hz == 20.0
+    go2 = parse_parameters({"robot": "go2"}).agent_settings().motion
+    assert go2.position_tolerance == 0.02 and go2.control_rate_hz == 10.0
+    assert math.isclose(go2.yaw_tolerance, math.radians(0.5)) and GO2_MOTION
+    monkeypatch.setenv("SHADOWHOUND_MOTION__POSITION_TOLERANCE", "0.05")
+    chosen = parse_parameters({"robot": "go2"}).agent_settings().motion
+    assert chosen.position_tolerance == 0.05 and chosen.control_rate_hz == 10.0
+
+
+def test_driver_parameters_default_and_are_checked_all_at_once() -> None:
+    assert parse_driver({}) == DriverSettings()
+    assert parse_driver({"camera_rate_hz": 0, "odom_rate_hz": 20}).odom_rate_hz == 20.0
+    with pytest.raises(ParameterError) as info:
+        parse_driver({"odom_rate_hz": 0.0, "camera_width": 2.5, "cmd_vel_timeout": True})
+    message = str(info.value)
+    for part in ("odom_rate_hz must be in 1..200, got 0.0",
+                 "camera_width must be an integer, got float 2.5",
+                 "cmd_vel_timeout must be a number, got bool True"):
+        assert part in message
