@@ -1,0 +1,219 @@
+"""Commands that run missions: `run` (with progress, approvals, dry runs), `chat`, `eval`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import threading
+from typing import Any, TextIO
+
+from .. import events as ev
+from ..config import ShadowHoundConfig
+from ._base import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, make_agent
+
+# -- run -----------------------------------------------------------------------------------
+
+
+def _progress(stream: TextIO) -> ev.Listener:
+    def show(event: ev.MissionEvent) -> None:
+        if event.kind == ev.MISSION_STARTED:
+            print(f"mission: {event.data['mission']!r}", file=stream)
+        elif event.kind == ev.PLAN_READY:
+            steps = event.data["plan"]["steps"]
+            print(f"plan: {len(steps)} step(s)", file=stream)
+        elif event.kind == ev.STEP_STARTED:
+            step = event.data["step"]
+            args = ", ".join(f"{k}={v}" for k, v in step["args"].items())
+            print(f"  [{step['index']}] {step['skill']}({args}) ...", file=stream, flush=True)
+        elif event.kind == ev.STEP_FINISHED:
+            step = event.data["step"]
+            mark = "ok" if step["status"] == "succeeded" else step["status"].upper()
+            detail = step["output"] if step["status"] == "succeeded" else step["error"]
+            print(f"  [{step['index']}] {mark}: {detail} ({step['robot_duration']:.1f} s robot "
+                  "time)", file=stream, flush=True)
+        stream.flush()
+
+    return show
+
+
+def _approver(agent: Any, ask: bool) -> ev.Listener:
+    """Answer approval requests: with --yes at once, else by asking on the terminal."""
+
+    def decide(request: dict[str, Any]) -> None:
+        if not ask:
+            agent.approve(request["request_id"])
+            return
+        print("approval needed: " + "; ".join(request["reasons"]), file=sys.stderr)
+        print(f"approve within {request['timeout']:g} s? [y/N] ", end="", file=sys.stderr,
+              flush=True)
+        answer = sys.stdin.readline().strip().lower()
+        if answer in ("y", "yes"):
+            agent.approve(request["request_id"])
+        else:
+            agent.reject(request["request_id"], "declined at the terminal")
+
+    def on_event(event: ev.MissionEvent) -> None:
+        if event.kind == ev.APPROVAL_REQUIRED:
+            # Ask on another thread: the mission thread waits with its time-out meanwhile.
+            threading.Thread(target=decide, args=(event.data["request"],), daemon=True).start()
+
+    return on_event
+
+
+def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    agent = make_agent(settings)
+    if args.dry_run:
+        return _dry_run(agent, args)
+    if not args.quiet:
+        agent.add_listener(_progress(sys.stderr))
+    if args.yes or sys.stdin.isatty():
+        agent.enable_approvals()
+        agent.add_listener(_approver(agent, ask=not args.yes))
+    box: dict[str, Any] = {}
+
+    def work() -> None:
+        try:
+            box["result"] = agent.execute_mission(args.mission)
+        except Exception as exc:  # a bug, not a mission failure: say so, never hide it
+            logging.getLogger(__name__).exception("the mission crashed")
+            box["crash"] = exc
+
+    # The mission runs on a worker so that Ctrl-C here can stop the robot at once.
+    worker = threading.Thread(target=work, name="shadowhound-mission", daemon=True)
+    worker.start()
+    interrupted = False
+    try:
+        while worker.is_alive():
+            worker.join(0.1)
+    except KeyboardInterrupt:
+        interrupted = True
+        agent.estop()
+        worker.join(5.0)
+    result = box.get("result")
+    agent.cleanup()
+    if "crash" in box:
+        print(f"shadowhound: internal error: {box['crash']!r}; the robot was stopped",
+              file=sys.stderr)
+        return EXIT_FAILED
+    if result is None:
+        print("shadowhound: interrupted; the robot was stopped", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    if args.json:
+        out = result.to_dict()
+        json.dump(out, sys.stdout, separators=(",", ":"))
+        sys.stdout.write("\n")
+    else:
+        st = result.robot
+        print(result.response)
+        print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
+              f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
+              f"battery={st.battery:.1f}%")
+    if interrupted:
+        return EXIT_INTERRUPTED
+    return EXIT_OK if result.success else EXIT_FAILED
+
+
+def _dry_run(agent: Any, args: argparse.Namespace) -> int:
+    result = agent.dry_run(args.mission)
+    agent.cleanup()
+    if args.json:
+        json.dump(result.to_dict(), sys.stdout, separators=(",", ":"))
+        sys.stdout.write("\n")
+    else:
+        for step in result.steps:
+            params = ", ".join(f"{k}={v}" for k, v in step.args.items())
+            print(f"  [{step.index}] {step.skill}({params})")
+        path = " -> ".join(f"({p.x:.2f}, {p.y:.2f})" for p in result.predicted_path)
+        if path:
+            print(f"predicted path: {path}")
+        print(result.response)
+    return EXIT_OK if result.success else EXIT_FAILED
+
+
+# -- chat --------------------------------------------------------------------------------------
+
+_CHAT_HELP = ("Ask a question (where are you? battery? what do you see? what did you do?), or: "
+              "/run MISSION, /status, /skills, /estop, /release, /help, /quit")
+
+
+def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    agent = make_agent(settings)
+    interactive = sys.stdin.isatty()
+    if interactive:
+        print("ShadowHound chat. " + _CHAT_HELP)
+    try:
+        while True:
+            if interactive:
+                print("you> ", end="", flush=True)
+            line = sys.stdin.readline()
+            if not line:
+                break
+            line = line.strip()
+            if not line:
+                continue
+            if line in ("/quit", "/exit"):
+                break
+            print(_chat_line(agent, line), flush=True)
+    except KeyboardInterrupt:
+        agent.estop()
+    finally:
+        agent.cleanup()
+    return EXIT_OK
+
+
+def _chat_line(agent: Any, line: str) -> str:
+    if line.startswith("/run"):
+        mission = line[4:].strip()
+        if not mission:
+            return "usage: /run MISSION"
+        result = agent.execute_mission(mission)
+        return ("ok: " if result.success else "failed: ") + result.response
+    commands = {
+        "/status": lambda: json.dumps(agent.get_robot_status()),
+        "/skills": lambda: ", ".join(s["name"] for s in agent.get_available_skills()),
+        "/estop": lambda: (agent.estop(), "e-stop latched; /release to release it")[1],
+        "/release": lambda: (agent.release_estop(), "e-stop released")[1],
+        "/help": lambda: _CHAT_HELP,
+    }
+    if line.startswith("/"):
+        action = commands.get(line.split()[0])
+        return action() if action else f"unknown command {line.split()[0]!r}. {_CHAT_HELP}"
+    return str(agent.chat(line))
+
+
+# -- eval ----------------------------------------------------------------------------------------
+
+
+def cmd_eval(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    from ..evaluation import CaseFileError, load_cases, run_cases
+
+    try:
+        cases = load_cases(args.file)
+    except CaseFileError as exc:
+        print(f"shadowhound: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+
+    def show(outcome: Any) -> None:
+        if args.json:
+            return
+        mark = "PASS" if outcome.passed else "FAIL"
+        print(f"{mark}  {outcome.case.mission!r}")
+        for failure in outcome.failures:
+            print(f"      {failure}  [{outcome.response}]")
+
+    outcomes = run_cases(cases, settings, on_case=show)
+    passed = sum(o.passed for o in outcomes)
+    total = len(outcomes)
+    rate = passed / total if total else 0.0
+    if args.json:
+        json.dump({"total": total, "passed": passed, "failed": total - passed,
+                   "pass_rate": round(rate, 4), "cases": [o.to_dict() for o in outcomes]},
+                  sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(f"{passed}/{total} cases passed ({100 * rate:.1f}%)")
+    return EXIT_OK if passed == total and total else EXIT_FAILED
+
+

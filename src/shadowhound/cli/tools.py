@@ -1,0 +1,195 @@
+"""Commands that inspect or serve: `skills`, `config`, `doctor`, `history`, `places`,
+`recall`, `serve`, and the ROS entry points `node` and `sim-driver`."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from typing import Any
+
+from ..config import ShadowHoundConfig
+from ._base import EXIT_FAILED, EXIT_OK, EXIT_USAGE
+
+# -- skills ----------------------------------------------------------------------------------
+
+
+def cmd_skills(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    from ..skills import default_registry
+
+    described = default_registry().describe()
+    if args.json:
+        json.dump(described, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+        return EXIT_OK
+    for skill in described:
+        props = skill["parameters"].get("properties", {})
+        required = set(skill["parameters"].get("required", []))
+        params = ", ".join(f"{n}{'' if n in required else '?'}" for n in props)
+        print(f"{skill['name']}({params})")
+        print(f"    {skill['description']}")
+        for name, prop in props.items():
+            print(f"      {name}: {_schema_summary(prop)}")
+    return EXIT_OK
+
+
+def _schema_summary(prop: dict[str, Any]) -> str:
+    options = prop.get("anyOf", [prop])
+    kinds = [o.get("type", "any") for o in options if o.get("type") != "null"]
+    text = "|".join(kinds) or "any"
+    if "enum" in prop or any("enum" in o for o in options):
+        enum = prop.get("enum") or next(o["enum"] for o in options if "enum" in o)
+        text += " one of " + ", ".join(map(str, enum))
+    for key, sign in (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="),
+                      ("exclusiveMaximum", "<")):
+        bound = next((o[key] for o in options if key in o), None)
+        if bound is not None:
+            text += f" {sign}{bound:g}"
+    if prop.get("description"):
+        text += f" - {prop['description']}"
+    return text
+
+
+# -- config --------------------------------------------------------------------------------------
+
+
+def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    import yaml
+
+    sys.stdout.write(yaml.safe_dump(json.loads(settings.model_dump_json()), sort_keys=False))
+    return EXIT_OK
+
+
+# -- doctor --------------------------------------------------------------------------------------
+
+
+def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    print(f"ok  configuration: profile {settings.profile!r}, backend {settings.backend!r}, "
+          f"robot {settings.robot!r}")
+    s = settings.safety
+    print(f"ok  safety limits: {s.max_linear_speed:g} m/s, {s.max_angular_speed:g} rad/s, "
+          f"{s.max_step_distance:g} m per step, geofence {s.geofence_radius:g} m, risky tricks "
+          f"{'allowed' if s.allow_risky_tricks else 'refused'}")
+    if settings.backend == "offline":
+        print("ok  planner: offline rules (no network, no model)")
+        return EXIT_OK
+    from ..llm import LLMBackend
+
+    for line in LLMBackend(settings.backend, settings.llm).check():
+        print(f"ok  {line}")
+    print(f"ok  planning mode {settings.llm.mode!r}, plan format {settings.llm.plan_format!r}, "
+          f"vision {'on' if settings.llm.vision else 'off'}")
+    return EXIT_OK
+
+
+# -- memory --------------------------------------------------------------------------------------
+
+
+def _memory(settings: ShadowHoundConfig) -> Any:
+    from ..memory.service import AgentMemory
+
+    return AgentMemory.open(settings)
+
+
+def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    if not settings.memory.enabled:
+        print("shadowhound: mission history is off (memory.enabled: false)", file=sys.stderr)
+        return EXIT_USAGE
+    memory = _memory(settings)
+    assert memory.history is not None
+    try:
+        if args.mission_id:
+            record = memory.history.get(args.mission_id)
+            if record is None:
+                print(f"shadowhound: no mission {args.mission_id!r} in "
+                      f"{memory.history.path}", file=sys.stderr)
+                return EXIT_FAILED
+            json.dump(record, sys.stdout, indent=2, default=str)
+            sys.stdout.write("\n")
+            return EXIT_OK
+        rows = memory.history.recent(max(1, args.limit))
+        if args.json:
+            json.dump(rows, sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        for row in [] if args.json else rows:
+            when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(row["started_at"]))
+            print(f"{row['id']}  {when}  {row['status']:<11} {row['mission'][:60]!r}")
+        return EXIT_OK
+    finally:
+        memory.close()
+
+
+def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    memory = _memory(settings)
+    try:
+        if args.forget:
+            if not memory.places.forget(args.forget):
+                print(f"shadowhound: no taught place {args.forget!r}", file=sys.stderr)
+                return EXIT_FAILED
+            print(f"forgot {args.forget!r}")
+            return EXIT_OK
+        taught = memory.places.all()
+        listing = {**{n: {"x": x, "y": y, "source": "profile"}
+                      for n, (x, y) in settings.places.items()},
+                   **{n: {"x": x, "y": y, "yaw": yaw, "source": "taught"}
+                      for n, (x, y, yaw) in taught.items()}}
+        if args.json:
+            json.dump(listing, sys.stdout, indent=2)
+            sys.stdout.write("\n")
+        else:
+            for name, place in listing.items():
+                print(f"{name:<20} x={place['x']:7.2f} y={place['y']:7.2f}  {place['source']}")
+        return EXIT_OK
+    finally:
+        memory.close()
+
+
+def cmd_recall(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    memory = _memory(settings)
+    try:
+        found = memory.search(args.query)
+        print("\n".join(found) if found else "nothing remembered about that")
+        return EXIT_OK
+    finally:
+        memory.close()
+
+
+# -- serve ---------------------------------------------------------------------------------------
+
+
+def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    try:
+        from ..web import serve_main
+    except ImportError as exc:
+        print(f"shadowhound: the web dashboard needs the 'web' extra "
+              f"(pip install 'shadowhound[web]'): {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    return int(serve_main(settings, args.host, args.port, args.token))
+
+
+# -- node ----------------------------------------------------------------------------------------
+
+
+def cmd_node(ros_argv: list[str]) -> int:
+    try:
+        from ..ros.node import main as node_main
+    except ImportError as exc:
+        print(f"shadowhound: the ROS 2 node needs rclpy and the shadowhound_interfaces package "
+              f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
+              file=sys.stderr)
+        return EXIT_USAGE
+    return node_main(ros_argv)
+
+
+def cmd_sim_driver(ros_argv: list[str]) -> int:
+    try:
+        from ..ros.sim_driver import main as driver_main
+    except ImportError as exc:
+        print(f"shadowhound: the simulated Go2 driver needs rclpy and the go2_interfaces package "
+              f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
+              file=sys.stderr)
+        return EXIT_USAGE
+    return driver_main(ros_argv)
+
+
