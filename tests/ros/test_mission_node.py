@@ -30,7 +30,7 @@ if _MISSING:
 from action_msgs.msg import GoalStatus  # noqa: E402
 from sensor_msgs.msg import CompressedImage, Image  # noqa: E402
 from shadowhound_interfaces.action import ExecuteMission  # noqa: E402
-from shadowhound_interfaces.srv import Chat  # noqa: E402
+from shadowhound_interfaces.srv import Approve, Chat  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
 from tests.images import tiny_jpeg  # noqa: E402
@@ -250,6 +250,33 @@ def test_chat_service_answers(agent: Agent, client: RosClient) -> None:
     future = chat.call_async(Chat.Request(text="where are you?"))
     wait_until(future.done, TIMEOUT, "the chat answer")
     assert future.result().answer.startswith("I am at x=")
+
+
+def test_risky_plans_wait_for_approval_over_ros(agent: Agent, client: RosClient) -> None:
+    requests = client.subscribe(String, "/approval_request")
+    approve = client.node.create_client(Approve, "/approve")
+    wait_until(approve.service_is_ready, TIMEOUT, "the approve service")
+
+    def decide(command: str, yes: bool) -> str:
+        mark, seen = agent.status.mark(), requests.mark()
+        agent.missions.publish(String(data=command))
+        announced = json.loads(requests.wait_for(lambda m: command in m.data, TIMEOUT,
+                                                 "the approval request", seen).data)
+        assert "risky trick" in announced["reasons"][0]
+        future = approve.call_async(Approve.Request(request_id=announced["request_id"],
+                                                    approve=yes, reason="not indoors"))
+        wait_until(future.done, TIMEOUT, "the approve service to answer")
+        assert future.result().accepted
+        return str(agent.status.wait_for(lambda m: m.data.startswith(("COMPLETED", "FAILED")),
+                                         TIMEOUT, "the mission to end", mark).data)
+
+    assert decide("do a front flip", yes=False).startswith("FAILED: Refused before moving: "
+                                                            "not approved (rejected: not indoors)")
+    assert decide("do a backflip", yes=True) == "COMPLETED: Done: performed backflip."
+    nothing = approve.call_async(Approve.Request(approve=True))
+    wait_until(nothing.done, TIMEOUT, "the approve service to answer")
+    assert not nothing.result().accepted
+    assert nothing.result().message == "no plan is waiting for approval"
 
 
 # -- camera ----------------------------------------------------------------------------------

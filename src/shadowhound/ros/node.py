@@ -59,14 +59,16 @@ from .params import NODE_NAME, PARAMETERS, ParameterError, describe_parameters, 
 
 try:  # built by scripts/build_ros.sh (ros2/shadowhound_interfaces)
     from shadowhound_interfaces.action import ExecuteMission
-    from shadowhound_interfaces.srv import Chat
-except ImportError:  # the node still runs its topics; the action and service are off
-    ExecuteMission = Chat = None
+    from shadowhound_interfaces.srv import Approve, Chat
+except ImportError:  # the node still runs its topics; the action and services are off
+    ExecuteMission = Chat = Approve = None
 
 ESTOP_TOPIC = "/shadowhound/estop"
 ESTOP_RELEASE_TOPIC = "/shadowhound/estop_release"
 ACTION_NAME = "execute_mission"
 CHAT_SERVICE = "chat"
+APPROVE_SERVICE = "approve"
+APPROVAL_TOPIC = "approval_request"
 ROBOT_STATUS_HZ = 5.0
 DIAGNOSTICS_NAME = "shadowhound: mission agent"
 EXIT_OK, EXIT_USAGE = 0, 2
@@ -161,6 +163,11 @@ class MissionNode(Node):
                                         goal_callback=self._on_goal,
                                         cancel_callback=self._on_cancel)
             self.create_service(Chat, CHAT_SERVICE, self._on_chat)
+            # Risky plans wait for a person: announced on a topic, decided by a service.
+            self._approval_pub = self.create_publisher(String, APPROVAL_TOPIC, _COMMANDS)
+            self.create_service(Approve, APPROVE_SERVICE, self._on_approve)
+            self.agent.add_listener(self._announce_approval)
+            self.agent.enable_approvals()
 
     def _report_startup(self) -> None:
         s, log = self.settings, self.get_logger()
@@ -322,6 +329,24 @@ class MissionNode(Node):
             self.get_logger().error(f"chat failed: {exc!r}")
             answer = f"Sorry, I could not answer: {exc}"
         self._resolve(answered, answer)
+
+    # -- approvals ---------------------------------------------------------------------------
+
+    def _announce_approval(self, event: ev.MissionEvent) -> None:
+        if event.kind == ev.APPROVAL_REQUIRED:
+            self._approval_pub.publish(String(data=json.dumps(event.data["request"])))
+
+    def _on_approve(self, request: Any, response: Any) -> Any:
+        wanted = request.request_id.strip() or None
+        if request.approve:
+            response.accepted = self.agent.approve(wanted)
+        else:
+            response.accepted = self.agent.reject(wanted, request.reason.strip())
+        verdict = "approved" if request.approve else "rejected"
+        response.message = verdict if response.accepted else (
+            "no plan with that id is waiting for approval" if wanted else
+            "no plan is waiting for approval")
+        return response
 
     # -- camera ----------------------------------------------------------------------------
 
