@@ -19,31 +19,23 @@ queue, action goals are rejected while a mission runs or waits.
 from __future__ import annotations
 
 import json
-import logging
-import signal
 import sys
-import threading
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
-from rclpy.utilities import remove_ros_args
 from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import Empty, String
 
 from .. import events as ev
 from ..agent import RobotAgent, RobotAgentConfig
 from ..camera import to_camera_frame
-from ..config import ConfigError
 from ..result import MissionResult
 from ..robot.base import RobotError
 from ..worker import MissionJob, MissionWorker
@@ -56,6 +48,7 @@ from .convert import (
     shorten,
 )
 from .params import NODE_NAME, PARAMETERS, ParameterError, describe_parameters, parse_parameters
+from .process import run_node
 
 try:  # built by scripts/build_ros.sh (ros2/shadowhound_interfaces)
     from shadowhound_interfaces.action import ExecuteMission
@@ -437,23 +430,6 @@ def _action_result(job: MissionJob) -> Any:
                                  response=f"Not run: {job.dropped or 'no result'}.")
 
 
-class _RosLogHandler(logging.Handler):
-    """Forwards the package's `logging` records to the node's ROS logger."""
-
-    def __init__(self, node: Node) -> None:
-        super().__init__()
-        self._logger = node.get_logger()
-
-    def emit(self, record: logging.LogRecord) -> None:
-        text = f"{record.name}: {self.format(record)}"
-        if record.levelno >= logging.ERROR:
-            self._logger.error(text)
-        elif record.levelno >= logging.WARNING:
-            self._logger.warning(text)
-        else:
-            self._logger.info(text)
-
-
 _USAGE = f"""usage: shadowhound node [--ros-args -p NAME:=VALUE ...]
 
 Run the ShadowHound mission agent as the ROS 2 node '{NODE_NAME}'. Parameters:
@@ -464,66 +440,9 @@ Exit codes: 0 after Ctrl-C / SIGTERM (the robot is stopped first), 2 for invalid
 
 def main(argv: Sequence[str] | None = None) -> int:
     """`shadowhound node --ros-args -p name:=value ...` (also the `mission_node` script)."""
-    args = list(sys.argv[1:] if argv is None else argv)
-    prog = "shadowhound node"
-    try:
-        extra = remove_ros_args(["mission_node", *args])[1:]
-    except Exception as exc:  # rcl reports malformed --ros-args this way
-        print(f"{prog}: invalid ROS arguments: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    if any(a in ("-h", "--help") for a in extra):
-        print(_USAGE)
-        return EXIT_OK
-    if extra:
-        print(f"{prog}: unexpected arguments {extra}; give parameters as --ros-args -p "
-              f"NAME:=VALUE (see --help)", file=sys.stderr)
-        return EXIT_USAGE
-    stop = threading.Event()
-    try:
-        rclpy.init(args=["mission_node", *args], signal_handler_options=SignalHandlerOptions.NO)
-    except Exception as exc:
-        print(f"{prog}: cannot start ROS 2: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    node: MissionNode | None = None
-    try:
-        node = MissionNode()
-    except ConfigError as exc:
-        print(f"{prog}: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return EXIT_USAGE
-    handler = _RosLogHandler(node)
-    package_log = logging.getLogger("shadowhound")
-    package_log.addHandler(handler)
-    package_log.setLevel(logging.INFO)
-    executor = SingleThreadedExecutor()  # callbacks are short; slow work runs on other threads
-    executor.add_node(node)
-    spinner = threading.Thread(target=_spin, args=(executor, stop), name="ros-executor")
-    spinner.start()
-    try:
-        while not stop.wait(0.5):  # the main thread stays free for the signal handlers
-            pass
-    except KeyboardInterrupt:
-        pass
-    finally:
-        node.get_logger().info("shutting down: cancelling the mission and stopping the robot")
-        node.shutdown()
-        package_log.removeHandler(handler)
-        executor.shutdown(timeout_sec=2.0)
-        spinner.join(2.0)
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return EXIT_OK
-
-
-def _spin(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
-    try:
-        executor.spin()
-    except ExternalShutdownException:
-        pass
-    finally:
-        stop.set()
+    return run_node("shadowhound node", "mission_node", argv, _USAGE, MissionNode,
+                    lambda node: node.shutdown(),  # type: ignore[attr-defined]
+                    "shutting down: cancelling the mission and stopping the robot")
 
 
 if __name__ == "__main__":

@@ -28,7 +28,6 @@ import itertools
 import json
 import math
 import queue
-import signal
 import sys
 import threading
 import time
@@ -36,16 +35,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import rclpy
 from geometry_msgs.msg import Twist
 from go2_interfaces.msg import Go2State, WebRtcReq
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.signals import SignalHandlerOptions
-from rclpy.utilities import remove_ros_args
 from sensor_msgs.msg import Image
 from std_msgs.msg import String
 
@@ -55,6 +50,7 @@ from ..robot.base import RobotError
 from ..robot.sim import SimRobot
 from ..state import Posture
 from .params import DRIVER_PARAMETERS, DriverSettings, ParameterError, parse_driver
+from .process import run_node
 
 NODE_NAME = "shadowhound_sim_driver"
 EXIT_OK, EXIT_USAGE = 0, 2
@@ -347,52 +343,9 @@ Exit codes: 0 after Ctrl-C / SIGTERM, 2 for invalid parameters.
 
 def main(argv: Sequence[str] | None = None) -> int:
     """`shadowhound sim-driver --ros-args ...`"""
-    args = list(sys.argv[1:] if argv is None else argv)
-    prog = "shadowhound sim-driver"
-    try:
-        extra = remove_ros_args([NODE_NAME, *args])[1:]
-    except Exception as exc:  # rcl reports malformed --ros-args this way
-        print(f"{prog}: invalid ROS arguments: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    if any(a in ("-h", "--help") for a in extra):
-        print(_USAGE)
-        return EXIT_OK
-    if extra:
-        print(f"{prog}: unexpected arguments {extra}; give parameters as --ros-args -p "
-              "NAME:=VALUE (see --help)", file=sys.stderr)
-        return EXIT_USAGE
-    stop = threading.Event()
-    rclpy.init(args=[NODE_NAME, *args], signal_handler_options=SignalHandlerOptions.NO)
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
-    try:
-        driver = SimDriver()
-    except ParameterError as exc:
-        print(f"{prog}: {exc}", file=sys.stderr)
-        rclpy.try_shutdown()
-        return EXIT_USAGE
-    executor = SingleThreadedExecutor()
-    executor.add_node(driver)
-    spinner = threading.Thread(target=_spin, args=(executor, stop), name="ros-executor")
-    spinner.start()
-    while not stop.wait(0.5):  # the main thread stays free for the signal handlers
-        pass
-    driver.get_logger().info("shutting down: the simulated robot stops")
-    driver.close()
-    executor.shutdown(timeout_sec=2.0)
-    spinner.join(2.0)
-    driver.destroy_node()
-    rclpy.try_shutdown()
-    return EXIT_OK
-
-
-def _spin(executor: SingleThreadedExecutor, stop: threading.Event) -> None:
-    try:
-        executor.spin()
-    except ExternalShutdownException:
-        pass  # shutting down: the main thread cleans up
-    finally:
-        stop.set()
+    return run_node("shadowhound sim-driver", NODE_NAME, argv, _USAGE, SimDriver,
+                    lambda driver: driver.close(),  # type: ignore[attr-defined]
+                    "shutting down: the simulated robot stops")
 
 
 if __name__ == "__main__":
