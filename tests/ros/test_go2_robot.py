@@ -4,23 +4,16 @@ SHADOWHOUND_REQUIRE_ROS=1 (then it fails)."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import os
 import subprocess
 import sys
 from collections.abc import Iterator
 
 import pytest
 
-_MISSING = [m for m in ("rclpy", "shadowhound_interfaces", "go2_interfaces")
-            if importlib.util.find_spec(m) is None]
-if _MISSING:
-    _WHY = (f"Go2 ROS 2 tests need {' and '.join(_MISSING)}: install the 'ros' extra and run "
-            "bash scripts/build_ros.sh")
-    if os.environ.get("SHADOWHOUND_REQUIRE_ROS") == "1":
-        raise RuntimeError(_WHY)
-    pytest.skip(_WHY, allow_module_level=True)
+from tests.ros.needs import require
+
+require("rclpy", "shadowhound_interfaces", "go2_interfaces")
 
 from geometry_msgs.msg import Twist  # noqa: E402
 from std_msgs.msg import String  # noqa: E402

@@ -8,24 +8,17 @@ without rclpy or the interface packages unless SHADOWHOUND_REQUIRE_ROS=1 (then i
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
-import os
 import signal
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
-_MISSING = [m for m in ("rclpy", "shadowhound_interfaces", "go2_interfaces")
-            if importlib.util.find_spec(m) is None]
-if _MISSING:
-    _WHY = (f"Go2 ROS 2 tests need {' and '.join(_MISSING)}: install the 'ros' extra and run "
-            "bash scripts/build_ros.sh")
-    if os.environ.get("SHADOWHOUND_REQUIRE_ROS") == "1":
-        raise RuntimeError(_WHY)
-    pytest.skip(_WHY, allow_module_level=True)
+from tests.ros.needs import require
+
+require("rclpy", "shadowhound_interfaces", "go2_interfaces")
 
 from geometry_msgs.msg import Twist  # noqa: E402
 from go2_interfaces.msg import Go2State  # noqa: E402

@@ -8,9 +8,7 @@ or without the built interface package, unless SHADOWHOUND_REQUIRE_ROS=1 (then i
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import os
 import signal
 import socket
 import urllib.request
@@ -18,14 +16,9 @@ from collections.abc import Iterator
 
 import pytest
 
-_MISSING = [m for m in ("rclpy", "shadowhound_interfaces")
-            if importlib.util.find_spec(m) is None]
-if _MISSING:
-    _WHY = (f"ROS 2 tests need {' and '.join(_MISSING)}: install the 'ros' extra and run "
-            "bash scripts/build_ros.sh")
-    if os.environ.get("SHADOWHOUND_REQUIRE_ROS") == "1":
-        raise RuntimeError(_WHY)
-    pytest.skip(_WHY, allow_module_level=True)
+from tests.ros.needs import require
+
+require("rclpy", "shadowhound_interfaces")
 
 from action_msgs.msg import GoalStatus  # noqa: E402
 from sensor_msgs.msg import CompressedImage, Image  # noqa: E402

@@ -3,8 +3,6 @@ SIGINT and SIGTERM stop the robot and exit 0, also in the middle of a mission.""
 
 from __future__ import annotations
 
-import importlib.util
-import os
 import signal
 import socket
 import subprocess
@@ -12,14 +10,9 @@ import sys
 
 import pytest
 
-_MISSING = [m for m in ("rclpy", "shadowhound_interfaces")
-            if importlib.util.find_spec(m) is None]
-if _MISSING:
-    _WHY = (f"ROS 2 tests need {' and '.join(_MISSING)}: install the 'ros' extra and run "
-            "bash scripts/build_ros.sh")
-    if os.environ.get("SHADOWHOUND_REQUIRE_ROS") == "1":
-        raise RuntimeError(_WHY)
-    pytest.skip(_WHY, allow_module_level=True)
+from tests.ros.needs import require
+
+require("rclpy", "shadowhound_interfaces")
 
 from std_msgs.msg import String  # noqa: E402
 
