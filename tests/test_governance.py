@@ -140,6 +140,10 @@ def test_watchdog_leaves_healthy_real_time_missions_alone():
     agent, robot = agent_with(SimRobot(time_scale=1.0))
     result = agent.execute_mission("walk forward 0.3 meters")
     assert result.success, result.response
+    watchdog = agent._watchdog
+    assert watchdog is not None and watchdog._thread.is_alive()
+    agent.cleanup()  # a long-lived process creating agents must not collect watchdog threads
+    assert not watchdog._thread.is_alive()
 
 
 # -- checked outcomes and acceleration caps -------------------------------------------------------

@@ -127,6 +127,9 @@ class RobotAgent:
         if self._robot is not None:
             self._robot.stop()
             self._robot.close()
+        if self._watchdog is not None:
+            self._watchdog.close()
+            self._watchdog = None
         self._memory.close()
 
     @property
@@ -172,7 +175,7 @@ class RobotAgent:
         env = self._plan_env()
         try:
             plan = self.planner.plan(text[: self.settings.agent.max_mission_chars],
-                                     self._planning_context())
+                                     self._planning_context(text, self.planner))
         except PlanningError as exc:
             return self._refuse(mission_id, text, started, exc.message, False)
         timing.agent_duration = timing.total_duration = time.perf_counter() - started
@@ -237,7 +240,7 @@ class RobotAgent:
         # 1. Plan. The planner never touches the robot.
         t = time.perf_counter()
         try:
-            plan = planner.plan(text, self._planning_context(text))
+            plan = planner.plan(text, self._planning_context(text, planner))
         except PlanningError as exc:
             timing.agent_duration = time.perf_counter() - t
             return self._finish(mission_id, text, started, timing, [], None,
@@ -585,13 +588,21 @@ class RobotAgent:
         return self._camera_frame or self.robot.get_camera_frame()
 
 
-    def _plan_env(self) -> PlanEnv:
+    def _known_places(self) -> dict[str, tuple[float, float]]:
+        """The profile's places, then taught ones (which win)."""
         taught = {n: (x, y) for n, (x, y, _yaw) in self._memory.places.all().items()}
-        return PlanEnv(self.settings, self.robot.get_state().pose, taught)
+        return {**self.settings.places, **taught}
 
-    def _planning_context(self, text: str = "") -> PlanningContext:
+    def _plan_env(self) -> PlanEnv:
+        return PlanEnv(self.settings, self.robot.get_state().pose, self._known_places())
+
+    def _planning_context(self, text: str = "", planner: Any = None) -> PlanningContext | None:
+        """What the planner may read; None for planners that read nothing (the offline rules),
+        so no history query or memory search is spent on them."""
+        if planner is not None and not getattr(planner, "needs_context", True):
+            return None
         rag = self.settings.memory.enable_rag and self.settings.backend != "offline"
-        return PlanningContext(self.registry, self.robot.get_state(), self._plan_env().places,
+        return PlanningContext(self.registry, self.robot.get_state(), self._known_places(),
                                self.recent_summaries(), self._cancel,
                                self._memory.search(text) if rag and text else [])
 

@@ -250,6 +250,7 @@ class Watchdog:
         self._armed = False
         self.timeout = 0.25
         self.trips = 0
+        self._closed = threading.Event()
         self._thread = threading.Thread(target=self._run, name="shadowhound-watchdog",
                                         daemon=True)
         self._thread.start()
@@ -269,9 +270,13 @@ class Watchdog:
             if moving is not None:
                 self._moving = moving
 
+    def close(self) -> None:
+        """End the watchdog's thread (within one check period)."""
+        self._closed.set()
+        self._thread.join(1.0)
+
     def _run(self) -> None:
-        while True:
-            time.sleep(max(0.005, self.timeout / 5))
+        while not self._closed.wait(max(0.005, self.timeout / 5)):
             with self._lock:
                 stale = time.monotonic() - self._last
                 tripped = self._armed and self._moving and stale > self.timeout

@@ -112,7 +112,8 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         if args.json:
             json.dump(rows, sys.stdout, indent=2)
             sys.stdout.write("\n")
-        for row in [] if args.json else rows:
+            return EXIT_OK
+        for row in rows:
             when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(row["started_at"]))
             print(f"{row['id']}  {when}  {row['status']:<11} {row['mission'][:60]!r}")
         return EXIT_OK

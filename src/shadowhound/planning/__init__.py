@@ -28,7 +28,11 @@ class PlanningContext:
 
 @runtime_checkable
 class Planner(Protocol):
-    """Turns a request into a Plan, or raises PlanningError saying what it did not understand."""
+    """Turns a request into a Plan, or raises PlanningError saying what it did not understand.
+
+    A planner may set `needs_context = False` when it ignores the PlanningContext; it then gets
+    None and the agent spends nothing on building one.
+    """
 
     name: str
 
@@ -39,6 +43,7 @@ class FixedPlanner:
     """Returns a plan given in advance (explicit skill calls from an API, a script or a test)."""
 
     name = "explicit"
+    needs_context = False
 
     def __init__(self, plan: Plan) -> None:
         self._plan = plan

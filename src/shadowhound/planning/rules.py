@@ -35,6 +35,7 @@ class RulePlanner:
     """Plans English requests with hand-written rules; fast, deterministic and offline."""
 
     name = "offline"
+    needs_context = False  # plans from the words alone
 
     def __init__(
         self,
