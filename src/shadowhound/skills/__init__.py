@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from . import body, memory, nav, sense
+from .arguments import NoArgs, SkillArgs
 from .context import MissionCancelled, PlanEnv, PlanProblem, SkillContext, SkillError, SkillTimeout
-from .registry import NoArgs, Skill, SkillArgs, SkillRegistry, SkillValidationError, ValidatedCall
+from .registry import Skill, SkillRegistry, SkillValidationError, ValidatedCall
 
 
 def default_registry() -> SkillRegistry:
