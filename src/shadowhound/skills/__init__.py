@@ -3,7 +3,21 @@
 from __future__ import annotations
 
 from . import body, memory, nav, sense
-from .arguments import NoArgs, SkillArgs
+from .arguments import (
+    Angle,
+    AngularSpeed,
+    Count,
+    Duration,
+    Length,
+    NoArgs,
+    OptionalAngle,
+    OptionalAngularSpeed,
+    OptionalDuration,
+    OptionalLength,
+    OptionalSpeed,
+    SkillArgs,
+    Speed,
+)
 from .context import MissionCancelled, PlanEnv, PlanProblem, SkillContext, SkillError, SkillTimeout
 from .registry import Skill, SkillRegistry, SkillValidationError, ValidatedCall
 
@@ -14,8 +28,18 @@ def default_registry() -> SkillRegistry:
 
 
 __all__ = [
+    "Angle",
+    "AngularSpeed",
+    "Count",
+    "Duration",
+    "Length",
     "MissionCancelled",
     "NoArgs",
+    "OptionalAngle",
+    "OptionalAngularSpeed",
+    "OptionalDuration",
+    "OptionalLength",
+    "OptionalSpeed",
     "PlanEnv",
     "PlanProblem",
     "Skill",
@@ -25,6 +49,7 @@ __all__ = [
     "SkillRegistry",
     "SkillTimeout",
     "SkillValidationError",
+    "Speed",
     "ValidatedCall",
     "default_registry",
 ]

@@ -58,6 +58,7 @@ Speed = Annotated[float, BeforeValidator(_Quantity(units.SPEED))]
 AngularSpeed = Annotated[float, BeforeValidator(_Quantity(units.ANGULAR_SPEED))]
 OptionalLength = Annotated[float | None, BeforeValidator(_Quantity(units.LENGTH, True))]
 OptionalAngle = Annotated[float | None, BeforeValidator(_Quantity(units.ANGLE, True))]
+OptionalDuration = Annotated[float | None, BeforeValidator(_Quantity(units.DURATION, True))]
 OptionalSpeed = Annotated[float | None, BeforeValidator(_Quantity(units.SPEED, True))]
 OptionalAngularSpeed = Annotated[
     float | None, BeforeValidator(_Quantity(units.ANGULAR_SPEED, True))
