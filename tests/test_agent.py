@@ -261,3 +261,21 @@ def test_a_robot_that_cannot_report_its_state_is_refused_clearly(agent, robot):
     assert not robot.received_motion
     assert agent.get_diagnostics()["robot"] == {"connected": False,
                                                 "error": "no odometry on /odom for 0.8 s"}
+
+
+def test_explicit_plans_read_units_like_every_other_path(agent, robot):
+    result = agent.run_plan([SkillCall("nav.move", {"distance": "3cm"}),
+                             SkillCall("nav.rotate", {"degrees": "90°"})])
+    assert result.success, result.response
+    assert result.steps[0].args == {"distance": 0.03}
+    st = robot.get_state()
+    assert st.x == pytest.approx(0.03, abs=0.003)
+    assert math.degrees(st.yaw) == pytest.approx(90, abs=0.1)
+
+
+@pytest.mark.parametrize("distance", [True, "3 seconds", "3 cmx"])
+def test_explicit_plans_with_unreadable_quantities_never_move(agent, robot, distance):
+    result = agent.run_plan([SkillCall("nav.move", {"distance": distance})])
+    assert not result.success and "'distance'" in result.response
+    assert "give a number of metres" in result.response
+    assert not robot.received_motion

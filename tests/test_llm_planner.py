@@ -6,16 +6,18 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import json
+import math
 import os
 import subprocess
 import sys
 import time
+from fractions import Fraction
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, load_config
+from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, SkillCall, load_config, units
 from shadowhound.config import ConfigError
 from shadowhound.llm.backend import estimate_tokens
 from shadowhound.llm.parse import parse_reply
@@ -111,6 +113,103 @@ def test_what_local_models_really_emit(srv, content):
     result = agent.execute_mission("walk forward 1 meter")
     assert result.success, result.response
     assert robot.get_state().x == pytest.approx(1.0, abs=0.003)
+
+
+# Units a model writes: the simulator's own pose says how far the robot really went.
+CENTIMETRES = ["3cm", "3 cm", "3 CM", "30mm", "0.03m", "3 centimetres", "3e-2 m", "0.03"]
+
+
+@pytest.mark.parametrize("distance", CENTIMETRES)
+def test_json_plan_with_units_moves_what_was_written(srv, distance):
+    agent, robot = make_agent(srv)
+    srv.script(json_plan([{"skill": "nav.move", "args": {"distance": distance}}]))
+    result = agent.execute_mission("walk forward 3 cm")
+    assert result.success, result.response
+    assert robot.get_state().x == pytest.approx(0.03, abs=0.003)
+    assert result.steps[0].args == {"distance": pytest.approx(0.03)}
+
+
+@pytest.mark.parametrize("mode", ["plan", "react"])
+@pytest.mark.parametrize("distance", ["3cm", "1.2 in"])
+def test_tool_calls_with_units_move_what_was_written(srv, mode, distance):
+    agent, robot = make_agent(srv, plan_format="tools", mode=mode)
+    srv.script(tool_calls(("nav_move", {"distance": distance}),
+                          ("nav_rotate", '{"degrees": "1/4 turn"}')), text("done"))
+    result = agent.execute_mission("walk forward 3 cm and turn a quarter turn left")
+    assert result.success, result.response
+    st_ = robot.get_state()
+    assert st_.x == pytest.approx(units.read(distance, units.LENGTH), abs=0.003)
+    assert math.degrees(st_.yaw) == pytest.approx(90, abs=0.1)
+
+
+@pytest.mark.parametrize(("distance", "why"), [
+    (True, "True is a boolean, not a length"),
+    ("3 seconds", "'3 seconds' is a duration, not a length"),
+    ("90 degrees", "'90 degrees' is an angle, not a length"),
+    ("3 cmx", "unknown unit 'cmx'"),
+    ("3 3 m", "expected one number and at most one unit"),
+    ("1e999 m", "too large"),
+])
+def test_model_quantities_that_cannot_be_read_never_move(srv, distance, why):
+    agent, robot = make_agent(srv)
+    bad = json_plan([{"skill": "nav.move", "args": {"distance": distance}}])
+    srv.script(bad, bad)
+    result = agent.execute_mission("walk forward")
+    assert not result.success and why in result.response
+    assert "give a number of metres" in result.response
+    assert why in srv.requests[1]["messages"][-1]["content"]  # the repair says what is allowed
+    assert not robot.received_motion
+
+
+@pytest.fixture(scope="module")
+def shared_srv():
+    with ScriptedLLM(models=("test-model",)) as server:
+        yield server
+
+
+# Unit spelling -> metres, or None for a unit of another kind (which must never move the robot).
+SPELLINGS = {"m": 1, "metres": 1, "cm": Fraction(1, 100), "centimeters": Fraction(1, 100),
+             "mm": Fraction(1, 1000), "in": Fraction(254, 10000), "inches": Fraction(254, 10000),
+             "ft": Fraction(3048, 10000), "feet": Fraction(3048, 10000), "": 1,
+             "s": None, "seconds": None, "deg": None, "°": None, "turn": None, "rad": None,
+             "m/s": None, "min": None}
+
+
+@settings(max_examples=40, deadline=None)
+@given(hundredths=st.integers(-150, 150), unit=st.sampled_from(sorted(SPELLINGS)),
+       space=st.sampled_from(["", " "]),
+       channel=st.sampled_from(["json plan", "tool call", "react", "run_plan"]))
+def test_any_distance_moves_its_reference_reading_or_nothing(shared_srv, hundredths, unit,
+                                                               space, channel):
+    """Whatever way a distance arrives, the simulator's pose shows it read in the right unit."""
+    written = f"{hundredths / 100}{space if unit else ''}{unit}"
+    factor = SPELLINGS[unit]
+    shared_srv.clear()
+    step = {"skill": "nav.move", "args": {"distance": written}}
+    call = ("nav_move", {"distance": written})
+    if channel == "json plan":
+        agent, robot = make_agent(shared_srv)
+        shared_srv.script(json_plan([step]), json_plan([step]))
+    elif channel == "react":
+        agent, robot = make_agent(shared_srv, plan_format="tools", mode="react")
+        shared_srv.script(tool_calls(call), text("done"))
+    else:
+        agent, robot = make_agent(shared_srv, plan_format="tools")
+        shared_srv.script(tool_calls(call), tool_calls(call))
+    if channel == "run_plan":
+        result = agent.run_plan([SkillCall("nav.move", {"distance": written})])
+    else:
+        result = agent.execute_mission("walk")
+    if factor is None:
+        if channel == "react":  # the refusal is the model's observation; it decides what next
+            assert "not a length" in str(shared_srv.requests[-1]["messages"][-1])
+        else:
+            assert not result.success and "not a length" in result.response
+        assert not robot.received_motion
+    else:
+        assert result.success, result.response
+        want = float(Fraction(hundredths, 100) * factor)
+        assert robot.get_state().x == pytest.approx(want, abs=0.003)
 
 
 def test_unknown_skill_gets_one_repair_round_trip(srv):

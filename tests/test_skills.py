@@ -3,9 +3,17 @@ import threading
 
 import pytest
 
-from shadowhound import SkillCall, SkillValidationError, default_registry
+from shadowhound import SkillCall, SkillValidationError, default_registry, units
 from shadowhound.config import ShadowHoundConfig
-from shadowhound.skills import MissionCancelled, PlanEnv, SkillContext, SkillError, SkillTimeout
+from shadowhound.skills import (
+    MissionCancelled,
+    PlanEnv,
+    SkillArgs,
+    SkillContext,
+    SkillError,
+    SkillTimeout,
+)
+from shadowhound.skills.arguments import Count, Length, argument_kind, is_numeric
 
 
 @pytest.fixture
@@ -49,12 +57,77 @@ def test_numbers_as_strings_are_accepted(registry):
     assert registry.validate(SkillCall("nav_rotate", {"degrees": 90})).name == "nav.rotate"
 
 
+# A valid call of every skill with numeric arguments; each argument is then varied alone.
+VALID = {"nav.move": {"distance": 1}, "nav.strafe": {"distance": 1}, "nav.rotate": {"degrees": 9},
+         "nav.goto": {"x": 1, "y": 1}, "nav.patrol": {}, "sys.wait": {"seconds": 1}}
+
+
+def numeric_arguments(registry):
+    return [(skill, name, info) for skill in registry
+            for name, info in skill.args_model.model_fields.items() if is_numeric(info)]
+
+
+def test_every_numeric_argument_reads_units_and_refuses_booleans(registry):
+    found = numeric_arguments(registry)
+    assert {s.name for s, _, _ in found} == set(VALID)
+    assert len(found) >= 12
+    for skill, name, info in found:
+        for flag in (True, False):  # pydantic alone would read True as 1 metre
+            with pytest.raises(SkillValidationError, match=rf"'{name}': {flag} is a boolean"):
+                registry.validate(SkillCall(skill.name, {**VALID[skill.name], name: flag}))
+        kind = argument_kind(info)
+        if kind is None:
+            continue
+        call = registry.validate(SkillCall(skill.name, {**VALID[skill.name],
+                                                        name: kind.example}))
+        assert getattr(call.args, name) == units.read(kind.example, kind), (skill.name, name)
+        other = next(k for k in units.KINDS if k is not kind)
+        with pytest.raises(SkillValidationError, match=f"not an? {kind.name}"):
+            registry.validate(SkillCall(skill.name, {**VALID[skill.name],
+                                                     name: f"1 {other.unit}"}))
+
+
+def test_numbers_with_units_are_read_for_every_caller(registry):
+    move = registry.validate(SkillCall("nav.move", {"distance": "3cm", "speed": "20 cm/s"}))
+    assert (move.args.distance, move.args.speed) == (0.03, 0.2)
+    assert move.args_dict() == {"distance": 0.03, "speed": 0.2}
+    turn = registry.validate(SkillCall("nav.rotate", {"degrees": "1/4 turn"}))
+    assert turn.args.degrees == 90.0
+    goto = registry.validate(SkillCall("nav.goto", {"x": "6 in", "y": "-2 ft",
+                                                    "heading_degrees": "90°"}))
+    assert (goto.args.x, goto.args.y, goto.args.heading_degrees) == (0.1524, -0.6096, 90.0)
+    assert registry.validate(SkillCall("sys.wait", {"seconds": "500ms"})).args.seconds == 0.5
+    assert registry.validate(SkillCall("nav.patrol", {"laps": "2"})).args.laps == 2
+
+
+def test_a_numeric_argument_must_be_declared_with_its_kind():
+    with pytest.raises(TypeError, match="Plain.distance: declare a numeric skill argument"):
+        class Plain(SkillArgs):
+            distance: float
+
+    with pytest.raises(TypeError, match="MaybeCount.n: declare"):
+        class MaybeCount(SkillArgs):
+            n: int | None = None
+
+    class Typed(SkillArgs):
+        distance: Length
+        n: Count = 1
+
+    assert Typed(distance="30cm").distance == 0.3
+
+
 @pytest.mark.parametrize(
     ("call", "message"),
     [
         (SkillCall("nav.fly", {}), "unknown skill 'nav.fly'; available skills: nav.move"),
         (SkillCall("nav.move", {}), "missing required argument 'distance'"),
-        (SkillCall("nav.move", {"distance": "far"}), "'distance' input should be a valid number"),
+        (SkillCall("nav.move", {"distance": "far"}), "'distance': 'far' is not a length"),
+        (SkillCall("nav.move", {"distance": "3 cmx"}), "'distance': '3 cmx': unknown unit 'cmx'"),
+        (SkillCall("nav.move", {"distance": "3 s"}), "'3 s' is a duration, not a length"),
+        (SkillCall("nav.move", {"distance": "2 km"}), "(got '2 km' = 2000.0)"),
+        (SkillCall("nav.move", {"distance": True}), "'distance': True is a boolean"),
+        (SkillCall("nav.patrol", {"laps": True}), "'laps': True is a boolean, not a count"),
+        (SkillCall("nav.patrol", {"laps": "1.5"}), "'laps': '1.5' is not a count"),
         (SkillCall("nav.move", {"distance": 1, "turbo": True}), "unknown argument 'turbo'"),
         (SkillCall("nav.move", {"distance": float("nan")}), "finite number"),
         (SkillCall("nav.move", {"distance": 5000}), "less than or equal to 1000"),

@@ -1,9 +1,10 @@
 """Reading plans out of what models really send.
 
 Tool calls, a JSON plan in the content, JSON in ``` fences, <tool_call> tags, a bare list of
-steps, arguments as JSON strings, numbers as strings with units: all become SkillCalls, and
-anything unusable becomes a problem sentence that goes back to the model. Nothing here decides
-whether a call is valid; the registry and the safety governor do.
+steps, arguments as JSON strings: all become SkillCalls, and anything unusable becomes a problem
+sentence that goes back to the model. Arguments are passed on as the model wrote them: the
+registry reads numbers with units ("3cm", "90 deg") the same way for every caller, and decides
+with the safety governor whether a call is valid.
 """
 
 from __future__ import annotations
@@ -18,12 +19,6 @@ from ..plan import SkillCall
 _THINK = re.compile(r"<think>.*?</think>", re.DOTALL | re.IGNORECASE)
 _FENCE = re.compile(r"```(?:json|JSON)?\s*(.*?)```", re.DOTALL)
 _TOOL_TAG = re.compile(r"<tool_call>\s*(.*?)\s*</tool_call>", re.DOTALL)
-_NUMBER_WITH_UNIT = re.compile(
-    r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?)\s*"
-    r"(?:m|meters?|metres?|cm|deg|degrees?|°|s|sec|seconds?|rad/s|m/s)?\s*$",
-    re.IGNORECASE,
-)
-_CENTIMETRES = re.compile(r"\bcm\s*$", re.IGNORECASE)
 
 
 @dataclass
@@ -136,16 +131,6 @@ def _add(reply: ParsedReply, name: Any, args: Any, where: str, call_id: str | No
         reply.problems.append(f"{where} ({name}): arguments must be an object, got "
                               f"{json.dumps(args)[:80]}")
         return
-    reply.calls.append(SkillCall(name.strip(), {k: _number(v) for k, v in args.items()}))
+    reply.calls.append(SkillCall(name.strip(), args))
     reply.call_ids.append(call_id)
 
-
-def _number(value: Any) -> Any:
-    """'1.5', '1.5 m', '90 degrees' -> float; '50 cm' -> 0.5. Anything else is left as it is."""
-    if not isinstance(value, str):
-        return value
-    m = _NUMBER_WITH_UNIT.match(value)
-    if m is None:
-        return value
-    number = float(m.group(1))
-    return number / 100.0 if _CENTIMETRES.search(value) else number

@@ -10,15 +10,16 @@ is decided in `rules.py`.
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass
 
+from shadowhound import units
 from shadowhound.planning._numbers import (
     NUM,
     NUMWORD,
     SPEED_UNITS,
     UNIT_ALT,
+    UNIT_KINDS,
     UNITS,
     to_digits,
     to_float,
@@ -36,7 +37,7 @@ _KEEP_COMMA = re.compile(
 )
 _KEEP_XY = re.compile(r"(\bx\s*[=:]?\s*[\w.-]+)\s*(?:,|\band\b)\s*(?=y\b)", re.I)
 _KEEP_AND = re.compile(
-    rf"\b(hundred|thousand)\s+and\s+(?=(?:{NUMWORD})\b)"
+    rf"\b(hundred|thousand|million|billion)\s+and\s+(?=(?:{NUMWORD})\b)"
     r"|\b(back|forth|forward|to)\s+and\s+(?=(?:forth|back|fro)\b)"
     r"|\b(go\s+ahead|try)\s+and\s+(?=\w)"
     r"|()\s+and\s+(?=(?:a\s+|an\s+|one\s+)?(?:half|quarter)\b)",
@@ -138,13 +139,17 @@ def quantity(number: str, unit: str | None) -> Token:
     value = to_float(number)
     if not unit:
         return Token("qty", number, value)
-    kind, mul, div = UNITS[canon(unit)]
-    if mul != 1.0 or div != 1.0:
-        # Rounding hides float noise such as 3 ft = 0.9144000000000001 m.
-        value = round(value * mul / div, 9)
-    if not math.isfinite(value):
-        raise ValueError(f"the quantity {number} {unit} is too large")
-    return Token("qty", f"{number} {unit}", value, kind, canon(unit))
+    name = canon(unit)
+    kind = UNITS[name]
+    value = _read(f"{number} {name}", UNIT_KINDS[kind])
+    return Token("qty", f"{number} {unit}", value, kind, name)
+
+
+def _read(text: str, kind: units.Kind) -> float:
+    try:
+        return units.read(text, kind)
+    except units.UnitError:  # the number and unit are well-formed: only its size can be wrong
+        raise ValueError(f"the quantity {text} is too large") from None
 
 
 def scan(text: str) -> list[Token]:
@@ -152,8 +157,8 @@ def scan(text: str) -> list[Token]:
     tokens: list[Token] = []
     for m in _TOKEN.finditer(text):
         if m.group("speed"):
-            speed = to_float(m.group("sn")) * SPEED_UNITS[canon(m.group("su"))]
-            tokens.append(Token("speed", m.group(0), round(speed, 9)))
+            speed = _read(f"{m.group('sn')} {canon(m.group('su'))}", units.SPEED)
+            tokens.append(Token("speed", m.group(0), speed))
         elif m.group("qty"):
             tokens.append(quantity(m.group("qty"), m.group("unit")))
         elif m.group("dir"):

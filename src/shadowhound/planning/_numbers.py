@@ -1,4 +1,4 @@
-"""Numbers for the offline planner: units, speed units, and numbers written out in words.
+"""Numbers for the offline planner: the units a sentence may use, and numbers in words.
 
 `to_digits` rewrites "one and a half meters" or "a quarter turn" as "1.5 meters" or "90 deg", so
 the rest of the planner only ever sees numbers in digits.
@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import re
 
+from shadowhound import units
 from shadowhound.planning._text import alternation, words
 
 DISTANCE = "distance"
@@ -17,39 +18,26 @@ TIME = "time"
 
 NUM = r"-?(?:[0-9]+(?:\.[0-9]+)?|\.[0-9]+)"
 
-# Unit name -> (kind, multiplier, divisor). Dividing separately keeps "50 cm" exactly 0.5 m.
-UNITS: dict[str, tuple[str, float, float]] = {}
+# The planner's kinds of quantity, in the units `shadowhound.units` reads them in.
+UNIT_KINDS = {DISTANCE: units.LENGTH, ANGLE: units.ANGLE, TIME: units.DURATION}
+# "walk 2 in the kitchen": in a sentence "in" is a preposition far more often than inches.
+_NOT_IN_SENTENCES = {"in"}
 
+# Unit name -> kind, for the units a sentence may use. Converting them is `shadowhound.units`'
+# job (see `_english.quantity`), the same conversion every other path uses.
+UNITS: dict[str, str] = {
+    name: planner_kind
+    for planner_kind, kind in UNIT_KINDS.items()
+    for name in units.unit_names(kind)
+    if name not in _NOT_IN_SENTENCES
+}
 
-def _units(kind: str, mul: float, div: float, names: str) -> None:
-    for name in names.split():
-        UNITS[name] = (kind, mul, div)
-
-
-_units(DISTANCE, 1.0, 1.0, "m meter meters metre metres mtr mtrs")
-_units(DISTANCE, 1.0, 100.0, "cm centimeter centimeters centimetre centimetres")
-_units(DISTANCE, 1.0, 1000.0, "mm millimeter millimeters millimetre millimetres")
-_units(DISTANCE, 1000.0, 1.0, "km kilometer kilometers kilometre kilometres")
-_units(DISTANCE, 0.3048, 1.0, "ft foot feet")
-_units(DISTANCE, 0.0254, 1.0, "inch inches")
-_units(DISTANCE, 0.9144, 1.0, "yd yds yard yards")
-_units(DISTANCE, 1609.344, 1.0, "mile miles")
-_units(ANGLE, 1.0, 1.0, "deg degs degree degrees")
-_units(ANGLE, 180.0 / math.pi, 1.0, "rad rads radian radians")
-_units(ANGLE, 360.0, 1.0, "turn turns rev revs revolution revolutions rotation rotations")
-_units(ANGLE, 360.0, 1.0, "circle circles spin spins")
-_units(TIME, 1.0, 1.0, "s sec secs second seconds")
-_units(TIME, 1.0, 1000.0, "ms millisecond milliseconds")
-_units(TIME, 60.0, 1.0, "min mins minute minutes")
-_units(TIME, 3600.0, 1.0, "h hr hrs hour hours")
-
-SPEED_UNITS: dict[str, float] = {
-    "m/s": 1.0, "mps": 1.0, "meters per second": 1.0, "metres per second": 1.0,
-    "meter per second": 1.0, "metre per second": 1.0, "cm/s": 0.01,
-    "km/h": 1 / 3.6, "kph": 1 / 3.6, "kmh": 1 / 3.6, "km per hour": 1 / 3.6,
-    "kilometers per hour": 1 / 3.6, "kilometres per hour": 1 / 3.6,
-    "mph": 0.44704, "miles per hour": 0.44704,
-}  # fmt: skip
+# Speed units a sentence may use ("at 2 km/h"), also converted by `shadowhound.units`.
+SPEED_UNITS = words(
+    "m/s|mps|meters per second|metres per second|meter per second|metre per second|cm/s"
+    "|km/h|kph|kmh|km per hour|kilometers per hour|kilometres per hour|mph|miles per hour",
+    "|",
+)
 
 UNIT_ALT = alternation(UNITS)
 QTY = re.compile(rf"({NUM})\s*({UNIT_ALT})?(?![\w/])")
@@ -76,7 +64,7 @@ _SMALL = words(
 )
 _TENS = words("twenty thirty forty fifty sixty seventy eighty ninety")
 _VALUES = {w: i for i, w in enumerate(_SMALL)} | {w: 20 + 10 * i for i, w in enumerate(_TENS)}
-_SCALES = {"hundred": 100, "thousand": 1000, "million": 1_000_000}
+_SCALES = {"hundred": 100, "thousand": 1000, "million": 1_000_000, "billion": 1_000_000_000}
 NUMWORD = alternation([*_VALUES, *_SCALES])
 _DIGITWORD = alternation(_SMALL[:10])
 
@@ -88,7 +76,7 @@ _PHRASES = [
     (re.compile(rf"{_ONE}half\s+(?:a\s+|of\s+a\s+)?{_TURN_WORDS}"), "180 deg"),
     (re.compile(rf"{_ONE}(?:full|complete|whole|entire)\s+{_TURN_WORDS}"), "360 deg"),
     (re.compile(r"\ball\s+the\s+way\s+(?:a)?round\b|\bin\s+a\s+(?:full\s+)?circle\b"), "360 deg"),
-    (re.compile(r"\ba\s+(hundred|thousand|million)\b"), r"one \1"),
+    (re.compile(r"\ba\s+(hundred|thousand|million|billion)\b"), r"one \1"),
     (re.compile(r"\ba\s+dozen\b"), "12"),
     (re.compile(r"\b(?:a\s+)?(?:couple|pair)(?:\s+of)?\b"), "2"),
     (re.compile(r"\b(?:a\s+)?few\b"), "3"),
@@ -127,15 +115,19 @@ def _words_to_numbers(m: re.Match[str]) -> str:
         words = words[:at]
     groups: list[float] = []
     total = current = 0
+    top = 0  # the largest scale in `total`
     last = ""
     for word in words:
         if word == "and":
             continue
         if word in _SCALES:
-            if _SCALES[word] == 100:
+            scale = _SCALES[word]
+            if scale == 100:
                 current = (current or 1) * 100
-            else:
-                total, current = total + (current or 1) * _SCALES[word], 0
+            elif scale > top:  # "one thousand million": the million scales all that came before
+                total, current, top = (total + current or 1) * scale, 0, scale
+            else:  # "two million three thousand"
+                total, current = total + (current or 1) * scale, 0
             last = "scale"
             continue
         value = _VALUES[word]

@@ -3,8 +3,23 @@
 from __future__ import annotations
 
 from . import body, memory, nav, sense
+from .arguments import (
+    Angle,
+    AngularSpeed,
+    Count,
+    Duration,
+    Length,
+    NoArgs,
+    OptionalAngle,
+    OptionalAngularSpeed,
+    OptionalDuration,
+    OptionalLength,
+    OptionalSpeed,
+    SkillArgs,
+    Speed,
+)
 from .context import MissionCancelled, PlanEnv, PlanProblem, SkillContext, SkillError, SkillTimeout
-from .registry import NoArgs, Skill, SkillArgs, SkillRegistry, SkillValidationError, ValidatedCall
+from .registry import Skill, SkillRegistry, SkillValidationError, ValidatedCall
 
 
 def default_registry() -> SkillRegistry:
@@ -13,8 +28,18 @@ def default_registry() -> SkillRegistry:
 
 
 __all__ = [
+    "Angle",
+    "AngularSpeed",
+    "Count",
+    "Duration",
+    "Length",
     "MissionCancelled",
     "NoArgs",
+    "OptionalAngle",
+    "OptionalAngularSpeed",
+    "OptionalDuration",
+    "OptionalLength",
+    "OptionalSpeed",
     "PlanEnv",
     "PlanProblem",
     "Skill",
@@ -24,6 +49,7 @@ __all__ = [
     "SkillRegistry",
     "SkillTimeout",
     "SkillValidationError",
+    "Speed",
     "ValidatedCall",
     "default_registry",
 ]

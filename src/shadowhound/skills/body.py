@@ -8,8 +8,9 @@ from pydantic import Field
 
 from ..robot.go2_api import TRICKS
 from ..state import Posture
+from .arguments import NoArgs, SkillArgs
 from .context import SkillContext
-from .registry import NoArgs, Skill, SkillArgs
+from .registry import Skill
 
 TrickName = Literal[tuple(TRICKS)]  # type: ignore[valid-type]
 

@@ -6,8 +6,9 @@ from pydantic import Field
 
 from ..memory.places import normalize_place
 from ..state import Pose2D
+from .arguments import NoArgs, SkillArgs
 from .context import PlanEnv, SkillContext, SkillError
-from .registry import NoArgs, Skill, SkillArgs
+from .registry import Skill
 
 _NAME = r"^[^\W\d_][\w' -]*$"
 

@@ -8,8 +8,19 @@ from pydantic import Field, model_validator
 
 from ..state import Pose2D, normalize_angle
 from . import motion
+from .arguments import (
+    Angle,
+    Count,
+    Length,
+    NoArgs,
+    OptionalAngle,
+    OptionalAngularSpeed,
+    OptionalLength,
+    OptionalSpeed,
+    SkillArgs,
+)
 from .context import PlanEnv, SkillContext
-from .registry import NoArgs, Skill, SkillArgs
+from .registry import Skill
 
 # Schema ranges are sanity bounds on the form of a request; the configured safety limits
 # (SafetyConfig) are checked on top of them before anything moves.
@@ -17,36 +28,42 @@ _MAX_DISTANCE = 1000.0
 
 
 class MoveArgs(SkillArgs):
-    distance: float = Field(
+    distance: Length = Field(
         ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres; + forward, - backward"
     )
-    speed: float | None = Field(None, gt=0, le=1.5, description="m/s; default from config")
+    speed: OptionalSpeed = Field(None, gt=0, le=1.5, description="m/s; default from config")
 
 
 class StrafeArgs(SkillArgs):
-    distance: float = Field(
+    distance: Length = Field(
         ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres sideways; + left, - right"
     )
-    speed: float | None = Field(None, gt=0, le=1.5, description="m/s; default from config")
+    speed: OptionalSpeed = Field(None, gt=0, le=1.5, description="m/s; default from config")
 
 
 class RotateArgs(SkillArgs):
-    degrees: float = Field(
+    degrees: Angle = Field(
         ge=-3600, le=3600, description="degrees; + counter-clockwise (left), - clockwise (right)"
     )
-    speed: float | None = Field(None, gt=0, le=3.0, description="rad/s; default from config")
+    speed: OptionalAngularSpeed = Field(
+        None, gt=0, le=3.0, description="rad/s; default from config"
+    )
 
 
 class GotoArgs(SkillArgs):
-    x: float | None = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
-    y: float | None = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
+    x: OptionalLength = Field(
+        None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom"
+    )
+    y: OptionalLength = Field(
+        None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom"
+    )
     place: str | None = Field(
         None, min_length=1, max_length=100, description="a named place, 'start' or 'home'"
     )
-    heading_degrees: float | None = Field(
+    heading_degrees: OptionalAngle = Field(
         None, ge=-360, le=360, description="final heading in degrees (odom); default: keep"
     )
-    speed: float | None = Field(None, gt=0, le=1.5, description="m/s; default from config")
+    speed: OptionalSpeed = Field(None, gt=0, le=1.5, description="m/s; default from config")
 
     @model_validator(mode="after")
     def _target(self) -> GotoArgs:
@@ -61,7 +78,7 @@ class GotoArgs(SkillArgs):
 
 
 class PatrolArgs(SkillArgs):
-    laps: int = Field(1, ge=1, le=20, description="how many times to walk the patrol route")
+    laps: Count = Field(1, ge=1, le=20, description="how many times to walk the patrol route")
 
 
 def _linear(ctx_or_env: SkillContext | PlanEnv, speed: float | None) -> float:

@@ -13,23 +13,15 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import ValidationError
 
 from ..plan import SkillCall
+from ..units import UnitError
+from .arguments import SkillArgs
 
 if TYPE_CHECKING:
     from ..state import Pose2D
     from .context import PlanEnv, SkillContext
-
-
-class SkillArgs(BaseModel):
-    """Base of every skill's arguments: unknown keys and non-finite numbers are errors."""
-
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
-
-
-class NoArgs(SkillArgs):
-    """This skill takes no arguments."""
 
 
 class SkillValidationError(ValueError):
@@ -154,7 +146,7 @@ class SkillRegistry:
         try:
             parsed = skill.args_model.model_validate(dict(args))
         except ValidationError as exc:
-            raise SkillValidationError(_explain(skill, exc)) from exc
+            raise SkillValidationError(_explain(skill, exc, args)) from exc
         return ValidatedCall(skill, parsed, call.label)
 
     def describe(self) -> list[dict[str, Any]]:
@@ -175,7 +167,7 @@ class SkillRegistry:
         ]
 
 
-def _explain(skill: Skill, exc: ValidationError) -> list[str]:
+def _explain(skill: Skill, exc: ValidationError, args: Mapping[str, Any]) -> list[str]:
     fields = skill.args_model.model_fields
     allowed = ", ".join(fields) or "none"
     problems = []
@@ -192,11 +184,16 @@ def _explain(skill: Skill, exc: ValidationError) -> list[str]:
                 f"{skill.name}: missing required argument {name!r}{_hint(fields, name)}"
             )
             continue
+        if isinstance(err.get("ctx", {}).get("error"), UnitError):
+            problems.append(f"{skill.name}: {name!r}: {err['ctx']['error']}")
+            continue
         if isinstance(got, float) and not math.isfinite(got):
             problems.append(f"{skill.name}: {name!r} must be a finite number, got {got}")
             continue
         message = err["msg"].lower()
-        problems.append(f"{skill.name}: {name!r} {message} (got {got!r}){_hint(fields, name)}")
+        given = args.get(name, got)
+        shown = repr(got) if given is got or given == got else f"{given!r} = {got!r}"
+        problems.append(f"{skill.name}: {name!r} {message} (got {shown}){_hint(fields, name)}")
     return problems
 
 

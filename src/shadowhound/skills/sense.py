@@ -10,8 +10,9 @@ from pydantic import Field
 
 from ..state import CameraFrame
 from . import motion
+from .arguments import Duration, NoArgs, SkillArgs
 from .context import SkillContext
-from .registry import NoArgs, Skill, SkillArgs
+from .registry import Skill
 
 
 class DescribeArgs(SkillArgs):
@@ -21,7 +22,7 @@ class DescribeArgs(SkillArgs):
 
 
 class WaitArgs(SkillArgs):
-    seconds: float = Field(ge=0, le=3600, description="seconds to stand still")
+    seconds: Duration = Field(ge=0, le=3600, description="seconds to stand still")
 
 
 def describe_frame(
