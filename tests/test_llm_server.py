@@ -155,7 +155,7 @@ def test_delay_longer_than_timeout(srv: ScriptedLLM) -> None:
     started = time.monotonic()
     with pytest.raises(openai.APITimeoutError):
         chat(client_for(srv, timeout=0.3))
-    assert time.monotonic() - started < 2
+    assert time.monotonic() - started < 10  # far below the 30 s the server would wait
 
 
 def test_delay_shorter_than_timeout_then_reply(srv: ScriptedLLM) -> None:
@@ -182,7 +182,7 @@ def test_stop_is_not_held_up_by_a_pending_delay() -> None:
     assert server.requests, "the request never reached the server"
     started = time.monotonic()
     server.stop()
-    assert time.monotonic() - started < 0.3
+    assert time.monotonic() - started < 10  # far below the 30 s delay it cut short
     caller.join(timeout=5)
     assert not caller.is_alive()
     assert len(errors) == 1
@@ -305,18 +305,24 @@ def test_keep_alive_requests_share_a_connection(srv: ScriptedLLM) -> None:
 
 
 def test_concurrent_clients(srv: ScriptedLLM) -> None:
-    srv.script(*(delay(0.3, text("x")) for _ in range(6)))
+    # Every reply waits until all six requests are being served at once: a server that handles
+    # them one after another breaks the barrier (a 500), whatever the machine's speed.
+    together = threading.Barrier(6, timeout=20)
+
+    def wait_for_all(_body: dict[str, Any]):  # type: ignore[no-untyped-def]
+        together.wait()
+        return text("x")
+
+    srv.script(*(dynamic(wait_for_all) for _ in range(6)))
     results: list[str | None] = []
 
     def call() -> None:
         results.append(chat(client_for(srv)).choices[0].message.content)
 
     threads = [threading.Thread(target=call) for _ in range(6)]
-    started = time.monotonic()
     for t in threads:
         t.start()
     for t in threads:
-        t.join(timeout=5)
+        t.join(timeout=30)
     assert results == ["x"] * 6
-    assert time.monotonic() - started < 1.2  # in parallel: one after another takes 1.8 s
     assert len(srv.requests) == 6
