@@ -125,7 +125,8 @@ def build_parser() -> argparse.ArgumentParser:
                                          "extra)")
     _common(serve, suppress=True)
     serve.add_argument("--host", default="127.0.0.1",
-                       help="address to listen on; anything but loopback needs a token")
+                       help="address to listen on; anything but a literal loopback address "
+                            "(127.x.x.x, ::1) or localhost needs a token")
     serve.add_argument("--port", type=int, default=8080, help="TCP port (default 8080)")
     serve.add_argument("--token", default=None,
                        help="bearer token the API requires (default $SHADOWHOUND_TOKEN; the "
