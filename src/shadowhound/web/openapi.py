@@ -65,9 +65,20 @@ def _answer(model: type[BaseModel], description: str) -> dict[str, Any]:
 
 
 def _drop_unused(schema: dict[str, Any], names: tuple[str, ...]) -> None:
+    """Remove the components `names` once nothing refers to them (FastAPI's 422 models)."""
     components = schema.get("components", {}).get("schemas", {})
-    for name in names:
-        kept = {k: v for k, v in schema.items() if k != "components"}
-        others = {k: v for k, v in components.items() if k != name}
-        if _REF.format(model=name) not in repr(kept) + repr(others):
+    for name in names:  # in order: a model that refers to a later one goes first
+        rest = {**schema, "components": {**schema.get("components", {}), "schemas": {
+            k: v for k, v in components.items() if k != name}}}
+        if _REF.format(model=name) not in _refs(rest):
             components.pop(name, None)
+
+
+def _refs(node: Any) -> set[str]:
+    """Every `$ref` value in a JSON document."""
+    if isinstance(node, dict):
+        found = {node["$ref"]} if isinstance(node.get("$ref"), str) else set()
+        return found.union(*(_refs(v) for v in node.values()))
+    if isinstance(node, list):
+        return set().union(*(_refs(v) for v in node))
+    return set()
