@@ -2,8 +2,11 @@
 
 import json
 import os
+import signal
+import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -133,3 +136,139 @@ def test_risky_trick_needs_approval_on_the_command_line():
     assert refused.returncode == 1 and "no interface that can ask a person" in refused.stdout
     approved = shadowhound("run", "-q", "--yes", "do a backflip")
     assert approved.returncode == 0 and "performed backflip" in approved.stdout
+
+
+# -- run --json answers with one JSON object on every exit -------------------------------------
+
+
+def one_error_object(proc, code, kind):
+    """stdout is exactly one JSON object saying what went wrong, and the exit code is kept."""
+    assert proc.returncode == code, proc.stderr
+    answer = json.loads(proc.stdout)  # raises on nothing, or on more than one document
+    assert answer["success"] is False and answer["status"] == "error"
+    assert answer["error_kind"] == kind and answer["exit_code"] == code
+    assert answer["error"] and answer["error"] in answer["response"]
+    assert answer["error"] in proc.stderr  # people see it too
+    assert "Traceback" not in proc.stderr
+    return answer
+
+
+def closed_port():
+    """A loopback port nothing listens on (bound, then closed)."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def test_run_json_unreachable_backend_is_one_json_error(tmp_path):
+    url = f"http://127.0.0.1:{closed_port()}/v1"
+    proc = shadowhound("run", "--json", "--backend", "llamacpp", "--base-url", url, "--model",
+                       "m", "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+    answer = one_error_object(proc, 2, "backend_unavailable")
+    assert url in answer["error"] and answer["mission"] == "stand up"
+
+
+def test_run_json_corrupt_history_database_is_one_json_error(tmp_path):
+    (tmp_path / "history.db").write_bytes(b"this is not a database" * 100)
+    proc = shadowhound("run", "--json", "stand up",
+                       env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+    answer = one_error_object(proc, 2, "configuration")
+    assert "history.db" in answer["error"] and "corrupt" in answer["response"]
+
+
+@pytest.mark.parametrize("args", [
+    ("--config", "nope", "run", "--json", "stand up"),
+    ("run", "--json", "--config", "nope", "stand up"),
+    ("run", "--json", "--config", "BAD", "stand up"),
+])
+def test_run_json_bad_profile_is_one_json_error(tmp_path, args):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("safety: {max_linear_speed: fast}")
+    proc = shadowhound(*(str(bad) if a == "BAD" else a for a in args))
+    answer = one_error_object(proc, 2, "configuration")
+    assert "nope" in answer["response"] or "safety.max_linear_speed" in answer["response"]
+
+
+@pytest.mark.parametrize("args", [
+    ("run", "--json"),  # no mission
+    ("run", "--json", "--backend", "skynet", "stand up"),
+    ("--time-scale", "slow", "run", "--json", "stand up"),
+])
+def test_run_json_usage_errors_are_one_json_error(args):
+    proc = shadowhound(*args)
+    one_error_object(proc, 2, "usage")
+    assert proc.stderr.startswith("usage: shadowhound")
+
+
+def test_run_json_results_carry_the_exit_code():
+    proc = shadowhound("run", "--json", "walk forward 500 meters")
+    answer = json.loads(proc.stdout)
+    assert proc.returncode == answer["exit_code"] == 1 and answer["status"] == "failed"
+    assert answer["error"]
+    proc = shadowhound("run", "--json", "stand up")
+    answer = json.loads(proc.stdout)
+    assert proc.returncode == answer["exit_code"] == 0 and answer["error"] is None
+
+
+def start_json_run(*args, env=None):
+    full_env = {**os.environ, **(env or {})}
+    full_env.pop("SHADOWHOUND_CONFIG", None)
+    return subprocess.Popen([sys.executable, "-m", "shadowhound", "run", "--json", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=full_env)
+
+
+def interrupt(proc):
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+
+
+def test_run_json_interrupted_while_connecting_is_one_json_error(tmp_path):
+    """Ctrl-C while the backend check waits on a server that accepts and never answers."""
+    with socket.socket() as listener:
+        listener.bind(("127.0.0.1", 0))
+        listener.listen(8)
+        url = f"http://127.0.0.1:{listener.getsockname()[1]}/v1"
+        proc = start_json_run("--backend", "llamacpp", "--base-url", url, "--model", "m",
+                              "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+        listener.settimeout(60)
+        conn, _ = listener.accept()  # the check is now waiting for an answer
+        with conn:
+            answer = one_error_object(interrupt(proc), 130, "interrupted")
+    assert answer["mission"] == "stand up"
+
+
+def test_run_json_interrupted_while_planning_is_one_json_error(tmp_path):
+    """Ctrl-C while the model has not answered the plan request."""
+    from tests.llm_server import ScriptedLLM, delay, json_plan
+
+    with ScriptedLLM(models=("m",)) as srv:
+        srv.script(delay(60, json_plan([{"skill": "body.stand", "args": {}}])))
+        proc = start_json_run("--backend", "llamacpp", "--base-url", srv.url, "--model", "m",
+                              "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+        deadline = time.monotonic() + 60
+        while not srv.requests and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        assert srv.requests, "the plan request never reached the model"
+        done = interrupt(proc)
+    # One object either way: the stopped mission's result once planning can be abandoned at
+    # once, else the error after the grace period; nothing moved.
+    answer = json.loads(done.stdout)
+    assert done.returncode == answer["exit_code"] == 130, done.stderr
+    assert answer["success"] is False and answer["error"] and "Traceback" not in done.stderr
+    assert (answer.get("robot") or {}).get("distance_travelled", 0) == 0
+
+
+def test_run_json_interrupted_while_moving_is_the_result_with_an_error(tmp_path):
+    proc = start_json_run("--time-scale", "1", "walk forward 4 meters",
+                          env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+    assert proc.stderr is not None
+    for line in proc.stderr:  # progress: wait until the robot walks
+        if "nav.move" in line:
+            break
+    done = interrupt(proc)
+    answer = json.loads(done.stdout)  # the mission's own result: it had started
+    assert done.returncode == answer["exit_code"] == 130 and answer["success"] is False
+    assert answer["status"] == "stopped" and "e-stop" in answer["error"]
+    assert answer["robot"]["distance_travelled"] < 4

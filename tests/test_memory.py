@@ -39,8 +39,9 @@ def agent_with_memory(data: Path, **memory) -> RobotAgent:
     return agent
 
 
-def cli(data: Path, *args: str, stdin: str | None = None) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "SHADOWHOUND_MEMORY__DATA_DIR": str(data)}
+def cli(data: Path, *args: str, stdin: str | None = None,
+        env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "SHADOWHOUND_MEMORY__DATA_DIR": str(data), **(env or {})}
     env.pop("SHADOWHOUND_CONFIG", None)
     return subprocess.run([sys.executable, "-m", "shadowhound", *args], capture_output=True,
                           text=True, timeout=120, env=env, input=stdin)
@@ -219,6 +220,68 @@ def test_language_model_gets_relevant_memories(tmp_path):
         agent.execute_mission("where is the charging dock?")
         system = srv.requests[0]["messages"][0]["content"]
         assert "Relevant memories:" in system and "behind the sofa" in system
+
+
+def break_store(data: Path, damage: str) -> Path:
+    """A retrieval store made unusable the way it happens to people; returns its path."""
+    store = data / "recall"
+    if damage == "corrupt":  # a real store, then its database overwritten (a bad disk, a bad copy)
+        agent = agent_with_memory(data, enable_rag=True)
+        assert agent.execute_mission("remember that the fridge is in the kitchen").success
+        agent.cleanup()
+        (store / "chroma.sqlite3").write_bytes(b"this is not a database" * 200)
+    else:  # a file where the directory should be
+        store.write_text("not a directory")
+    return store
+
+
+@needs_rag
+@pytest.mark.parametrize("damage", ["corrupt", "file"])
+def test_a_broken_retrieval_store_turns_recall_off_and_missions_still_run(tmp_path, damage):
+    store = break_store(tmp_path, damage)
+    kept = store.read_bytes() if store.is_file() else (store / "chroma.sqlite3").read_bytes()
+    rag = {"SHADOWHOUND_MEMORY__ENABLE_RAG": "true"}
+
+    proc = cli(tmp_path, "run", "--json", "walk forward 1 meter", env=rag)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["success"] is True
+    assert "retrieval memory is off for this run" in proc.stderr and str(store) in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+    proc = cli(tmp_path, "recall", "where is the fridge?", env=rag)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert "retrieval memory is unavailable" in proc.stderr and str(store) in proc.stderr
+    assert "move it aside" in proc.stderr and "memory.enable_rag: false" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+    agent = agent_with_memory(tmp_path, enable_rag=True)
+    status = agent.get_diagnostics()["memory"]
+    assert status["history"] == "on" and status["recall"] == "unavailable"
+    assert str(store) in status["recall_problem"]
+    taught = agent.execute_mission("remember that the sofa is blue")
+    assert not taught.success and "retrieval memory is off for this run" in taught.response
+    assert agent.execute_mission("walk forward 1 meter").success
+    agent.cleanup()
+    # The broken store is left as it was, for inspection.
+    assert kept == (store.read_bytes() if store.is_file()
+                    else (store / "chroma.sqlite3").read_bytes())
+
+
+@needs_rag
+def test_a_store_that_breaks_while_running_turns_recall_off(tmp_path):
+    agent = agent_with_memory(tmp_path, enable_rag=True)
+    assert agent.execute_mission("remember that the fridge is in the kitchen").success
+    assert agent.get_diagnostics()["memory"]["recall"] == "on"
+    with (tmp_path / "recall" / "chroma.sqlite3").open("r+b") as db:
+        db.write(b"\0garbage" * 20_000)
+    answer = agent.execute_mission("where is the fridge?")  # searches the broken store
+    assert answer.success
+    assert agent.execute_mission("walk forward 1 meter").success  # its summary is not stored
+    status = agent.get_diagnostics()["memory"]
+    assert status["recall"] == "unavailable" and "recall" in status["recall_problem"]
+    assert [r["mission"] for r in agent.recent_missions(3)][:2] == [
+        "walk forward 1 meter", "where is the fridge?"]
+    agent.cleanup()
 
 
 def test_rag_without_the_extra_says_what_to_install(tmp_path):

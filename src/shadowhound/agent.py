@@ -551,6 +551,7 @@ class RobotAgent:
             "refusals": list(last.refusals) if last else [],
             "pending_approval": self.pending_approval(),
             "limits": self.settings.safety.model_dump(),
+            "memory": self._memory.status(),
         }
 
     def get_robot_status(self) -> dict[str, Any]:

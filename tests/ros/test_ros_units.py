@@ -121,6 +121,10 @@ def test_diagnostic_values_are_strings_with_the_documented_keys() -> None:
     assert float(values["battery"]) == pytest.approx(100.0)
     assert {"current_skill", "progress", "errors", "backend", "pose_x", "pose_y",
             "pose_yaw", "robot"} <= set(values)
+    assert values["memory_recall"] == "off" and values["memory_problem"] == ""
+    broken = {"memory": {"recall": "unavailable", "recall_problem": "the store 'x' is corrupt"}}
+    values = dict(convert.diagnostic_values(broken))
+    assert values["memory_recall"] == "unavailable" and "corrupt" in values["memory_problem"]
     assert convert.diagnostic_message({"status": "failed", "errors": ["a", "b"]}) == "failed: b"
 
 

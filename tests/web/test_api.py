@@ -10,6 +10,7 @@ from fastapi.testclient import TestClient
 
 from shadowhound import RobotAgent
 from shadowhound.web import create_app
+from shadowhound.web.models import MAX_BODY
 from tests.images import tiny_jpeg
 from tests.web.conftest import finished, make_agent, wait_for
 
@@ -87,7 +88,7 @@ def test_bad_requests_get_clear_4xx(client: TestClient) -> None:
     reply = client.post("/api/mission", content=b"{not json",
                         headers={"content-type": "application/json"})
     assert reply.status_code == 422
-    big = client.post("/api/mission", content=b"x" * 20_000,
+    big = client.post("/api/mission", content=b"x" * (MAX_BODY + 1),
                       headers={"content-type": "application/json"})
     assert big.status_code == 413 and "larger than" in big.json()["detail"]
     assert client.get("/api/missions/nope").status_code == 404
@@ -202,3 +203,85 @@ def test_importing_shadowhound_does_not_import_the_web_stack() -> None:
             "bad = [m for m in ('fastapi', 'uvicorn', 'starlette') if m in sys.modules]; "
             "assert not bad, bad")
     subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
+
+
+# -- strict types at the HTTP edge ----------------------------------------------------------------
+
+
+def _field_is_valid(field: str, value: object) -> bool:
+    """The reference reading of MissionRequest's optional fields: JSON types are not converted
+    (a string is not a boolean, a boolean is not a number)."""
+    if field == "dry_run":
+        return type(value) is bool
+    if field == "priority":
+        return value is None or type(value) is int and 0 <= value <= 10
+    raise AssertionError(field)
+
+
+def test_strings_are_not_booleans_and_booleans_are_not_numbers(client: TestClient,
+                                                               agent: RobotAgent) -> None:
+    for body, where in [
+        ({"command": "walk forward 1 meter", "dry_run": "yes"}, "body.dry_run"),
+        ({"command": "walk forward 1 meter", "dry_run": "true"}, "body.dry_run"),
+        ({"command": "walk forward 1 meter", "dry_run": 1}, "body.dry_run"),
+        ({"command": "walk forward 1 meter", "priority": True}, "body.priority"),
+        ({"command": "walk forward 1 meter", "priority": "1"}, "body.priority"),
+        ({"command": "walk forward 1 meter", "priority": 1.5}, "body.priority"),
+        ({"command": True}, "body.command"),
+    ]:
+        reply = client.post("/api/mission", json=body)
+        assert reply.status_code == 422, (body, reply.text)
+        problems = reply.json()["problems"]
+        assert [p["where"] for p in problems] == [where], (body, problems)
+        assert where in reply.json()["detail"]
+    assert client.post("/api/chat", json={"text": False}).status_code == 422
+    reply = client.post("/api/approval/x/reject", json={"reason": 0})
+    assert reply.status_code == 422 and reply.json()["problems"][0]["where"] == "body.reason"
+    assert client.get("/api/missions").json()["missions"] == []  # nothing was queued
+    assert agent.get_robot_state().x == 0.0
+
+
+def test_mission_fields_accept_exactly_their_json_type(client: TestClient) -> None:
+    """Property: for any JSON value in `dry_run` or `priority`, the request is refused (422,
+    naming the field) exactly when the value is not of the field's JSON type and range."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    scalars = st.one_of(st.none(), st.booleans(), st.integers(-20, 20),
+                        st.floats(allow_nan=False, allow_infinity=False), st.text(max_size=6),
+                        st.sampled_from(["yes", "no", "true", "false", "1", "0", "on", "off"]))
+    values = st.one_of(scalars, st.lists(scalars, max_size=2),
+                       st.dictionaries(st.text(max_size=3), scalars, max_size=2))
+
+    @settings(max_examples=150, deadline=None, database=None,
+              suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(st.sampled_from(["dry_run", "priority"]), values)
+    def check(field: str, value: object) -> None:
+        # A dry run never moves the robot, so accepted requests cost nothing.
+        body = {"command": "walk forward 1 meter", "dry_run": True, field: value}
+        reply = client.post("/api/mission", json=body)
+        valid = _field_is_valid(field, value)
+        assert (reply.status_code != 422) == valid, (body, reply.text)
+        if not valid:
+            assert [p["where"] for p in reply.json()["problems"]] == [f"body.{field}"]
+
+    check()
+
+
+def test_every_mission_within_the_text_limit_fits_in_a_body(agent: RobotAgent) -> None:
+    """413 is about bytes, the mission limit about characters: a command of the longest allowed
+    length in the most expensive JSON spelling still reaches the route (and is judged there)."""
+    from shadowhound.web.models import MAX_TEXT
+
+    wide = make_agent(agent={"max_mission_chars": MAX_TEXT})
+    with TestClient(create_app(wide), base_url="http://127.0.0.1") as client:
+        text = "\U0001f600" * (MAX_TEXT - 20) + " stand up"  # each escaped as 12 bytes
+        body = ('{"command": "' + text.encode("unicode_escape").decode()
+                .replace("\\U0001f600", "\\ud83d\\ude00") + '", "dry_run": true}')
+        assert len(body.encode()) > 12 * (MAX_TEXT - 20)
+        reply = client.post("/api/mission", content=body.encode(),
+                            headers={"content-type": "application/json"})
+        assert reply.status_code == 202, reply.text[:300]
+        over = client.post("/api/mission", json={"command": "x" * (MAX_TEXT + 1)})
+        assert over.status_code == 422 and over.json()["problems"][0]["where"] == "body.command"
+    wide.cleanup()

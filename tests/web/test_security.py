@@ -122,3 +122,82 @@ def test_serve_refuses_with_a_clear_message_and_exit_2(monkeypatch: pytest.Monke
         taken.close()
         agent.cleanup()
     assert code == 2 and "cannot listen" in out.getvalue()
+
+
+# -- the Host header and the loopback rule ------------------------------------------------------
+
+# What a Host header may be (RFC 9110): a name or a bracketed IPv6 literal, then ":" and digits.
+_HOST_CHARS = "abcdefghijklmnopqrstuvwxyz0123456789.-_~:[]@#/?%! "
+_ALLOWED = ("127.0.0.1", "localhost", "[::1]")
+
+
+def _host_reference(value: str) -> bool:
+    """Accepted without a token iff the value is an allowed name, maybe with a numeric port."""
+    for name in _ALLOWED:
+        rest = value.lower()[len(name):] if value.lower().startswith(name) else None
+        if rest is not None and (rest == "" or rest[:1] == ":" and rest[1:].isdigit()
+                                 and len(rest) <= 6 and int(rest[1:] or 0) <= 65535
+                                 or rest == ":"):
+            return True
+    return False
+
+
+@pytest.mark.parametrize(("host", "allowed"), [
+    ("127.0.0.1", True), ("127.0.0.1:8080", True), ("LOCALHOST:80", True), ("[::1]:8080", True),
+    ("[::1]", True), ("127.0.0.1:8080.evil.example", False), ("localhost:80.evil.example", False),
+    ("127.0.0.1:8080:9090", False), ("127.0.0.1:99999", False), ("127.0.0.1@evil.example", False),
+    ("127.0.0.1.evil.example", False), ("[::1].evil.example", False), ("127.0.0.1 ", True),
+    ("evil.example:127", False), ("", False), ("127.0.0.1:80 evil", False),
+])
+def test_the_host_header_is_parsed_strictly(client: TestClient, host: str, allowed: bool) -> None:
+    reply = client.get("/api/status", headers={"host": host})
+    assert reply.status_code == (200 if allowed else 400), (host, reply.text)
+    if not allowed:
+        assert "is not allowed" in reply.json()["detail"]
+
+
+def test_host_check_matches_the_rfc_reading_for_any_header(client: TestClient) -> None:
+    """Property: without a token, a Host header is accepted only when it is an allowed name,
+    optionally followed by ':' and a port number; nothing else (suffixes, user info, paths)."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    values = st.one_of(
+        st.text(alphabet=_HOST_CHARS, max_size=30),
+        st.builds(lambda name, rest: name + rest, st.sampled_from(_ALLOWED),
+                  st.text(alphabet=_HOST_CHARS, max_size=20)),
+        st.builds(lambda name, port: f"{name}:{port}", st.sampled_from(_ALLOWED),
+                  st.integers(0, 70000)),
+    )
+
+    @settings(max_examples=300, deadline=None, database=None,
+              suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(values)
+    def check(value: str) -> None:
+        value = value.strip()
+        reply = client.get("/api/status", headers={"host": value})
+        assert (reply.status_code == 200) == _host_reference(value), (value, reply.text)
+
+    check()
+
+
+@pytest.mark.parametrize("host", ["127.attacker.example", "127.0.0.1.nip.io", "127.0.0.1.",
+                                  "localhost.attacker.example", "127.1", "::ffff:127.0.0.1"])
+def test_only_literal_loopback_addresses_count_as_loopback(host: str) -> None:
+    # Names are not resolved: what "127.x" resolves to is whoever owns the name.
+    with pytest.raises(ServeError, match="needs a token"):
+        check_binding(host, None)
+
+
+@pytest.mark.parametrize("host", ["127.0.0.1", "127.1.2.3", "localhost", "::1", "[::1]"])
+def test_literal_loopback_addresses_need_no_token(host: str) -> None:
+    check_binding(host, None)
+
+
+def test_serve_on_a_127_name_is_refused_without_resolving_it(monkeypatch: pytest.MonkeyPatch,
+                                                            capsys: pytest.CaptureFixture[str]
+                                                            ) -> None:
+    monkeypatch.delenv("SHADOWHOUND_TOKEN", raising=False)
+    # .invalid never resolves (RFC 2606): refused for the missing token, not a failed lookup.
+    assert serve_main(ShadowHoundConfig(), host="127.0.0.1.invalid", port=0) == 2
+    assert "needs a token" in capsys.readouterr().err

@@ -10,12 +10,12 @@ import argparse
 import logging
 import sys
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NoReturn
 
 from .. import __version__
 from ..config import ConfigError, ShadowHoundConfig, available_profiles, load_config
 from ..memory.history import MemoryStoreError
-from ._base import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from ._base import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, report_error
 from .missions import cmd_chat, cmd_eval, cmd_run
 from .tools import (
     cmd_config,
@@ -30,6 +30,21 @@ from .tools import (
 )
 
 __all__ = ["EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_USAGE", "build_parser", "main"]
+
+
+class UsageError(Exception):
+    """A command line argparse cannot parse; `usage` is the failing (sub)command's usage."""
+
+    def __init__(self, message: str, usage: str) -> None:
+        super().__init__(message)
+        self.usage = usage
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that raises instead of exiting, so `run --json` can still answer in JSON."""
+
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(f"{self.prog}: {message}", self.format_usage())
 
 
 def _common(parser: argparse.ArgumentParser, suppress: bool) -> None:
@@ -52,7 +67,7 @@ def _common(parser: argparse.ArgumentParser, suppress: bool) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="shadowhound",
         description="Mission agent for quadruped robots: plans a sentence into checked skills "
                     "and runs it on a simulated Unitree Go2 (default) or a real one.",
@@ -110,7 +125,8 @@ def build_parser() -> argparse.ArgumentParser:
                                          "extra)")
     _common(serve, suppress=True)
     serve.add_argument("--host", default="127.0.0.1",
-                       help="address to listen on; anything but loopback needs a token")
+                       help="address to listen on; anything but a literal loopback address "
+                            "(127.x.x.x, ::1) or localhost needs a token")
     serve.add_argument("--port", type=int, default=8080, help="TCP port (default 8080)")
     serve.add_argument("--token", default=None,
                        help="bearer token the API requires (default $SHADOWHOUND_TOKEN; the "
@@ -141,7 +157,6 @@ def _settings(args: argparse.Namespace) -> ShadowHoundConfig:
     return load_config(profile, overrides)
 
 
-
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["node"]:  # ROS owns the rest of the command line (--ros-args ...)
@@ -149,7 +164,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     if argv[:1] == ["sim-driver"]:
         return cmd_sim_driver(argv[1:])
     parser = build_parser()
-    args = parser.parse_args(argv)
+    # A line that cannot be parsed has no `args` to ask; `run ... --json` in it is enough.
+    json_out = "run" in argv and "--json" in argv
+    try:
+        args = parser.parse_args(argv)
+    except UsageError as exc:
+        sys.stderr.write(exc.usage)
+        return report_error("usage", str(exc), EXIT_USAGE, json_out=json_out)
+    json_out = args.command == "run" and args.json
+    mission = args.mission if args.command == "run" else None
     logging.basicConfig(level=[logging.WARNING, logging.INFO, logging.DEBUG][min(args.verbose, 2)],
                         format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     if args.command is None:
@@ -162,15 +185,19 @@ def main(argv: Sequence[str] | None = None) -> int:
                    "places": cmd_places, "recall": cmd_recall, "serve": cmd_serve}[args.command]
         return handler(args, settings)
     except ConfigError as exc:
-        print(f"shadowhound: {_kind(exc)}: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        return report_error(_kind(exc), str(exc), EXIT_USAGE, json_out=json_out, mission=mission)
     except MemoryStoreError as exc:
-        print(f"shadowhound: memory error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        return report_error("memory", str(exc), EXIT_USAGE, json_out=json_out, mission=mission)
+    except KeyboardInterrupt:  # before the mission ran (while connecting, say): nothing moved
+        what = "stopped before the mission started" if args.command == "run" else "stopped"
+        return report_error("interrupted", what, EXIT_INTERRUPTED, json_out=json_out,
+                            mission=mission)
+    except Exception as exc:  # a bug: the traceback goes to the log, the answer is still one
+        logging.getLogger(__name__).exception("shadowhound %s crashed", args.command)
+        return report_error("internal", repr(exc), EXIT_FAILED, json_out=json_out,
+                            mission=mission)
 
 
 def _kind(exc: ConfigError) -> str:
-    return "backend unavailable" if type(exc).__name__ == "BackendUnavailable" else \
-        "configuration error"
-
-
+    return "backend_unavailable" if type(exc).__name__ == "BackendUnavailable" else \
+        "configuration"

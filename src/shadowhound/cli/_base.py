@@ -1,12 +1,49 @@
-"""What every command shares: exit codes and building an agent from settings."""
+"""What every command shares: exit codes, how a command reports an error (also as the one JSON
+object `run --json` promises), and building an agent from settings."""
 
 from __future__ import annotations
 
+import json
+import sys
 from typing import Any
 
 from ..config import ShadowHoundConfig
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+# Error kinds (`error_kind` of a JSON answer) and how they are named on stderr.
+ERROR_LABELS = {
+    "usage": "usage error",
+    "configuration": "configuration error",
+    "backend_unavailable": "backend unavailable",
+    "memory": "memory error",
+    "interrupted": "interrupted",
+    "internal": "internal error",
+}
+
+
+def report_error(kind: str, message: str, code: int, *, json_out: bool = False,
+                 mission: str | None = None) -> int:
+    """Say on stderr what went wrong; with `json_out` also print the one JSON object on stdout.
+    Returns `code`, the exit code.
+
+    The object has a mission result's first keys (`success` false, `status` "error",
+    `mission`, `response`, `error` the message) plus `error_kind` and `exit_code`.
+    """
+    label = ERROR_LABELS[kind]
+    print(f"shadowhound: {label}: {message}", file=sys.stderr, flush=True)
+    if json_out:
+        print_json({"success": False, "status": "error", "mission": mission,
+                    "response": f"{label}: {message}", "error": message, "error_kind": kind,
+                    "exit_code": code})
+    return code
+
+
+def print_json(answer: dict[str, Any]) -> None:
+    """One JSON object on one line of stdout."""
+    json.dump(answer, sys.stdout, separators=(",", ":"))
+    sys.stdout.write("\n")
+    sys.stdout.flush()
 
 
 def make_agent(settings: ShadowHoundConfig) -> Any:

@@ -11,7 +11,15 @@ from typing import Any, TextIO
 
 from .. import events as ev
 from ..config import ShadowHoundConfig
-from ._base import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, make_agent
+from ._base import (
+    EXIT_FAILED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_USAGE,
+    make_agent,
+    print_json,
+    report_error,
+)
 
 # -- run -----------------------------------------------------------------------------------
 
@@ -72,6 +80,7 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         agent.enable_approvals()
         agent.add_listener(_approver(agent, ask=not args.yes))
     box: dict[str, Any] = {}
+    done = threading.Event()
 
     def work() -> None:
         try:
@@ -79,48 +88,54 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         except Exception as exc:  # a bug, not a mission failure: say so, never hide it
             logging.getLogger(__name__).exception("the mission crashed")
             box["crash"] = exc
+        finally:
+            done.set()
 
-    # The mission runs on a worker so that Ctrl-C here can stop the robot at once.
-    worker = threading.Thread(target=work, name="shadowhound-mission", daemon=True)
-    worker.start()
+    # The mission runs on a worker so that Ctrl-C here can stop the robot at once. Its end is
+    # an Event, not Thread.join: a join interrupted by Ctrl-C can mark a live thread finished
+    # (CPython 3.11), and the result would be lost. Ctrl-C may land in start() itself.
     interrupted = False
     try:
-        while worker.is_alive():
-            worker.join(0.1)
+        threading.Thread(target=work, name="shadowhound-mission", daemon=True).start()
+        while not done.wait(0.1):
+            pass
     except KeyboardInterrupt:
         interrupted = True
         agent.estop()
-        worker.join(5.0)
+        done.wait(5.0)
     result = box.get("result")
     agent.cleanup()
     if "crash" in box:
-        print(f"shadowhound: internal error: {box['crash']!r}; the robot was stopped",
-              file=sys.stderr)
-        return EXIT_FAILED
+        return report_error("internal", f"{box['crash']!r}; the robot was stopped", EXIT_FAILED,
+                            json_out=args.json, mission=args.mission)
     if result is None:
-        print("shadowhound: interrupted; the robot was stopped", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return report_error("interrupted", "the robot was stopped", EXIT_INTERRUPTED,
+                            json_out=args.json, mission=args.mission)
+    code = EXIT_INTERRUPTED if interrupted else EXIT_OK if result.success else EXIT_FAILED
     if args.json:
-        out = result.to_dict()
-        json.dump(out, sys.stdout, separators=(",", ":"))
-        sys.stdout.write("\n")
+        print_json(_answer(result, code))
     else:
         st = result.robot
         print(result.response)
         print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
               f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
               f"battery={st.battery:.1f}%")
-    if interrupted:
-        return EXIT_INTERRUPTED
-    return EXIT_OK if result.success else EXIT_FAILED
+    return code
+
+
+def _answer(result: Any, code: int) -> dict[str, Any]:
+    """A result as the JSON answer, with the exit code the command ends with."""
+    answer: dict[str, Any] = result.to_dict()
+    answer["exit_code"] = code
+    return answer
 
 
 def _dry_run(agent: Any, args: argparse.Namespace) -> int:
     result = agent.dry_run(args.mission)
     agent.cleanup()
+    code = EXIT_OK if result.success else EXIT_FAILED
     if args.json:
-        json.dump(result.to_dict(), sys.stdout, separators=(",", ":"))
-        sys.stdout.write("\n")
+        print_json(_answer(result, code))
     else:
         for step in result.steps:
             params = ", ".join(f"{k}={v}" for k, v in step.args.items())
@@ -129,7 +144,7 @@ def _dry_run(agent: Any, args: argparse.Namespace) -> int:
         if path:
             print(f"predicted path: {path}")
         print(result.response)
-    return EXIT_OK if result.success else EXIT_FAILED
+    return code
 
 
 # -- chat --------------------------------------------------------------------------------------

@@ -149,7 +149,13 @@ def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 def cmd_recall(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     memory = _memory(settings)
     try:
-        found = memory.search(args.query)
+        # Missions carry on without a broken store (it turns itself off); this command exists
+        # to search it, so it says what is wrong instead of answering from elsewhere.
+        found = [] if memory.recall_problem else memory.search(args.query)
+        if memory.recall_problem:
+            print(f"shadowhound: retrieval memory is unavailable: {memory.recall_problem}",
+                  file=sys.stderr)
+            return EXIT_USAGE
         print("\n".join(found) if found else "nothing remembered about that")
         return EXIT_OK
     finally:

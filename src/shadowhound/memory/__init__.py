@@ -5,5 +5,6 @@ from __future__ import annotations
 
 from .history import MemoryStoreError, MissionHistory
 from .places import PlaceBook
+from .recall import RecallStoreError
 
-__all__ = ["MemoryStoreError", "MissionHistory", "PlaceBook"]
+__all__ = ["MemoryStoreError", "MissionHistory", "PlaceBook", "RecallStoreError"]

@@ -5,6 +5,10 @@ and observations (answers of perception.describe, with pose and time). `search` 
 closest memories by meaning. Vectors come from our own embedder (offline MiniLM, or the
 backend's /v1/embeddings) and are handed to Chroma directly, so Chroma never tries to fetch an
 embedding model. Telemetry is off.
+
+A store that cannot be used (a corrupt Chroma directory, a file where the directory should be,
+no permission) raises `RecallStoreError` naming the path and what to do, at open and at every
+later use; `AgentMemory` then turns retrieval memory off for the run instead of failing missions.
 """
 
 from __future__ import annotations
@@ -16,7 +20,24 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
+from .history import MemoryStoreError
+
 KINDS = ("mission", "fact", "observation")
+
+
+class RecallStoreError(MemoryStoreError):
+    """The retrieval store cannot be used. The message names the path and what to do."""
+
+
+def _store_error(path: Path, exc: Exception) -> RecallStoreError:
+    if path.exists() and not path.is_dir():
+        why = "it is a file, not a directory"
+    else:
+        why = f"{type(exc).__name__}: {exc}"
+    return RecallStoreError(
+        f"the retrieval memory store {str(path)!r} cannot be used ({why}); move it aside to keep "
+        "it for inspection (a new one is created at the next start), or set "
+        "memory.enable_rag: false")
 
 
 class Embedder(Protocol):
@@ -51,15 +72,20 @@ class RecallMemory:
             raise ImportError("retrieval memory needs chromadb: "
                               "pip install 'shadowhound[memory]'") from exc
         self.path = Path(path).expanduser()
-        self.path.mkdir(parents=True, exist_ok=True)
         self.embedder = embedder
         self._lock = threading.Lock()
-        client = chromadb.PersistentClient(path=str(self.path),
-                                           settings=Settings(anonymized_telemetry=False))
         # The collection name carries the embedder: vectors of different models never mix.
         name = "shadowhound-" + "".join(c if c.isalnum() else "-" for c in embedder.name)[:40]
-        self._collection = client.get_or_create_collection(
-            name.strip("-"), embedding_function=None, metadata={"hnsw:space": "cosine"})
+        # Chroma reports a damaged store with errors of many kinds (its own, sqlite's, OSError
+        # from its Rust core); whatever the kind, the store is unusable and the caller must know.
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+            client = chromadb.PersistentClient(path=str(self.path),
+                                               settings=Settings(anonymized_telemetry=False))
+            self._collection = client.get_or_create_collection(
+                name.strip("-"), embedding_function=None, metadata={"hnsw:space": "cosine"})
+        except Exception as exc:
+            raise _store_error(self.path, exc) from exc
 
     def add(self, text: str, kind: str, **meta: Any) -> str:
         if kind not in KINDS:
@@ -76,10 +102,13 @@ class RecallMemory:
                       **{k: v for k, v in meta.items() if isinstance(v, (str, int, float, bool))}}
                      for _, kind, meta in items]
         with self._lock:
-            self._collection.add(
-                ids=ids, documents=[t for t, _, _ in items], embeddings=list(vectors),
-                metadatas=metadatas,  # type: ignore[arg-type]
-            )
+            try:
+                self._collection.add(
+                    ids=ids, documents=[t for t, _, _ in items], embeddings=list(vectors),
+                    metadatas=metadatas,  # type: ignore[arg-type]
+                )
+            except Exception as exc:
+                raise _store_error(self.path, exc) from exc
         return ids
 
     def search(self, query: str, k: int = 3, kind: str | None = None) -> list[Memory]:
@@ -87,13 +116,16 @@ class RecallMemory:
             return []
         vector = self.embedder.embed([query])[0]
         with self._lock:
-            total = self._collection.count()
-            if total == 0:
-                return []
-            found = self._collection.query(
-                query_embeddings=[vector], n_results=min(k, total),
-                where={"kind": kind} if kind else None,
-                include=["documents", "metadatas", "distances"])
+            try:
+                total = self._collection.count()
+                if total == 0:
+                    return []
+                found = self._collection.query(
+                    query_embeddings=[vector], n_results=min(k, total),
+                    where={"kind": kind} if kind else None,
+                    include=["documents", "metadatas", "distances"])
+            except Exception as exc:
+                raise _store_error(self.path, exc) from exc
         documents = (found.get("documents") or [[]])[0]
         metadatas = (found.get("metadatas") or [[]])[0]
         distances = (found.get("distances") or [[]])[0]
@@ -108,4 +140,7 @@ class RecallMemory:
 
     def count(self) -> int:
         with self._lock:
-            return self._collection.count()
+            try:
+                return self._collection.count()
+            except Exception as exc:
+                raise _store_error(self.path, exc) from exc

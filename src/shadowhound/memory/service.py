@@ -3,6 +3,9 @@
 History (SQLite) records every mission; taught places live beside it; retrieval memory
 (optional) keeps mission summaries, taught facts and observations for semantic search.
 Without `memory.enabled`, places last for the process and nothing is written to disk.
+A retrieval store that cannot be used (corrupt, a file in its place) turns retrieval memory off
+for the run, with a warning and a note in `status()`: memory is an aid, never a reason for a
+mission not to run. A broken history database is still an error: it holds the records.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from ..config import ConfigError, ShadowHoundConfig
 from ..events import MISSION_FINISHED, MISSION_STARTED, STEP_FINISHED, MissionEvent
 from .history import MemoryStoreError, MissionHistory
 from .places import PlaceBook
+from .recall import RecallStoreError
 
 log = logging.getLogger(__name__)
 _WORD = re.compile(r"[a-z0-9]+")
@@ -31,11 +35,13 @@ class AgentMemory:
     """History, places and (optionally) recall for one agent."""
 
     def __init__(self, settings: ShadowHoundConfig, history: MissionHistory | None = None,
-                 recall: Any = None) -> None:
+                 recall: Any = None, recall_problem: str | None = None) -> None:
         self.settings = settings
         self.history = history
         self.places = PlaceBook(history)
         self.recall = recall
+        # Why retrieval memory is off although enable_rag asks for it (None: it is not).
+        self.recall_problem = recall_problem
 
     @classmethod
     def open(cls, settings: ShadowHoundConfig, backend: Any = None) -> AgentMemory:
@@ -54,8 +60,13 @@ class AgentMemory:
                 log.warning("%d mission(s) were running when the last process stopped; marked "
                             "interrupted", history.interrupted)
             history.prune(max_age_days=cfg.retention_days, max_missions=cfg.max_missions)
-        recall = cls._open_recall(settings, data, backend) if cfg.enable_rag else None
-        return cls(settings, history, recall)
+        memory = cls(settings, history)
+        if cfg.enable_rag:
+            try:
+                memory.recall = cls._open_recall(settings, data, backend)
+            except RecallStoreError as exc:
+                memory.turn_recall_off(exc)
+        return memory
 
     @staticmethod
     def _open_recall(settings: ShadowHoundConfig, data: Path, backend: Any) -> Any:
@@ -74,6 +85,21 @@ class AgentMemory:
             return RecallMemory(data / "recall", embedder)
         except ImportError as exc:
             raise ConfigError(f"memory.enable_rag is on but {exc}") from exc
+
+    def turn_recall_off(self, exc: RecallStoreError) -> None:
+        """Stop using a retrieval store that failed; searches fall back to the history."""
+        log.warning("retrieval memory is off for this run: %s", exc)
+        self.recall = None
+        self.recall_problem = str(exc)
+
+    def status(self) -> dict[str, Any]:
+        """For diagnostics: which stores are on, and why retrieval memory is off if it should
+        be on."""
+        cfg = self.settings.memory
+        recall = "on" if self.recall is not None else \
+            "unavailable" if self.recall_problem else "off"
+        return {"history": "on" if self.history is not None else "off", "recall": recall,
+                "recall_problem": self.recall_problem if cfg.enable_rag else None}
 
     def close(self) -> None:
         if self.history is not None:
@@ -100,8 +126,13 @@ class AgentMemory:
                                       y=robot.get("y", 0.0), mission=result["mission_id"])
 
     def _remember_safely(self, text: str, kind: str, **meta: Any) -> None:
+        recall = self.recall
+        if recall is None:
+            return
         try:
-            self.recall.add(text[:2000], kind, **meta)
+            recall.add(text[:2000], kind, **meta)
+        except RecallStoreError as exc:
+            self.turn_recall_off(exc)
         except Exception:  # memory must never break a mission; the history still has it
             log.exception("could not add a %s to retrieval memory", kind)
 
@@ -124,9 +155,8 @@ class AgentMemory:
         """
         cfg = self.settings.memory
         k = k or cfg.rag_top_k
-        if self.recall is not None:
-            lines = [m.line() for m in self.recall.search(query, k)]
-        else:
+        lines = self._semantic_search(query, k)
+        if lines is None:
             lines = self._keyword_search(query, k)
         kept, used = [], 0
         for line in lines:
@@ -135,6 +165,17 @@ class AgentMemory:
             kept.append(line)
             used += len(line)
         return kept
+
+    def _semantic_search(self, query: str, k: int) -> list[str] | None:
+        """Lines from retrieval memory; None when it is off (or has just turned itself off)."""
+        recall = self.recall
+        if recall is None:
+            return None
+        try:
+            return [m.line() for m in recall.search(query, k)]
+        except RecallStoreError as exc:
+            self.turn_recall_off(exc)
+            return None
 
     def _keyword_search(self, query: str, k: int) -> list[str]:
         wanted = set(_WORD.findall(query.lower())) - _STOPWORDS

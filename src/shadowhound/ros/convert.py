@@ -74,6 +74,7 @@ def diagnostic_values(diagnostics: dict[str, Any],
     """Key-values of the agent's diagnostics as strings (what DiagnosticStatus carries)."""
     robot = diagnostics.get("robot") or {}
     errors = list(diagnostics.get("errors") or [])
+    memory = diagnostics.get("memory") or {}
     values: dict[str, Any] = {
         "status": diagnostics.get("status"),
         "mission": diagnostics.get("mission") or "",
@@ -90,6 +91,8 @@ def diagnostic_values(diagnostics: dict[str, Any],
         "battery": robot.get("battery"),
         "posture": robot.get("posture"),
         "moving": robot.get("moving"),
+        "memory_recall": memory.get("recall"),  # "unavailable" when its store is broken
+        "memory_problem": shorten(memory.get("recall_problem") or ""),
     }
     values.update(extra or {})
     return [(k, _text(v)) for k, v in values.items()]

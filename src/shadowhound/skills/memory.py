@@ -5,6 +5,7 @@ from __future__ import annotations
 from pydantic import Field
 
 from ..memory.places import normalize_place
+from ..memory.recall import RecallStoreError
 from ..state import Pose2D
 from .arguments import NoArgs, SkillArgs
 from .context import PlanEnv, SkillContext, SkillError
@@ -76,12 +77,19 @@ def _list(ctx: SkillContext, _a: NoArgs) -> str:
 
 
 def _note(ctx: SkillContext, a: NoteArgs) -> str:
-    recall = _memory(ctx).recall
+    memory = _memory(ctx)
+    recall = memory.recall
+    if recall is None and memory.recall_problem:
+        raise SkillError(f"retrieval memory is off for this run: {memory.recall_problem}")
     if recall is None:
         raise SkillError("retrieval memory is off: set memory.enable_rag: true (and install "
                          "the 'memory' extra) to teach me facts")
     st = ctx.robot.get_state()
-    recall.add(a.text, "fact", x=st.x, y=st.y)
+    try:
+        recall.add(a.text, "fact", x=st.x, y=st.y)
+    except RecallStoreError as exc:
+        memory.turn_recall_off(exc)
+        raise SkillError(f"retrieval memory is off for this run: {exc}") from exc
     return f"I will remember that {a.text}"
 
 

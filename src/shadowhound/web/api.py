@@ -24,6 +24,7 @@ from .models import (
     ChatRequest,
     EstopAnswer,
     MissionAccepted,
+    MissionRefused,
     MissionRequest,
     Problem,
     RejectRequest,
@@ -47,9 +48,15 @@ def ctx(request: Request) -> WebContext:
 
 
 router = APIRouter(prefix="/api")
-_ERRORS: dict[int | str, dict[str, Any]] = {
-    code: {"model": Problem} for code in (400, 401, 403, 404, 409, 413, 422, 429)
-}
+# Each route's own error answers; the gate's (400, 401, 403, 413) and 422 are added to the
+# document by openapi.py.
+_NOT_FOUND: dict[int | str, dict[str, Any]] = {
+    404: {"model": Problem, "description": "no such mission or approval"}}
+_REFUSED: dict[int | str, dict[str, Any]] = {
+    409: {"model": MissionRefused, "description": "the e-stop is latched (dry runs still run)"},
+    429: {"model": MissionRefused, "description": "the queue is full"}}
+_CANCEL: dict[int | str, dict[str, Any]] = {
+    **_NOT_FOUND, 409: {"model": Problem, "description": "the mission has already finished"}}
 
 
 @router.get("/health", tags=["status"])
@@ -60,7 +67,7 @@ async def health(request: Request) -> dict[str, Any]:
             "estop": agent.estop_latched}
 
 
-@router.post("/mission", status_code=202, response_model=MissionAccepted, responses=_ERRORS,
+@router.post("/mission", status_code=202, response_model=MissionAccepted, responses=_REFUSED,
              tags=["missions"])
 async def submit_mission(request: Request, body: MissionRequest
                          ) -> MissionAccepted | JSONResponse:
@@ -102,13 +109,13 @@ def _record(request: Request, mission_id: str) -> WebMission:
     return record
 
 
-@router.get("/missions/{mission_id}", responses=_ERRORS, tags=["missions"])
+@router.get("/missions/{mission_id}", responses=_NOT_FOUND, tags=["missions"])
 async def get_mission(request: Request, mission_id: str) -> dict[str, Any]:
     """One mission: its state and, once finished, the full result with every step."""
     return _record(request, mission_id).to_dict()
 
 
-@router.post("/missions/{mission_id}/cancel", responses=_ERRORS, tags=["missions"])
+@router.post("/missions/{mission_id}/cancel", responses=_CANCEL, tags=["missions"])
 async def cancel_mission(request: Request, mission_id: str) -> dict[str, Any]:
     """Cancel a waiting or running mission; a running one stops within one control tick."""
     record, outcome = ctx(request).desk.cancel(mission_id)
@@ -120,7 +127,7 @@ async def cancel_mission(request: Request, mission_id: str) -> dict[str, Any]:
     return {"mission_id": record.id, "cancelled": True, "state": record.state}
 
 
-@router.post("/estop", response_model=EstopAnswer, responses=_ERRORS, tags=["safety"])
+@router.post("/estop", response_model=EstopAnswer, tags=["safety"])
 async def estop(request: Request) -> EstopAnswer:
     """Emergency stop: the robot stops before this answers; latched until released."""
     web = ctx(request)
@@ -131,7 +138,7 @@ async def estop(request: Request) -> EstopAnswer:
                                   else "") + "; release it to run missions again")
 
 
-@router.post("/estop/release", response_model=EstopAnswer, responses=_ERRORS, tags=["safety"])
+@router.post("/estop/release", response_model=EstopAnswer, tags=["safety"])
 async def release_estop(request: Request) -> EstopAnswer:
     agent = ctx(request).agent
     agent.release_estop()
@@ -145,14 +152,14 @@ async def pending_approval(request: Request) -> dict[str, Any]:
     return {"pending": ctx(request).agent.pending_approval()}
 
 
-@router.post("/approval/{request_id}/approve", responses=_ERRORS, tags=["safety"])
+@router.post("/approval/{request_id}/approve", responses=_NOT_FOUND, tags=["safety"])
 async def approve(request: Request, request_id: str) -> dict[str, Any]:
     if not ctx(request).agent.approve(request_id):
         raise HTTPException(404, f"no pending approval {request_id!r}")
     return {"request_id": request_id, "approved": True}
 
 
-@router.post("/approval/{request_id}/reject", responses=_ERRORS, tags=["safety"])
+@router.post("/approval/{request_id}/reject", responses=_NOT_FOUND, tags=["safety"])
 async def reject(request: Request, request_id: str,
                  body: Annotated[RejectRequest | None, Body()] = None) -> dict[str, Any]:
     reason = body.reason if body else ""
@@ -161,7 +168,7 @@ async def reject(request: Request, request_id: str,
     return {"request_id": request_id, "approved": False}
 
 
-@router.post("/chat", response_model=ChatAnswer, responses=_ERRORS, tags=["chat"])
+@router.post("/chat", response_model=ChatAnswer, tags=["chat"])
 def chat(request: Request, body: ChatRequest) -> ChatAnswer:
     """Ask about the robot and its missions; never moves the robot."""
     agent = ctx(request).agent

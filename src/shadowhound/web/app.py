@@ -12,6 +12,7 @@ import contextlib
 import logging
 from collections.abc import AsyncIterator, Iterable
 from pathlib import Path
+from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -26,12 +27,13 @@ from . import api, live
 from .desk import MissionDesk
 from .feed import EventFeed
 from .frames import FrameCache
+from .models import MAX_BODY
+from .openapi import document_answers
 from .security import LOOPBACK_HOSTS, Gate, scrubber, secret_values
 
 log = logging.getLogger(__name__)
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
-MAX_BODY = 16 * 1024
 # The page loads only its own files; images may be data: or blob: URLs drawn by the script.
 _PAGE_POLICY = ("default-src 'self'; img-src 'self' data: blob:; connect-src 'self'; "
                 "style-src 'self'; script-src 'self'; frame-ancestors 'none'; base-uri 'none'")
@@ -82,7 +84,21 @@ def create_app(agent: RobotAgent, *, token: str | None = None,
     _add_error_handlers(app)
     app.add_middleware(Gate, token=token, allowed_hosts=allowed_hosts,
                        max_body=max_body, secrets=hidden)
+    _document(app, token=token is not None, checks_hosts=allowed_hosts is not None,
+              max_body=max_body)
     return app
+
+
+def _document(app: FastAPI, **gate: Any) -> None:
+    """Make /openapi.json say what this app really sends (see openapi.py)."""
+    build = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            app.openapi_schema = document_answers(build(), **gate)
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
 
 
 def _add_page(app: FastAPI) -> None:

@@ -1,4 +1,9 @@
-"""Request and answer bodies of the HTTP API (they also make the OpenAPI document)."""
+"""Request and answer bodies of the HTTP API (they also make the OpenAPI document).
+
+Request bodies are strict: a JSON string is not a boolean (`"dry_run": "yes"` is refused) and a
+boolean is not a number, so what a client sends is what the robot gets, or a 422 naming the
+field. The error bodies are here too (openapi.py puts them in the document).
+"""
 
 from __future__ import annotations
 
@@ -9,12 +14,19 @@ from pydantic import BaseModel, ConfigDict, Field
 # Hard ceiling for text fields; the agent's own limit (agent.max_mission_chars) is checked in
 # the route so the answer can name it.
 MAX_TEXT = 16_000
+# The body limit (413) lets through every body whose text fields keep to MAX_TEXT however a
+# client encodes them: JSON may spell one character as 12 bytes (an escaped surrogate pair).
+MAX_BODY = 12 * MAX_TEXT + 4096
+
+_STRICT = ConfigDict(extra="forbid", strict=True)
 
 
 class MissionRequest(BaseModel):
     """`{"command": ...}` as in the original ShadowHound, plus `dry_run`."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(**_STRICT, json_schema_extra={"examples": [
+        {"command": "walk forward 1 meter then turn left 90 degrees"},
+        {"command": "go to x 2 y 1", "dry_run": True}]})
 
     command: str = Field(..., min_length=1, max_length=MAX_TEXT,
                          description="what the robot should do, e.g. 'walk forward 1 meter'")
@@ -38,7 +50,8 @@ class MissionAccepted(BaseModel):
 
 
 class ChatRequest(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(**_STRICT, json_schema_extra={"examples": [
+        {"text": "where are you?"}]})
 
     text: str = Field(..., min_length=1, max_length=MAX_TEXT, description="a question")
 
@@ -49,7 +62,7 @@ class ChatAnswer(BaseModel):
 
 
 class RejectRequest(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = _STRICT
 
     reason: str = Field("", max_length=500)
 
@@ -62,6 +75,28 @@ class EstopAnswer(BaseModel):
 
 
 class Problem(BaseModel):
-    """Every 4xx answer: `detail` says what was wrong and what is allowed."""
+    """An error answer: `detail` says what was wrong and what is allowed."""
 
-    detail: Any
+    detail: str
+
+
+class FieldProblem(BaseModel):
+    where: str = Field(description="the field, e.g. 'body.dry_run' or 'query.limit'")
+    problem: str
+
+
+class ValidationProblem(BaseModel):
+    """422: the request does not match the schema (`problems` names each field), or its text is
+    over the agent's own limit (`agent.max_mission_chars`; then `problems` may be empty)."""
+
+    detail: str
+    problems: list[FieldProblem] = Field(default_factory=list)
+
+
+class MissionRefused(BaseModel):
+    """409 (the e-stop is latched) or 429 (the queue is full): the mission was not queued."""
+
+    detail: str
+    success: bool
+    message: str
+    command: str

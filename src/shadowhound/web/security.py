@@ -6,7 +6,8 @@
   offer the subprotocol `bearer.<token>` (next to `shadowhound`). Mutating requests need the
   header, so a token never has to travel in a URL to move the robot.
 - Host (without a token): only loopback names, so a web page cannot reach the robot through
-  DNS rebinding.
+  DNS rebinding. The header is parsed strictly (`name`, `name:port`, `[v6]`, `[v6]:port`, the
+  port all digits); anything else, such as `127.0.0.1:8080.evil.example`, is refused.
 - Origin: a request that changes something, and every WebSocket, must come from the page's own
   origin (no cross-site requests; there is no CORS at all).
 - Bodies over `max_body` bytes get 413 before any route sees them.
@@ -17,8 +18,10 @@
 from __future__ import annotations
 
 import hmac
+import ipaddress
 import json
 import os
+import re
 from collections.abc import Awaitable, Callable, Iterable, MutableMapping
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
@@ -31,14 +34,27 @@ ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
 
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 WS_PROTOCOL = "shadowhound"
-_SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
-_OPEN_PATHS = {"/api/health"}
+SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
+OPEN_PATHS = {"/api/health"}
 _HEADERS = [(b"x-content-type-options", b"nosniff"), (b"x-frame-options", b"DENY"),
             (b"referrer-policy", b"no-referrer")]
 
 
 def is_loopback(host: str) -> bool:
-    return host in LOOPBACK_HOSTS or host.startswith("127.")
+    """True for a literal loopback address (127.0.0.0/8, ::1) or the name `localhost`.
+
+    Any other name counts as remote without resolving it: `127.attacker.example` is a name
+    like any other, and what a name resolves to can change after the check.
+    """
+    name = host.strip().lower()
+    if name.startswith("[") and name.endswith("]"):
+        name = name[1:-1]
+    if name == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(name).is_loopback
+    except ValueError:
+        return False
 
 
 def secret_values(token: str | None, api_key_env: str | None = None) -> list[str]:
@@ -83,7 +99,7 @@ class Gate:
         if problem is not None:
             await self._refuse(scope, receive, send, *problem)
             return
-        if scope["type"] == "http" and scope["method"] not in _SAFE_METHODS:
+        if scope["type"] == "http" and scope["method"] not in SAFE_METHODS:
             body = await self._read_body(receive, headers)
             if body is None:
                 await _send_json(send, 413, f"the request body is larger than {self.max_body} "
@@ -126,17 +142,18 @@ class Gate:
     def _check(self, scope: Scope, headers: dict[str, str]) -> tuple[int, str] | None:
         host = _hostname(headers.get("host", ""))
         if self.allowed_hosts is not None and self.token is None \
-                and host not in self.allowed_hosts:
-            return 400, (f"host {host!r} is not allowed: without a token the dashboard answers "
+                and (host is None or host not in self.allowed_hosts):
+            shown = host if host is not None else headers.get("host", "")[:100]
+            return 400, (f"host {shown!r} is not allowed: without a token the dashboard answers "
                          "only on loopback names (set a token to serve other hosts)")
         websocket = scope["type"] == "websocket"
         origin = headers.get("origin")
-        if origin is not None and (websocket or scope["method"] not in _SAFE_METHODS):
+        if origin is not None and (websocket or scope["method"] not in SAFE_METHODS):
             parts = urlsplit(origin)
             if parts.netloc.lower() != headers.get("host", "").lower():
                 return 403, "cross-origin requests are not allowed; use the dashboard's own page"
         path = scope.get("path", "")
-        if self.token is None or path in _OPEN_PATHS or not path.startswith(("/api/", "/ws/")):
+        if self.token is None or path in OPEN_PATHS or not path.startswith(("/api/", "/ws/")):
             return None
         if self._token_ok(scope, headers, websocket):
             return None
@@ -149,7 +166,7 @@ class Gate:
         auth = headers.get("authorization", "")
         if auth[:7].lower() == "bearer ":
             offered.append(auth[7:].strip())
-        if websocket or scope.get("method") in _SAFE_METHODS:
+        if websocket or scope.get("method") in SAFE_METHODS:
             query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
             offered += query.get("token", [])[:1]
         if websocket:
@@ -185,11 +202,16 @@ class Gate:
         await _send_json(send, status, detail, extra)
 
 
-def _hostname(host: str) -> str:
-    host = host.strip().lower()
-    if host.startswith("["):  # [::1]:8080
-        return host[1:host.find("]")] if "]" in host else host
-    return host.rsplit(":", 1)[0] if host.count(":") == 1 else host
+# RFC 9110 Host: uri-host [ ":" port ]; an IP literal in brackets, else a registered name.
+_HOST = re.compile(r"(?:\[(?P<v6>[0-9a-f:.]+)\]|(?P<name>[a-z0-9._~-]+))(?::(?P<port>[0-9]{0,5}))?")
+
+
+def _hostname(host: str) -> str | None:
+    """The host name of a Host header value, lower case; None when the value is not one."""
+    match = _HOST.fullmatch(host.strip().lower())
+    if match is None or (match["port"] and int(match["port"]) > 65535):
+        return None
+    return match["v6"] or match["name"]
 
 
 def _replay(messages: list[Message], receive: Receive) -> Receive:

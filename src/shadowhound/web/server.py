@@ -34,9 +34,10 @@ class ServeError(Exception):
 def check_binding(host: str, token: str | None) -> None:
     """Refuse to listen beyond loopback without a strong enough token. Raises ServeError."""
     if not is_loopback(host) and not token:
-        raise ServeError(f"refusing to listen on {host}: beyond loopback (127.0.0.1) the "
-                         "dashboard needs a token; set SHADOWHOUND_TOKEN or pass --token, "
-                         + _TOKEN_HINT)
+        raise ServeError(f"refusing to listen on {host}: only a literal loopback address "
+                         "(127.x.x.x, ::1) or localhost counts as loopback (names are not "
+                         "resolved), and beyond loopback the dashboard needs a token; set "
+                         "SHADOWHOUND_TOKEN or pass --token, " + _TOKEN_HINT)
     if token is not None and len(token) < MIN_TOKEN_CHARS:
         raise ServeError(f"the token is {len(token)} characters long; use at least "
                          f"{MIN_TOKEN_CHARS}, " + _TOKEN_HINT)
