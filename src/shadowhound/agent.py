@@ -243,6 +243,9 @@ class RobotAgent:
             plan = planner.plan(text, self._planning_context(text, planner))
         except PlanningError as exc:
             timing.agent_duration = time.perf_counter() - t
+            if self._cancel.is_set():  # the wait on the model was abandoned: stopped, not failed
+                return self._finish(mission_id, text, started, timing, [], None,
+                                    MissionStatus.STOPPED, self._stop_reason(), usage=exc.usage)
             return self._finish(mission_id, text, started, timing, [], None,
                                 MissionStatus.FAILED, exc.message, usage=exc.usage)
         timing.agent_duration = time.perf_counter() - t
@@ -300,6 +303,8 @@ class RobotAgent:
                     steps += more
                     self._set_current(steps=len(steps))
                     status, error = self._run_steps(mission_id, more, more_valid, env, timing)
+            if status is MissionStatus.FAILED and self._cancel.is_set():  # while re-planning
+                status, error = MissionStatus.STOPPED, self._stop_reason()
         response = compose_response(status, steps, plan, error)
         return self._finish(mission_id, text, started, timing, steps, plan, status, response,
                             error=error)
@@ -401,7 +406,7 @@ class RobotAgent:
         failed = [s for s in steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)]
         if status is not MissionStatus.STOPPED and (not finished or failed or refusals):
             status = MissionStatus.FAILED
-        if status is MissionStatus.SUCCEEDED and self._cancel.is_set():
+        if status is not MissionStatus.STOPPED and self._cancel.is_set():  # e.g. while asking
             status, answer = MissionStatus.STOPPED, self._stop_reason()
         plan = Plan([SkillCall(s.skill, s.args, s.label) for s in steps], text=text,
                     usage=usage, planner=getattr(planner, "name", "react"))
@@ -581,7 +586,17 @@ class RobotAgent:
         """The planner's image describer when the model is configured as vision-capable."""
         if not self.settings.llm.vision:
             return None
-        return getattr(self._planner, "describe_image", None)
+        describe = getattr(self._planner, "describe_image", None)
+        if describe is None:
+            return None
+
+        def look(frame: CameraFrame, question: str) -> str:
+            answer = str(describe(frame, question, self._cancel))
+            if self._cancel.is_set():  # the request was abandoned: the step is cancelled
+                raise MissionCancelled(self._stop_reason())
+            return answer
+
+        return look
 
     def latest_frame(self) -> CameraFrame | None:
         """The latest camera frame: the one an interface gave, else the robot's own camera."""
