@@ -50,9 +50,10 @@ class AgentMemory:
                 history = MissionHistory(data / "history.db")
             except MemoryStoreError as exc:
                 raise ConfigError(str(exc)) from exc
-            if history.interrupted:
-                log.warning("%d mission(s) were running when the last process stopped; marked "
-                            "interrupted", history.interrupted)
+            if history.interrupted or history.not_run:
+                log.warning("%d mission(s) were running and %d waiting when their process "
+                            "ended; marked interrupted and not run", history.interrupted,
+                            history.not_run)
             history.prune(max_age_days=cfg.retention_days, max_missions=cfg.max_missions)
         recall = cls._open_recall(settings, data, backend) if cfg.enable_rag else None
         return cls(settings, history, recall)
@@ -78,6 +79,18 @@ class AgentMemory:
     def close(self) -> None:
         if self.history is not None:
             self.history.close()
+
+    # -- recording (the mission queue) ------------------------------------------------------
+
+    def mission_queued(self, mission_id: str, mission: str) -> None:
+        """An interface accepted a mission into its queue: on record before it runs."""
+        if self.history is not None:
+            self.history.mission_queued(mission_id, mission, time.time())
+
+    def mission_not_run(self, mission_id: str, mission: str, reason: str) -> None:
+        """A queued mission ended without starting (dropped, cancelled, refused)."""
+        if self.history is not None:
+            self.history.mission_not_run(mission_id, mission, reason, time.time())
 
     # -- recording (agent events) ------------------------------------------------------------
 
