@@ -173,6 +173,19 @@ def test_the_stopped_mission_is_in_the_history_and_the_next_one_runs(srv, tmp_pa
     history.close()
 
 
+@pytest.mark.parametrize("press", ["cancel", "estop"])
+def test_a_dry_run_after_a_press_still_asks_the_model(srv, press):
+    agent, robot = make_agent(srv)
+    srv.script(hang(), json_plan(MOVE_1))
+    stopped, _ = run_and_press(agent, srv, 1, press)
+    assert stopped.status.value == "stopped"
+    dry = agent.dry_run("walk forward 1 meter")  # allowed also while the e-stop is latched
+    assert dry.success, dry.response
+    assert len(srv.requests) == 2 and not robot.received_motion
+    agent.release_estop()
+    agent.cleanup()
+
+
 # -- the whole kind: whichever request the press lands on ------------------------------------
 
 _PLAN_PREFIXES: dict[str, list[Any]] = {

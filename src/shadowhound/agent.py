@@ -171,6 +171,9 @@ class RobotAgent:
         if not isinstance(text, str) or not text.strip():
             return self._refuse(mission_id, str(text)[:200], started,
                                 "the mission is empty; say what the robot should do", False)
+        if self._mission_lock.acquire(blocking=False):  # no mission runs: an earlier cancel or
+            self._cancel.clear()  # e-stop must not abandon this plan (a later one still does)
+            self._mission_lock.release()
         timing = Timing()
         env = self._plan_env()
         try:
