@@ -42,6 +42,10 @@ def test_cancel_on_the_web_ends_planning_and_the_queue_moves_on(serve: Serve, sr
         second = client.post("/api/mission", json={"command": "walk forward 1 meter"}).json()
         wait_for(lambda: len(srv.requests) == 1, what="the model to be asked")
         assert client.get("/api/status").json()["status"] == "planning"
+        reader = MissionHistory(tmp_path / "history.db")  # on record from acceptance
+        assert reader.get(first["mission_id"])["status"] == "running"
+        assert reader.get(second["mission_id"])["status"] == "queued"
+        reader.close()
         cancelled = client.post(f"/api/missions/{first['mission_id']}/cancel").json()
         assert cancelled["cancelled"] is True
         record = finished(client, first["mission_id"], timeout=BOUND)
