@@ -171,6 +171,21 @@ def _running(agent: RobotAgent) -> None:
         time.sleep(0.01)
 
 
+def test_waiting_missions_are_listed_but_kept_out_of_prompts_and_chat(tmp_path):
+    agent, worker = _worker(tmp_path)
+    running, waiting = MissionJob("wait 60 seconds"), MissionJob("walk forward 1 meter")
+    assert worker.submit(running) is None and worker.submit(waiting) is None
+    _running(agent)
+    history = agent.memory.history
+    assert history is not None
+    listed = {r["mission"]: r["status"] for r in history.recent()}  # `shadowhound history`
+    assert listed == {"wait 60 seconds": "running", "walk forward 1 meter": "queued"}
+    assert not any("walk forward" in line for line in agent.recent_summaries())
+    assert "wait 60 seconds" in " ".join(agent.recent_summaries())
+    worker.stop()
+    agent.cleanup()
+
+
 def test_a_queued_mission_cancelled_before_its_turn_is_not_run(tmp_path):
     agent, worker = _worker(tmp_path)
     running, skipped = MissionJob("wait 60 seconds"), MissionJob("walk forward 1 meter")

@@ -197,11 +197,16 @@ class MissionHistory:
 
     # -- reading ----------------------------------------------------------------------------
 
-    def recent(self, limit: int = 20, offset: int = 0) -> list[dict[str, Any]]:
-        """Newest first: id, mission, status, success, response, started_at, finished_at."""
+    def recent(self, limit: int = 20, offset: int = 0, *,
+               queued: bool = True) -> list[dict[str, Any]]:
+        """Newest first: id, mission, status, success, response, started_at, finished_at.
+
+        `queued=False` leaves out missions still waiting for their turn (`started_at` is then
+        when they were accepted)."""
+        where = "" if queued else "WHERE status != 'queued' "
         rows = self._query("SELECT id, mission, status, success, response, started_at, "
-                           "finished_at FROM missions ORDER BY started_at DESC LIMIT ? OFFSET ?",
-                           (limit, offset))
+                           f"finished_at FROM missions {where}ORDER BY started_at DESC "
+                           "LIMIT ? OFFSET ?", (limit, offset))
         keys = ("id", "mission", "status", "success", "response", "started_at", "finished_at")
         return [dict(zip(keys, row, strict=True)) for row in rows]
 

@@ -121,11 +121,12 @@ class AgentMemory:
     # -- reading -----------------------------------------------------------------------------
 
     def recent_missions(self, limit: int) -> list[dict[str, Any]]:
-        """Newest first, from the history database (empty when history is off)."""
+        """Newest first, from the history database (empty when history is off). Missions still
+        waiting in the queue are left out: prompts and chat speak of what happened."""
         if self.history is None or limit <= 0:
             return []
         try:
-            return self.history.recent(limit)
+            return self.history.recent(limit, queued=False)
         except MemoryStoreError as exc:
             log.error("%s", exc)
             return []
