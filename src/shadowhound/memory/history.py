@@ -79,6 +79,9 @@ class MissionHistory:
             if "owner" not in columns:  # a file from before owners were recorded
                 self._db.execute("ALTER TABLE missions ADD COLUMN owner TEXT")
             self.interrupted, self.not_run = self._mark_ownerless()
+            if self.not_run:
+                log.warning("%d mission(s) were waiting in the queue when their process ended; "
+                            "marked not_run", self.not_run)
         except sqlite3.DatabaseError as exc:
             raise MemoryStoreError(_explain(self.path, exc)) from exc
         except OSError as exc:

@@ -50,10 +50,9 @@ class AgentMemory:
                 history = MissionHistory(data / "history.db")
             except MemoryStoreError as exc:
                 raise ConfigError(str(exc)) from exc
-            if history.interrupted or history.not_run:
-                log.warning("%d mission(s) were running and %d waiting when their process "
-                            "ended; marked interrupted and not run", history.interrupted,
-                            history.not_run)
+            if history.interrupted:
+                log.warning("%d mission(s) were running when the last process stopped; marked "
+                            "interrupted", history.interrupted)
             history.prune(max_age_days=cfg.retention_days, max_missions=cfg.max_missions)
         recall = cls._open_recall(settings, data, backend) if cfg.enable_rag else None
         return cls(settings, history, recall)
