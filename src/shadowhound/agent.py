@@ -401,6 +401,8 @@ class RobotAgent:
             answer, usage, finished = planner.react(text, self._planning_context(text), run_step)
         except PlanningError as exc:
             answer, usage, finished = exc.message, exc.usage, False
+            if self._cancel.is_set():  # the wait on the model was abandoned: stopped, not failed
+                answer, status = self._stop_reason(), MissionStatus.STOPPED
         except MissionCancelled:
             answer, finished, status = self._stop_reason(), False, MissionStatus.STOPPED
         except RobotError as exc:
@@ -409,7 +411,7 @@ class RobotAgent:
         failed = [s for s in steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)]
         if status is not MissionStatus.STOPPED and (not finished or failed or refusals):
             status = MissionStatus.FAILED
-        if status is not MissionStatus.STOPPED and self._cancel.is_set():  # e.g. while asking
+        if status is MissionStatus.SUCCEEDED and self._cancel.is_set():
             status, answer = MissionStatus.STOPPED, self._stop_reason()
         plan = Plan([SkillCall(s.skill, s.args, s.label) for s in steps], text=text,
                     usage=usage, planner=getattr(planner, "name", "react"))
