@@ -23,6 +23,7 @@ from shadowhound.memory import MissionHistory
 from shadowhound.result import MissionResult
 from tests.llm_server import (
     ScriptedLLM,
+    drop,
     hang,
     json_plan,
     status,
@@ -183,6 +184,26 @@ def test_a_dry_run_after_a_press_still_asks_the_model(srv, press):
     assert dry.success, dry.response
     assert len(srv.requests) == 2 and not robot.received_motion
     agent.release_estop()
+    agent.cleanup()
+
+
+# -- the retries LLMBackend does itself (so that a cancel can stop them) ---------------------
+
+
+@pytest.mark.parametrize(("replies", "requests", "success"), [
+    ([status(401, "bad key"), json_plan(MOVE_1)], 1, False),  # retrying cannot help
+    ([status(429, retry_after_ms=10), json_plan(MOVE_1)], 2, True),  # rate limited: wait
+    ([status(503, retry_after_ms=61_000), json_plan(MOVE_1)], 1, False),  # too long a wait
+    ([drop(), json_plan(MOVE_1)], 2, True),  # the connection was lost: try again
+    ([status(500, retry_after_ms=10)] * 3 + [json_plan(MOVE_1)], 3, False),  # 1 + 2 retries
+])
+def test_which_failures_are_retried(srv, replies, requests, success):
+    agent, robot = make_agent(srv)
+    srv.script(*replies)
+    result = agent.execute_mission("walk forward 1 meter")
+    assert result.success is success, result.response
+    assert len(srv.requests) == requests
+    assert bool(robot.received_motion) is success
     agent.cleanup()
 
 
