@@ -35,6 +35,7 @@ __all__ = [
     "drop",
     "dynamic",
     "garbage",
+    "hang",
     "json_plan",
     "status",
     "text",
@@ -52,8 +53,8 @@ _POLL_INTERVAL = 0.05  # serve_forever poll interval: bounds how long stop() wai
 class Reply:
     """One scripted answer. Build it with the module-level constructors, not directly.
 
-    ``kind`` is one of ``"message"``, ``"status"``, ``"delay"``, ``"drop"``, ``"raw"``,
-    ``"dynamic"``; the other fields are used by the kinds that need them.
+    ``kind`` is one of ``"message"``, ``"status"``, ``"delay"``, ``"hang"``, ``"drop"``,
+    ``"raw"``, ``"dynamic"``; the other fields are used by the kinds that need them.
     """
 
     kind: str
@@ -113,6 +114,12 @@ def status(code: int, message: str = "boom", *, retry_after_ms: int | None = Non
 def delay(seconds: float, then: Reply) -> Reply:
     """Wait ``seconds`` (cut short by ``stop()``, then the connection is dropped), send ``then``."""
     return Reply(kind="delay", seconds=seconds, then=then)
+
+
+def hang() -> Reply:
+    """Read the request and never answer: a model server that is stuck. ``stop()`` (or the client
+    hanging up) ends it; ``hung_up()`` tells whether the client closed the connection."""
+    return Reply(kind="hang")
 
 
 def drop() -> Reply:
@@ -237,6 +244,8 @@ class _Handler(BaseHTTPRequestHandler):
             self._send_bytes(reply.status, reply.body, reply.content_type)
         elif reply.kind == "drop":
             self._drop()
+        elif reply.kind == "hang":
+            self._hang()
         elif reply.kind == "delay":
             if owner._stopping.wait(reply.seconds) or reply.then is None:
                 self._drop()  # shutting down: never hold stop() up
@@ -254,6 +263,22 @@ class _Handler(BaseHTTPRequestHandler):
             self._serve(produced, body)
         else:
             self._send_error(500, f"unknown scripted reply kind {reply.kind!r}")
+
+    def _hang(self) -> None:
+        """Wait, answering nothing, until the server stops or the client closes the connection."""
+        owner = self.server.owner
+        self.connection.settimeout(_POLL_INTERVAL)
+        while not owner._stopping.is_set():
+            try:
+                if self.connection.recv(1, socket.MSG_PEEK) == b"":
+                    owner._note_hangup()
+                    break
+            except TimeoutError:
+                continue
+            except OSError:
+                owner._note_hangup()
+                break
+        self._drop()
 
     def _drop(self) -> None:
         self.close_connection = True
@@ -332,6 +357,7 @@ class ScriptedLLM:
         self._thread: threading.Thread | None = None
         self._completion_ids = 0
         self._call_ids = 0
+        self._hangups = 0
 
     # -- addresses
 
@@ -412,7 +438,16 @@ class ScriptedLLM:
         with self._lock:
             self._queue.clear()
 
+    def hung_up(self) -> int:
+        """How many clients closed their connection while a ``hang()`` reply held it."""
+        with self._lock:
+            return self._hangups
+
     # -- used by the handler threads
+
+    def _note_hangup(self) -> None:
+        with self._lock:
+            self._hangups += 1
 
     def _next_reply(self) -> Reply | None:
         with self._lock:

@@ -22,6 +22,7 @@ from tests.llm_server import (
     drop,
     dynamic,
     garbage,
+    hang,
     json_plan,
     status,
     text,
@@ -161,6 +162,18 @@ def test_delay_longer_than_timeout(srv: ScriptedLLM) -> None:
 def test_delay_shorter_than_timeout_then_reply(srv: ScriptedLLM) -> None:
     srv.script(delay(0.05, text("worth the wait")))
     assert chat(client_for(srv)).choices[0].message.content == "worth the wait"
+
+
+def test_hang_never_answers_and_sees_the_client_leave(srv: ScriptedLLM) -> None:
+    srv.script(hang(), text("after the hang"))
+    client = client_for(srv, timeout=0.3)
+    with pytest.raises(openai.APITimeoutError):
+        chat(client)
+    deadline = time.monotonic() + 5
+    while srv.hung_up() < 1 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert srv.hung_up() == 1 and len(srv.requests) == 1
+    assert chat(client).choices[0].message.content == "after the hang"
 
 
 def test_stop_is_not_held_up_by_a_pending_delay() -> None:

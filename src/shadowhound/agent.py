@@ -171,6 +171,9 @@ class RobotAgent:
         if not isinstance(text, str) or not text.strip():
             return self._refuse(mission_id, str(text)[:200], started,
                                 "the mission is empty; say what the robot should do", False)
+        if self._mission_lock.acquire(blocking=False):  # no mission runs: an earlier cancel or
+            self._cancel.clear()  # e-stop must not abandon this plan (a later one still does)
+            self._mission_lock.release()
         timing = Timing()
         env = self._plan_env()
         try:
@@ -243,6 +246,9 @@ class RobotAgent:
             plan = planner.plan(text, self._planning_context(text, planner))
         except PlanningError as exc:
             timing.agent_duration = time.perf_counter() - t
+            if self._cancel.is_set():  # the wait on the model was abandoned: stopped, not failed
+                return self._finish(mission_id, text, started, timing, [], None,
+                                    MissionStatus.STOPPED, self._stop_reason(), usage=exc.usage)
             return self._finish(mission_id, text, started, timing, [], None,
                                 MissionStatus.FAILED, exc.message, usage=exc.usage)
         timing.agent_duration = time.perf_counter() - t
@@ -300,6 +306,8 @@ class RobotAgent:
                     steps += more
                     self._set_current(steps=len(steps))
                     status, error = self._run_steps(mission_id, more, more_valid, env, timing)
+            if status is MissionStatus.FAILED and self._cancel.is_set():  # while re-planning
+                status, error = MissionStatus.STOPPED, self._stop_reason()
         response = compose_response(status, steps, plan, error)
         return self._finish(mission_id, text, started, timing, steps, plan, status, response,
                             error=error)
@@ -393,6 +401,8 @@ class RobotAgent:
             answer, usage, finished = planner.react(text, self._planning_context(text), run_step)
         except PlanningError as exc:
             answer, usage, finished = exc.message, exc.usage, False
+            if self._cancel.is_set():  # the wait on the model was abandoned: stopped, not failed
+                answer, status = self._stop_reason(), MissionStatus.STOPPED
         except MissionCancelled:
             answer, finished, status = self._stop_reason(), False, MissionStatus.STOPPED
         except RobotError as exc:
@@ -582,7 +592,17 @@ class RobotAgent:
         """The planner's image describer when the model is configured as vision-capable."""
         if not self.settings.llm.vision:
             return None
-        return getattr(self._planner, "describe_image", None)
+        describe = getattr(self._planner, "describe_image", None)
+        if describe is None:
+            return None
+
+        def look(frame: CameraFrame, question: str) -> str:
+            answer = str(describe(frame, question, self._cancel))
+            if self._cancel.is_set():  # the request was abandoned: the step is cancelled
+                raise MissionCancelled(self._stop_reason())
+            return answer
+
+        return look
 
     def latest_frame(self) -> CameraFrame | None:
         """The latest camera frame: the one an interface gave, else the robot's own camera."""

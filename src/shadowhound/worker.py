@@ -3,6 +3,8 @@
 Interfaces (the ROS node, the web app) submit missions here. Queued missions are bounded;
 `start_now` accepts a job only when the worker is idle (a second action goal is rejected). The
 e-stop drops queued missions so nothing starts by surprise after the e-stop is released.
+Every accepted mission is in the history from the moment it is accepted (`queued`), and one
+that ends without starting is recorded `not_run` with the reason, so a crash loses none.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ class MissionJob:
     on_event: Callable[[MissionEvent], None] | None = None
     result: MissionResult | None = None
     dropped: str | None = None  # why it never ran
+    started: bool = False  # the agent started it (a mission record of its own exists)
     done: threading.Event = field(default_factory=threading.Event)
     cancelled: threading.Event = field(default_factory=threading.Event)
     on_done: Callable[[MissionJob], None] | None = None  # after `done` is set
@@ -74,6 +77,7 @@ class MissionWorker:
                 return (f"{self._max_queue} missions are already waiting; wait for them or "
                         "cancel the running one")
             self._pending += 1
+        self._accepted(job)
         self._queue.put(job)
         return None
 
@@ -83,8 +87,14 @@ class MissionWorker:
             if self._pending:
                 return "another mission is running; wait for it to finish or cancel it"
             self._pending += 1
+        self._accepted(job)
         self._queue.put(job)
         return None
+
+    def _accepted(self, job: MissionJob) -> None:
+        """Record the job before the worker can see it (its start then replaces the record)."""
+        if not job.dry_run:  # dry runs move nothing and leave no record
+            self._agent.memory.mission_queued(job.mission_id, job.command)
 
     def drop_queued(self, reason: str) -> list[MissionJob]:
         """Remove every waiting job (not the running one); each finishes with `dropped`."""
@@ -134,6 +144,9 @@ class MissionWorker:
 
     def _finish(self, job: MissionJob) -> None:
         try:
+            if not job.dry_run and not job.started:
+                reason = job.dropped or (job.result.response if job.result else "never started")
+                self._agent.memory.mission_not_run(job.mission_id, job.command, reason)
             self._on_finish(job)
         except Exception:  # reporting must not stop the worker
             log.exception("reporting the end of mission %r failed", job.command[:80])
@@ -148,7 +161,9 @@ class MissionWorker:
         job = self._current
         if job is None or threading.current_thread() is not self._thread:
             return
-        if event.kind == MISSION_STARTED and job.cancelled.is_set():
-            self._agent.cancel()  # a cancel that came before the agent cleared its flag
+        if event.kind == MISSION_STARTED:
+            job.started = True
+            if job.cancelled.is_set():
+                self._agent.cancel()  # a cancel that came before the agent cleared its flag
         if job.on_event is not None:
             job.on_event(event)

@@ -137,12 +137,8 @@ class BackendEmbedder:
         self._np = _need("numpy")
 
     def embed(self, texts: list[str]) -> Any:
-        from ..llm.backend import BackendError
-
-        try:
-            response = self.backend.client().embeddings.create(model=self.name, input=texts)
-        except Exception as exc:  # the openai client raises many kinds; report one
-            raise BackendError(f"embeddings from {self.backend.where} failed: {exc}") from exc
+        """Unit vectors for `texts`. Raises BackendError naming the server (retried as chat)."""
+        response = self.backend.embed(self.name, texts)
         vectors = self._np.array([d.embedding for d in response.data], dtype=self._np.float32)
         norms = self._np.linalg.norm(vectors, axis=1, keepdims=True)
         return vectors / self._np.maximum(norms, 1e-12)

@@ -1,9 +1,12 @@
 """MissionHistory: every mission, its plan, steps, timing, result and refusals, in SQLite.
 
 One file (`history.db` in the data directory), WAL mode so the web and ROS threads and other
-processes can read while one writes. A mission is written when it starts (status `running`)
-and again when it finishes; rows still `running` when a process opens the file belong to a
-process that died, and are marked `interrupted`. A write that fails (the file is locked past
+processes can read while one writes. A mission is written when an interface accepts it into
+its queue (status `queued`), when it starts (`running`) and when it finishes; one that was
+accepted but never started is `not_run`, with the reason. Each queued or running row names the
+process that owns it (a lease, see lease.py); when any process opens the file, rows whose owner
+has ended are marked: `running` ones `interrupted`, `queued` ones `not_run`. A live owner's
+missions are never touched by another process. A write that fails (the file is locked past
 the busy time-out, the disk is full) is kept in memory and retried with the next write, so no
 record is lost while the process lives.
 """
@@ -18,6 +21,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .lease import Lease, live_owners
+
 log = logging.getLogger(__name__)
 
 _SCHEMA = """
@@ -29,7 +34,8 @@ CREATE TABLE IF NOT EXISTS missions (
     response TEXT,
     started_at REAL NOT NULL,
     finished_at REAL,
-    record TEXT
+    record TEXT,
+    owner TEXT
 );
 CREATE INDEX IF NOT EXISTS missions_started ON missions (started_at);
 CREATE TABLE IF NOT EXISTS places (
@@ -42,6 +48,10 @@ CREATE TABLE IF NOT EXISTS places (
 """
 
 
+INTERRUPTED = "interrupted: the process running it ended before it finished"
+NEVER_STARTED = "not run: the process that accepted it ended before its turn"
+
+
 class MemoryStoreError(Exception):
     """The history database cannot be used. The message names the file and what to do."""
 
@@ -51,6 +61,8 @@ class MissionHistory:
 
     def __init__(self, path: str | Path, *, busy_timeout: float = 5.0) -> None:
         self.path = Path(path).expanduser()
+        self._owners = self.path.with_name(self.path.name + "-owners")  # lease files
+        self._lease: Lease | None = None
         self._lock = threading.Lock()
         self._backlog: list[tuple[str, tuple[Any, ...]]] = []
         try:
@@ -63,9 +75,13 @@ class MissionHistory:
             # power cut may drop the last commits. FULL would fsync every mission (slower).
             self._db.execute("PRAGMA synchronous = NORMAL")
             self._db.executescript(_SCHEMA)
-            self.interrupted = self._db.execute(
-                "UPDATE missions SET status = 'interrupted', finished_at = ? "
-                "WHERE status = 'running'", (time.time(),)).rowcount
+            columns = [row[1] for row in self._db.execute("PRAGMA table_info(missions)")]
+            if "owner" not in columns:  # a file from before owners were recorded
+                self._db.execute("ALTER TABLE missions ADD COLUMN owner TEXT")
+            self.interrupted, self.not_run = self._mark_ownerless()
+            if self.not_run:
+                log.warning("%d mission(s) were waiting in the queue when their process ended; "
+                            "marked not_run", self.not_run)
         except sqlite3.DatabaseError as exc:
             raise MemoryStoreError(_explain(self.path, exc)) from exc
         except OSError as exc:
@@ -76,12 +92,59 @@ class MissionHistory:
         with self._lock:
             self._flush()
             self._db.close()
+            if self._lease is not None:
+                self._lease.release()
+                self._lease = None
+
+    def _mark_ownerless(self) -> tuple[int, int]:
+        """Mark the queued and running missions of ended processes. Returns how many of each."""
+        live = sorted(live_owners(self._owners))
+        dead = f"owner IS NULL OR owner NOT IN ({', '.join('?' * len(live))})"  # () is fine
+        now = time.time()
+        interrupted = self._db.execute(
+            f"UPDATE missions SET status = 'interrupted', success = 0, finished_at = ?, "
+            f"response = ? "
+            f"WHERE status = 'running' AND ({dead})", (now, INTERRUPTED, *live)).rowcount
+        not_run = self._db.execute(
+            f"UPDATE missions SET status = 'not_run', success = 0, finished_at = ?, "
+            f"response = ? WHERE status = 'queued' AND ({dead})", (now, NEVER_STARTED, *live)
+        ).rowcount
+        return interrupted, not_run
+
+    def _owner(self) -> str | None:
+        """This process's lease token, taken on first use (readers never take one)."""
+        with self._lock:
+            if self._lease is None:
+                try:
+                    self._lease = Lease(self._owners)
+                except OSError as exc:  # the row is still written; others may mark it
+                    log.error("cannot take a lease in %s (%s): missions of this process may "
+                              "be marked interrupted by others", self._owners, exc)
+                    return None
+            return self._lease.token
 
     # -- writing ----------------------------------------------------------------------------
 
+    def mission_queued(self, mission_id: str, mission: str, queued_at: float) -> None:
+        """An interface accepted the mission; it waits for its turn."""
+        self._write("INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
+                    "VALUES (?, ?, 'queued', ?, ?)", (mission_id, mission, queued_at,
+                                                      self._owner()))
+
     def mission_started(self, mission_id: str, mission: str, started_at: float) -> None:
-        self._write("INSERT OR REPLACE INTO missions (id, mission, status, started_at) "
-                    "VALUES (?, ?, 'running', ?)", (mission_id, mission, started_at))
+        self._write("INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
+                    "VALUES (?, ?, 'running', ?, ?)", (mission_id, mission, started_at,
+                                                       self._owner()))
+
+    def mission_not_run(self, mission_id: str, mission: str, reason: str,
+                        finished_at: float) -> None:
+        """A mission that was accepted but never started (dropped, cancelled, refused)."""
+        self._write(
+            "INSERT INTO missions (id, mission, status, success, response, started_at, "
+            "finished_at) VALUES (?, ?, 'not_run', 0, ?, ?, ?) ON CONFLICT(id) DO UPDATE SET "
+            "status = 'not_run', success = 0, response = excluded.response, "
+            "finished_at = excluded.finished_at",
+            (mission_id, mission, reason, finished_at, finished_at))
 
     def mission_finished(self, record: dict[str, Any], finished_at: float) -> None:
         """Store a finished mission (`MissionResult.to_dict()`), also one that never started."""
@@ -137,22 +200,31 @@ class MissionHistory:
 
     # -- reading ----------------------------------------------------------------------------
 
-    def recent(self, limit: int = 20, offset: int = 0) -> list[dict[str, Any]]:
-        """Newest first: id, mission, status, success, response, started_at, finished_at."""
+    def recent(self, limit: int = 20, offset: int = 0, *,
+               queued: bool = True) -> list[dict[str, Any]]:
+        """Newest first: id, mission, status, success, response, started_at, finished_at.
+
+        `queued=False` leaves out missions still waiting for their turn (`started_at` is then
+        when they were accepted)."""
+        where = "" if queued else "WHERE status != 'queued' "
         rows = self._query("SELECT id, mission, status, success, response, started_at, "
-                           "finished_at FROM missions ORDER BY started_at DESC LIMIT ? OFFSET ?",
-                           (limit, offset))
+                           f"finished_at FROM missions {where}ORDER BY started_at DESC "
+                           "LIMIT ? OFFSET ?", (limit, offset))
         keys = ("id", "mission", "status", "success", "response", "started_at", "finished_at")
         return [dict(zip(keys, row, strict=True)) for row in rows]
 
     def get(self, mission_id: str) -> dict[str, Any] | None:
         """The full record of one mission (plan, steps, timing, usage, refusals, robot)."""
-        rows = self._query("SELECT id, mission, status, started_at, finished_at, record "
-                           "FROM missions WHERE id = ?", (mission_id,))
+        rows = self._query("SELECT id, mission, status, success, response, started_at, "
+                           "finished_at, record FROM missions WHERE id = ?", (mission_id,))
         if not rows:
             return None
-        mission_id, mission, status, started, finished, record = rows[0]
-        full = json.loads(record) if record else {"mission_id": mission_id, "mission": mission}
+        mission_id, mission, status, success, response, started, finished, record = rows[0]
+        # A mission that never finished (queued, running, not run, interrupted) has no record:
+        # what the row says is all there is.
+        full = json.loads(record) if record else {
+            "mission_id": mission_id, "mission": mission, "response": response,
+            "success": None if success is None else bool(success)}
         full.update(status=status, started_at=started, finished_at=finished)
         return full
 

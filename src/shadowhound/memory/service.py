@@ -105,6 +105,18 @@ class AgentMemory:
         if self.history is not None:
             self.history.close()
 
+    # -- recording (the mission queue) ------------------------------------------------------
+
+    def mission_queued(self, mission_id: str, mission: str) -> None:
+        """An interface accepted a mission into its queue: on record before it runs."""
+        if self.history is not None:
+            self.history.mission_queued(mission_id, mission, time.time())
+
+    def mission_not_run(self, mission_id: str, mission: str, reason: str) -> None:
+        """A queued mission ended without starting (dropped, cancelled, refused)."""
+        if self.history is not None:
+            self.history.mission_not_run(mission_id, mission, reason, time.time())
+
     # -- recording (agent events) ------------------------------------------------------------
 
     def on_event(self, event: MissionEvent) -> None:
@@ -139,11 +151,12 @@ class AgentMemory:
     # -- reading -----------------------------------------------------------------------------
 
     def recent_missions(self, limit: int) -> list[dict[str, Any]]:
-        """Newest first, from the history database (empty when history is off)."""
+        """Newest first, from the history database (empty when history is off). Missions still
+        waiting in the queue are left out: prompts and chat speak of what happened."""
         if self.history is None or limit <= 0:
             return []
         try:
-            return self.history.recent(limit)
+            return self.history.recent(limit, queued=False)
         except MemoryStoreError as exc:
             log.error("%s", exc)
             return []

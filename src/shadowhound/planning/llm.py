@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import logging
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -122,8 +123,8 @@ class LLMPlanner:
                   **options: Any) -> Any:
         if ctx.cancelled is not None and ctx.cancelled.is_set():
             raise PlanningError("mission cancelled before the model was asked", usage=usage)
-        try:
-            completion = self.backend.complete(messages, **options)
+        try:  # a cancel ends the wait at once (BackendCancelled) and nothing more is sent
+            completion = self.backend.complete(messages, cancelled=ctx.cancelled, **options)
         except BackendError:
             usage.round_trips += 1  # a failed request is still a round trip
             raise
@@ -210,8 +211,11 @@ class LLMPlanner:
             return f"I cannot answer right now: {exc}"
         return str(completion.message.get("content") or "").strip() or "(no answer)"
 
-    def describe_image(self, frame: CameraFrame, question: str) -> str:
-        """Ask the (vision-capable) model about a downscaled JPEG of the frame."""
+    def describe_image(self, frame: CameraFrame, question: str,
+                       cancelled: threading.Event | None = None) -> str:
+        """Ask the (vision-capable) model about a downscaled JPEG of the frame.
+
+        Setting `cancelled` abandons the request at once (the caller checks the event)."""
         from ..llm.vision import jpeg_data_url
 
         try:
@@ -219,7 +223,7 @@ class LLMPlanner:
             completion = self.backend.complete([{"role": "user", "content": [
                 {"type": "text", "text": question},
                 {"type": "image_url", "image_url": {"url": url}},
-            ]}])
+            ]}], cancelled=cancelled)
         except (BackendError, ValueError) as exc:
             return f"I could not look at the image: {exc}"
         return str(completion.message.get("content") or "").strip() or "(no answer)"
