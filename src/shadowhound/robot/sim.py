@@ -29,6 +29,7 @@ from .base import RobotError
 from .go2_api import TRICKS
 
 _SUBSTEP = 0.01  # seconds of physics per integration step
+_TRACE_SIZE = 1_000_000  # substeps kept by SimRobot(trace=True): 2.8 hours of simulated time
 
 _POSTURE_SECONDS = {
     (Posture.SITTING, Posture.STANDING): 1.0,
@@ -69,6 +70,7 @@ class SimRobot:
         time_scale: float | None = None,
         world: Any = None,
         name: str = "sim-go2",
+        trace: bool = False,
     ) -> None:
         self.config = config or SimConfig()
         if time_scale is not None:
@@ -86,6 +88,9 @@ class SimRobot:
         self._commands: deque[RobotCommand] = deque(maxlen=self.config.command_log_size)
         self._counters = _Counters()
         self._closed = False
+        # Ground truth for tests and evaluation: the position after every physics substep.
+        self._trace: deque[tuple[float, float]] | None = \
+            deque([(0.0, 0.0)], maxlen=_TRACE_SIZE) if trace else None
 
     # -- clock ---------------------------------------------------------------------------
 
@@ -156,6 +161,8 @@ class SimRobot:
             stamp=self._sim_time + dt,
         )
         self._sim_time += dt
+        if self._trace is not None:
+            self._trace.append((self._state.x, self._state.y))
 
     # -- Robot protocol ------------------------------------------------------------------
 
@@ -274,6 +281,13 @@ class SimRobot:
             return list(self._commands)
 
     @property
+    def trace(self) -> list[tuple[float, float]]:
+        """With SimRobot(trace=True): the true (x, y) after every physics substep since the
+        start (the latest 1,000,000; `reset` adds its pose). Empty without it."""
+        with self._lock:
+            return [] if self._trace is None else list(self._trace)
+
+    @property
     def received_motion(self) -> bool:
         """True when any non-zero velocity command was accepted (the robot was asked to move)."""
         return self._counters.motion_commands > 0
@@ -296,6 +310,8 @@ class SimRobot:
         with self._lock:
             self._cmd = (0.0, 0.0, 0.0)
             self._state = RobotState(x=x, y=y, yaw=normalize_angle(yaw), stamp=self._sim_time)
+            if self._trace is not None:
+                self._trace.append((x, y))
 
     def _settle(self) -> None:
         """Let the body come to rest (bounded) before a posture change."""
