@@ -94,7 +94,8 @@ def test_a_robot_that_stopped_within_the_margin_may_turn_and_walk_back_only():
 
 
 @pytest.mark.parametrize(("polygon", "message"), [
-    ([[0, 0], [1, 1]], "must be a list of at least 3 [x, y] vertices"),
+    ([[0, 0], [1, 1]], "must be a list of 3 to 1000 [x, y] vertices"),
+    ([[math.cos(k / 200), math.sin(k / 200)] for k in range(1001)], "3 to 1000"),
     ([[0, 0], [1, 0], ["nan", 1]], "must be finite numbers"),
     ([[0, 0], [1, 1], [1, 0], [0, 1]], "edges 0 (0, 0)-(1, 1) and 2 (1, 0)-(0, 1) cross or touch"),
     ([[0, 0], [2, 0], [1, 0], [1, 1]], "edges 0 and 1 fold back on each other at (2, 0)"),
@@ -354,34 +355,53 @@ def fence_for_robot(poly, margin):
 
 
 @st.composite
-def plans_in(draw, poly):
+def plans_in(draw, poly, clearance, margin):
+    """Plans whose goto targets are mostly hard ones (vertices, edges) or well inside."""
+    xs, ys = [p[0] for p in poly], [p[1] for p in poly]
+    roomy = [(x / 4, y / 4) for x in range(int(min(xs) * 4), int(max(xs) * 4) + 1)
+             for y in range(int(min(ys) * 4), int(max(ys) * 4) + 1)
+             if clearance((x / 4, y / 4)) >= margin]
     n = draw(st.integers(1, 4))
     calls = []
     for _ in range(n):
-        kind = draw(st.sampled_from(["goto", "goto", "move", "strafe", "rotate"]))
-        if kind == "goto":
-            x, y = draw(points_near(poly))
+        kind = draw(st.sampled_from(["goto", "goto", "inside", "inside", "move", "strafe",
+                                     "rotate", "patrol"]))
+        if kind in ("goto", "inside"):
+            x, y = draw(st.sampled_from(roomy) if kind == "inside" and roomy
+                        else points_near(poly))
             calls.append(SkillCall("nav.goto", {"x": round(x, 3), "y": round(y, 3)}))
         elif kind == "rotate":
             calls.append(SkillCall("nav.rotate", {"degrees": draw(st.floats(-270, 270))}))
+        elif kind == "patrol":
+            calls.append(SkillCall("nav.patrol", {"laps": 1}))
         else:
             calls.append(SkillCall(f"nav.{kind}", {"distance": draw(st.floats(-4, 4))}))
     return calls
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                                   HealthCheck.filter_too_much])
 @given(st.data())
 def test_the_robots_true_path_never_leaves_the_fence(data):
+    """Random plans (goto points snapped to the fence's vertices and edges) on the simulator:
+    the robot's true position, every 10 ms, keeps the margin from the polygon and the radius
+    fence; the controller tracks a straight leg to within millimetres, so allow it 2 cm."""
     margin = data.draw(st.sampled_from([0.0, 0.2, 0.4]))
-    poly = fence_for_robot(data.draw(polygons), margin)
-    plan = data.draw(plans_in(poly))
-    agent, robot = agent_on_sim(geofence_polygon=poly, geofence_margin=margin,
-                                max_step_distance=10.0)
+    if data.draw(st.booleans()):
+        poly = fence_for_robot(data.draw(polygons), margin)
+        fence = {"geofence_polygon": poly}
+        clearance = lambda p: ref_clearance(p, poly)  # noqa: E731
+    else:
+        radius = data.draw(st.floats(1.0, 4.0))
+        poly = [(radius * math.cos(k * math.pi / 4), radius * math.sin(k * math.pi / 4))
+                for k in range(8)]  # targets on (and beyond) the circle
+        fence = {"geofence_radius": radius}
+        clearance = lambda p: radius - math.hypot(*p)  # noqa: E731
+    plan = data.draw(plans_in(poly, clearance, margin))
+    agent, robot = agent_on_sim(geofence_margin=margin, max_step_distance=10.0, **fence)
     result = agent.run_plan(plan)
     event("moved" if robot.received_motion else "refused")
     event("succeeded" if result.success else "failed")
-    # The controller tracks a straight leg to within millimetres; allow it 2 cm.
-    worst = min(ref_clearance(p, poly) for p in robot.trace)
+    worst = min(clearance(p) for p in robot.trace)
     assert worst >= margin - 0.02, (worst, result.response)
     agent.cleanup()

@@ -149,8 +149,8 @@ def test_an_idle_robot_still_follows_the_wall_clock_after_the_controller_stops()
     robot = SimRobot(time_scale=0.01)
     robot.sleep(0.05)
     robot.send_velocity(0.2, 0, 0)
-    time.sleep(0.3)  # nobody ticks (longer than the grace): at least 30 simulated seconds
-    assert robot.now() >= 10.0 and robot.get_state().x > 1.5  # at most 10 s per catch-up
+    time.sleep(0.3)  # nobody ticks for longer than the grace: the wall clock asks for 30 s
+    assert robot.now() >= 10.0 and robot.get_state().x > 1.5  # (at most 10 s per catch-up)
 
 
 @pytest.mark.parametrize("scale", [0.001, 0.0001])

@@ -17,7 +17,7 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .geofence import polygon_problem
+from .geofence import MAX_VERTICES, polygon_problem
 
 ENV_PREFIX = "SHADOWHOUND_"
 _PACKAGE_DIR = Path(__file__).resolve().parent
@@ -89,8 +89,8 @@ class SafetyConfig(_Section):
     def _polygon(cls, value: Any) -> list[tuple[float, float]] | None:
         if value is None:
             return None
-        if not isinstance(value, (list, tuple)) or len(value) < 3:
-            raise ValueError("must be a list of at least 3 [x, y] vertices")
+        if not isinstance(value, (list, tuple)) or not 3 <= len(value) <= MAX_VERTICES:
+            raise ValueError(f"must be a list of 3 to {MAX_VERTICES} [x, y] vertices")
         points = [_finite_pair(v) for v in value]
         problem = polygon_problem(points)
         if problem:

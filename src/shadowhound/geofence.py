@@ -24,6 +24,7 @@ Point = tuple[float, float]
 # Metres. Far below any distance that matters for a 70 cm robot, far above float round-off
 # for coordinates up to a few kilometres.
 EPS = 1e-9
+MAX_VERTICES = 1000
 _BISECTIONS = 60  # halves a leg of up to 1 km below 1e-15 m
 
 
@@ -147,12 +148,14 @@ class PolygonFence:
 
 
 def polygon_problem(vertices: Sequence[Point]) -> str:
-    """Why these vertices are not a usable fence ("" when they are): at least 3 finite
+    """Why these vertices are not a usable fence ("" when they are): 3 to MAX_VERTICES finite
     points, no repeated consecutive point, no two edges that cross or touch (other than
     neighbours at their shared vertex), and a non-zero area."""
     n = len(vertices)
     if n < 3:
         return f"it has {n} vertices; at least 3 are needed"
+    if n > MAX_VERTICES:
+        return f"it has {n} vertices; at most {MAX_VERTICES} are allowed (checks cost n squared)"
     for i, (x, y) in enumerate(vertices):
         if not (math.isfinite(x) and math.isfinite(y)):
             return f"vertex {i} ({x}, {y}) is not a finite point"
