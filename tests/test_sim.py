@@ -4,7 +4,7 @@ import time
 
 import pytest
 
-from shadowhound import Posture, RobotError, SimRobot
+from shadowhound import Posture, RobotAgent, RobotAgentConfig, RobotError, SimRobot
 from shadowhound.config import SimConfig
 
 
@@ -127,3 +127,49 @@ def test_command_log_is_bounded():
 def test_invalid_time_scale():
     with pytest.raises(ValueError, match="time_scale"):
         SimRobot(time_scale=float("inf"))
+
+
+# -- the clock at tiny time scales (issue 12, item 9) -------------------------------------------
+
+
+def test_a_controllers_work_between_ticks_takes_no_simulated_time():
+    """At a time scale of 0.001 a millisecond of the controller's own work would be a whole
+    simulated second: while it ticks, simulated time passes only in its sleeps."""
+    robot = SimRobot(time_scale=0.001)
+    robot.sleep(0.05)
+    start = robot.now()
+    for _ in range(20):
+        time.sleep(0.002)  # the controller computing its next command
+        robot.send_velocity(0.2, 0, 0)
+        robot.sleep(0.05)
+    assert robot.now() - start == pytest.approx(1.0)
+
+
+def test_an_idle_robot_still_follows_the_wall_clock_after_the_controller_stops():
+    robot = SimRobot(time_scale=0.01)
+    robot.sleep(0.05)
+    robot.send_velocity(0.2, 0, 0)
+    time.sleep(0.3)  # nobody ticks for longer than the grace: the wall clock asks for 30 s
+    assert robot.now() >= 10.0 and robot.get_state().x > 1.5  # (at most 10 s per catch-up)
+
+
+@pytest.mark.parametrize("scale", [0.001, 0.0001])
+def test_motion_at_a_tiny_time_scale_succeeds(scale):
+    robot = SimRobot(time_scale=scale)
+    agent = RobotAgent(RobotAgentConfig(robot=robot))
+    result = agent.execute_mission("walk forward 1 meter then turn left 90 degrees")
+    assert result.success, result.response
+    state = robot.get_state()
+    assert state.x == pytest.approx(1.0, abs=0.01) and state.yaw == pytest.approx(math.pi / 2,
+                                                                                  abs=0.01)
+    agent.cleanup()
+
+
+def test_a_stalled_robot_still_fails_as_stalled_at_a_tiny_time_scale():
+    robot = SimRobot(time_scale=0.001)
+    robot.emergency_stop()  # latched in the robot itself: it ignores every velocity command
+    agent = RobotAgent(RobotAgentConfig(robot=robot))
+    result = agent.execute_mission("walk forward 1 meter")
+    assert not result.success and "no progress for 3.0 s with 1.00 m to go" in result.response
+    assert 3.0 <= result.steps[0].robot_duration < 5.0  # measured on the robot's clock
+    agent.cleanup()

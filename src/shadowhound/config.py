@@ -17,6 +17,8 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .geofence import MAX_VERTICES, polygon_problem
+
 ENV_PREFIX = "SHADOWHOUND_"
 _PACKAGE_DIR = Path(__file__).resolve().parent
 
@@ -49,6 +51,10 @@ class SafetyConfig(_Section):
     )
     geofence_polygon: list[tuple[float, float]] | None = Field(
         None, description="optional polygon [[x, y], ...] in the odom frame the robot must stay in"
+    )
+    geofence_margin: float = Field(
+        0.40, ge=0, le=10, description="metres the robot's centre keeps from every fence edge: "
+        "its body (a Go2 is about 0.70 x 0.31 m, 0.38 m from centre to corner)"
     )
     max_linear_accel: float = Field(1.0, gt=0, le=10, description="m/s^2 cap on commands")
     max_angular_accel: float = Field(3.0, gt=0, le=20, description="rad/s^2 cap on commands")
@@ -83,9 +89,22 @@ class SafetyConfig(_Section):
     def _polygon(cls, value: Any) -> list[tuple[float, float]] | None:
         if value is None:
             return None
-        if not isinstance(value, (list, tuple)) or len(value) < 3:
-            raise ValueError("must be a list of at least 3 [x, y] vertices")
-        return [_finite_pair(v) for v in value]
+        if not isinstance(value, (list, tuple)) or not 3 <= len(value) <= MAX_VERTICES:
+            raise ValueError(f"must be a list of 3 to {MAX_VERTICES} [x, y] vertices")
+        points = [_finite_pair(v) for v in value]
+        problem = polygon_problem(points)
+        if problem:
+            raise ValueError(f"is not a usable fence: {problem}")
+        return points
+
+    @model_validator(mode="after")
+    def _margin_fits(self) -> SafetyConfig:
+        if self.geofence_margin >= self.geofence_radius:
+            raise ValueError(
+                f"geofence_margin ({self.geofence_margin:g} m) must be smaller than "
+                f"geofence_radius ({self.geofence_radius:g} m), or the robot could not move"
+            )
+        return self
 
 
 class MotionConfig(_Section):

@@ -16,6 +16,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from . import geofence
 from .config import SafetyConfig
 from .robot.go2_api import TRICKS
 from .skills.context import PlanEnv, PlanProblem
@@ -170,58 +171,54 @@ class Governor:
         return reasons, poses, approval
 
     def _outside_fence(self, pose: Pose2D, poses: list[Pose2D]) -> str:
+        """Why the path from `pose` through `poses` breaks a geofence ("" when it does not).
+        The robot's body is a circle of safety.geofence_margin around its centre."""
         lim = self.limits
+        margin = lim.geofence_margin
+        fences: list[tuple[geofence.Fence, str, str]] = [(
+            geofence.CircleFence(lim.geofence_radius), f"the geofence of {lim.geofence_radius:g} m",
+            "around the origin (safety.geofence_radius)")]
+        if lim.geofence_polygon:
+            fences.append((geofence.PolygonFence(lim.geofence_polygon), "the geofence polygon",
+                           "(safety.geofence_polygon)"))
         previous = pose
         for p in poses:
-            if math.hypot(p.x, p.y) > lim.geofence_radius + 1e-9:
-                return (f"it would take the robot to ({p.x:.2f}, {p.y:.2f}), outside the "
-                        f"geofence of {lim.geofence_radius:g} m around the origin "
-                        "(safety.geofence_radius)")
-            polygon = lim.geofence_polygon
-            if polygon and (not inside_polygon(p.x, p.y, polygon)
-                            or _crosses(previous, p, polygon)):
-                return (f"its path to ({p.x:.2f}, {p.y:.2f}) leaves the geofence polygon "
-                        "(safety.geofence_polygon)")
+            a, b = (previous.x, previous.y), (p.x, p.y)
+            for fence, name, where in fences:
+                breach = geofence.leg_breach(fence, a, b, margin)
+                if breach is not None:
+                    return _fence_message(breach, a, b, (name, where), margin)
             previous = p
         return ""
 
 
+def _fence_message(breach: geofence.Breach, a: tuple[float, float], b: tuple[float, float],
+                   fence: tuple[str, str], margin: float) -> str:
+    """Say where the path first breaks the fence, and where its centre leaves it."""
+    Kind = geofence.BreachKind
+    name, full = fence[0], " ".join(fence)
+    leg = f"its path from {_xy(a)} to {_xy(b)}"
+    body = f"{margin:g} m kept around its centre for the robot's body (safety.geofence_margin)"
+    if breach.kind is Kind.STARTS_OUTSIDE:
+        return f"it would start at {_xy(a)}, outside {full}"
+    if breach.kind is Kind.LEAVES:
+        return f"{leg} leaves {full} at {_xy(breach.at)}"
+    if breach.kind is Kind.STAYS_NEAR:
+        return (f"{leg} starts {breach.start_clearance:.2f} m from the edge of {full}, within "
+                f"the {body}: from there the robot may only turn in place, or walk back to at "
+                f"least {margin:g} m from the edge, but this leg ends closer")
+    leaves = f"; its centre leaves {name} at {_xy(breach.exit)}" if breach.exit else ""
+    return (f"{leg} takes the robot's body outside {full} when its centre passes "
+            f"{_xy(breach.at)} ({body}){leaves}")
+
+
 def inside_polygon(x: float, y: float, polygon: Sequence[tuple[float, float]]) -> bool:
-    """Even-odd rule; points on an edge count as inside."""
-    inside = False
-    n = len(polygon)
-    for i in range(n):
-        (x1, y1), (x2, y2) = polygon[i], polygon[(i + 1) % n]
-        if _on_segment(x, y, x1, y1, x2, y2):
-            return True
-        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
-            inside = not inside
-    return inside
+    """Is (x, y) inside the polygon or on its boundary?"""
+    return geofence.PolygonFence(polygon).contains((x, y))
 
 
-def _crosses(a: Pose2D, b: Pose2D, polygon: Sequence[tuple[float, float]]) -> bool:
-    """Does the straight leg a->b properly cross any edge (a non-convex fence)?"""
-    n = len(polygon)
-    for i in range(n):
-        (x1, y1), (x2, y2) = polygon[i], polygon[(i + 1) % n]
-        d1 = _cross(x1, y1, x2, y2, a.x, a.y)
-        d2 = _cross(x1, y1, x2, y2, b.x, b.y)
-        d3 = _cross(a.x, a.y, b.x, b.y, x1, y1)
-        d4 = _cross(a.x, a.y, b.x, b.y, x2, y2)
-        if d1 * d2 < -1e-12 and d3 * d4 < -1e-12:
-            return True
-    return False
-
-
-def _cross(ax: float, ay: float, bx: float, by: float, px: float, py: float) -> float:
-    return (bx - ax) * (py - ay) - (by - ay) * (px - ax)
-
-
-def _on_segment(px: float, py: float, x1: float, y1: float, x2: float, y2: float) -> bool:
-    if abs(_cross(x1, y1, x2, y2, px, py)) > 1e-9:
-        return False
-    return min(x1, x2) - 1e-9 <= px <= max(x1, x2) + 1e-9 and \
-        min(y1, y2) - 1e-9 <= py <= max(y1, y2) + 1e-9
+def _xy(p: tuple[float, float]) -> str:
+    return f"({p[0]:.2f}, {p[1]:.2f})"
 
 
 def _legs(pose: Pose2D, poses: list[Pose2D]) -> list[float]:

@@ -69,7 +69,8 @@ def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
           f"robot {settings.robot!r}")
     s = settings.safety
     print(f"ok  safety limits: {s.max_linear_speed:g} m/s, {s.max_angular_speed:g} rad/s, "
-          f"{s.max_step_distance:g} m per step, geofence {s.geofence_radius:g} m, risky tricks "
+          f"{s.max_step_distance:g} m per step, geofence {s.geofence_radius:g} m "
+          f"(margin {s.geofence_margin:g} m), risky tricks "
           f"{'allowed' if s.allow_risky_tricks else 'refused'}")
     if settings.backend == "offline":
         print("ok  planner: offline rules (no network, no model)")

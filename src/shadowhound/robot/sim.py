@@ -10,8 +10,9 @@ with accepted=False); the motion skills stand the robot up first (MotionConfig.a
 Tricks run only while standing and never translate the robot.
 
 Clock: with time_scale 0 simulated time advances only when the controller sleeps, as fast
-as the CPU allows; with time_scale s > 0 each simulated second takes s real seconds and the
-simulation also advances while idle.
+as the CPU allows. With time_scale s > 0 each simulated second takes s real seconds (or longer,
+when the controller or the CPU cannot keep up): while a controller ticks, time passes in its
+sleeps only, paced to the wall clock; while nobody ticks, it follows the wall clock.
 """
 
 from __future__ import annotations
@@ -29,6 +30,10 @@ from .base import RobotError
 from .go2_api import TRICKS
 
 _SUBSTEP = 0.01  # seconds of physics per integration step
+_CONTROLLER_GRACE = 0.25  # wall seconds between sleeps that still count as one ticking loop
+_MAX_LAG = 0.1  # wall seconds the clock may fall behind its scale before it slows down instead
+_MAX_CATCH_UP = 10.0  # simulated seconds one catch-up may integrate (about 10 ms of CPU)
+_TRACE_SIZE = 1_000_000  # substeps kept by SimRobot(trace=True): 2.8 hours of simulated time
 
 _POSTURE_SECONDS = {
     (Posture.SITTING, Posture.STANDING): 1.0,
@@ -69,6 +74,7 @@ class SimRobot:
         time_scale: float | None = None,
         world: Any = None,
         name: str = "sim-go2",
+        trace: bool = False,
     ) -> None:
         self.config = config or SimConfig()
         if time_scale is not None:
@@ -82,10 +88,16 @@ class SimRobot:
         self._state = RobotState()
         self._cmd = (0.0, 0.0, 0.0)
         self._sim_time = 0.0
-        self._wall_origin = time.monotonic()
+        # Scaled clock: simulated time _anchor[1] was due at wall time _anchor[0]; _ticked is
+        # when a controller last read the clock or returned from sleep().
+        self._anchor = (time.monotonic(), 0.0)
+        self._ticked = -math.inf
         self._commands: deque[RobotCommand] = deque(maxlen=self.config.command_log_size)
         self._counters = _Counters()
         self._closed = False
+        # Ground truth for tests and evaluation: the position after every physics substep.
+        self._trace: deque[tuple[float, float]] | None = \
+            deque([(0.0, 0.0)], maxlen=_TRACE_SIZE) if trace else None
 
     # -- clock ---------------------------------------------------------------------------
 
@@ -94,8 +106,11 @@ class SimRobot:
         return self.config.time_scale
 
     def now(self) -> float:
+        """Simulated seconds. Reading the clock marks a controller at work (only controllers
+        read it), so its work until its next sleep takes no simulated time."""
         with self._lock:
             self._catch_up()
+            self._ticked = time.monotonic()
             return self._sim_time
 
     def sleep(self, seconds: float) -> None:
@@ -105,17 +120,44 @@ class SimRobot:
             with self._lock:
                 self._advance(seconds)
             return
-        # Real-time mode: wait on an event so stop() from another thread wakes the loop early.
-        self._wake.clear()
-        self._wake.wait(seconds * self.time_scale)
         with self._lock:
             self._catch_up()
+            target = self._sim_time + seconds
+            deadline = self._anchor[0] + (target - self._anchor[1]) * self.time_scale
+        # Wait on an event so stop() from another thread wakes the loop early.
+        self._wake.clear()
+        woken = self._wake.wait(max(0.0, deadline - time.monotonic()))
+        with self._lock:
+            wall = time.monotonic()
+            reach = min(target, self._wall_sim(wall)) if woken else target
+            if reach > self._sim_time:
+                self._advance(reach - self._sim_time)
+            if wall > deadline + _MAX_LAG:  # slower than the scale: run as fast as we can
+                self._anchor = (wall, self._sim_time)
+            self._ticked = wall
+
+    def _wall_sim(self, wall: float) -> float:
+        """The simulated time the wall clock asks for at `wall`, at this time scale."""
+        return self._anchor[1] + (wall - self._anchor[0]) / self.time_scale
 
     def _catch_up(self) -> None:
-        if self.time_scale > 0:
-            target = (time.monotonic() - self._wall_origin) / self.time_scale
-            if target > self._sim_time:
-                self._advance(target - self._sim_time)
+        """Let simulated time follow the wall clock, unless a controller is ticking: then its
+        work between sleeps takes no simulated time (at a time scale of 0.001 a millisecond of
+        Python would be a whole simulated second), and time passes only in its sleeps. A
+        controller that leaves the clock alone for longer than _CONTROLLER_GRACE (hung, done) hands
+        the clock back to the wall, counting the whole gap, so a hung loop's robot walks on
+        (up to _MAX_CATCH_UP at once, so a tiny time scale cannot outrun the CPU)."""
+        if self.time_scale <= 0:
+            return
+        wall = time.monotonic()
+        if wall - self._ticked <= _CONTROLLER_GRACE:
+            return
+        behind = self._wall_sim(wall) - self._sim_time
+        if behind > _MAX_CATCH_UP:  # more than the CPU can simulate at once: drop the rest
+            self._advance(_MAX_CATCH_UP)
+            self._anchor = (wall, self._sim_time)
+        elif behind > 0:
+            self._advance(behind)
 
     # -- physics -------------------------------------------------------------------------
 
@@ -156,6 +198,8 @@ class SimRobot:
             stamp=self._sim_time + dt,
         )
         self._sim_time += dt
+        if self._trace is not None:
+            self._trace.append((self._state.x, self._state.y))
 
     # -- Robot protocol ------------------------------------------------------------------
 
@@ -274,6 +318,13 @@ class SimRobot:
             return list(self._commands)
 
     @property
+    def trace(self) -> list[tuple[float, float]]:
+        """With SimRobot(trace=True): the true (x, y) after every physics substep since the
+        start (the latest 1,000,000; `reset` adds its pose). Empty without it."""
+        with self._lock:
+            return [] if self._trace is None else list(self._trace)
+
+    @property
     def received_motion(self) -> bool:
         """True when any non-zero velocity command was accepted (the robot was asked to move)."""
         return self._counters.motion_commands > 0
@@ -296,6 +347,8 @@ class SimRobot:
         with self._lock:
             self._cmd = (0.0, 0.0, 0.0)
             self._state = RobotState(x=x, y=y, yaw=normalize_angle(yaw), stamp=self._sim_time)
+            if self._trace is not None:
+                self._trace.append((x, y))
 
     def _settle(self) -> None:
         """Let the body come to rest (bounded) before a posture change."""
