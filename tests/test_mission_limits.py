@@ -27,7 +27,7 @@ from shadowhound import events as ev
 from shadowhound.budget import MissionBudget
 from shadowhound.robot.go2_api import TRICKS
 from shadowhound.safety import Governor
-from shadowhound.skills import PlanEnv
+from shadowhound.skills import NoArgs, PlanEnv, Skill
 from tests.llm_server import Reply, ScriptedLLM, json_plan, text, tool_calls
 
 # How far the simulated body may end past a limit through control error alone: each motion
@@ -184,6 +184,29 @@ def test_the_last_gate_refuses_a_risky_call_nobody_approved():
     assert governor.check_step(lookalike, state, env) != []
     # Checked on its own (no mission budget), a step is judged as before: approval is the plan's.
     assert governor.check_step(lookalike, state, PlanEnv(settings, state.pose)) == []
+
+
+def test_a_skill_that_walks_further_than_it_predicts_is_stopped_at_the_mission_limit():
+    """The plan check sees predictions; the control loop sees the odometer. A skill that
+    predicts no path (or a real robot's detour) is stopped once the mission walked too far."""
+
+    def wander(ctx, _args):
+        while True:
+            ctx.drive(0.4, 0.0, 0.0)
+            ctx.tick()
+
+    registry = default_registry()
+    registry.register(Skill("test.wander", "walks on and on", NoArgs, wander, timeout=600))
+    robot = SimRobot(time_scale=0.0)
+    settings = ShadowHoundConfig(safety={"max_mission_distance": 3, "geofence_radius": 100})
+    agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings, registry=registry))
+    result = agent.run_plan([SkillCall("test.wander")])
+    assert not result.success
+    assert "past the limit of 3 m (safety.max_mission_distance)" in result.response
+    robot.sleep(2.0)  # let the body come to rest: braking from 0.4 m/s at 1 m/s^2 is 8 cm
+    tick = 0.4 / settings.motion.control_rate_hz
+    braking = 0.4**2 / (2 * robot.config.linear_accel)
+    assert robot.true_odometer <= 3 + settings.safety.outcome_tolerance + tick + braking + 1e-6
 
 
 # -- property tests: random plans and model replies against random limits and fences ------------

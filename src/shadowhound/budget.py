@@ -52,6 +52,12 @@ class MissionBudget:
         return any(c is call for c in self._approved)
 
 
+def walked_too_far(walked: float, limit: float) -> str:
+    """Why a step stopped when the robot measurably walked past the mission's distance."""
+    return (f"the robot has walked {walked:.2f} m in this mission, past the limit of {limit:g} m "
+            "(safety.max_mission_distance)")
+
+
 def out_of_time(limit: float) -> str:
     """Why a step stopped or was refused when the mission's time ran out."""
     return (f"the mission's time is up: it may take {limit:g} s on the robot's clock "

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..budget import MissionBudget, out_of_time
+from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
 from ..robot.base import Robot
 from ..state import CameraFrame, Pose2D, Posture
@@ -101,11 +101,18 @@ class SkillContext:
             self.deadline, self._late = budget.deadline(limit), out_of_time(limit)
 
     def check(self) -> None:
-        """Raise if the mission was cancelled or the skill ran out of time."""
+        """Raise if the mission was cancelled, the skill ran out of time, or the robot walked
+        past the mission's distance (whatever the plan predicted: a detour, a skill that
+        predicts no path), with `outcome_tolerance` of slack for control error."""
         if self._cancelled.is_set():
             raise MissionCancelled("mission cancelled")
         if self.robot.now() > self.deadline:
             raise SkillTimeout(self._late)
+        budget, safety = self.env.budget, self.config.safety
+        if budget is not None:
+            walked = budget.travelled(self.robot.get_state())
+            if walked > safety.max_mission_distance + safety.outcome_tolerance:
+                raise SkillError(walked_too_far(walked, safety.max_mission_distance))
 
     def tick(self) -> None:
         """Wait one control period, then check cancellation and the time-out."""
