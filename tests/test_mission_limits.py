@@ -31,7 +31,8 @@ from shadowhound.skills import NoArgs, PlanEnv, Skill
 from tests.llm_server import Reply, ScriptedLLM, json_plan, text, tool_calls
 
 # How far the simulated body may end past a limit through control error alone: each motion
-# stops within motion.position_tolerance (2 mm), and path points are 1 cm apart.
+# stops within motion.position_tolerance (2 mm; a batch checked on predictions has at most 5
+# steps here), and the body is never more than 1 cm from the last true-path point.
 METRES_SLACK = 0.02
 # Robot time a step can take beyond the mission's deadline: a posture change before the first
 # control tick (lying -> standing: 1.5 s) plus one control period.
@@ -211,19 +212,16 @@ def test_a_skill_that_walks_further_than_it_predicts_is_stopped_at_the_mission_l
 
 # -- property tests: random plans and model replies against random limits and fences ------------
 
-TRICK_NAMES = sorted(TRICKS)
 metres = st.one_of(st.floats(-2.5, 2.5), st.floats(-7, 7)).map(lambda v: round(v, 2))
 walks = st.one_of(
     st.builds(lambda d: move(d), metres),
     st.builds(lambda x, y: {"skill": "nav.goto", "args": {"x": x, "y": y}}, metres, metres),
 )
 steps = st.one_of(
-    walks, walks,
-    st.builds(lambda d: move(d), metres),
+    walks, walks, walks,
     st.builds(lambda d: {"skill": "nav.strafe", "args": {"distance": d}}, metres),
     st.builds(lambda a: {"skill": "nav.rotate", "args": {"degrees": a}},
               st.sampled_from([-90, 45, 180, 720])),
-    st.builds(lambda x, y: {"skill": "nav.goto", "args": {"x": x, "y": y}}, metres, metres),
     st.builds(lambda s: {"skill": "sys.wait", "args": {"seconds": s}}, st.sampled_from([1, 5, 20])),
     st.builds(lambda t: {"skill": "body.sport", "args": {"trick": t}},
               st.sampled_from(RISKY + ["hello", "stretch"])),
