@@ -18,7 +18,7 @@ U_FENCE = [(0, 0), (3, 0), (3, 3), (2, 3), (2, 1), (1, 1), (1, 3), (0, 3)]
 
 
 def agent_on_sim(**safety):
-    robot = SimRobot(time_scale=0.0, trace=True)
+    robot = SimRobot(time_scale=0.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=ShadowHoundConfig(safety=safety)))
     agent.initialize()
     return agent, robot
@@ -402,6 +402,7 @@ def test_the_robots_true_path_never_leaves_the_fence(data):
     result = agent.run_plan(plan)
     event("moved" if robot.received_motion else "refused")
     event("succeeded" if result.success else "failed")
-    worst = min(clearance(p) for p in robot.trace)
+    assert robot.true_path_complete
+    worst = min(clearance((x, y)) for _t, x, y in robot.true_path)
     assert worst >= margin - 0.02, (worst, result.response)
     agent.cleanup()

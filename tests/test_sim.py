@@ -173,3 +173,23 @@ def test_a_stalled_robot_still_fails_as_stalled_at_a_tiny_time_scale():
     assert not result.success and "no progress for 3.0 s with 1.00 m to go" in result.response
     assert 3.0 <= result.steps[0].robot_duration < 5.0  # measured on the robot's clock
     agent.cleanup()
+
+
+def test_true_path_is_ground_truth_about_1_cm_apart_and_bounded():
+    robot = SimRobot(SimConfig(true_path_size=50), time_scale=0.0)
+    robot.send_velocity(0.5, 0.0, 0.0)
+    robot.sleep(0.8)  # 0.5 s ramp to 0.5 m/s (0.125 m), then 0.3 s at 0.5 m/s (0.15 m)
+    path = robot.true_path
+    assert path[0] == (0.0, 0.0, 0.0) and path[-1][1:] == (robot.get_state().x, 0.0)
+    gaps = [math.hypot(b[1] - a[1], b[2] - a[2]) for a, b in zip(path, path[1:], strict=False)]
+    # A point is kept once the body is 1 cm from the last one: gaps are 1 cm plus at most one
+    # 10 ms physics substep (at most 1 cm at the hardware's 1 m/s), and the body never strays
+    # more than 1 cm from the last point kept.
+    assert min(gaps[:-1]) > 0.01 - 1e-9 and max(gaps) < 0.02 and robot.true_path_complete
+    assert robot.true_odometer == pytest.approx(0.275, abs=1e-6)
+    robot.sleep(1.0)  # another 0.5 m: more points than the 50 kept
+    assert len(robot.true_path) == 51 and not robot.true_path_complete
+    robot.stop()
+    robot.reset(1.0, 2.0)  # a teleport is not a walk: the path starts again, the odometer stays
+    assert robot.true_path == [(robot.now(), 1.0, 2.0), (robot.now(), 1.0, 2.0)]
+    assert robot.true_path_complete and robot.true_odometer == pytest.approx(0.775, abs=1e-6)

@@ -16,6 +16,7 @@ from typing import Any
 
 from . import events as ev
 from .approval import ApprovalDesk, ApprovalRequest
+from .budget import MissionBudget
 from .camera import to_camera_frame
 from .checking import CheckedPlan, check_plan, new_mission_id, plain_args
 from .config import ConfigError, ShadowHoundConfig
@@ -261,7 +262,8 @@ class RobotAgent:
         checked = self._prepare(plan, env, start_state, first=1)
         steps, valid, problems = checked.steps, checked.calls, checked.problems
         if not problems and checked.approvals:
-            refused = self._await_approval(mission_id, text, steps, checked.approvals)
+            refused = self._await_approval(mission_id, text, steps, checked.approvals, env,
+                                           valid)
             problems = [refused] if refused else []
         elif problems:
             problems += checked.approvals  # say everything that stands in the way at once
@@ -316,8 +318,10 @@ class RobotAgent:
         return check_plan(plan, self.registry, self.governor, self.settings, env, start, first)
 
     def _await_approval(self, mission_id: str, text: str, steps: list[StepResult],
-                        reasons: list[str]) -> str | None:
-        """None when a person approved; otherwise the refusal."""
+                        reasons: list[str], env: PlanEnv,
+                        calls: list[ValidatedCall]) -> str | None:
+        """None when a person approved (the mission's budget then holds `calls` as approved);
+        otherwise the refusal."""
         if not self.approvals_enabled:
             return ("needs approval, and no interface that can ask a person is attached: "
                     + "; ".join(reasons))
@@ -327,6 +331,8 @@ class RobotAgent:
         self._emit(ev.APPROVAL_REQUIRED, mission_id, request=request.to_dict())
         refused = self._approvals.wait(request, self._cancel)
         self._emit(ev.APPROVAL_DECIDED, mission_id, approved=refused is None, reason=refused)
+        if refused is None and env.budget is not None:
+            env.budget.grant(calls)
         return None if refused is None else f"not approved ({refused}): " + "; ".join(reasons)
 
     def enable_approvals(self, enabled: bool = True) -> None:
@@ -372,21 +378,23 @@ class RobotAgent:
             steps.append(step)
             self._set_current(steps=len(steps))
             try:
-                valid = self.registry.validate(call)
+                named = self.registry.validate(call)
             except SkillValidationError as exc:
                 step.status, step.error = StepStatus.SKIPPED, "; ".join(exc.problems)
                 return f"invalid call, not run: {step.error}"
-            verdict = self.governor.check_plan([valid], self.robot.get_state(), env)
-            found = verdict.refusals
-            if not found and verdict.approvals:
-                refused = self._await_approval(mission_id, text, [step],
-                                               [r.reason for r in verdict.approvals])
-                found = [] if refused is None else verdict.approvals
+            step.skill, step.args = named.name, named.args_dict()  # as a person is asked
+            # Each step is a batch of one, checked against what the mission has already used.
+            checked = self._prepare(Plan([call], text=text), env, self.robot.get_state(),
+                                    first=step.index)
+            found, valid = checked.problems, checked.calls[0]
+            if not found and checked.approvals:
+                refused = self._await_approval(mission_id, text, [step], checked.approvals,
+                                               env, checked.calls)
+                found = [refused] if refused else []
             if found:
-                step.status, step.error = StepStatus.SKIPPED, "; ".join(r.reason for r in found)
-                refusals.append(f"step {step.index} ({valid.name}): {step.error}")
+                step.status, step.error = StepStatus.SKIPPED, "; ".join(found)
+                refusals.extend(found)
                 return f"refused by the safety limits, not run: {step.error}"
-            step.skill, step.args = valid.name, valid.args_dict()
             outcome = self._run_step(mission_id, step, valid, env)
             timing.execution_duration += step.duration
             timing.robot_duration += step.robot_duration
@@ -413,6 +421,8 @@ class RobotAgent:
             status = MissionStatus.FAILED
         if status is MissionStatus.SUCCEEDED and self._cancel.is_set():
             status, answer = MissionStatus.STOPPED, self._stop_reason()
+        if refusals and status is MissionStatus.FAILED:
+            answer = f"{answer} Refused: {'; '.join(refusals)}."
         plan = Plan([SkillCall(s.skill, s.args, s.label) for s in steps], text=text,
                     usage=usage, planner=getattr(planner, "name", "react"))
         return self._finish(mission_id, text, started, timing, steps, plan, status, answer,
@@ -615,7 +625,10 @@ class RobotAgent:
         return {**self.settings.places, **taught}
 
     def _plan_env(self) -> PlanEnv:
-        return PlanEnv(self.settings, self.robot.get_state().pose, self._known_places())
+        """The mission's environment, with a fresh budget: made once per mission."""
+        state = self.robot.get_state()
+        return PlanEnv(self.settings, state.pose, self._known_places(),
+                       MissionBudget.start(state, self.robot.now))
 
     def _planning_context(self, text: str = "", planner: Any = None) -> PlanningContext | None:
         """What the planner may read; None for planners that read nothing (the offline rules),

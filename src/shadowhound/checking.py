@@ -1,6 +1,8 @@
 """Checking a plan before anything moves: every step validated, then the governor's verdict.
 
-Pure: it reads the registry, the governor and the settings, and touches no robot.
+Pure: it reads the registry, the governor and the settings, and touches no robot. Every batch
+of steps of a mission passes here (the first plan, a re-plan, each react step) with the
+mission's `PlanEnv`, whose budget makes the governor count what the mission already used.
 """
 
 from __future__ import annotations

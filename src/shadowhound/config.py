@@ -61,6 +61,9 @@ class SafetyConfig(_Section):
     max_mission_distance: float = Field(
         50.0, gt=0, le=10_000, description="metres one mission may travel in all"
     )
+    max_mission_duration: float = Field(
+        600.0, gt=0, le=86_400, description="seconds on the robot's clock one mission may take"
+    )
     battery_floor: float = Field(
         15.0, ge=0, le=100, description="percent below which only stop, sit, lie down, status"
     )
@@ -136,6 +139,9 @@ class SimConfig(_Section):
     camera_width: int = Field(160, ge=16, le=1920)
     camera_height: int = Field(120, ge=12, le=1080)
     command_log_size: int = Field(10000, ge=10, le=10_000_000)
+    true_path_size: int = Field(
+        100_000, ge=10, le=10_000_000, description="ground-truth path points kept (1 cm apart)"
+    )
 
 
 class LLMConfig(_Section):

@@ -2,7 +2,10 @@
 
 Whoever proposed a step (a planner, the web, a test), the agent checks the whole plan here
 before the first step runs, predicting the robot's pose and posture step by step. A plan with
-any refused step is refused whole; risky steps run only with approval. `SkillContext.drive`
+any refused step is refused whole; risky steps run only with approval. Limits that bind the
+mission as a whole (its distance, its time, approvals) are counted against the mission's
+`MissionBudget` (in `PlanEnv.budget`), so a re-plan or a react step is checked against what the
+mission has already walked, spent and been granted, not from zero. `SkillContext.drive`
 additionally caps every velocity and acceleration command, the agent's watchdog zeroes velocity
 when the control loop stops ticking, and the agent checks each motion step's measured outcome.
 """
@@ -17,6 +20,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from . import geofence
+from .budget import out_of_time
 from .config import SafetyConfig
 from .robot.go2_api import TRICKS
 from .skills.context import PlanEnv, PlanProblem
@@ -65,6 +69,9 @@ class Governor:
         is skipped and the rest still checked."""
         check = PlanCheck(path=[start.pose])
         pose, posture = start.pose, start.posture
+        budget = env.budget
+        walked = budget.travelled(start) if budget else 0.0
+        seconds = budget.elapsed() if budget else 0.0
         for index, call in enumerate(calls, start=1):
             if call is None:
                 continue
@@ -75,11 +82,9 @@ class Governor:
                 continue
             legs = _legs(pose, poses)
             check.distance += sum(legs)
-            if check.distance > self.limits.max_mission_distance + 1e-9:
-                reasons.append(
-                    f"the mission would travel {check.distance:.1f} m, more than the limit of "
-                    f"{self.limits.max_mission_distance:g} m (safety.max_mission_distance)"
-                )
+            reasons += self._mission_distance(walked, check.distance)
+            seconds += self._least_seconds(call, sum(legs))
+            reasons += self._mission_time(seconds)
             check.refusals += [Refusal(index, call.name, r) for r in reasons]
             if needs_approval:
                 check.approvals.append(Refusal(index, call.name, needs_approval))
@@ -113,11 +118,59 @@ class Governor:
                 "(safety.outcome_tolerance, outcome_tolerance_deg)")
 
     def check_step(self, call: ValidatedCall, state: RobotState, env: PlanEnv) -> list[str]:
-        """Re-check one step from the measured state just before it runs."""
+        """Re-check one step from the measured state just before it runs.
+
+        With the mission's budget in `env`, this is also the last gate for the mission's limits:
+        a risky step runs only if a person approved this very call, and the distance walked so
+        far plus this step's must fit (with `outcome_tolerance` of slack, since the plan it
+        belongs to already passed on predictions and each step may end that far off).
+        """
         try:
-            return self._check(call, state.pose, state.posture, state, env)[0]
+            reasons, poses, needs_approval = self._check(call, state.pose, state.posture,
+                                                         state, env)
         except PlanProblem as exc:
             return [str(exc)]
+        budget = env.budget
+        if budget is None:
+            return reasons
+        if needs_approval and not budget.granted(call):
+            reasons.append(f"not approved: {needs_approval}")
+        distance = sum(_legs(state.pose, poses))
+        reasons += self._mission_distance(budget.travelled(state), distance,
+                                          self.limits.outcome_tolerance)
+        elapsed = budget.elapsed()
+        if elapsed > self.limits.max_mission_duration + 1e-9:
+            reasons.append(out_of_time(self.limits.max_mission_duration))
+        else:
+            reasons += self._mission_time(elapsed + self._least_seconds(call, distance))
+        return reasons
+
+    def _mission_distance(self, walked: float, planned: float, slack: float = 0.0) -> list[str]:
+        """The mission's distance limit: what was walked so far plus what is planned."""
+        limit = self.limits.max_mission_distance
+        total = walked + planned
+        if total <= limit + slack + 1e-9:
+            return []
+        already = f" in all ({walked:.1f} m walked already)" if walked > 0 else ""
+        return [f"the mission would travel {total:.1f} m{already}, more than the limit of "
+                f"{limit:g} m (safety.max_mission_distance)"]
+
+    def _mission_time(self, seconds: float) -> list[str]:
+        """The mission's time limit, against the robot-clock time used so far plus at least
+        what the steps up to here will take."""
+        limit = self.limits.max_mission_duration
+        if seconds <= limit + 1e-9:
+            return []
+        return [f"the mission would take at least {seconds:.1f} s on the robot's clock, more "
+                f"than the limit of {limit:g} s (safety.max_mission_duration)"]
+
+    def _least_seconds(self, call: ValidatedCall, distance: float) -> float:
+        """A lower bound on a step's robot time (never more than it can take): its distance at
+        the speed cap, its wait, its trick. Turns and posture changes count as free."""
+        trick = getattr(call.args, "trick", None)
+        return (distance / self.limits.max_linear_speed
+                + float(getattr(call.args, "seconds", None) or 0.0)
+                + (TRICKS[trick].duration if trick is not None else 0.0))
 
     def _check(
         self, call: ValidatedCall, pose: Pose2D, posture: Posture, start: RobotState,

@@ -33,7 +33,7 @@ _SUBSTEP = 0.01  # seconds of physics per integration step
 _CONTROLLER_GRACE = 0.25  # wall seconds between sleeps that still count as one ticking loop
 _MAX_LAG = 0.1  # wall seconds the clock may fall behind its scale before it slows down instead
 _MAX_CATCH_UP = 10.0  # simulated seconds one catch-up may integrate (about 10 ms of CPU)
-_TRACE_SIZE = 1_000_000  # substeps kept by SimRobot(trace=True): 2.8 hours of simulated time
+_PATH_SPACING = 0.01  # metres between recorded ground-truth path points
 
 _POSTURE_SECONDS = {
     (Posture.SITTING, Posture.STANDING): 1.0,
@@ -74,7 +74,6 @@ class SimRobot:
         time_scale: float | None = None,
         world: Any = None,
         name: str = "sim-go2",
-        trace: bool = False,
     ) -> None:
         self.config = config or SimConfig()
         if time_scale is not None:
@@ -95,9 +94,11 @@ class SimRobot:
         self._commands: deque[RobotCommand] = deque(maxlen=self.config.command_log_size)
         self._counters = _Counters()
         self._closed = False
-        # Ground truth for tests and evaluation: the position after every physics substep.
-        self._trace: deque[tuple[float, float]] | None = \
-            deque([(0.0, 0.0)], maxlen=_TRACE_SIZE) if trace else None
+        # Ground truth, kept apart from what get_state reports, for tests and evaluation.
+        self._true_path: deque[tuple[float, float, float]] = deque(
+            [(0.0, 0.0, 0.0)], maxlen=self.config.true_path_size)
+        self._true_path_dropped = 0
+        self._true_odometer = 0.0
 
     # -- clock ---------------------------------------------------------------------------
 
@@ -198,8 +199,10 @@ class SimRobot:
             stamp=self._sim_time + dt,
         )
         self._sim_time += dt
-        if self._trace is not None:
-            self._trace.append((self._state.x, self._state.y))
+        self._true_odometer += step
+        _t, last_x, last_y = self._true_path[-1]
+        if math.hypot(s.x + dx - last_x, s.y + dy - last_y) >= _PATH_SPACING:
+            self._note_true_point()
 
     # -- Robot protocol ------------------------------------------------------------------
 
@@ -318,13 +321,6 @@ class SimRobot:
             return list(self._commands)
 
     @property
-    def trace(self) -> list[tuple[float, float]]:
-        """With SimRobot(trace=True): the true (x, y) after every physics substep since the
-        start (the latest 1,000,000; `reset` adds its pose). Empty without it."""
-        with self._lock:
-            return [] if self._trace is None else list(self._trace)
-
-    @property
     def received_motion(self) -> bool:
         """True when any non-zero velocity command was accepted (the robot was asked to move)."""
         return self._counters.motion_commands > 0
@@ -342,13 +338,37 @@ class SimRobot:
                 **c.by_kind,
             }
 
+    @property
+    def true_path(self) -> list[tuple[float, float, float]]:
+        """Where the body really was: (sim time, x, y), oldest first, points about 1 cm apart
+        while it moves, ending where it is now. Starts again at a `reset`; check
+        `true_path_complete` before relying on the oldest points."""
+        with self._lock:
+            self._catch_up()
+            s = self._state
+            return [*self._true_path, (self._sim_time, s.x, s.y)]
+
+    @property
+    def true_path_complete(self) -> bool:
+        """False when more points were recorded than SimConfig.true_path_size keeps."""
+        with self._lock:
+            return self._true_path_dropped == 0
+
+    @property
+    def true_odometer(self) -> float:
+        """Metres the body really walked since the simulator started (resets do not walk)."""
+        with self._lock:
+            self._catch_up()
+            return self._true_odometer
+
     def reset(self, x: float = 0.0, y: float = 0.0, yaw: float = 0.0) -> None:
         """Put the robot back at a pose, standing, stopped, with a full battery."""
         with self._lock:
             self._cmd = (0.0, 0.0, 0.0)
             self._state = RobotState(x=x, y=y, yaw=normalize_angle(yaw), stamp=self._sim_time)
-            if self._trace is not None:
-                self._trace.append((x, y))
+            self._true_path.clear()
+            self._true_path_dropped = 0
+            self._note_true_point()
 
     def _settle(self) -> None:
         """Let the body come to rest (bounded) before a posture change."""
@@ -356,6 +376,11 @@ class SimRobot:
             if not self.get_state().is_moving:
                 return
             self.sleep(_SUBSTEP * 5)
+
+    def _note_true_point(self) -> None:
+        if len(self._true_path) == self._true_path.maxlen:
+            self._true_path_dropped += 1
+        self._true_path.append((self._sim_time, self._state.x, self._state.y))
 
     def _record(self, kind: str, value: Any, accepted: bool, note: str = "") -> None:
         self._commands.append(RobotCommand(self._sim_time, kind, value, accepted, note))

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
 from ..robot.base import Robot
 from ..state import CameraFrame, Pose2D, Posture
@@ -31,15 +32,18 @@ class PlanProblem(ValueError):
 
 @dataclass
 class PlanEnv:
-    """What predictions and checks know before anything moves.
+    """What predictions and checks know about one mission.
 
     `places` are the named places of this mission: the profile's, then taught ones. Skills that
     teach or forget a place update it, so later steps of the same plan see the change.
+    `budget` is what the mission has used of its limits so far (the agent sets it once per
+    mission; None checks a plan on its own, as if the mission had just begun).
     """
 
     config: ShadowHoundConfig
     mission_start: Pose2D = field(default_factory=Pose2D)
     places: dict[str, tuple[float, float]] = field(default_factory=dict)
+    budget: MissionBudget | None = None
 
     def __post_init__(self) -> None:
         self.places = {**self.config.places, **self.places}
@@ -85,18 +89,30 @@ class SkillContext:
         self.period = 1.0 / self.config.motion.control_rate_hz
         self._last_command = (0.0, 0.0, 0.0)
         self.deadline = math.inf
+        self._late = ""
         self.notes: list[str] = []
 
     def start_clock(self, timeout: float) -> None:
+        """Give the skill `timeout` seconds of robot time, and never past the mission's end."""
         self.deadline = self.robot.now() + timeout
-        self._timeout = timeout
+        self._late = f"timed out after {timeout:.1f} s (robot clock)"
+        budget, limit = self.env.budget, self.config.safety.max_mission_duration
+        if budget is not None and budget.deadline(limit) < self.deadline:
+            self.deadline, self._late = budget.deadline(limit), out_of_time(limit)
 
     def check(self) -> None:
-        """Raise if the mission was cancelled or the skill ran out of time."""
+        """Raise if the mission was cancelled, the skill ran out of time, or the robot walked
+        past the mission's distance (whatever the plan predicted: a detour, a skill that
+        predicts no path), with `outcome_tolerance` of slack for control error."""
         if self._cancelled.is_set():
             raise MissionCancelled("mission cancelled")
         if self.robot.now() > self.deadline:
-            raise SkillTimeout(f"timed out after {self._timeout:.1f} s (robot clock)")
+            raise SkillTimeout(self._late)
+        budget, safety = self.env.budget, self.config.safety
+        if budget is not None:
+            walked = budget.travelled(self.robot.get_state())
+            if walked > safety.max_mission_distance + safety.outcome_tolerance:
+                raise SkillError(walked_too_far(walked, safety.max_mission_distance))
 
     def tick(self) -> None:
         """Wait one control period, then check cancellation and the time-out."""
