@@ -3,9 +3,13 @@ import threading
 import time
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from shadowhound import Posture, RobotAgent, RobotAgentConfig, RobotError, SimRobot
 from shadowhound.config import SimConfig
+from shadowhound.robot.scene import DEFAULT_WORLD
+from shadowhound.robot.sensors import penetration
 
 
 def test_starts_standing_at_origin_with_full_battery(robot):
@@ -173,3 +177,46 @@ def test_a_stalled_robot_still_fails_as_stalled_at_a_tiny_time_scale():
     assert not result.success and "no progress for 3.0 s with 1.00 m to go" in result.response
     assert 3.0 <= result.steps[0].robot_duration < 5.0  # measured on the robot's clock
     agent.cleanup()
+
+
+# -- collisions and the range scan (issue 15) ----------------------------------------------
+
+_COLLIDING = SimConfig(collisions=True)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    start=st.tuples(st.floats(-5.5, 5.5), st.floats(-5.5, 5.5), st.floats(-3.1, 3.1)),
+    commands=st.lists(st.tuples(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5),
+                                st.floats(-2.5, 2.5), st.floats(0.1, 3.0)),
+                      min_size=1, max_size=6),
+)
+def test_random_motion_never_makes_the_body_overlap_an_object_or_wall(start, commands):
+    robot = SimRobot(_COLLIDING, trace=True)
+    x, y, yaw = start
+    if penetration(DEFAULT_WORLD, x, y, 0.35)[0] > 0:
+        return  # a start inside something is not a pose the robot can be in
+    robot.reset(x, y, yaw)
+    for vx, vy, wz, seconds in commands:
+        robot.send_velocity(vx, vy, wz)
+        robot.sleep(seconds)
+    for px, py in robot.trace[1:]:
+        assert penetration(DEFAULT_WORLD, px, py, 0.35)[0] <= 1e-9, (px, py)
+
+
+def test_walking_into_the_red_ball_stops_at_contact_and_names_it():
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(_COLLIDING)))
+    result = agent.execute_mission("walk forward 4 meters")
+    assert not result.success
+    assert "blocked by the red ball 0.35 m ahead" in result.response
+    assert result.robot.x == pytest.approx(3.0 - 0.2 - 0.35, abs=0.01)
+    assert result.robot.blocked_by == "the red ball 0.35 m ahead"
+
+
+def test_the_scan_sees_the_red_ball_ahead_and_the_walls():
+    robot = SimRobot()
+    scan = robot.get_scan()
+    assert scan is not None and len(scan.ranges) == 360
+    assert scan.ranges[180] == pytest.approx(3.0 - 0.2)  # beam 180 looks straight ahead
+    assert scan.ranges[0] == pytest.approx(6.0)  # straight behind: the wall at x = -6
+    assert scan.pose == robot.get_state().pose

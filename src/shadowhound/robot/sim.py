@@ -9,7 +9,7 @@ Like the real Go2, velocity commands are *ignored* while sitting or lying (they 
 with accepted=False); the motion skills stand the robot up first (MotionConfig.auto_stand).
 Tricks run only while standing and never translate the robot.
 
-The body is a circle (SimConfig.body_radius) in the scene (robot/scene.py): it cannot enter an
+With SimConfig.collisions the body is a circle (body_radius) in the scene (robot/scene.py): it cannot enter an
 object or a wall. A substep that would push it in is cut short at contact, the body's velocity
 drops to zero, and the state's `blocked_by` says what stopped it ("the red ball 0.35 m ahead"),
 so the motion skills' stall check fails with that name. A 360-beam range scan (`get_scan`)
@@ -192,7 +192,8 @@ class SimRobot:
         dx = (mvx * c - mvy * si) * dt
         dy = (mvx * si + mvy * c) * dt
         blocked_by = s.blocked_by if not (dx or dy) else ""
-        depth, what = sensors.penetration(self.world, s.x + dx, s.y + dy, cfg.body_radius)
+        depth, what = (sensors.penetration(self.world, s.x + dx, s.y + dy, cfg.body_radius)
+                       if cfg.collisions else (0.0, ""))
         if depth > self._depth + 1e-12:
             # Cut the substep short at contact: the largest fraction that goes no deeper.
             lo, hi = 0.0, 1.0

@@ -64,15 +64,17 @@ def apply_scan(grid: OccupancyGrid, scan: Scan) -> int:
             cleared = span.translate(_CLEAR)
             for m in _OCCUPIED_RUN.finditer(span):
                 col = c0 + m.start()
-                if not _beam_passes(scan, reach, grid, ox, oy, col, row):
-                    cleared[m.start()] = span[m.start()]
+                if _beam_passes(scan, reach, grid, ox, oy, col, row):
+                    cleared[m.start()] = FREE
             cells[base + c0 : base + c1] = cleared
     hits = 0
     for i, r in enumerate(scan.ranges):
         if scan.is_hit(r):
             a = scan.beam_angle(i) - grid.origin.yaw
-            col = math.floor(ox + r / res * math.cos(a))
-            row = math.floor(oy + r / res * math.sin(a))
+            # A quarter cell past the surface: the cell behind it, whatever the rounding.
+            reach_cells = r / res + 0.25
+            col = math.floor(ox + reach_cells * math.cos(a))
+            row = math.floor(oy + reach_cells * math.sin(a))
             if 0 <= col < w and 0 <= row < grid.height:
                 cells[row * w + col] = OCCUPIED
                 hits += 1
