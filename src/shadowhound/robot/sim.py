@@ -9,11 +9,11 @@ Like the real Go2, velocity commands are *ignored* while sitting or lying (they 
 with accepted=False); the motion skills stand the robot up first (MotionConfig.auto_stand).
 Tricks run only while standing and never translate the robot.
 
-With SimConfig.collisions the body is a circle (body_radius) in the scene (robot/scene.py): it cannot enter an
-object or a wall. A substep that would push it in is cut short at contact, the body's velocity
-drops to zero, and the state's `blocked_by` says what stopped it ("the red ball 0.35 m ahead"),
-so the motion skills' stall check fails with that name. A 360-beam range scan (`get_scan`)
-comes from the same ray casting as the camera.
+With SimConfig.collisions the body is a circle (body_radius) in the scene (robot/scene.py):
+it cannot enter an object or a wall. A substep that would push it in is cut short at contact,
+the body's velocity drops to zero, and the state's `blocked_by` says what stopped it ("the red
+ball 0.35 m ahead"), so the motion skills' stall check fails with that name. A 360-beam range
+scan (`get_scan`) comes from the same ray casting as the camera.
 
 Clock: with time_scale 0 simulated time advances only when the controller sleeps, as fast
 as the CPU allows. With time_scale s > 0 each simulated second takes s real seconds (or longer,

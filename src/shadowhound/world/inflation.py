@@ -56,6 +56,7 @@ def inflate(
         table[255] = 1
         blocked = grid.cells.translate(table)
     kernel = _kernel(radius / grid.resolution)
+    centre = next(k for k in kernel if k[0] == 0)
     # The Minkowski sum of a horizontal run of obstacle cells and the disc kernel is, in each
     # kernel row, the run widened by that row's half-width: one slice assignment per run and
     # kernel row instead of one per cell.
@@ -69,11 +70,12 @@ def inflate(
         below = obstacles[base + w : base + 2 * w] if row + 1 < h else b""
         for match in _RUN.finditer(line):
             a, b = match.start(), match.end()
-            # The kernel narrows away from its centre row, so a run with obstacle cells right
-            # above and below it adds nothing their own stamps do not cover.
-            if above and below and 0 not in above[a:b] and 0 not in below[a:b]:
-                continue
-            for dr, half in kernel:
+            # Inside a vertical stack of obstacle cells (cells right above and below the whole
+            # run) only the run's own row needs widening: rows beyond the stack get wider
+            # stamps from the stack's end rows, which are nearer to them.
+            interior = bool(above) and bool(below) and 0 not in above[a:b] \
+                and 0 not in below[a:b]
+            for dr, half in (centre,) if interior else kernel:
                 r = row + dr
                 if 0 <= r < h:
                     c0, c1 = max(0, a - half), min(w, b + half)
@@ -96,7 +98,7 @@ def _kernel(radius_cells: float) -> tuple[tuple[int, int], ...]:
         half = 0
         for dc in range(reach + 1):
             gap_c = max(dc - 1, 0)
-            if gap_r * gap_r + gap_c * gap_c < radius_cells * radius_cells:
+            if math.hypot(gap_r, gap_c) < radius_cells:  # hypot: no underflow for tiny radii
                 half = dc
         rows.append((dr, half))
     return tuple(rows)

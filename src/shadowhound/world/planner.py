@@ -400,15 +400,16 @@ def _clear(inflated: InflatedGrid, a: tuple[float, float], b: tuple[float, float
     dx, dy = x1 - x0, y1 - y0
     sx = 1 if dx > 0 else -1
     sy = 1 if dy > 0 else -1
+    # Segment parameter (0 at a, 1 at b) at which the walk next crosses a column / row line.
     t_dx = abs(1.0 / dx) if dx else math.inf
     t_dy = abs(1.0 / dy) if dy else math.inf
     t_x = ((c + 1 - x0) if dx > 0 else (x0 - c)) * t_dx if dx else math.inf
     t_y = ((r + 1 - y0) if dy > 0 else (y0 - r)) * t_dy if dy else math.inf
-    for _ in range(abs(ce - c) + abs(re_ - r) + 2):
-        if c == ce and r == re_:
-            return True
+    for _ in range(abs(ce - c) + abs(re_ - r) + 4):
+        if min(t_x, t_y) > 1.0 + 1e-9:
+            return True  # the segment ends inside the current cell
         if abs(t_x - t_y) < 1e-9:
-            # Through a corner: both cells beside it are touched.
+            # Through a corner (or within rounding of one): every cell around it is touched.
             if bad(c + sx, r) or bad(c, r + sy):
                 return False
             c += sx
@@ -423,4 +424,4 @@ def _clear(inflated: InflatedGrid, a: tuple[float, float], b: tuple[float, float
             t_y += t_dy
         if bad(c, r):
             return False
-    return c == ce and r == re_
+    return False  # more crossings than the segment can have: rounding trouble, so refuse

@@ -27,18 +27,30 @@ def apply_scan(grid: OccupancyGrid, scan: Scan) -> int:
     ox, oy = grid.to_grid_frame(scan.pose.x, scan.pose.y)
     n = len(scan.ranges)
     reach = []
-    verts = []
-    for i, r in enumerate(scan.ranges):
+    for r in scan.ranges:
         if not math.isfinite(r) and r > 0:
             r = scan.range_max  # inf: nothing within reach on this beam
         elif not (math.isfinite(r) and r >= scan.range_min):
             r = 0.0  # an error or too close to trust: claim nothing along this beam
-        r = min(r, scan.range_max)
-        reach.append(r)
+        reach.append(min(r, scan.range_max))
+    verts = []
+
+    def vertex(i: int, r: float) -> None:
         a = scan.beam_angle(i) - grid.origin.yaw
         verts.append((ox + r / res * math.cos(a), oy + r / res * math.sin(a)))
-    full_circle = n * scan.angle_increment >= 2 * math.pi - 1e-6
-    if not full_circle:
+
+    # Between two beams only the nearer range counts as seen: where the ranges jump (an
+    # object's edge), the outline steps in along the farther beam rather than cutting
+    # diagonally across space that neither beam crossed.
+    n = len(reach)
+    for i, r in enumerate(reach):
+        nxt = reach[(i + 1) % n] if i + 1 < n or _full_circle(scan) else r
+        vertex(i, r)
+        if nxt < r - res:
+            vertex(i, nxt)
+        elif nxt > r + res:
+            vertex((i + 1) % n if i + 1 < n else i, r)
+    if not _full_circle(scan):
         verts.append((ox, oy))  # a partial scan's free space is a fan from the sensor
     crossings: dict[int, list[float]] = {}
     for (x0, y0), (x1, y1) in zip(verts, verts[1:] + verts[:1], strict=True):
@@ -81,13 +93,25 @@ def apply_scan(grid: OccupancyGrid, scan: Scan) -> int:
     return hits
 
 
+def _full_circle(scan: Scan) -> bool:
+    return len(scan.ranges) * scan.angle_increment >= 2 * math.pi - 1e-6
+
+
 def _beam_passes(
     scan: Scan, reach: list[float], grid: OccupancyGrid, ox: float, oy: float, col: int, row: int
 ) -> bool:
-    """Whether the beam nearest in angle to this cell's centre ran clearly past the cell."""
+    """Whether one of the two beams either side of this cell's bearing crosses the cell
+    (passes within half a cell diagonal of its centre) and runs on clearly past it."""
     dx, dy = col + 0.5 - ox, row + 0.5 - oy
+    dist = math.hypot(dx, dy)
     angle = math.atan2(dy, dx) + grid.origin.yaw - scan.pose.yaw - scan.angle_min
-    i = round(angle / scan.angle_increment) % round(2 * math.pi / scan.angle_increment)
-    if i >= len(reach):
-        return False
-    return reach[i] / grid.resolution > math.hypot(dx, dy) + 1.0
+    k = angle / scan.angle_increment
+    per_turn = 2 * math.pi / scan.angle_increment
+    for i in {math.floor(k), math.ceil(k)}:
+        i = round(i % per_turn) % max(1, round(per_turn))
+        if i >= len(reach) or reach[i] / grid.resolution <= dist + 1.0:
+            continue
+        a = scan.beam_angle(i) - grid.origin.yaw
+        if abs(dx * math.sin(a) - dy * math.cos(a)) <= 0.5 * math.sqrt(2):
+            return True
+    return False
