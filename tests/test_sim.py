@@ -220,3 +220,44 @@ def test_the_scan_sees_the_red_ball_ahead_and_the_walls():
     assert scan.ranges[180] == pytest.approx(3.0 - 0.2)  # beam 180 looks straight ahead
     assert scan.ranges[0] == pytest.approx(6.0)  # straight behind: the wall at x = -6
     assert scan.pose == robot.get_state().pose
+
+
+def test_the_wall_stops_the_body_and_is_named():
+    robot = SimRobot(_COLLIDING)
+    robot.reset(0.0, 5.0, math.pi / 2)
+    robot.send_velocity(0.5, 0.0, 0.0)
+    robot.sleep(3.0)
+    state = robot.get_state()
+    assert state.y == pytest.approx(6.0 - 0.35, abs=1e-6)
+    assert state.blocked_by == "the wall 0.35 m ahead"
+    # Turning in place against the wall is free (the body is a circle), and walking away
+    # clears the contact.
+    robot.send_velocity(0.0, 0.0, 1.0)
+    robot.sleep(1.0)
+    assert robot.get_state().yaw != pytest.approx(math.pi / 2)
+    robot.send_velocity(0.0, 0.0, 0.0)
+    robot.sleep(1.0)
+    robot.reset(0.0, 5.65, math.pi / 2)
+    robot.send_velocity(-0.5, 0.0, 0.0)
+    robot.sleep(1.0)
+    state = robot.get_state()
+    assert state.y < 5.4 and state.blocked_by == ""
+
+
+def test_a_body_put_inside_an_object_may_only_move_out_of_it():
+    robot = SimRobot(_COLLIDING, trace=True)
+    robot.reset(2.8, 0.0, 0.0)  # overlapping the red ball (x = 3, r = 0.2) by 0.55 m
+    robot.send_velocity(0.5, 0.0, 0.0)  # further in: refused
+    robot.sleep(1.0)
+    assert robot.get_state().x == pytest.approx(2.8)
+    assert "the red ball" in robot.get_state().blocked_by
+    robot.send_velocity(-0.5, 0.0, 0.0)  # out: allowed
+    robot.sleep(2.0)
+    assert robot.get_state().x < 2.45
+
+
+def test_without_collisions_the_body_passes_through_as_before():
+    robot = SimRobot()
+    robot.send_velocity(1.0, 0.0, 0.0)
+    robot.sleep(5.0)
+    assert robot.get_state().x > 3.5 and robot.get_state().blocked_by == ""

@@ -388,3 +388,45 @@ def test_an_object_with_no_room_around_it_has_no_standoff():
     belief = scene_belief(world, 0.35)
     with pytest.raises(PlanError, match="no reachable place 0.6 m from the box"):
         standoff_point(belief, (0.4, 0.4), belief.objects[0])
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 100_000))
+def test_a_scan_never_marks_free_what_is_inside_an_object_or_a_wall(seed):
+    rng = random.Random(seed)
+    objects = tuple(WorldObject(f"thing {i}", rng.uniform(-4, 4), rng.uniform(-4, 4),
+                                rng.uniform(0.1, 0.8)) for i in range(rng.randint(0, 8)))
+    world = World(objects=objects, bounds=(-4.5, 4.5, -3.0, 3.0))
+    while True:
+        x, y = rng.uniform(-4.3, 4.3), rng.uniform(-2.8, 2.8)
+        if all(math.hypot(o.x - x, o.y - y) > o.radius + 0.1 for o in objects):
+            break
+    scan = cast_scan(world, Pose2D(x, y, rng.uniform(-math.pi, math.pi)))
+    grid = OccupancyGrid.empty(-5, 5, -3.5, 3.5, 0.05)
+    apply_scan(grid, scan)
+    for r in range(grid.height):
+        for c in range(grid.width):
+            cell = Cell(c, r)
+            if grid.value(cell) != FREE:
+                continue
+            px, py = grid.center_of(cell)
+            assert world.contains(px, py), (px, py)
+            # Between two beams the outline is a chord of a round object: 2 cm of slack.
+            assert all(math.hypot(o.x - px, o.y - py) >= o.radius - 0.02 for o in objects)
+    # Each return lies on a surface: occupied, and the space just before it free.
+    for i, rng_ in enumerate(scan.ranges):
+        if scan.is_hit(rng_) and rng_ > 0.3:
+            a = scan.beam_angle(i)
+            assert grid.value_at(x + (rng_ + 0.0125) * math.cos(a),
+                                 y + (rng_ + 0.0125) * math.sin(a)) == OCCUPIED
+
+
+def test_a_path_on_a_rotated_map_keeps_clear_in_the_map_frame():
+    grid = OccupancyGrid(80, 60, 0.05, Pose2D(1.0, -2.0, 0.7), bytearray(80 * 60))
+    for r in range(20, 60):
+        grid.set(Cell(40, r), OCCUPIED)  # a wall across most of the map
+    inflated = inflate(grid, 0.2)
+    a, b = grid.center_of(Cell(10, 50)), grid.center_of(Cell(70, 50))
+    path = plan_path(inflated, a, b)
+    assert path.length > math.dist(a, b) + 0.5  # round the wall's end, not through it
+    _assert_path_is_clear(inflated, path)
