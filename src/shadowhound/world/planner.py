@@ -5,7 +5,7 @@ cuts a blocked corner) with the octile-distance heuristic, which is exact on ope
 result is a shortest 8-connected path. Shortcutting then replaces runs of cells by straight
 segments wherever the segment crosses only free cells (a supercover walk: every cell the
 segment touches, both cells at a corner). Shortcuts only ever make the path shorter, so it is
-never longer than the optimal 8-connected path (itself at most 8.3 % longer than the best
+never longer than the optimal 8-connected path (itself up to about 8 % longer than the best
 any-angle path), and every point of it lies in unblocked cells: by the inflation rule the body
 keeps its radius from every occupied cell.
 """
