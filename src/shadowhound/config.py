@@ -134,6 +134,14 @@ class SimConfig(_Section):
     max_angular_speed: float = Field(2.0, gt=0, description="hardware limit, rad/s")
     linear_accel: float = Field(1.0, gt=0, description="m/s^2")
     angular_accel: float = Field(3.0, gt=0, description="rad/s^2")
+    body_radius: float = Field(
+        0.35, ge=0.05, le=2.0, description="metres: the body's collision circle in the scene"
+    )
+    # Off by default until nav.goto plans around obstacles (issue 15, phase 2): the public
+    # missions (a 2 m square, "go to the kitchen") walk through the default scene's objects.
+    collisions: bool = Field(
+        False, description="the body stops at contact with the scene's objects and walls"
+    )
     battery_drain_idle: float = Field(0.01, ge=0, description="percent per second standing")
     battery_drain_per_metre: float = Field(0.05, ge=0, description="percent per metre walked")
     camera_width: int = Field(160, ge=16, le=1920)

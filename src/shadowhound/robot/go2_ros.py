@@ -35,7 +35,7 @@ from sensor_msgs.msg import CompressedImage, Image
 
 from ..camera import to_camera_frame
 from ..ros.convert import raw_image_frame
-from ..state import CameraFrame, Posture, RobotState, normalize_angle
+from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
 from . import go2_api
 from .base import RobotError
 
@@ -302,6 +302,10 @@ class Go2RosRobot:
 
     def get_camera_frame(self) -> CameraFrame | None:
         return self._frame
+
+    def get_scan(self) -> Scan | None:
+        """None: the driver's `scan` topic is not subscribed yet (issue 15, phase 2)."""
+        return None
 
     def close(self) -> None:
         if self._closed:

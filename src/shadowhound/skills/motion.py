@@ -63,6 +63,8 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
             best, best_time = error, robot.now()
         elif robot.now() - best_time > m.stall_timeout:
             robot.stop()
+            if st.blocked_by:
+                raise SkillError(f"blocked by {st.blocked_by} with {error:.2f} m to go")
             raise SkillError(
                 f"no progress for {m.stall_timeout:.1f} s with {error:.2f} m to go: "
                 "the robot is blocked, stalled or ignoring velocity commands"
