@@ -12,7 +12,9 @@ import asyncio
 import base64
 import json
 import logging
+import secrets
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import mcp_types as types
@@ -45,7 +47,21 @@ _APPROVE_SCHEMA: dict[str, Any] = {
     "required": ["approve"],
 }
 
+_APPROVAL_KEY = "approval"
+
 _Start = Callable[[Callable[[ev.MissionEvent], None], Callable[[MissionJob], None]], MissionJob]
+ToolAnswer = types.CallToolResult | types.InputRequiredResult
+
+
+@dataclass(eq=False)
+class _Watch:
+    """A job an MCP call follows: its events (None when done), the plan's size, and the
+    approval it waits for while the client asks the person."""
+
+    events: asyncio.Queue[ev.MissionEvent | None]
+    job: MissionJob | None = None
+    total: int = 0
+    request_id: str = ""
 
 
 class McpRobotServer:
@@ -56,6 +72,7 @@ class McpRobotServer:
         self.desk = desk or McpDesk(agent)
         self.tools = all_tools(agent.registry, agent.settings.agent.max_mission_chars)
         self._by_name = {t.name: t for t in self.tools}
+        self._waiting: dict[str, _Watch] = {}  # request_state -> a job waiting for approval
         self.server: Server[Any] = Server(
             SERVER_NAME, version=__version__, instructions=INSTRUCTIONS,
             on_list_tools=self._list_tools, on_call_tool=self._call_tool,
@@ -73,7 +90,9 @@ class McpRobotServer:
         return types.ListToolsResult(tools=[_tool(t) for t in self.tools])
 
     async def _call_tool(self, ctx: ServerRequestContext[Any],
-                         params: types.CallToolRequestParams) -> types.CallToolResult:
+                         params: types.CallToolRequestParams) -> ToolAnswer:
+        if params.request_state is not None:
+            return await self._resume(ctx, params)
         spec = self._by_name.get(params.name)
         if spec is None:
             raise MCPError(types.INVALID_PARAMS, f"unknown tool {params.name!r}; call tools/list "
@@ -89,7 +108,7 @@ class McpRobotServer:
             return _error(str(exc))
 
     async def _simple(self, ctx: ServerRequestContext[Any], name: str,
-                      args: dict[str, Any]) -> types.CallToolResult:
+                      args: dict[str, Any]) -> ToolAnswer:
         desk = self.desk
         if name == "run_mission":
             dry = args.get("dry_run", False)
@@ -119,22 +138,32 @@ class McpRobotServer:
             await asyncio.to_thread(actions[name])
         return _answer(data)
 
-    async def _run(self, ctx: ServerRequestContext[Any], start: _Start) -> types.CallToolResult:
-        """Start a job, report its steps as progress, answer approvals, return its result."""
+    async def _run(self, ctx: ServerRequestContext[Any], start: _Start) -> ToolAnswer:
+        """Start a job and follow it to its result."""
         loop = asyncio.get_running_loop()
-        events: asyncio.Queue[ev.MissionEvent | None] = asyncio.Queue()
+        watch = _Watch(asyncio.Queue())
 
         def on_event(event: ev.MissionEvent) -> None:  # on the mission thread
-            loop.call_soon_threadsafe(events.put_nowait, event)
+            loop.call_soon_threadsafe(watch.events.put_nowait, event)
 
         def on_done(_job: MissionJob) -> None:
-            loop.call_soon_threadsafe(events.put_nowait, None)
+            loop.call_soon_threadsafe(watch.events.put_nowait, None)
 
-        job = start(on_event, on_done)
+        watch.job = start(on_event, on_done)
+        return await self._follow(ctx, watch)
+
+    async def _follow(self, ctx: ServerRequestContext[Any], watch: _Watch) -> ToolAnswer:
+        """Report the job's steps as progress and answer approvals until its result."""
+        job = watch.job
+        assert job is not None
         try:
-            total = 0
-            while (event := await events.get()) is not None:
-                total = await self._on_event(ctx, event, total)
+            while (event := await watch.events.get()) is not None:
+                if event.kind == ev.APPROVAL_REQUIRED:
+                    asked = await self._ask_approval(ctx, event.data["request"], watch)
+                    if asked is not None:  # the client asks the person and calls again
+                        return asked
+                else:
+                    await self._report(ctx, event, watch)
         except BaseException:  # cancelled, or the client went away: stop the robot
             self.desk.abandon(job)
             raise
@@ -142,37 +171,50 @@ class McpRobotServer:
             return _error(f"the mission did not run: {job.dropped or 'unknown reason'}")
         return _answer(job.result.to_dict(), ok_key="success")
 
-    async def _on_event(self, ctx: ServerRequestContext[Any], event: ev.MissionEvent,
-                        total: int) -> int:
-        data = event.data
+    async def _report(self, ctx: ServerRequestContext[Any], event: ev.MissionEvent,
+                      watch: _Watch) -> None:
+        data, total = event.data, watch.total or None
         if event.kind == ev.PLAN_READY:
-            total = len(data["plan"]["steps"])
-            await ctx.session.report_progress(0, total, f"plan: {total} step(s)")
+            watch.total = len(data["plan"]["steps"])
+            await ctx.session.report_progress(0, watch.total, f"plan: {watch.total} step(s)")
         elif event.kind == ev.STEP_STARTED:
             step = data["step"]
             args = ", ".join(f"{k}={v}" for k, v in step["args"].items())
-            await ctx.session.report_progress(step["index"] - 1, total or None,
+            await ctx.session.report_progress(step["index"] - 1, total,
                                               f"[{step['index']}] {step['skill']}({args})")
         elif event.kind == ev.STEP_FINISHED:
             step = data["step"]
             done = step["output"] if step["status"] == "succeeded" else step["error"]
-            await ctx.session.report_progress(step["index"], total or None,
+            await ctx.session.report_progress(step["index"], total,
                                               f"[{step['index']}] {step['status']}: {done}")
-        elif event.kind == ev.APPROVAL_REQUIRED:
-            await self._ask_approval(ctx, data["request"])
-        return total
 
-    async def _ask_approval(self, ctx: ServerRequestContext[Any],
-                            request: dict[str, Any]) -> None:
-        """Ask the person through the client (elicitation); refuse where it cannot ask."""
+    async def _ask_approval(self, ctx: ServerRequestContext[Any], request: dict[str, Any],
+                            watch: _Watch) -> types.InputRequiredResult | None:
+        """Ask the person through the client (elicitation); refuse where it cannot ask.
+
+        Over a connection with a back-channel (handshake-era stdio and HTTP sessions) the
+        question is sent at once. Without one (the 2026-07-28 protocol) the call answers
+        `InputRequiredResult` and the mission waits for the client to call again with the
+        person's answer (`_resume`), within safety.approval_timeout.
+        """
         request_id = request["request_id"]
         caps = ctx.session.client_capabilities
         if caps is None or caps.elicitation is None:
             self.agent.reject(request_id, "this MCP client cannot ask a person (it does not "
                               "support elicitation), so calls that need approval are refused")
-            return
+            return None
         message = ("ShadowHound asks for approval: " + "; ".join(request["reasons"])
                    + f". Mission: {request['mission']!r}")
+        if not ctx.session.can_send_request:
+            state = secrets.token_urlsafe(16)
+            watch.request_id = request_id
+            self._waiting = {k: w for k, w in self._waiting.items()
+                             if w.job is not None and not w.job.done.is_set()}
+            self._waiting[state] = watch
+            return types.InputRequiredResult(input_requests={_APPROVAL_KEY: types.ElicitRequest(
+                params=types.ElicitRequestFormParams(message=message,
+                                                     requested_schema=_APPROVE_SCHEMA))},
+                request_state=state)
         try:
             answer = await asyncio.wait_for(
                 ctx.session.elicit_form(message, _APPROVE_SCHEMA,
@@ -180,7 +222,25 @@ class McpRobotServer:
                 timeout=request["timeout"])
         except (MCPError, asyncio.TimeoutError) as exc:
             self.agent.reject(request_id, f"the client could not ask: {exc}")
-            return
+            return None
+        self._decide(request_id, answer)
+        return None
+
+    async def _resume(self, ctx: ServerRequestContext[Any],
+                      params: types.CallToolRequestParams) -> ToolAnswer:
+        """A call made again with the person's answer to `InputRequiredResult`."""
+        watch = self._waiting.pop(params.request_state or "", None)
+        if watch is None or watch.job is None or watch.job.done.is_set():
+            return _error("no approval is pending for this call (it was answered, timed out "
+                          "or never asked); call the tool again")
+        answer = (params.input_responses or {}).get(_APPROVAL_KEY)
+        if not isinstance(answer, types.ElicitResult):
+            self.agent.reject(watch.request_id, "the client sent no answer to the approval")
+        else:
+            self._decide(watch.request_id, answer)
+        return await self._follow(ctx, watch)
+
+    def _decide(self, request_id: str, answer: types.ElicitResult) -> None:
         content = answer.content or {}
         if answer.action == "accept" and content.get("approve") is True:
             self.agent.approve(request_id)
