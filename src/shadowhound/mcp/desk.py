@@ -85,11 +85,11 @@ class McpDesk:
             raise ToolInputError(f"{skill}: arguments must be an object, got "
                                  f"{type(arguments).__name__}")
         _check_finite(skill, arguments)
-        call = SkillCall(skill, dict(arguments), label="mcp")
-        try:
-            valid = self.agent.registry.validate(call)  # early, clear; run_plan checks again
+        try:  # early, for a clear answer; run_plan validates again, with the governor
+            valid = self.agent.registry.validate(SkillCall(skill, dict(arguments)))
         except SkillValidationError as exc:
             raise ToolInputError("; ".join(exc.problems)) from exc
+        call = SkillCall(valid.name, dict(arguments), label="mcp")  # as given: run_plan checks
         shown = ", ".join(f"{k}={v!r}" for k, v in valid.args_dict().items())
         return self._start(MissionJob(f"{valid.name}({shown})", source="mcp", calls=[call],
                                       on_event=on_event, on_done=on_done))
