@@ -80,7 +80,7 @@ class McpGate:
             return 421, (f"host {raw_host[:100]!r} is not allowed: without a token the MCP "
                          "server answers only on loopback names")
         origin = headers.get("origin")
-        if origin is not None and urlsplit(origin).netloc.lower() != raw_host.lower():
+        if origin is not None and not _same_origin(origin, raw_host):
             return 403, (f"origin {origin[:100]!r} is not allowed: the MCP server takes no "
                          "requests from web pages of other origins")
         if self.token is None:
@@ -90,6 +90,13 @@ class McpGate:
         if offered and hmac.compare_digest(offered.encode(), self.token.encode()):
             return None
         return 401, "a valid token is required: send 'Authorization: Bearer <token>'"
+
+
+def _same_origin(origin: str, host: str) -> bool:
+    """Whether a request's Origin is the server's own (the scheme http or https)."""
+    parts = urlsplit(origin.strip())
+    return parts.scheme.lower() in ("http", "https") and parts.netloc.lower() == host.lower() \
+        and not parts.path and not parts.query
 
 
 def http_app(robot_server: McpRobotServer, host: str, token: str | None) -> ASGIApp:
