@@ -134,6 +134,7 @@ class McpDesk:
         self.agent.estop()  # first: the robot stops before any bookkeeping
         dropped = len(self.worker.drop_queued(ESTOP_DROP_REASON))
         return {"estop_latched": True, "dropped": dropped,
+                "robot": self.agent.get_robot_status(),  # read after the stop
                 "response": "e-stop latched: the robot is stopped; call release_estop to "
                             "run missions again"}
 
