@@ -195,6 +195,41 @@ def planner_first_request(mode: str) -> int:
     return len(json.dumps(body, separators=(",", ":")))
 
 
+def ros_mcp_server_size(server_py: Path) -> tuple[int, int]:
+    """(tools, characters) of ros-mcp-server's tool list, from its `server.py` (v0.2.0 layout:
+    FastMCP decorators). Its list is static, so it is listed without ROS or rosbridge: the
+    module is loaded with MCP 2's `MCPServer` for v1's `FastMCP` and its websocket helpers
+    stubbed (tools/list never calls them)."""
+    import importlib.util
+    import types
+
+    from mcp.server.mcpserver import MCPServer
+
+    stubs = {"mcp.server.fastmcp": {"FastMCP": MCPServer}, "utils": {},
+             "utils.websocket_manager": {"WebSocketManager": lambda *a, **k: None,
+                                         "parse_json": lambda text: text},
+             "utils.network_utils": {"ping_ip_and_port": lambda *a, **k: None}}
+    saved = {name: sys.modules.get(name) for name in stubs}
+    try:
+        for name, attrs in stubs.items():
+            module = types.ModuleType(name)
+            module.__dict__.update(attrs)
+            sys.modules[name] = module
+        spec = importlib.util.spec_from_file_location("ros_mcp_server", server_py)
+        assert spec is not None and spec.loader is not None
+        loaded = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(loaded)
+        tools = asyncio.run(loaded.mcp.list_tools())
+    finally:
+        for name, module in saved.items():
+            if module is None:
+                sys.modules.pop(name, None)
+            else:
+                sys.modules[name] = module
+    listed = [t.model_dump(by_alias=True, exclude_none=True, mode="json") for t in tools]
+    return len(tools), len(json.dumps(listed, separators=(",", ":")))
+
+
 async def listed_size(client: Any) -> int:
     tools = (await client.list_tools()).tools
     return len(json.dumps([t.model_dump(by_alias=True, exclude_none=True, mode="json")
@@ -278,6 +313,8 @@ def render(m: dict[str, Any], load: str) -> str:
         f"{m['plan'] // 4} |",
         f"| LLM planner's first request, react mode (messages + tools) | {m['react']} | "
         f"{m['react'] // 4} |",
+        *([f"| ros-mcp-server {m['ros_mcp'][2]} tools/list ({m['ros_mcp'][0]} tools) | "
+           f"{m['ros_mcp'][1]} | {m['ros_mcp'][1] // 4} |"] if m.get("ros_mcp") else []),
         "",
         "Methods. Round trip: a warmed-up client calls the tool in a loop; `direct` is the same "
         "work in one process (`McpDesk.state()`; `McpDesk.start_skill` then waiting for the "
@@ -293,8 +330,12 @@ def render(m: dict[str, Any], load: str) -> str:
         "the tools as the client receives them, against the first chat request of the LLM "
         "planner for 'walk forward 1 meter' (its system prompt, skill catalogue, state and "
         "places; plus the function tools in react mode), recorded by a scripted "
-        "OpenAI-compatible server on loopback. ros-mcp-server's list was not measured: it "
-        "needs a rosbridge connection to a ROS graph to be listed the way a client sees it.",
+        "OpenAI-compatible server on loopback. "
+        + ("ros-mcp-server's list (generic ROS tools, the same for any robot; a client must "
+           "then also read topic and message descriptions before it can move a Go2) is "
+           "listed from its server.py with MCP 2's MCPServer standing in for v1's FastMCP "
+           "(`--ros-mcp-server PATH`)." if m.get("ros_mcp") else
+           "ros-mcp-server's list was not measured (pass `--ros-mcp-server PATH/server.py`)."),
         "<!-- mcp:end -->",
     ]
     return "\n".join(lines) + "\n"
@@ -310,6 +351,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="update bench/RESULTS.md")
     parser.add_argument("--quick", action="store_true", help="fewer runs")
+    parser.add_argument("--ros-mcp-server", type=Path, metavar="SERVER_PY",
+                        help="also measure ros-mcp-server's tool list from its server.py")
+    parser.add_argument("--ros-mcp-server-version", default="v0.2.0",
+                        help="the version of that server.py, for the table")
     args = parser.parse_args()
     runs, stops = (30, 10) if args.quick else (300, 40)
     with tempfile.TemporaryDirectory() as data:
@@ -317,6 +362,9 @@ def main() -> int:
         load = load_average()
         m = asyncio.run(measure(runs, stops))
         m["plan"], m["react"] = planner_first_request("plan"), planner_first_request("react")
+        if args.ros_mcp_server:
+            m["ros_mcp"] = (*ros_mcp_server_size(args.ros_mcp_server),
+                            args.ros_mcp_server_version)
     section = render(m, load)
     print(section)
     if args.write:

@@ -106,6 +106,9 @@ class McpRobotServer:
             return await self._simple(ctx, spec.name, args)
         except ToolInputError as exc:
             return _error(str(exc))
+        except Exception as exc:  # a bug or a robot fault: an answer, never a dead server
+            log.exception("MCP tool %s failed", params.name)
+            return _error(f"internal error in {params.name}: {exc!r}")
 
     async def _simple(self, ctx: ServerRequestContext[Any], name: str,
                       args: dict[str, Any]) -> ToolAnswer:
