@@ -3,10 +3,17 @@ any interface's mission runs, an MCP mission or skill call is refused as busy, n
 
 from __future__ import annotations
 
+import math
+
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
+from shadowhound.checking import check_plan
 from shadowhound.mcp.desk import BUSY, McpDesk, ToolInputError
+from shadowhound.plan import Plan, SkillCall
+from shadowhound.skills import PlanEnv
 from shadowhound.worker import MissionJob, MissionWorker
 
 
@@ -39,4 +46,51 @@ def test_a_mission_from_another_interface_makes_mcp_busy():
     finally:
         desk.close()
         worker.stop()
+        agent.cleanup()
+
+
+# A skill tool call is a one-step plan: it runs exactly when checking that plan (validation,
+# then the governor, with a person who says no) finds nothing against it, and it moves the
+# robot only then.
+finite = st.floats(-50, 50, allow_nan=False)
+calls = st.one_of(
+    st.builds(lambda d: ("nav_move", {"distance": d}), st.one_of(finite, st.just(math.nan))),
+    st.builds(lambda d, s: ("nav_move", {"distance": d, "speed": s}), finite,
+              st.floats(-1, 5, allow_nan=False)),
+    st.builds(lambda d: ("nav_strafe", {"distance": d}), finite),
+    st.builds(lambda a: ("nav_rotate", {"degrees": a}), st.floats(-720, 720)),
+    st.builds(lambda x, y: ("nav_goto", {"x": x, "y": y}), finite, finite),
+    st.builds(lambda t: ("body_sport", {"trick": t}), st.sampled_from(["hello", "front_flip",
+                                                                       "backflip", "flop"])),
+    st.builds(lambda s: ("sys_wait", {"seconds": s}), st.floats(-1, 400, allow_nan=False)),
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(call=calls)
+def test_a_skill_tool_runs_exactly_when_its_one_step_plan_passes_the_checks(call):
+    tool, args = call
+    config = ShadowHoundConfig(safety={"approval_timeout": 0.05})  # nobody answers: a no
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(config.sim, time_scale=0.0),
+                                        settings=config))
+    agent.initialize()
+    desk = McpDesk(agent)
+    try:
+        start = agent.get_robot_state()
+        plan = Plan([SkillCall(tool, dict(args))], text="oracle", planner="explicit")
+        checked = check_plan(plan, agent.registry, agent.governor, config,
+                             PlanEnv(config, start.pose), start)
+        allowed = not checked.problems and not checked.approvals
+        try:
+            job = desk.start_skill(tool, args)
+        except ToolInputError:
+            assert not allowed  # refused at the door: only calls that fail validation
+            assert agent.get_robot_state().pose == start.pose
+            return
+        assert job.done.wait(30) and job.result is not None
+        assert job.result.success == allowed, (job.result.response, checked)
+        if not allowed:
+            assert job.result.refusals and agent.get_robot_state().pose == start.pose
+    finally:
+        desk.close()
         agent.cleanup()

@@ -244,8 +244,10 @@ def test_emergency_stop_mid_mission_stops_the_robot_and_latches(transport, http_
                 "run_mission", {"text": "walk forward 3 meters"}, progress_callback=on_progress))
             await wait_for_step(progress, "nav.move")
             await asyncio.sleep(0.5)  # moving now
-            stop = await client.call_tool("emergency_stop", {})
-            assert structured(stop)["estop_latched"] is True
+            stop = structured(await client.call_tool("emergency_stop", {}))
+            assert stop["estop_latched"] is True
+            # Stopped before the answer was written: the state in it was read after the stop.
+            assert stop["robot"]["moving"] is False and stop["robot"]["estopped"] is True
             stopped = await robot(client)
             result = structured(await mission)
             assert result["status"] == "stopped" and "e-stop" in result["response"]
