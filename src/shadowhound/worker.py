@@ -25,6 +25,7 @@ from .result import MissionResult
 log = logging.getLogger(__name__)
 
 _STOP = object()
+ESTOP_DROP_REASON = "the e-stop was pressed before it started"  # why queued jobs were dropped
 
 
 @dataclass(eq=False)

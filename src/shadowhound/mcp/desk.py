@@ -19,10 +19,9 @@ from ..camera import encode_jpeg
 from ..events import MissionEvent
 from ..plan import SkillCall
 from ..skills import SkillValidationError
-from ..worker import MissionJob, MissionWorker
+from ..worker import ESTOP_DROP_REASON, MissionJob, MissionWorker
 
 BUSY = "busy: another mission is running; wait for it to finish or call cancel_mission"
-ESTOP_DROP_REASON = "the e-stop was pressed before it started"
 IMAGE_MAX_SIDE = 512  # pixels: enough to see, small enough for a client model's context
 IMAGE_QUALITY = 75
 
@@ -98,9 +97,8 @@ class McpDesk:
         if self.agent.estop_latched and not job.dry_run:
             raise ToolInputError("the e-stop is latched; call release_estop before running "
                                  "missions")
-        refused = self.worker.start_now(job)
-        if refused is not None:
-            raise ToolInputError(BUSY if "another mission" in refused else refused)
+        if self.worker.start_now(job) is not None:  # its only refusal: not idle
+            raise ToolInputError(BUSY)
         return job
 
     def abandon(self, job: MissionJob) -> None:
