@@ -74,6 +74,10 @@ def test_lists_tools_from_the_registry_resources_and_the_prompt(transport, http_
             skills = json.loads((await client.read_resource("shadowhound://skills"))
                                 .contents[0].text)
             assert [s["name"] for s in skills] == default_registry().names
+            await client.call_tool("places_remember", {"name": "dock"})
+            places = json.loads((await client.read_resource("shadowhound://places"))
+                                .contents[0].text)
+            assert places["dock"]["x"] == 0.0 and places["dock"]["y"] == 0.0
             prompt = await client.get_prompt("mission", {"task": "fetch the ball"})
             assert "fetch the ball" in prompt.messages[0].content.text
 
