@@ -112,7 +112,9 @@ def http_app(robot_server: McpRobotServer, host: str, token: str | None) -> ASGI
 def bind(host: str, port: int) -> socket.socket:
     """A listening socket (port 0 picks a free one). Raises ServeError when it cannot."""
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
-    sock = socket.socket(family, socket.SOCK_STREAM)
+    # IPPROTO_TCP explicitly: asyncio sets TCP_NODELAY only on connections whose socket says
+    # TCP, and without it a streamed answer waits ~40 ms for the client's delayed ACK (Nagle).
+    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
     try:
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((host, port))
