@@ -21,6 +21,7 @@ from .tools import (
     cmd_config,
     cmd_doctor,
     cmd_history,
+    cmd_mcp,
     cmd_node,
     cmd_places,
     cmd_recall,
@@ -132,6 +133,23 @@ def build_parser() -> argparse.ArgumentParser:
                        help="bearer token the API requires (default $SHADOWHOUND_TOKEN; the "
                             "environment is safer: a command line is visible in ps)")
 
+    mcp = sub.add_parser("mcp", help="run the MCP server for Claude Desktop and other MCP "
+                                     "clients (needs the 'mcp' extra)",
+                         description="Serve ShadowHound's tools to MCP clients: over stdio "
+                                     "(default; the client starts this command) or Streamable "
+                                     "HTTP (--http).")
+    _common(mcp, suppress=True)
+    mcp.add_argument("--robot", choices=["sim", "go2"], default=None,
+                     help="robot to drive (default: the profile's, normally sim; go2 needs the "
+                          "'ros' extra and go2_ros2_sdk)")
+    mcp.add_argument("--http", action="store_true",
+                     help="serve Streamable HTTP at http://HOST:PORT/mcp instead of stdio")
+    mcp.add_argument("--host", default="127.0.0.1",
+                     help="HTTP address; anything but a literal loopback address needs a token")
+    mcp.add_argument("--port", type=int, default=8765, help="HTTP port (default 8765)")
+    mcp.add_argument("--token", default=None,
+                     help="bearer token HTTP clients must send (default $SHADOWHOUND_TOKEN)")
+
     sub.add_parser("node", help="run the ROS 2 MissionNode (needs the 'ros' extra): "
                                 "shadowhound node --ros-args -p name:=value ...",
                    add_help=False)
@@ -150,6 +168,8 @@ def _settings(args: argparse.Namespace) -> ShadowHoundConfig:
             profile = args.backend  # --backend ollama alone means the ollama profile
     if args.time_scale is not None:
         overrides["sim"] = {"time_scale": args.time_scale}
+    if getattr(args, "robot", None):
+        overrides["robot"] = args.robot
     llm = {k: v for k, v in (("model", args.model), ("base_url", args.base_url),
                              ("mode", args.mode)) if v is not None}
     if llm:
@@ -182,7 +202,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         settings = _settings(args)
         handler = {"run": cmd_run, "skills": cmd_skills, "chat": cmd_chat, "eval": cmd_eval,
                    "config": cmd_config, "doctor": cmd_doctor, "history": cmd_history,
-                   "places": cmd_places, "recall": cmd_recall, "serve": cmd_serve}[args.command]
+                   "places": cmd_places, "recall": cmd_recall, "serve": cmd_serve,
+                   "mcp": cmd_mcp}[args.command]
         return handler(args, settings)
     except ConfigError as exc:
         return report_error(_kind(exc), str(exc), EXIT_USAGE, json_out=json_out, mission=mission)

@@ -1,5 +1,5 @@
 """Commands that inspect or serve: `skills`, `config`, `doctor`, `history`, `places`,
-`recall`, `serve`, and the ROS entry points `node` and `sim-driver`."""
+`recall`, `serve`, `mcp`, and the ROS entry points `node` and `sim-driver`."""
 
 from __future__ import annotations
 
@@ -174,6 +174,16 @@ def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
               f"(pip install 'shadowhound[web]'): {exc}", file=sys.stderr)
         return EXIT_USAGE
     return int(serve_main(settings, args.host, args.port, args.token))
+
+
+# -- mcp -----------------------------------------------------------------------------------------
+
+
+def cmd_mcp(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    from ..mcp import main as mcp_main
+
+    return int(mcp_main(settings, http=args.http, host=args.host, port=args.port,
+                        token=args.token))
 
 
 # -- node ----------------------------------------------------------------------------------------
