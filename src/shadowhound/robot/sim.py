@@ -150,7 +150,7 @@ class SimRobot:
             vx=vx,
             vy=vy,
             wz=wz,
-            battery=max(0.0, s.battery - drain),
+            battery=max(0.0, (s.battery or 0.0) - drain),  # the simulator always knows it
             distance_travelled=s.distance_travelled + step,
             angle_turned=s.angle_turned + abs(mwz * dt),
             stamp=self._sim_time + dt,
