@@ -107,3 +107,18 @@ def test_a_robot_that_ignores_commands_is_not_predicted_far() -> None:
         tracker.odometry(i * 0.1, 0.0, 0.0, 0.0)  # odometry says: not moving at all
     x, _, _ = tracker.pose(5.0)
     assert x <= 0.5 * (0.3 + 0.1) + 1e-6  # latency plus the time since the last sample
+
+
+def test_the_delay_is_fitted_once_odometry_shows_the_robot_still_again() -> None:
+    """A creeping start fools the first guess; the fit over the stop gets the delay right."""
+    tracker = MotionTracker()
+    robot = DelayedOdometry(tracker, 10.0, 0.8)
+    robot.run(0.5)
+    robot.command(0.004, 0.0, 0.0)  # slower than odometry can call moving
+    robot.run(2.0)
+    robot.command(0.4, 0.0, 0.3)
+    robot.run(2.0)
+    robot.command(0.0, 0.0, 0.0)
+    robot.run(2.0)
+    assert abs(tracker.latency - 0.8) <= 0.01
+    assert robot.error()[0] < 1e-6

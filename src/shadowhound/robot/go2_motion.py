@@ -7,9 +7,11 @@ link). A closed loop that steers on it overshoots by speed x delay. `MotionTrack
 - what was commanded (body-frame velocity, with StopMove as a step to zero), run through a
   model of the robot's response (acceleration-limited) into a dead-reckoned trace;
 - the odometry samples, each taken to show the robot `latency` seconds before it arrived;
-- the latency itself: fixed by configuration, or measured each time the robot starts from rest
-  (time from the first command to the first sample that shows motion, less the time the model
-  needs to show it and half a sample period).
+- the latency itself: fixed by configuration, or measured: a first guess each time the robot
+  starts from rest (time from the first command to the first sample that shows motion, less
+  the time the model needs to show it and half a sample period), then, each time odometry
+  shows the robot still again, the delay that best lines the last seconds of odometry up with
+  the trace (least squares over a grid of delays).
 
 `pose()` is the last odometry pose moved forward by the trace's motion since that sample was
 taken. `velocity()` is the larger of the model's and the odometry's (successive poses), so a
@@ -30,10 +32,11 @@ from dataclasses import dataclass
 from ..state import normalize_angle
 
 _DT = 0.01  # seconds per model integration step
-_TRACE_SECONDS = 5.0  # how much model history to keep (the latency is capped well below)
+_TRACE_SECONDS = 6.0  # how much model history to keep (the latency is capped well below)
 _MAX_LATENCY = 2.0
 _MOTION_EPS = 0.003  # metres (and the same in radians) that count as "it moved"
 _STILL_WINDOW = 0.25  # seconds of odometry a velocity is measured over
+_FIT_SECONDS = 3.0  # seconds of odometry the delay is fitted over
 
 
 @dataclass(frozen=True)
@@ -89,6 +92,8 @@ class MotionTracker:
         self._trace: deque[_Point] = deque()
         self._samples: deque[Sample] = deque(maxlen=400)
         self._start: tuple[float, Sample] | None = None  # (first command from rest, rest pose)
+        self._fitted: float | None = None  # the latest least-squares latency
+        self._moved = False  # the model moved since the last fit
 
     # -- inputs ------------------------------------------------------------------------
 
@@ -106,8 +111,15 @@ class MotionTracker:
         self._advance(t)
         sample = Sample(t, x, y, normalize_angle(yaw))
         self._samples.append(sample)
+        if self.fixed_latency is not None:
+            return
         if self._start is not None:
             self._measure_latency(sample)
+        if self._model_moving():
+            self._moved = True
+        elif self._moved and _still(self.measured_velocity()):
+            self._moved = False
+            self._fit_latency()
 
     # -- outputs -----------------------------------------------------------------------
 
@@ -116,6 +128,8 @@ class MotionTracker:
         """Seconds between the robot's motion and odometry showing it (command to pose)."""
         if self.fixed_latency is not None:
             return self.fixed_latency
+        if self._fitted is not None:
+            return self._fitted
         return statistics.median(self._latencies) if self._latencies else self._initial
 
     def last_sample(self) -> Sample | None:
@@ -219,6 +233,30 @@ class MotionTracker:
                 break
         latency = sample.t - shown - self._sample_period() / 2
         self._latencies.append(min(_MAX_LATENCY, max(0.0, latency)))
+
+    def _fit_latency(self) -> None:
+        """The delay that best lines the last seconds of odometry up with the trace."""
+        end = self._samples[-1].t
+        window = [s for s in self._samples if s.t >= end - _FIT_SECONDS
+                  and s.t - _MAX_LATENCY >= self._trace[0].t]
+        if len(window) < 5:
+            return
+        first = window[0]
+        seen = [relative((first.x, first.y, first.yaw), (s.x, s.y, s.yaw)) for s in window]
+        if max(math.hypot(d[0], d[1]) + abs(d[2]) for d in seen) < 10 * _MOTION_EPS:
+            return  # too little motion to tell one delay from another
+
+        def cost(latency: float) -> float:
+            base = self._trace_at(first.t - latency)
+            total = 0.0
+            for s, d in zip(window, seen, strict=True):
+                m = relative(base, self._trace_at(s.t - latency))
+                total += (m[0] - d[0]) ** 2 + (m[1] - d[1]) ** 2 + (m[2] - d[2]) ** 2
+            return total
+
+        coarse = min((i * 0.05 for i in range(int(_MAX_LATENCY / 0.05) + 1)), key=cost)
+        fine = [coarse + i * 0.005 for i in range(-10, 11) if coarse + i * 0.005 >= 0]
+        self._fitted = min(fine, key=cost)
 
     def _sample_period(self) -> float:
         times = [s.t for s in self._samples]
