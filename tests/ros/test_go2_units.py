@@ -6,13 +6,8 @@ import math
 
 import pytest
 
-from shadowhound.ros.params import (
-    GO2_MOTION,
-    DriverSettings,
-    ParameterError,
-    parse_driver,
-    parse_parameters,
-)
+from shadowhound.ros.params import GO2_MOTION, ParameterError, parse_parameters
+from shadowhound.ros.sim_options import DriverSettings, build_parser, parse_settings
 
 
 def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
@@ -35,13 +30,31 @@ def test_go2_gets_motion_settings_for_real_odometry_unless_the_profile_sets_them
     assert chosen.position_tolerance == 0.05 and chosen.control_rate_hz == 10.0
 
 
-def test_driver_parameters_default_and_are_checked_all_at_once() -> None:
-    assert parse_driver({}) == DriverSettings()
-    assert parse_driver({"camera_rate_hz": 0, "odom_rate_hz": 20}).odom_rate_hz == 20.0
+def test_driver_settings_default_and_are_checked_all_at_once() -> None:
+    assert parse_settings({}) == DriverSettings()
+    assert DriverSettings().battery is None and DriverSettings().relay is True
+    chosen = parse_settings({"camera_rate_hz": 0, "odom_rate_hz": 10, "battery": 80})
+    assert (chosen.odom_rate_hz, chosen.battery) == (10.0, 80.0)
     with pytest.raises(ParameterError) as info:
-        parse_driver({"odom_rate_hz": 0.0, "camera_width": 2.5, "cmd_vel_timeout": True})
+        parse_settings({"odom_rate_hz": 0.0, "camera_width": 2.5, "move_timeout": True,
+                        "battery": 120, "battery_topic": "1bad", "lidar": 1})
     message = str(info.value)
     for part in ("odom_rate_hz must be in 1..200, got 0.0",
                  "camera_width must be an integer, got float 2.5",
-                 "cmd_vel_timeout must be a number, got bool True"):
+                 "move_timeout must be a number, got bool True",
+                 "battery must be in 0..100, got 120",
+                 "battery_topic '1bad' is not a valid ROS topic name",
+                 "unknown setting(s) lidar"):
         assert part in message
+
+
+def test_every_driver_setting_has_a_command_line_option() -> None:
+    parser = build_parser("sim-driver", "", "")
+    assert vars(parser.parse_args([])) == {}  # only given options override ROS parameters
+    given = vars(parser.parse_args(["--battery", "42.5", "--no-relay", "--robots", "2",
+                                    "--odom-delay", "0.5", "--battery-topic", "bat"]))
+    assert given == {"battery": 42.5, "relay": False, "robots": 2, "odom_delay": 0.5,
+                     "battery_topic": "bat"}
+    text = parser.format_help()
+    for name in DriverSettings.__dataclass_fields__:
+        assert "--" + name.replace("_", "-") in text

@@ -211,7 +211,8 @@ class SimRobot:
             self._state = replace(self._state, estopped=False)
             self._record("estop_release", None, True)
 
-    def set_posture(self, posture: Posture) -> None:
+    def set_posture(self, posture: Posture, seconds: float | None = None) -> None:
+        """Change posture, taking the Go2's typical time (or `seconds` for the whole change)."""
         posture = Posture(posture)
         with self._lock:
             self._catch_up()
@@ -229,7 +230,7 @@ class SimRobot:
             path = [current, Posture.STANDING, posture]
         for a, b in zip(path, path[1:], strict=False):
             self._settle()
-            self.sleep(_POSTURE_SECONDS[(a, b)])
+            self.sleep(_POSTURE_SECONDS[(a, b)] if seconds is None else seconds / (len(path) - 1))
             with self._lock:
                 self._state = replace(self._state, posture=b)
 
