@@ -164,3 +164,14 @@ def test_bad_and_unknown_requests_are_ignored_with_a_reason(robot: SimSportMode)
     assert request(robot, 4242) == (False, "not simulated: api id 4242")
     assert request(robot, go2_api.SIT, "", "rt/api/other")[0] is False
     assert robot.truth().posture is Posture.STANDING and not robot.truth().moving
+
+
+def test_a_robot_can_start_lying_down() -> None:
+    body = SimSportMode(SimRobot(SimConfig(time_scale=1.0)), start=Posture.LYING)
+    try:
+        truth = body.truth()
+        assert (truth.posture, truth.mode) == (Posture.LYING, SportMode.LIE_DOWN)
+        assert posture_of(truth.mode, truth.body_height) is Posture.LYING
+        assert body.move(0.3, 0.0, 0.0).startswith("ignored: mode LIE_DOWN")
+    finally:
+        body.close()

@@ -37,14 +37,16 @@ def test_driver_settings_default_and_are_checked_all_at_once() -> None:
     assert (chosen.odom_rate_hz, chosen.battery) == (10.0, 80.0)
     with pytest.raises(ParameterError) as info:
         parse_settings({"odom_rate_hz": 0.0, "camera_width": 2.5, "move_timeout": True,
-                        "battery": 120, "battery_topic": "1bad", "lidar": 1})
+                        "battery": 120, "battery_topic": "1bad", "lidar": 1,
+                        "start_posture": "kneeling"})
     message = str(info.value)
     for part in ("odom_rate_hz must be in 1..200, got 0.0",
                  "camera_width must be an integer, got float 2.5",
                  "move_timeout must be a number, got bool True",
                  "battery must be in 0..100, got 120",
                  "battery_topic '1bad' is not a valid ROS topic name",
-                 "unknown setting(s) lidar"):
+                 "unknown setting(s) lidar",
+                 "start_posture must be one of standing, sitting, lying, got 'kneeling'"):
         assert part in message
 
 

@@ -31,6 +31,7 @@ from std_msgs.msg import String  # noqa: E402
 
 from shadowhound.robot import go2_api  # noqa: E402
 from shadowhound.robot.go2_api import SportMode  # noqa: E402
+from shadowhound.state import Posture  # noqa: E402
 from tests.ros.rosclient import NodeProcess, RosClient, wait_until  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
@@ -273,7 +274,8 @@ def test_battery_state_drains_from_the_level_asked_for(driver: Driver,
 def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery(
         client: RosClient) -> None:
     process = NodeProcess("-r", "__ns:=/bare", command="sim-driver",
-                          options=("--no-relay", "--camera-rate-hz", "0"))
+                          options=("--no-relay", "--camera-rate-hz", "0", "--start-posture",
+                                   "lying"))
     bare = Driver(client, "/bare")
     try:
         bare.wait_ready(process)
@@ -285,9 +287,12 @@ def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery(
         after = bare.wait_truth(lambda _t: True, "the truth after Twists on cmd_vel")
         assert (after["twists"], after["moves"]) == (0, 0)  # nothing came from cmd_vel
         mark = bare.truths.mark()
-        bare.walk(0.3, 0.3)  # the same on cmd_vel_out does move it
-        moved = bare.wait_truth(lambda t: t["moving"], "motion on cmd_vel_out", mark)
-        assert moved["moves"] >= 1 and moved["battery"] is None
+        bare.walk(0.3, 0.3)  # the same on cmd_vel_out reaches the robot (lying: it ignores it)
+        arrived = bare.wait_truth(lambda t: t["moves"] >= 1, "Moves from cmd_vel_out", mark)
+        assert arrived["moves_ignored"] == arrived["moves"] and not arrived["moving"]
+        assert arrived["posture"] == "lying" and arrived["battery"] is None
+        state = bare.states.items[-1]
+        assert go2_api.posture_of(state.mode, state.body_height) is Posture.LYING
     finally:
         assert process.stop(signal.SIGTERM) == 0, process.output()[-2000:]
 

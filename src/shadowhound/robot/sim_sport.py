@@ -38,6 +38,8 @@ _TRICK_MODES = {1030: SportMode.FRONT_FLIP, 1031: SportMode.FRONT_JUMP,
                 1032: SportMode.FRONT_POUNCE}
 _log = logging.getLogger(__name__)
 _SETTLE_LIMIT = 10.0  # seconds a posture change waits for the body to come to rest
+_START_MODES = {Posture.STANDING: SportMode.BALANCE_STAND, Posture.SITTING: SportMode.SIT,
+                Posture.LYING: SportMode.LIE_DOWN}
 _MODE_SHIFT = 0.3  # share of the posture time a mode change without a posture change takes
 
 
@@ -76,12 +78,13 @@ class SimSportMode:
     """The robot's sport-mode service over `sim` (a real-time SimRobot)."""
 
     def __init__(self, sim: SimRobot, *, move_timeout: float = 1.0,
-                 posture_seconds: float = 1.5) -> None:
+                 posture_seconds: float = 1.5, start: Posture = Posture.STANDING) -> None:
         self.sim = sim
         self.move_timeout = move_timeout
         self.posture_seconds = posture_seconds
         self._cond = threading.Condition()
-        self._mode = SportMode.BALANCE_STAND  # a Go2 boots standing, balanced
+        self._mode = _START_MODES[start]  # a Go2 boots standing, balanced
+        sim.set_posture(start, seconds=0.0)
         self._change: tuple[PostureChange, float, float, float, float] | None = None
         # ... (change, start mono, seconds, height from, height to)
         self._trick = ""

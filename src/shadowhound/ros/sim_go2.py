@@ -83,7 +83,8 @@ class SimGo2:
     def __init__(self, node: Node, settings: DriverSettings, prefix: str, sim: SimRobot) -> None:
         self.node, self.settings, self.prefix, self.sim = node, settings, prefix, sim
         self.body = SimSportMode(sim, move_timeout=settings.move_timeout,
-                                 posture_seconds=settings.posture_seconds)
+                                 posture_seconds=settings.posture_seconds,
+                                 start=Posture(settings.start_posture))
         self.faults = Faults()
         self._counts = {"twists": 0, "twists_dropped": 0, "requests_dropped": 0}
         self._pending: deque[tuple[int, Any, str, float]] = deque()  # the 10 Hz queue

@@ -23,6 +23,7 @@ class DriverSettings:
     """Checked settings of the simulated driver."""
 
     robots: int = 1
+    start_posture: str = "standing"
     relay: bool = True
     relay_timeout: float = 0.5
     move_timeout: float = 1.0
@@ -48,11 +49,15 @@ class Option:
     low: float = -math.inf
     high: float = math.inf
     metavar: str = ""
+    choices: tuple[str, ...] = ()  # for a str that is not a topic name
 
 
 OPTIONS: dict[str, Option] = {
     "robots": Option(int, "robots to simulate; 2 or more name every topic robot{i}/..., as "
                           "go2_ros2_sdk does with several ROBOT_IPs", 1, 8, "N"),
+    "start_posture": Option(str, "posture the robots start in (lying: mode LieDown, sitting: "
+                                 "Sit, standing: BalanceStand)", metavar="POSTURE",
+                            choices=("standing", "sitting", "lying")),
     "relay": Option(bool, "a twist_mux-like relay (node 'twist_mux', not namespaced) from "
                           "cmd_vel (priority 5) and cmd_vel_joy (10) to cmd_vel_out, as "
                           "go2_ros2_sdk's launch starts with teleop; --no-relay: the driver "
@@ -111,7 +116,10 @@ def parse_settings(values: Mapping[str, Any]) -> DriverSettings:
         elif option.kind in (int, float) and not (math.isfinite(value)
                                                   and option.low <= value <= option.high):
             problems.append(f"{f.name} must be in {option.low:g}..{option.high:g}, got {value}")
-        elif option.kind is str and not _TOPIC.match(value):
+        elif option.choices and value not in option.choices:
+            problems.append(f"{f.name} must be one of {', '.join(option.choices)}, got "
+                            f"{value!r}")
+        elif option.kind is str and not option.choices and not _TOPIC.match(value):
             problems.append(f"{f.name} {value!r} is not a valid ROS topic name")
         else:
             out[f.name] = option.kind(value)
@@ -139,6 +147,7 @@ def build_parser(prog: str, description: str, epilog: str) -> argparse.ArgumentP
         shown = "none" if default is None else f"{default:g}" if isinstance(default, float) \
             else default
         parser.add_argument(_flag(name), dest=name, type=option.kind, metavar=option.metavar,
+                            choices=option.choices or None,
                             help=f"{option.help} (default: {shown})")
     return parser
 
