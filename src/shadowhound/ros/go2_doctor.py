@@ -142,7 +142,8 @@ def _odometry(obs: Observation) -> Finding:
         return Finding("fail", f"no odometry on {topic} in {obs.seconds:.0f} s",
                        "check that the driver is connected to the robot (WebRTC allows one "
                        "client: close the phone app) and that CONN_TYPE=webrtc")
-    rate = (len(times) - 1) / (times[-1] - times[0]) if len(times) > 1 else 0.0
+    gaps = sorted(b - a for a, b in zip(times, times[1:], strict=False) if b > a)
+    rate = 1.0 / gaps[len(gaps) // 2] if gaps else 0.0  # the median: bursts do not count
     age = obs.ended - times[-1]
     text = f"odometry on {topic}: {rate:.1f} Hz, last {age:.2f} s ago"
     if age > MAX_ODOM_AGE:
