@@ -175,3 +175,20 @@ def test_a_robot_can_start_lying_down() -> None:
         assert body.move(0.3, 0.0, 0.0).startswith("ignored: mode LIE_DOWN")
     finally:
         body.close()
+
+
+def test_what_the_robot_reports_never_runs_ahead_of_its_posture(robot: SimSportMode) -> None:
+    """While a posture changes, mode and body height never read as a posture the body is not
+    in yet: a client that judges by them cannot finish early."""
+    for api_id in (go2_api.SIT, go2_api.RISE_SIT, go2_api.STAND_DOWN, go2_api.STAND_UP):
+        request(robot, api_id)
+        samples = []
+        while True:
+            truth = robot.truth()
+            samples.append(truth)
+            if not truth.changing:
+                break
+        assert len(samples) > 1
+        for truth in samples:
+            reported = posture_of(truth.mode, truth.body_height)
+            assert reported is None or reported is truth.posture, truth

@@ -153,11 +153,14 @@ def test_a_zero_twist_is_dropped_and_the_move_runs_on_until_it_lapses(driver: Dr
     assert lapsed["mono"] - moved["mono"] >= MOVE_TIMEOUT - 0.05
     assert all(t["moving"] for t in driver.truths_since(mark)
                if dropped["mono"] <= t["mono"] < lapsed["mono"])
-    still = driver.wait_truth(lambda t: not t["moving"], "the robot to brake", mark)
+    braking = driver.truths.mark()
+    still = driver.wait_truth(lambda t: not t["moving"], "the robot to brake", braking)
+    assert still["mono"] > lapsed["mono"]
     assert still["stop_moves"] == before["stop_moves"]  # the lapse stopped it, nothing else
     # A Twist that rounds to zero is not dropped: it is a Move of zero.
     driver.twist(0.004)
-    tiny = driver.wait_truth(lambda t: t["moves"] == still["moves"] + 1, "the tiny Move", mark)
+    tiny = driver.wait_truth(lambda t: t["moves"] == still["moves"] + 1, "the tiny Move",
+                             braking)
     assert tiny["twists_dropped"] == dropped["twists_dropped"] and not tiny["moving"]
 
 
@@ -320,3 +323,32 @@ def test_several_robots_get_robot_i_names_and_twist_mux_feeds_none_of_them(
         assert robots[1].truth()["moves"] == 0 and not robots[1].truth()["moving"]
     finally:
         assert process.stop(signal.SIGTERM) == 0, process.output()[-2000:]
+
+
+def test_in_process_the_truth_is_one_call_away(client: RosClient) -> None:
+    from shadowhound.ros.sim_driver import SimDriver
+
+    driver = SimDriver(context=client.context, namespace="/inproc_truth",
+                       options={"camera_rate_hz": 0.0, "relay": False, "odom_delay": 0.0})
+    for node in driver.nodes:
+        client.executor.add_node(node)
+    try:
+        assert driver.nodes == [driver]  # no relay asked for
+        published = client.subscribe(String, "/inproc_truth/sim_driver/truth")
+        out = client.publisher(Twist, "/inproc_truth/cmd_vel_out")
+        wait_until(out.get_subscription_count, TIMEOUT, "the in-process driver")
+        msg = Twist()
+        msg.angular.z = 0.5
+        out.publish(msg)
+        wait_until(lambda: driver.truth().moving, TIMEOUT, "the robot to turn")
+        truth = driver.truth()
+        assert (truth.moves, truth.posture, truth.mode) == (1, Posture.STANDING,
+                                                            SportMode.LOCOMOTION)
+        seen = published.wait_for(lambda m: json.loads(m.data)["moves"] == 1, TIMEOUT,
+                                  "the published truth")
+        assert json.loads(seen.data).keys() == driver.truth_dict().keys()
+    finally:
+        for node in driver.nodes:
+            client.executor.remove_node(node)
+        driver.close()
+        driver.destroy_node()

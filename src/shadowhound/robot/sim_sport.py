@@ -19,6 +19,7 @@ apart from anything the driver publishes, so tests judge by it.
 from __future__ import annotations
 
 import logging
+import math
 import queue
 import threading
 import time
@@ -29,7 +30,14 @@ from typing import Any
 from ..state import Posture
 from . import go2_api
 from .base import RobotError
-from .go2_api import BODY_HEIGHT, POSTURE_CHANGES, WALKING_MODES, PostureChange, SportMode
+from .go2_api import (
+    BODY_HEIGHT,
+    BODY_HEIGHT_TOLERANCE,
+    POSTURE_CHANGES,
+    WALKING_MODES,
+    PostureChange,
+    SportMode,
+)
 from .sim import SimRobot
 
 Report = Callable[[bool, str], None]  # (accepted, note) once the robot acts on a request
@@ -41,6 +49,30 @@ _SETTLE_LIMIT = 10.0  # seconds a posture change waits for the body to come to r
 _START_MODES = {Posture.STANDING: SportMode.BALANCE_STAND, Posture.SITTING: SportMode.SIT,
                 Posture.LYING: SportMode.LIE_DOWN}
 _MODE_SHIFT = 0.3  # share of the posture time a mode change without a posture change takes
+_HEIGHT_MARGIN = 1.25 * BODY_HEIGHT_TOLERANCE  # how far from its end a body height stays
+
+
+@dataclass
+class _Change:
+    """A posture change under way: braking until `start` is set, then `seconds` long."""
+
+    command: PostureChange
+    height_from: float
+    height_to: float
+    start: float | None = None
+    seconds: float = 0.0
+
+    def done(self, now: float) -> bool:
+        return self.start is not None and now - self.start >= self.seconds
+
+    def height(self, now: float) -> float:
+        """The body height on the way: it nears the new posture's height but enters its
+        tolerance only when the change completes, so the reports never run ahead of it."""
+        span = self.height_to - self.height_from
+        if self.start is None or abs(span) <= _HEIGHT_MARGIN:
+            return self.height_from
+        part = min(1.0, (now - self.start) / self.seconds) if self.seconds > 0 else 1.0
+        return self.height_from + (span - math.copysign(_HEIGHT_MARGIN, span)) * part
 
 
 @dataclass(frozen=True)
@@ -85,8 +117,7 @@ class SimSportMode:
         self._cond = threading.Condition()
         self._mode = _START_MODES[start]  # a Go2 boots standing, balanced
         sim.set_posture(start, seconds=0.0)
-        self._change: tuple[PostureChange, float, float, float, float] | None = None
-        # ... (change, start mono, seconds, height from, height to)
+        self._change: _Change | None = None
         self._trick = ""
         self._lapse_at: float | None = None
         self._counts = {"moves": 0, "moves_ignored": 0, "moves_lapsed": 0, "stop_moves": 0,
@@ -173,8 +204,9 @@ class SimSportMode:
             self.sim.stop()
 
     def _why_not_walking(self) -> str:
+        self._finish_due_change()
         if self._change is not None:
-            return f"{self._change[0].name} is under way"
+            return f"{self._change.command.name} is under way"
         if self._trick:
             return f"{self._trick} is under way"
         if self._mode not in WALKING_MODES:
@@ -185,19 +217,20 @@ class SimSportMode:
 
     def truth(self) -> Truth:
         with self._cond:
+            self._finish_due_change()
             st = self.sim.get_state()
             return Truth(
                 mono=time.monotonic(), x=st.x, y=st.y, yaw=st.yaw, vx=st.vx, vy=st.vy, wz=st.wz,
                 posture=st.posture, mode=int(self._current_mode(st.is_moving)),
                 body_height=self._body_height(st.posture),
-                changing=self._change[0].name if self._change else "", trick=self._trick,
+                changing=self._change.command.name if self._change else "", trick=self._trick,
                 moving=st.is_moving, ai_mode=self._ai_mode,
                 battery=st.battery if st.battery is not None else 0.0,
                 **self._counts)
 
     def _current_mode(self, moving: bool) -> SportMode:
         if self._change is not None:
-            return self._change[0].mode
+            return self._change.command.mode
         if self._trick:
             return _TRICK_MODES.get(go2_api.TRICKS[self._trick].api_id, self._mode)
         if self._mode in WALKING_MODES:
@@ -207,9 +240,18 @@ class SimSportMode:
     def _body_height(self, posture: Posture) -> float:
         if self._change is None:
             return BODY_HEIGHT[posture]
-        _change, start, seconds, h0, h1 = self._change
-        done = min(1.0, (time.monotonic() - start) / seconds) if seconds > 0 else 1.0
-        return h0 + (h1 - h0) * done
+        return self._change.height(time.monotonic())
+
+    def _finish_due_change(self) -> None:
+        """End the posture change whose time is up (whoever looks first, with the lock held),
+        so the truth, the mode and the body height all show the new posture at once."""
+        change = self._change
+        if change is None or not change.done(time.monotonic()):
+            return
+        self.sim.set_posture(change.command.target, seconds=0.0)
+        self._mode = change.command.mode_after
+        self._change = None
+        self._cond.notify_all()
 
     # -- the robot's own loops -------------------------------------------------------------
 
@@ -237,36 +279,33 @@ class SimSportMode:
             else:
                 self._perform(api_id, report)
 
-    def _change_posture(self, change: PostureChange, report: Report) -> None:
+    def _change_posture(self, command: PostureChange, report: Report) -> None:
         posture = self.sim.get_state().posture
-        if posture not in change.needs:
-            needs = " or ".join(sorted(p.value for p in change.needs))
-            report(False, f"ignored: {change.name} needs the robot {needs}, it is "
+        if posture not in command.needs:
+            needs = " or ".join(sorted(p.value for p in command.needs))
+            report(False, f"ignored: {command.name} needs the robot {needs}, it is "
                           f"{posture.value}")
             return
         with self._cond:  # no more walking: brake, then change
             self._lapse_at = None
             self.sim.stop()
-            self._change = (change, time.monotonic(), 0.0, BODY_HEIGHT[posture],
-                            BODY_HEIGHT[posture])
+            self._change = _Change(command, BODY_HEIGHT[posture], BODY_HEIGHT[command.target])
         self._settle()
-        if change.target is not posture:
-            seconds = change.share * self.posture_seconds
-        elif self._mode != change.mode_after:  # same posture, another mode: a short shift
-            seconds = min(change.share, _MODE_SHIFT) * self.posture_seconds
+        if command.target is not posture:
+            seconds = command.share * self.posture_seconds
+        elif self._mode != command.mode_after:  # same posture, another mode: a short shift
+            seconds = min(command.share, _MODE_SHIFT) * self.posture_seconds
         else:
             seconds = 0.0  # already there: the robot acknowledges and stays
         with self._cond:
-            self._change = (change, time.monotonic(), seconds, BODY_HEIGHT[posture],
-                            BODY_HEIGHT[change.target])
+            change = self._change
+            change.start, change.seconds = time.monotonic(), seconds
         report(True, "")
-        if change.target is posture:
-            self.sim.sleep(seconds)
-        else:
-            self.sim.set_posture(change.target, seconds=seconds)
         with self._cond:
-            self._change = None
-            self._mode = change.mode_after
+            while self._change is change and not self._closed:
+                self._finish_due_change()
+                if self._change is change:
+                    self._cond.wait(max(0.001, change.start + seconds - time.monotonic()))
 
     def _perform(self, api_id: int, report: Report) -> None:
         trick = _TRICKS_BY_ID[api_id]
