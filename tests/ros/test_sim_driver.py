@@ -13,6 +13,8 @@ import bisect
 import json
 import math
 import signal
+import subprocess
+import sys
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -32,7 +34,7 @@ from std_msgs.msg import String  # noqa: E402
 from shadowhound.robot import go2_api  # noqa: E402
 from shadowhound.robot.go2_api import SportMode  # noqa: E402
 from shadowhound.state import Posture  # noqa: E402
-from tests.ros.rosclient import NodeProcess, RosClient, wait_until  # noqa: E402
+from tests.ros.rosclient import ROOT, NodeProcess, RosClient, wait_until  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 MOVE_TIMEOUT, ODOM_DELAY, POSTURE_SECONDS = 1.5, 0.5, 1.0
@@ -352,3 +354,28 @@ def test_in_process_the_truth_is_one_call_away(client: RosClient) -> None:
             client.executor.remove_node(node)
         driver.close()
         driver.destroy_node()
+
+
+def test_the_relay_gives_the_joystick_priority_while_it_speaks() -> None:
+    from shadowhound.ros.twist_mux import MuxInput, forwards
+
+    joy, nav = MuxInput("cmd_vel_joy", 10, 0.5), MuxInput("cmd_vel", 5, 0.5)
+    inputs = [joy, nav]
+    assert forwards(inputs, nav, now=100.0)  # the joystick never spoke
+    joy.last = 100.0
+    assert forwards(inputs, joy, now=100.1) and not forwards(inputs, nav, now=100.4)
+    assert forwards(inputs, nav, now=100.6)  # the joystick's message has expired
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--odom-delay", "9"], "odom_delay must be in 0..5, got 9.0"),
+    (["--start-posture", "kneeling"], "invalid choice: 'kneeling'"),
+    (["--ros-args", "-p", "battery:=101.0"], "battery must be in 0..100, got 101.0"),
+    (["--ros-args", "-p", "lidar:=true"], "unknown ROS parameter(s): lidar"),
+])
+def test_bad_options_and_parameters_exit_2_with_what_is_allowed(args: list[str],
+                                                                 message: str) -> None:
+    done = subprocess.run([sys.executable, "-m", "shadowhound", "sim-driver", *args],
+                          capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert message in done.stderr and "Traceback" not in done.stderr

@@ -129,9 +129,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser("node", help="run the ROS 2 MissionNode (needs the 'ros' extra): "
                                 "shadowhound node --ros-args -p name:=value ...",
                    add_help=False)
-    sub.add_parser("sim-driver", help="run a simulated Go2 with go2_ros2_sdk's ROS 2 topics "
-                                      "(for robot:=go2 without a robot): shadowhound sim-driver "
-                                      "--ros-args ...", add_help=False)
+    sub.add_parser("sim-driver", help="run a simulated Go2 behind go2_ros2_sdk's ROS 2 topics, "
+                                      "behaving as the real driver does (for robot:=go2 without "
+                                      "a robot): shadowhound sim-driver [options] [--ros-args "
+                                      "...]; see shadowhound sim-driver --help", add_help=False)
     return parser
 
 

@@ -203,7 +203,7 @@ def cmd_node(ros_argv: list[str]) -> int:
     return node_main(ros_argv)
 
 
-def cmd_sim_driver(ros_argv: list[str]) -> int:
+def cmd_sim_driver(argv: list[str]) -> int:
     try:
         from ..ros.sim_driver import main as driver_main
     except ImportError as exc:
@@ -211,6 +211,6 @@ def cmd_sim_driver(ros_argv: list[str]) -> int:
               f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
               file=sys.stderr)
         return EXIT_USAGE
-    return driver_main(ros_argv)
+    return driver_main(argv)
 
 
