@@ -113,7 +113,7 @@ def test_the_delay_is_fitted_once_odometry_shows_the_robot_still_again() -> None
     """A creeping start fools the first guess; the fit over the stop gets the delay right."""
     tracker = MotionTracker()
     robot = DelayedOdometry(tracker, 10.0, 0.8)
-    robot.run(0.5)
+    robot.run(1.5)
     robot.command(0.004, 0.0, 0.0)  # slower than odometry can call moving
     robot.run(2.0)
     robot.command(0.4, 0.0, 0.3)
@@ -122,3 +122,26 @@ def test_the_delay_is_fitted_once_odometry_shows_the_robot_still_again() -> None
     robot.run(2.0)
     assert abs(tracker.latency - 0.8) <= 0.01
     assert robot.error()[0] < 1e-6
+
+
+def test_commands_the_robot_never_obeyed_teach_no_delay() -> None:
+    """A dropped link: the model moved, odometry did not. The delay measured before stays."""
+    tracker = MotionTracker()
+    robot = DelayedOdometry(tracker, 20.0, 0.3)
+    robot.run(1.0)
+    robot.command(0.4, 0.0, 0.0)
+    robot.run(1.5)
+    robot.command(0.0, 0.0, 0.0)
+    robot.run(1.5)
+    assert abs(tracker.latency - 0.3) <= 0.01
+    robot.sim.emergency_stop()  # from now on the robot ignores every velocity command
+    robot.command(0.4, 0.0, 0.3)
+    robot.run(3.0)
+    robot.command(0.0, 0.0, 0.0)
+    robot.run(1.5)
+    robot.sim.release_estop()
+    robot.command(0.0, 0.0, -0.3)  # a turn the robot obeys, right after the ignored walk
+    robot.run(1.0)
+    robot.command(0.0, 0.0, 0.0)
+    robot.run(1.5)
+    assert abs(tracker.latency - 0.3) <= 0.01

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from ..state import normalize_angle
 
 _DT = 0.01  # seconds per model integration step
-_TRACE_SECONDS = 6.0  # how much model history to keep (the latency is capped well below)
+_TRACE_SECONDS = 6.0  # model history kept: more than a fit window plus the largest latency
 _MAX_LATENCY = 2.0
 _MOTION_EPS = 0.003  # metres (and the same in radians) that count as "it moved"
 _STILL_WINDOW = 0.25  # seconds of odometry a velocity is measured over
@@ -93,6 +93,7 @@ class MotionTracker:
         self._samples: deque[Sample] = deque(maxlen=400)
         self._start: tuple[float, Sample] | None = None  # (first command from rest, rest pose)
         self._fitted: float | None = None  # the latest least-squares latency
+        self._segment: Sample | None = None  # the odometry at rest before the last start
         self._moved = False  # the model moved since the last fit
 
     # -- inputs ------------------------------------------------------------------------
@@ -104,6 +105,7 @@ class MotionTracker:
         if (moving and self.fixed_latency is None and self._samples
                 and not self._model_moving() and _still(self.measured_velocity())):
             self._start = (t, self._samples[-1])  # from rest, as odometry shows it
+            self._segment = self._samples[-1]  # the fit looks no further back than this
         self._command = (vx, vy, wz)
 
     def odometry(self, t: float, x: float, y: float, yaw: float) -> None:
@@ -235,10 +237,15 @@ class MotionTracker:
         self._latencies.append(min(_MAX_LATENCY, max(0.0, latency)))
 
     def _fit_latency(self) -> None:
-        """The delay that best lines the last seconds of odometry up with the trace."""
-        end = self._samples[-1].t
-        window = [s for s in self._samples if s.t >= end - _FIT_SECONDS
-                  and s.t - _MAX_LATENCY >= self._trace[0].t]
+        """The delay that best lines odometry up with the trace over the motion that just
+        ended (from the rest before it; at most the last few seconds). Kept only when it
+        explains what odometry saw: commands the robot never obeyed (a dropped link) must not
+        teach a delay."""
+        segment, end = self._segment, self._samples[-1].t
+        if segment is None:
+            return
+        # The trace reaches back _FIT_SECONDS + _MAX_LATENCY (it keeps _TRACE_SECONDS).
+        window = [s for s in self._samples if s.t >= max(segment.t, end - _FIT_SECONDS)]
         if len(window) < 5:
             return
         first = window[0]
@@ -256,7 +263,10 @@ class MotionTracker:
 
         coarse = min((i * 0.05 for i in range(int(_MAX_LATENCY / 0.05) + 1)), key=cost)
         fine = [coarse + i * 0.005 for i in range(-10, 11) if coarse + i * 0.005 >= 0]
-        self._fitted = min(fine, key=cost)
+        best = min(fine, key=cost)
+        scale = sum(d[0] ** 2 + d[1] ** 2 + d[2] ** 2 for d in seen)
+        if cost(best) <= 0.05 * scale:  # the model, so delayed, explains the odometry
+            self._fitted = best
 
     def _sample_period(self) -> float:
         times = [s.t for s in self._samples]
