@@ -115,13 +115,11 @@ class SimDriver(Node):
         if unknown:
             raise ParameterError(f"unknown ROS parameter(s): {', '.join(unknown)}; known: "
                                  f"{', '.join(OPTIONS)}")
-        values = {}
-        for name in sorted(given):
-            default = getattr(DriverSettings(), name)
-            values[name] = self.declare_parameter(
-                name, default, ParameterDescriptor(description=OPTIONS[name].help,
-                                                   dynamic_typing=True)).value
-        return values
+        declared = {name: self.declare_parameter(
+            name, getattr(DriverSettings(), name),
+            ParameterDescriptor(description=option.help, dynamic_typing=True)).value
+            for name, option in OPTIONS.items()}  # all declared, so `ros2 param` lists them
+        return {name: declared[name] for name in given}  # only those set win over defaults
 
     def _each(self, method: str) -> Any:
         return lambda: [getattr(robot, method)() for robot in self.robots]
