@@ -210,6 +210,19 @@ def test_a_battery_source_is_read_and_the_floor_refuses_a_mission_under_it(
         stop()
 
 
+def test_ctrl_c_of_the_node_during_a_walk_sends_stop_move(client: RosClient) -> None:
+    rig, stop = start_rig(client, (), "/quit", "/quit", "quit")
+    try:
+        rig.agent.missions.publish(String(data="walk forward 3 meters"))
+        rig.truth.wait(lambda t: t["vx"] > 0.2, "the robot to walk")
+        requests = rig.truth.requests.mark()
+        assert rig.node.stop(signal.SIGINT) == 0, rig.node.output()[-3000:]
+        wait_until(lambda: rig.truth.stop_moves(requests), 5.0, "StopMove at the driver")
+        assert not rig.truth.still()["moving"]
+    finally:
+        stop()
+
+
 # -- the driver's defaults (20 Hz, 0.2 s late, relay on): mission, e-stops, battery, doctor ---
 
 
@@ -273,6 +286,23 @@ def test_estop_from_the_web_stops_the_truth(rig: Rig) -> None:
             assert 0 <= latency < 1.0
         finally:
             web.post("/api/estop/release").raise_for_status()
+
+
+def test_cancelling_the_mission_action_during_a_walk_sends_stop_move(rig: Rig) -> None:
+    from shadowhound_interfaces.action import ExecuteMission
+
+    assert rig.agent.run("stand up").startswith("COMPLETED")
+    wait_until(lambda: rig.agent.action.server_is_ready(), TIMEOUT, "the action server")
+    sent = rig.agent.action.send_goal_async(ExecuteMission.Goal(command="walk forward 3 meters"))
+    handle = wait_until(lambda: sent.done() and sent.result(), TIMEOUT, "the goal accepted")
+    assert handle.accepted
+    rig.truth.wait(lambda t: abs(t["vx"]) > 0.2, "the robot to walk")
+    requests = rig.truth.requests.mark()
+    handle.cancel_goal_async()
+    wait_until(lambda: rig.truth.stop_moves(requests), 5.0, "StopMove at the driver")
+    assert not rig.truth.still()["moving"]
+    result = handle.get_result_async()
+    wait_until(result.done, TIMEOUT, "the mission's result")
 
 
 def test_without_a_battery_source_the_battery_is_unknown_everywhere(rig: Rig) -> None:
