@@ -16,6 +16,9 @@ from tests.ros.needs import require
 require("rclpy", "shadowhound_interfaces", "go2_interfaces")
 
 from geometry_msgs.msg import Twist  # noqa: E402
+from go2_interfaces.msg import WebRtcReq  # noqa: E402
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
 from shadowhound.robot.base import RobotError  # noqa: E402
@@ -132,6 +135,56 @@ def test_the_estop_sends_stop_move_and_refuses_motion_until_released(
     robot.send_velocity(0.1, 0.0, 0.0)
     robot.stop()
     twists.wait_for(lambda m: m.linear.x == 0.1, 5, "motion after the release")
+
+
+_SPEEDS = st.sampled_from([0.0, 0.0, 0.2, -0.3])
+_OPERATIONS = st.lists(st.one_of(
+    st.tuples(st.just("move"), _SPEEDS, _SPEEDS, _SPEEDS),
+    st.just(("zero",)), st.just(("stop",)), st.just(("estop",))), min_size=1, max_size=6)
+
+
+@settings(max_examples=8, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(operations=_OPERATIONS)
+def test_every_stop_is_a_stop_move_and_no_zero_twist_is_ever_sent(
+        client: RosClient, driver: SimDriver, robot: Go2RosRobot,
+        operations: list[tuple[object, ...]]) -> None:
+    """The whole kind: whatever the sequence of commands, each stop (stop, e-stop, a zero
+    command after motion) reaches the driver as StopMove, and no all-zero Twist goes out
+    (the driver would drop it and the robot keep walking)."""
+    twists = client.subscribe(Twist, f"{NS}/cmd_vel")
+    requests = client.subscribe(WebRtcReq, f"{NS}/webrtc_req")
+    wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the robot")
+    expected, moving = 0, False
+    try:
+        for op in [*operations, ("stop",)]:
+            if op[0] == "move":
+                values = (float(op[1]), float(op[2]), float(op[3]))  # type: ignore[arg-type]
+                robot.send_velocity(*values)
+                expected += moving and not any(values)
+                moving = any(values)
+            elif op[0] == "zero":
+                robot.send_velocity(0.0, 0.0, 0.0)
+                expected += moving
+                moving = False
+            elif op[0] == "stop":
+                robot.stop()
+                expected, moving = expected + 1, False
+            else:
+                robot.emergency_stop()
+                robot.release_estop()
+                expected, moving = expected + 1, False
+
+        def stops() -> int:
+            return sum(m.api_id == 1003 for m in requests.items)
+
+        wait_until(lambda: stops() >= expected, 10, f"{expected} StopMoves")
+        assert stops() == expected
+        assert all(m.linear.x or m.linear.y or m.angular.z for m in twists.items)
+    finally:
+        client.node.destroy_subscription(twists.subscription)
+        client.node.destroy_subscription(requests.subscription)
+    wait_until(lambda: not driver.truth().moving, 10, "the true robot to stop")
 
 
 def test_without_a_driver_commands_time_out_and_motion_is_refused(client: RosClient) -> None:
