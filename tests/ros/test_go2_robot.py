@@ -109,6 +109,19 @@ def test_postures_are_read_from_go2_states_and_sent_only_when_needed(
     assert truth.posture is Posture.STANDING and truth.mode in (1, 3)  # balanced: can walk
     wait_until(lambda: len(api_ids(requests)) >= 3, 5, "the driver's records")
     assert api_ids(requests) == [1005, 1004, 1002]  # StandDown; StandUp, BalanceStand
+    robot.set_posture(Posture.SITTING)
+    robot.set_posture(Posture.STANDING)  # RiseSit ends balanced: no BalanceStand after it
+    assert driver.truth().mode in (1, 3)
+    # Standing with locked joints (someone sent StandUp): "stand up" only balances.
+    client.publisher(WebRtcReq, f"{NS}/webrtc_req").publish(WebRtcReq(
+        id=0, topic="rt/api/sport/request", api_id=1004, parameter="", priority=0))
+    wait_until(lambda: driver.truth().mode == 6 and not driver.truth().changing, 10,
+               "the robot standing locked")
+    wait_until(lambda: robot.get_state().posture is Posture.STANDING, 5, "go2_states")
+    robot.set_posture(Posture.STANDING)
+    assert driver.truth().mode in (1, 3)
+    wait_until(lambda: len(api_ids(requests)) >= 7, 5, "the driver's records")
+    assert api_ids(requests)[3:] == [1009, 1010, 1004, 1002]
 
 
 def test_firmware_tricks_are_refused_unless_enabled(robot: Go2RosRobot) -> None:

@@ -336,7 +336,7 @@ class Go2RosRobot:
         posture = Posture(posture)
         self._check_estop("changing posture")
         current = self._wait_for_posture()
-        if current is posture:
+        if current is posture and (posture is not Posture.STANDING or self._balanced()):
             return
         with self._lock:
             moving = not self._halted
@@ -345,8 +345,13 @@ class Go2RosRobot:
         path = [current, posture]
         if Posture.STANDING not in path:  # sitting <-> lying goes through standing
             path = [current, Posture.STANDING, posture]
-        for a, b in zip(path, path[1:], strict=False):
-            for api_id in _STEPS[(a, b)]:
+        # Standing with locked joints (after a StandUp from elsewhere) only needs balancing.
+        steps = [(go2_api.BALANCE_STAND,)] if current is posture else \
+            [_STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
+        for b, api_ids in zip(path[1:], steps, strict=True):
+            for api_id in api_ids:
+                if api_id == go2_api.BALANCE_STAND and self._balanced():
+                    continue  # RiseSit already ends balanced: no redundant command
                 self._request(api_id)
                 self._await_posture(b, api_id)
 
@@ -438,6 +443,12 @@ class Go2RosRobot:
             estopped = self._estopped
         if estopped:
             raise RobotError(f"e-stop is latched; release it before {doing}")
+
+    def _balanced(self) -> bool:
+        """go2_states shows a mode in which the robot obeys Moves (standing balanced)."""
+        with self._lock:
+            go2 = self._go2
+        return go2 is not None and go2[1] in go2_api.WALKING_MODES
 
     def _fresh_posture(self) -> tuple[Posture | None, str]:
         """The posture go2_states shows now (None while in between), and how it looks."""
