@@ -109,7 +109,8 @@ class Go2RosRobot:
         elif context is None:
             context = rclpy.get_default_context()
         self._context = context
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # state; held briefly, never while publishing
+        self._send_lock = threading.Lock()  # orders Twists and StopMoves as they go out
         self._wake = threading.Event()  # stop() and e-stop wake sleeps and waits early
         self._tracker = MotionTracker(linear_accel=c.linear_accel,
                                       angular_accel=c.angular_accel, latency=c.odom_latency)
@@ -227,9 +228,16 @@ class Go2RosRobot:
 
     def _keep_alive(self) -> None:
         with self._lock:
-            command, due = self._command, time.monotonic() - self._last_sent >= 0.08
-        if any(command) and due and not self._estopped:
-            self._publish_twist(command)
+            idle = not any(self._command)
+        if idle:
+            return
+        topic = self._discover_velocity_topic()
+        with self._send_lock:
+            with self._lock:
+                command, due = self._command, time.monotonic() - self._last_sent >= 0.08
+                estopped = self._estopped
+            if any(command) and due and not estopped:
+                self._publish_twist(command, topic)
 
     def _warn_without_odometry(self) -> None:
         if self._odom_at is None:
@@ -300,24 +308,31 @@ class Go2RosRobot:
         if not self.last_state().connected:
             raise RobotError(self._odometry_problem() + " Not moving without odometry.")
         with self._lock:
-            if self._estopped:
-                return  # like the simulator: motion is ignored while the e-stop is latched
-            starting = self._halted
-            self._command = command
-            self._halted = False
-            # The robot ignores velocity unless standing: predict no motion then.
-            walks = self._posture is Posture.STANDING
-            self._tracker.command(time.monotonic(), *(command if walks else (0.0, 0.0, 0.0)))
-            self._rediscover = self._rediscover or starting
-        self._publish_twist(command)
+            self._rediscover = self._rediscover or self._halted  # starting: look again
+        topic = self._discover_velocity_topic()
+        with self._send_lock:
+            with self._lock:
+                if self._estopped:
+                    return  # like the simulator: motion is ignored while the e-stop is latched
+                self._command = command
+                self._halted = False
+                # The robot ignores velocity unless standing: predict no motion then.
+                walks = self._posture is Posture.STANDING
+                self._tracker.command(time.monotonic(),
+                                      *(command if walks else (0.0, 0.0, 0.0)))
+            self._publish_twist(command, topic)
 
     def stop(self) -> None:
-        """StopMove now (thread-safe); the keep-alive goes quiet."""
+        """StopMove now (thread-safe); the keep-alive goes quiet. Under the send lock, so no
+        Twist read before the stop can go out after it (the robot would walk on for a second)."""
+        now = time.monotonic()
+        with self._send_lock:
+            with self._lock:
+                self._command = (0.0, 0.0, 0.0)
+                self._halted = True
+            self._request(go2_api.STOP_MOVE)
         with self._lock:
-            self._command = (0.0, 0.0, 0.0)
-            self._halted = True
-            self._tracker.command(time.monotonic(), 0.0, 0.0, 0.0)
-        self._request(go2_api.STOP_MOVE)
+            self._tracker.command(now, 0.0, 0.0, 0.0)
         self._wake.set()
 
     def emergency_stop(self) -> None:
@@ -421,13 +436,14 @@ class Go2RosRobot:
             self._velocity_topic = found
         return found
 
-    def _publish_twist(self, command: tuple[float, float, float]) -> None:
+    def _publish_twist(self, command: tuple[float, float, float], topic: str) -> None:
+        """Publish one Twist; the caller holds the send lock."""
         msg = Twist()
         msg.linear.x, msg.linear.y, msg.angular.z = command
         with self._lock:
             self._last_sent = time.monotonic()
         if self._context.ok():
-            self._twist_pubs[self._discover_velocity_topic()].publish(msg)
+            self._twist_pubs[topic].publish(msg)
 
     def _request(self, api_id: int, parameter: dict[str, object] | None = None,
                  topic: str = go2_api.SPORT_TOPIC) -> None:
