@@ -97,3 +97,11 @@ def test_walk_and_turn_end_on_target_in_truth_and_report_the_truth(rate: float,
     assert math.hypot(reported.x - truth.x, reported.y - truth.y) < 0.05
     assert abs(math.degrees(math.remainder(reported.yaw - truth.yaw, math.tau))) < 3.0
     assert "battery level unknown" in result.response
+
+
+def test_a_robot_without_a_battery_source_never_claims_a_level() -> None:
+    agent = RobotAgent(RobotAgentConfig(robot=LateRobot(20.0, 0.2)))
+    assert agent.chat("how is your battery?") == \
+        "I cannot tell my battery level: this robot reports none."
+    assert agent.get_robot_status()["battery"] is None
+    assert "battery unknown" in agent.execute_mission("report your status").response
