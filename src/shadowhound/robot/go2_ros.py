@@ -192,8 +192,12 @@ class Go2RosRobot:
                 step = math.hypot(p.x - last.x, p.y - last.y)
                 turn = abs(normalize_angle(yaw - last.yaw))
                 self._travel = (self._travel[0] + step, self._travel[1] + turn)
+            before = self._tracker.latency
             self._tracker.odometry(now, p.x, p.y, yaw)
             self._odom_at = now
+            after = self._tracker.latency
+        if abs(after - before) >= 0.01:
+            self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
     def _on_state(self, msg: Go2State) -> None:
         mode, height = int(msg.mode), float(msg.body_height)
