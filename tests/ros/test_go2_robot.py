@@ -130,6 +130,24 @@ def test_firmware_tricks_are_refused_unless_enabled(robot: Go2RosRobot) -> None:
         robot.perform("backflip")
 
 
+def test_enabled_firmware_tricks_switch_to_the_ai_motion_mode_first(
+        client: RosClient, driver: SimDriver, robot: Go2RosRobot) -> None:
+    requests = client.subscribe(String, f"{NS}/sim_driver/requests")
+    enabled = Go2RosRobot(Go2RosConfig(namespace=NS[1:], firmware_tricks=True,
+                                       node_name="shadowhound_go2_firmware"),
+                          context=client.context)
+    try:
+        wait_until(lambda: enabled.last_state().connected, 30, "odometry")
+        assert not driver.truth().ai_mode
+        enabled.perform("moonwalk")  # 1305: only in the "ai" motion mode
+        assert driver.truth().ai_mode
+        records = [json.loads(m.data) for m in requests.items]
+        moonwalk = [r for r in records if r["api_id"] == 1305]
+        assert moonwalk and moonwalk[0]["accepted"], records
+    finally:
+        enabled.close()
+
+
 def test_the_estop_sends_stop_move_and_refuses_motion_until_released(
         client: RosClient, driver: SimDriver, robot: Go2RosRobot) -> None:
     twists = client.subscribe(Twist, f"{NS}/cmd_vel")
