@@ -105,3 +105,19 @@ def test_a_robot_without_a_battery_source_never_claims_a_level() -> None:
         "I cannot tell my battery level: this robot reports none."
     assert agent.get_robot_status()["battery"] is None
     assert "battery unknown" in agent.execute_mission("report your status").response
+
+
+def test_a_wrong_delay_is_corrected_at_rest_not_reported_as_done() -> None:
+    """Odometry later than the robot believes (0.5 s, told 0.2 s, the first guess before any
+    measure): the first approach stops off the goal, and a slow approach from rest, with its
+    own stall clock, corrects it; the step is judged on the pose at rest."""
+    robot = LateRobot(10.0, 0.5)
+    robot.tracker = MotionTracker(latency=0.2)
+    robot.sleep(1.0)
+    settings = ShadowHoundConfig(robot="go2")
+    settings.motion = settings.motion.model_copy(update=GO2_MOTION)
+    agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
+    result = agent.execute_mission("walk forward 1 meter")
+    assert result.success, result.response
+    truth = robot.sim.get_state()
+    assert math.hypot(truth.x - 1.0, truth.y) < 0.05, (truth.x, truth.y)

@@ -18,6 +18,9 @@ from .context import SkillContext, SkillError
 _SETTLE_SPEED = 0.01
 _SETTLE_SECONDS = 3.0  # longest wait for rest after a stop (odometry may be half a second late)
 _CORRECTIONS = 3  # approaches after the first when the pose at rest is off the goal
+# A correction moves slowly enough that odometry half a second later than the robot believes
+# costs at most the tolerance (late odometry is what leaves the first approach off the goal).
+_CORRECTION_SECONDS = 0.5
 
 
 def straight_timeout(distance: float, speed: float, accel: float) -> float:
@@ -54,8 +57,9 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
     start = robot.get_state()
     c, s = math.cos(start.yaw), math.sin(start.yaw)
     goal = math.hypot(tx, ty)
-    best, best_time = math.inf, robot.now()
-    for _attempt in range(1 + _CORRECTIONS):
+    for attempt in range(1 + _CORRECTIONS):
+        best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
+        cap = speed if attempt == 0 else min(speed, m.position_tolerance / _CORRECTION_SECONDS)
         while True:
             st = robot.get_state()
             dx, dy = st.x - start.x, st.y - start.y
@@ -72,7 +76,7 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
                     f"no progress for {m.stall_timeout:.1f} s with {error:.2f} m to go: "
                     "the robot is blocked, stalled or ignoring velocity commands"
                 )
-            v = abs(_profile(error, speed, m.linear_accel, ctx.period))
+            v = abs(_profile(error, cap, m.linear_accel, ctx.period))
             yaw_error = normalize_angle(start.yaw - st.yaw)
             # Body-frame command toward the goal; the start frame and the body differ by
             # yaw_error.
@@ -97,8 +101,9 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
     m = ctx.config.motion
     last_yaw = robot.get_state().yaw
     turned = 0.0
-    best, best_time = math.inf, robot.now()
-    for _attempt in range(1 + _CORRECTIONS):
+    for attempt in range(1 + _CORRECTIONS):
+        best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
+        cap = speed if attempt == 0 else min(speed, m.yaw_tolerance / _CORRECTION_SECONDS)
         while True:
             st = robot.get_state()
             turned += normalize_angle(st.yaw - last_yaw)  # unwrapped, so 360 degree turns work
@@ -114,7 +119,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
                     f"no progress for {m.stall_timeout:.1f} s with {math.degrees(error):.0f} "
                     "degrees to go: the robot is blocked, stalled or ignoring velocity commands"
                 )
-            ctx.drive(0.0, 0.0, _profile(error, speed, m.angular_accel, ctx.period))
+            ctx.drive(0.0, 0.0, _profile(error, cap, m.angular_accel, ctx.period))
             ctx.on_progress(min(1.0, 1.0 - abs(error) / abs(angle)) if angle else 1.0)
             ctx.tick()
         settle(ctx)
