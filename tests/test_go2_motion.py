@@ -145,3 +145,29 @@ def test_commands_the_robot_never_obeyed_teach_no_delay() -> None:
     robot.command(0.0, 0.0, 0.0)
     robot.run(1.5)
     assert abs(tracker.latency - 0.3) <= 0.01
+
+
+def test_a_robot_that_never_left_its_rest_is_where_odometry_says_once_stopped() -> None:
+    """Commands lost on the way (a dropped link): the model walked, the robot did not. Once
+    stopped, the pose is odometry's at once, not odometry plus a ghost of the model's walk
+    (the next step would start from a pose the robot never had)."""
+    tracker = MotionTracker(latency=0.5)
+    for i in range(10):
+        tracker.odometry(i * 0.1, 2.0, 1.0, 0.5)
+    tracker.command(1.0, 0.4, 0.0, 0.0)
+    for i in range(11, 30):
+        tracker.odometry(i * 0.1, 2.0, 1.0, 0.5)  # odometry: the robot stays put
+    tracker.command(3.0, 0.0, 0.0, 0.0)  # the stall is detected: stop
+    assert tracker.pose(3.01) == (2.0, 1.0, 0.5)
+
+
+def test_a_gap_in_odometry_is_no_velocity() -> None:
+    """Odometry stopped for seconds while the robot moved, then came back: the jump across
+    the gap is not a speed the robot has now."""
+    tracker = MotionTracker(latency=0.2)
+    tracker.odometry(0.0, 0.0, 0.0, 0.0)
+    tracker.odometry(0.05, 0.0, 0.0, 0.0)
+    tracker.odometry(3.0, 0.5, 0.0, 0.0)  # back after 3 s, half a metre further
+    tracker.odometry(3.05, 0.5, 0.0, 0.0)
+    assert tracker.measured_velocity() == (0.0, 0.0, 0.0)
+    assert tracker.velocity(3.06) == (0.0, 0.0, 0.0)

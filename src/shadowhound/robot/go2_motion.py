@@ -102,10 +102,11 @@ class MotionTracker:
         """The robot was told to move at this body-frame velocity from time t (0 = stop)."""
         self._advance(t)
         moving = bool(vx or vy or wz)
-        if (moving and self.fixed_latency is None and self._samples
-                and not self._model_moving() and _still(self.measured_velocity())):
-            self._start = (t, self._samples[-1])  # from rest, as odometry shows it
-            self._segment = self._samples[-1]  # the fit looks no further back than this
+        if moving and not self._model_moving():
+            at_rest = bool(self._samples) and _still(self.measured_velocity())
+            self._segment = self._samples[-1] if at_rest else None  # the rest it starts from
+            if at_rest and self.fixed_latency is None:
+                self._start = (t, self._samples[-1])
         self._command = (vx, vy, wz)
 
     def odometry(self, t: float, x: float, y: float, yaw: float) -> None:
@@ -138,9 +139,14 @@ class MotionTracker:
         return self._samples[-1] if self._samples else None
 
     def pose(self, t: float) -> tuple[float, float, float]:
-        """The pose now: the last odometry pose plus the model's motion since it was taken."""
+        """The pose now: the last odometry pose plus the model's motion since it was taken.
+
+        Once stopped, a robot that odometry never showed leaving its rest did not move: the
+        model's motion was a ghost (commands ignored or lost), and the pose is odometry's."""
         self._advance(t)
         last = self._samples[-1] if self._samples else Sample(t, 0.0, 0.0, 0.0)
+        if not any(self._command) and self._never_left_rest(last):
+            return last.x, last.y, last.yaw
         then = self._trace_at(last.t - self.latency)
         now = self._trace_at(t)
         return compose((last.x, last.y, last.yaw), relative(then, now))
@@ -161,6 +167,8 @@ class MotionTracker:
         last = self._samples[-1]
         first = last
         for sample in reversed(self._samples):
+            if last.t - sample.t > 2 * _STILL_WINDOW:
+                break  # a gap in odometry: what happened across it is no velocity
             first = sample
             if last.t - sample.t >= _STILL_WINDOW:
                 break
@@ -169,6 +177,13 @@ class MotionTracker:
             return (0.0, 0.0, 0.0)
         dx, dy, dyaw = relative((first.x, first.y, first.yaw), (last.x, last.y, last.yaw))
         return dx / span, dy / span, dyaw / span
+
+    def _never_left_rest(self, last: Sample) -> bool:
+        rest = self._segment
+        if rest is None:
+            return False
+        d = relative((rest.x, rest.y, rest.yaw), (last.x, last.y, last.yaw))
+        return math.hypot(d[0], d[1]) < _MOTION_EPS and abs(d[2]) < _MOTION_EPS
 
     # -- model -------------------------------------------------------------------------
 

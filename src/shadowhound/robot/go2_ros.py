@@ -47,24 +47,15 @@ from ..state import CameraFrame, Posture, RobotState, normalize_angle
 from . import go2_api
 from .base import RobotError
 from .go2_motion import MotionTracker
+from .go2_posture import STEPS, PostureWatch
 from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
 
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _SENSOR = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                      reliability=ReliabilityPolicy.BEST_EFFORT)
 _KEEPALIVE_PERIOD = 0.1  # 10 Hz, as DIMOS streams Twist to the Go2
-_POLL = 0.02  # seconds between looks at go2_states while a posture runs
-
-# Sport api ids that take the robot from one posture to the next (sitting is left with
-# RiseSit); each is followed by a wait until go2_states shows the posture it leads to.
-_STEPS: dict[tuple[Posture, Posture], tuple[int, ...]] = {
-    (Posture.LYING, Posture.STANDING): (go2_api.STAND_UP, go2_api.BALANCE_STAND),
-    (Posture.SITTING, Posture.STANDING): (go2_api.RISE_SIT, go2_api.BALANCE_STAND),
-    (Posture.STANDING, Posture.SITTING): (go2_api.SIT,),
-    (Posture.STANDING, Posture.LYING): (go2_api.STAND_DOWN,),
-}
-_NAMES = {go2_api.STAND_UP: "StandUp", go2_api.BALANCE_STAND: "BalanceStand",
-          go2_api.RISE_SIT: "RiseSit", go2_api.SIT: "Sit", go2_api.STAND_DOWN: "StandDown"}
+_NAME = {go2_api.STAND_UP: "StandUp", go2_api.BALANCE_STAND: "BalanceStand",
+         go2_api.RISE_SIT: "RiseSit", go2_api.SIT: "Sit", go2_api.STAND_DOWN: "StandDown"}
 
 
 @dataclass(frozen=True)
@@ -116,7 +107,6 @@ class Go2RosRobot:
                                       angular_accel=c.angular_accel, latency=c.odom_latency)
         self._odom_at: float | None = None  # monotonic receipt of the last odometry
         self._travel = (0.0, 0.0)  # distance travelled, angle turned (odometry)
-        self._go2: tuple[float, int, float] | None = None  # (receipt, mode, body_height)
         self._posture = Posture.STANDING  # until go2_states says otherwise
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
@@ -127,6 +117,8 @@ class Go2RosRobot:
         self._closed = False
         self._started = time.monotonic()
         self._velocity_topic = c.cmd_vel_topic
+        self._postures = PostureWatch(self._check_estop, "", c.command_timeout,
+                                      stale=max(1.0, c.odom_timeout))
         self._rediscover = True  # look up who subscribes at the next velocity command
         # use_global_arguments=False: the mission node's own remappings and parameters
         # (`-r __ns:=...`) must not move the robot's topics; `namespace` does that explicitly.
@@ -137,6 +129,7 @@ class Go2RosRobot:
         except Exception as exc:  # rclpy raises several types for bad names
             self.node.destroy_node()
             raise RobotError(f"cannot create the Go2 topics: {exc}") from exc
+        self._postures.topic = self.topic(c.state_topic)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name="go2-ros", daemon=True)
@@ -200,11 +193,9 @@ class Go2RosRobot:
             self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
     def _on_state(self, msg: Go2State) -> None:
-        mode, height = int(msg.mode), float(msg.body_height)
-        posture = go2_api.posture_of(mode, height)
-        with self._lock:
-            self._go2 = (time.monotonic(), mode, height)
-            if posture is not None:
+        posture = self._postures.update(int(msg.mode), float(msg.body_height))
+        if posture is not None:
+            with self._lock:
                 self._posture = posture
 
     def _on_battery(self, msg: BatteryState) -> None:
@@ -354,8 +345,8 @@ class Go2RosRobot:
         go2_states shows the posture it leads to. Nothing is sent when already there."""
         posture = Posture(posture)
         self._check_estop("changing posture")
-        current = self._wait_for_posture()
-        if current is posture and (posture is not Posture.STANDING or self._balanced()):
+        current = self._postures.current()
+        if current is posture and (posture is not Posture.STANDING or self._postures.balanced()):
             return
         with self._lock:
             moving = not self._halted
@@ -366,13 +357,14 @@ class Go2RosRobot:
             path = [current, Posture.STANDING, posture]
         # Standing with locked joints (after a StandUp from elsewhere) only needs balancing.
         steps = [(go2_api.BALANCE_STAND,)] if current is posture else \
-            [_STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
+            [STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
         for b, api_ids in zip(path[1:], steps, strict=True):
             for api_id in api_ids:
-                if api_id == go2_api.BALANCE_STAND and self._balanced():
+                balance = api_id == go2_api.BALANCE_STAND
+                if balance and self._postures.balanced():
                     continue  # RiseSit already ends balanced: no redundant command
                 self._request(api_id)
-                self._await_posture(b, api_id)
+                self._postures.reach(b, f"{_NAME[api_id]} (api id {api_id})", balance)
 
     def perform(self, trick: str) -> None:
         info = go2_api.TRICKS.get(trick)
@@ -385,15 +377,15 @@ class Go2RosRobot:
                 "'ai' motion mode; it is off unless enabled (ROS parameter "
                 "go2_firmware_tricks, see docs/go2.md)")
         self._check_estop(f"performing {trick}")
-        posture = self._wait_for_posture()
+        posture = self._postures.current()
         if posture is not Posture.STANDING:
             raise RobotError(f"cannot perform {trick} while the robot is {posture.value}; "
                              "stand up first")
         if ai_mode:  # recent firmware runs these only in the "ai" motion mode
             self._request(go2_api.MOTION_SWITCH, {"name": "ai"}, go2_api.MOTION_SWITCHER_TOPIC)
         self._request(info.api_id)
-        self._pause(info.duration, f"{trick} (api id {info.api_id})")
-        self._await_posture(Posture.STANDING, info.api_id, what=trick)
+        self._postures.pause(info.duration, f"{trick} (api id {info.api_id})")
+        self._postures.reach(Posture.STANDING, trick)
 
     def now(self) -> float:
         return time.monotonic()
@@ -463,62 +455,3 @@ class Go2RosRobot:
             estopped = self._estopped
         if estopped:
             raise RobotError(f"e-stop is latched; release it before {doing}")
-
-    def _balanced(self) -> bool:
-        """go2_states shows a mode in which the robot obeys Moves (standing balanced)."""
-        with self._lock:
-            go2 = self._go2
-        return go2 is not None and go2[1] in go2_api.WALKING_MODES
-
-    def _fresh_posture(self) -> tuple[Posture | None, str]:
-        """The posture go2_states shows now (None while in between), and how it looks."""
-        with self._lock:
-            go2 = self._go2
-        if go2 is None or time.monotonic() - go2[0] > max(1.0, self.config.odom_timeout):
-            return None, "no messages" if go2 is None else "no recent messages"
-        posture = go2_api.posture_of(go2[1], go2[2])
-        seen = posture.value if posture else "in between"
-        return posture, f"mode {go2[1]} ({seen}), body height {go2[2]:.2f} m"
-
-    def _wait_for_posture(self) -> Posture:
-        """The robot's posture from go2_states, waiting (bounded) for a report."""
-        deadline = time.monotonic() + self.config.command_timeout
-        while True:
-            posture, seen = self._fresh_posture()
-            if posture is not None:
-                return posture
-            if time.monotonic() > deadline:
-                raise RobotError(
-                    f"cannot tell the robot's posture: {self.topic(self.config.state_topic)} "
-                    f"shows {seen} after {self.config.command_timeout:.0f} s; check that "
-                    "go2_ros2_sdk is running and connected (`shadowhound doctor --go2`)")
-            self._check_estop("changing posture")
-            time.sleep(_POLL)
-
-    def _await_posture(self, target: Posture, api_id: int, what: str = "") -> None:
-        """Wait until go2_states shows `target` (walkable, for standing after BalanceStand)."""
-        what = what or f"{_NAMES.get(api_id, api_id)} (api id {api_id})"
-        deadline = time.monotonic() + self.config.command_timeout
-        needs_balance = api_id == go2_api.BALANCE_STAND
-        while True:
-            with self._lock:
-                go2 = self._go2
-            posture, seen = self._fresh_posture()
-            reached = posture is target and go2 is not None and (
-                not needs_balance or go2[1] in go2_api.WALKING_MODES)
-            if reached:
-                return
-            self._check_estop(f"waiting for {what}")
-            if time.monotonic() > deadline:
-                raise RobotError(
-                    f"{what} sent, but the robot did not reach {target.value} within "
-                    f"{self.config.command_timeout:.0f} s: {self.topic(self.config.state_topic)}"
-                    f" shows {seen}; check that nothing else (the phone app, a joystick) holds "
-                    "the robot and that it has room")
-            time.sleep(_POLL)
-
-    def _pause(self, seconds: float, what: str) -> None:
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            self._check_estop(f"waiting for {what}")
-            time.sleep(min(_POLL * 5, max(0.0, end - time.monotonic())))
