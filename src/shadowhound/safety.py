@@ -53,6 +53,7 @@ class PlanCheck:
     approvals: list[Refusal] = field(default_factory=list)
     path: list[Pose2D] = field(default_factory=list)
     distance: float = 0.0
+    notes: list[str] = field(default_factory=list)  # what the check could not establish
 
 
 class Governor:
@@ -68,6 +69,10 @@ class Governor:
         """Check every step from `start`. None stands for a step that failed validation: it
         is skipped and the rest still checked."""
         check = PlanCheck(path=[start.pose])
+        if start.battery is None:  # say so, rather than pass a level nobody measured
+            check.notes.append(f"battery level unknown (the robot reports none): the battery "
+                               f"floor of {self.limits.battery_floor:g}% "
+                               "(safety.battery_floor) cannot be checked")
         pose, posture = start.pose, start.posture
         budget = env.budget
         walked = budget.travelled(start) if budget else 0.0
@@ -183,9 +188,10 @@ class Governor:
             reasons.append(f"{name} is not in safety.allow_skills ({', '.join(lim.allow_skills)})")
         if _matches(name, lim.deny_skills):
             reasons.append(f"{name} is in safety.deny_skills")
-        if start.battery < lim.battery_floor and name not in LOW_BATTERY_SKILLS:
+        level = start.battery  # None: unknown, said once in check_plan's notes
+        if level is not None and level < lim.battery_floor and name not in LOW_BATTERY_SKILLS:
             reasons.append(
-                f"the battery is at {start.battery:.0f}%, below the floor of "
+                f"the battery is at {level:.0f}%, below the floor of "
                 f"{lim.battery_floor:g}% (safety.battery_floor): only "
                 f"{', '.join(LOW_BATTERY_SKILLS)} are allowed"
             )

@@ -46,7 +46,7 @@ class RobotState:
     vy: float = 0.0
     wz: float = 0.0
     posture: Posture = Posture.STANDING
-    battery: float = 100.0  # percent
+    battery: float | None = 100.0  # percent; None = unknown (a Go2 without a battery source)
     distance_travelled: float = 0.0  # metres, path length since the robot started
     angle_turned: float = 0.0  # radians, absolute rotation since the robot started
     stamp: float = 0.0  # seconds on the robot's clock
@@ -61,6 +61,11 @@ class RobotState:
         return Pose2D(self.x, self.y, self.yaw)
 
     @property
+    def battery_text(self) -> str:
+        """The battery level for people: "87.0%", or "unknown" (never a guess)."""
+        return "unknown" if self.battery is None else f"{self.battery:.1f}%"
+
+    @property
     def is_moving(self) -> bool:
         return abs(self.vx) > 1e-3 or abs(self.vy) > 1e-3 or abs(self.wz) > 1e-3
 
@@ -72,7 +77,7 @@ class RobotState:
             "yaw": round(self.yaw, 4),
             "yaw_deg": round(math.degrees(self.yaw), 2),
             "posture": self.posture.value,
-            "battery": round(self.battery, 2),
+            "battery": None if self.battery is None else round(self.battery, 2),
             "distance_travelled": round(self.distance_travelled, 4),
             "angle_turned": round(self.angle_turned, 4),
             "moving": self.is_moving,

@@ -104,8 +104,18 @@ def build_parser() -> argparse.ArgumentParser:
     show = sub.add_parser("config", help="print the effective configuration (no secrets)")
     _common(show, suppress=True)
 
-    doctor = sub.add_parser("doctor", help="check the configuration, the backend and the model")
+    doctor = sub.add_parser("doctor", help="check the configuration, the backend and the model "
+                                           "(and with --go2 the Go2 driver's ROS 2 link)")
     _common(doctor, suppress=True)
+    doctor.add_argument("--go2", action="store_true",
+                        help="check the go2_ros2_sdk driver (also when the profile's robot is go2)")
+    doctor.add_argument("--namespace", default="", help="the robot's namespace, e.g. robot0")
+    doctor.add_argument("--cmd-vel-topic", default="",
+                        help="velocity topic to check ('' = as the robot discovers it)")
+    doctor.add_argument("--battery-topic", default="",
+                        help="sensor_msgs/BatteryState topic ('' = none)")
+    doctor.add_argument("--seconds", type=float, default=3.0,
+                        help="how long to watch the topics (default 3)")
 
     history = sub.add_parser("history", help="list past missions, or show one (memory.enabled)")
     _common(history, suppress=True)
@@ -153,9 +163,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser("node", help="run the ROS 2 MissionNode (needs the 'ros' extra): "
                                 "shadowhound node --ros-args -p name:=value ...",
                    add_help=False)
-    sub.add_parser("sim-driver", help="run a simulated Go2 with go2_ros2_sdk's ROS 2 topics "
-                                      "(for robot:=go2 without a robot): shadowhound sim-driver "
-                                      "--ros-args ...", add_help=False)
+    sub.add_parser("sim-driver", help="run a simulated Go2 behind go2_ros2_sdk's ROS 2 topics, "
+                                      "behaving as the real driver does (for robot:=go2 without "
+                                      "a robot): shadowhound sim-driver [options] [--ros-args "
+                                      "...]; see shadowhound sim-driver --help", add_help=False)
     return parser
 
 

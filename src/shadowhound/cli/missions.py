@@ -119,7 +119,7 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         print(result.response)
         print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
               f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
-              f"battery={st.battery:.1f}%")
+              f"battery={st.battery_text}")
     return code
 
 

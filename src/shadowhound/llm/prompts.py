@@ -110,7 +110,7 @@ def state_line(state: RobotState | None) -> str:
         return ""
     return (
         f"Robot now: {state.posture.value} at x={state.x:.2f} y={state.y:.2f}, facing "
-        f"{math.degrees(state.yaw):.0f} degrees, battery {state.battery:.0f}%."
+        f"{math.degrees(state.yaw):.0f} degrees, battery {state.battery_text}."
     )
 
 

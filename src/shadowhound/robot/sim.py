@@ -218,7 +218,7 @@ class SimRobot:
             vx=vx,
             vy=vy,
             wz=wz,
-            battery=max(0.0, s.battery - drain),
+            battery=max(0.0, (s.battery or 0.0) - drain),  # the simulator always knows it
             distance_travelled=s.distance_travelled + step,
             angle_turned=s.angle_turned + abs(mwz * dt),
             stamp=self._sim_time + dt,
@@ -301,7 +301,8 @@ class SimRobot:
             self._state = replace(self._state, estopped=False)
             self._record("estop_release", None, True)
 
-    def set_posture(self, posture: Posture) -> None:
+    def set_posture(self, posture: Posture, seconds: float | None = None) -> None:
+        """Change posture, taking the Go2's typical time (or `seconds` for the whole change)."""
         posture = Posture(posture)
         with self._lock:
             self._catch_up()
@@ -319,7 +320,7 @@ class SimRobot:
             path = [current, Posture.STANDING, posture]
         for a, b in zip(path, path[1:], strict=False):
             self._settle()
-            self.sleep(_POSTURE_SECONDS[(a, b)])
+            self.sleep(_POSTURE_SECONDS[(a, b)] if seconds is None else seconds / (len(path) - 1))
             with self._lock:
                 self._state = replace(self._state, posture=b)
 
