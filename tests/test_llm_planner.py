@@ -68,8 +68,9 @@ def test_json_plan_in_one_round_trip(srv):
     assert request["model"] == "test-model" and request["temperature"] == 0
     # llama.cpp's dialect: json_object constrained by the plan's schema.
     assert request["response_format"]["type"] == "json_object"
-    items = request["response_format"]["schema"]["properties"]["steps"]["items"]
-    assert "nav.move" in items["properties"]["skill"]["enum"]
+    steps = request["response_format"]["schema"]["properties"]["steps"]["items"]["anyOf"]
+    assert {"type": "string", "const": "nav.move"} in [s["properties"]["skill"] for s in steps]
+    assert request["cache_prompt"] is True  # llama.cpp reuses the evaluated prompt prefix
     system = request["messages"][0]["content"]
     assert "nav.move(distance" in system and "Robot now: standing at x=0.00" in system
     assert request["messages"][1] == {"role": "user",
@@ -85,6 +86,7 @@ def test_openai_dialect_of_the_plan_schema(srv):
     fmt = srv.requests[0]["response_format"]
     assert fmt["type"] == "json_schema" and fmt["json_schema"]["name"] == "plan"
     assert "steps" in fmt["json_schema"]["schema"]["properties"]
+    assert "cache_prompt" not in srv.requests[0]  # vLLM caches shared prefixes by itself
 
 
 def test_parallel_tool_calls_in_tools_format(srv):

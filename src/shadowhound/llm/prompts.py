@@ -1,8 +1,8 @@
 """Prompts and schemas generated from the skill registry: compact, so small models plan well.
 
 Plan mode sends one system prompt listing every skill on one line each, and asks for a JSON
-plan (constrained by `PLAN_SCHEMA` where the server supports it). Tool mode and react mode send
-the skills as function tools with schemas stripped to what a model needs.
+plan (constrained by `llm.schema`'s plan schema where the server enforces one). Tool mode and
+react mode send the skills as function tools with schemas stripped to what a model needs.
 """
 
 from __future__ import annotations
@@ -81,28 +81,6 @@ def tools(registry: SkillRegistry) -> list[dict[str, Any]]:
         }
         for s in registry
     ]
-
-
-def plan_schema(registry: SkillRegistry) -> dict[str, Any]:
-    """JSON Schema of a whole plan, for response_format json_schema / Ollama's format."""
-    return {
-        "type": "object",
-        "properties": {
-            "steps": {
-                "type": "array",
-                "items": {
-                    "type": "object",
-                    "properties": {
-                        "skill": {"type": "string", "enum": registry.names},
-                        "args": {"type": "object"},
-                    },
-                    "required": ["skill", "args"],
-                },
-            },
-            "answer": {"type": "string"},
-        },
-        "required": ["steps"],
-    }
 
 
 def state_line(state: RobotState | None) -> str:

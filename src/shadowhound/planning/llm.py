@@ -18,7 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..config import ShadowHoundConfig
-from ..llm import prompts
+from ..llm import prompts, schema
 from ..llm.backend import BackendError, LLMBackend
 from ..llm.parse import ParsedReply, parse_reply
 from ..plan import Plan, PlanningError, SkillCall, Usage
@@ -91,12 +91,12 @@ class LLMPlanner:
         options: dict[str, Any] = {}
         fmt = self._format()
         if style == "tools":
-            options["tools"] = prompts.tools(ctx.registry)
+            options["tools"] = self._tools(ctx)
             if self.settings.backend == "openai":
                 options["parallel_tool_calls"] = True
         elif fmt == "json_schema":
-            options["response_format"] = _response_format(self.settings.backend,
-                                                          prompts.plan_schema(ctx.registry))
+            options["response_format"] = schema.response_format(self.settings.backend,
+                                                                ctx.registry)
         try:
             completion = self._complete(messages, usage, ctx, **options)
         except BackendError as exc:
@@ -122,8 +122,10 @@ class LLMPlanner:
                   **options: Any) -> Any:
         if ctx.cancelled is not None and ctx.cancelled.is_set():
             raise PlanningError("mission cancelled before the model was asked", usage=usage)
+        hints = schema.request_hints(self.settings.backend)
         try:
-            completion = self.backend.complete(messages, **options)
+            completion = self.backend.complete(messages, **options,
+                                               extra_body=hints or None)
         except BackendError:
             usage.round_trips += 1  # a failed request is still a round trip
             raise
@@ -144,6 +146,11 @@ class LLMPlanner:
             calls.append(SkillCall(valid.name, valid.args_dict(), call.label))
         return calls, problems
 
+    def _tools(self, ctx: PlanningContext) -> list[dict[str, Any]]:
+        if self.settings.backend == "openai":  # the one API that enforces `strict` tools
+            return schema.strict_tools(ctx.registry)
+        return prompts.tools(ctx.registry)
+
     def _system(self, ctx: PlanningContext, style: str) -> str:
         return prompts.system_prompt(
             ctx.registry, style=style, state=ctx.state, places=ctx.places, history=ctx.history,
@@ -160,7 +167,7 @@ class LLMPlanner:
             {"role": "system", "content": self._system(ctx, "react")},
             {"role": "user", "content": text},
         ]
-        tools = prompts.tools(ctx.registry)
+        tools = self._tools(ctx)
         executed = 0
         while True:
             if usage.total_tokens >= self.llm.react_token_budget:
@@ -223,15 +230,6 @@ class LLMPlanner:
         except (BackendError, ValueError) as exc:
             return f"I could not look at the image: {exc}"
         return str(completion.message.get("content") or "").strip() or "(no answer)"
-
-
-def _response_format(backend: str, schema: dict[str, Any]) -> dict[str, Any]:
-    """A plan-constrained response format in the dialect the server speaks."""
-    if backend == "llamacpp":
-        # llama.cpp (llama-server and llama-cpp-python) constrain json_object with a schema.
-        return {"type": "json_object", "schema": schema}
-    return {"type": "json_schema", "json_schema": {"name": "plan", "schema": schema,
-                                                   "strict": False}}
 
 
 def _context(context: Any) -> PlanningContext:
