@@ -189,8 +189,10 @@ def llm_args(srv: LlamaServer) -> list[str]:
     return ["--backend", "llamacpp", "--base-url", srv.url, "--model", MODEL_ALIAS]
 
 
-# CPU inference on 2 cores: generous per-request timeout, short answers.
-LLM_ENV = {"SHADOWHOUND_LLM__TIMEOUT": "60", "SHADOWHOUND_LLM__MAX_TOKENS": "256"}
+# CPU inference on 2 cores: generous per-request timeout, short answers. Hybrid off: the
+# offline rules would plan MISSION without asking the model, and these tests are the model's.
+LLM_ENV = {"SHADOWHOUND_LLM__TIMEOUT": "60", "SHADOWHOUND_LLM__MAX_TOKENS": "256",
+           "SHADOWHOUND_LLM__HYBRID": "false"}
 
 
 def check_mission(proc: subprocess.CompletedProcess[str], registered: set[str],

@@ -44,8 +44,10 @@ def srv():
 
 
 def make_agent(srv, robot=None, **llm):
+    """An agent whose every mission the model plans (hybrid off: these tests are the model's)."""
     settings = load_config("llamacpp", {"llm": {"base_url": srv.url, "model": "test-model",
-                                                "max_retries": 0, "timeout": 5, **llm}},
+                                                "max_retries": 0, "timeout": 5, "hybrid": False,
+                                                **llm}},
                            environ={})
     robot = robot or SimRobot(time_scale=0.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
@@ -78,7 +80,8 @@ def test_json_plan_in_one_round_trip(srv):
 
 
 def test_openai_dialect_of_the_plan_schema(srv):
-    settings = load_config("vllm", {"llm": {"base_url": srv.url, "model": "test-model"}},
+    settings = load_config("vllm", {"llm": {"base_url": srv.url, "model": "test-model",
+                                            "hybrid": False}},
                            environ={})
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
     srv.script(json_plan(MOVE_1))
@@ -398,7 +401,7 @@ def cli(*args, env=None):
 def test_cli_run_with_a_scripted_openai_server(srv):
     srv.script(json_plan([{"skill": "nav.rotate", "args": {"degrees": 90}}]))
     proc = cli("run", "--backend", "openai", "--base-url", srv.url, "--model", "test-model",
-               "--json", "turn left")
+               "--json", "turn left", env={"SHADOWHOUND_LLM__HYBRID": "false"})
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["success"] and out["robot"]["yaw"] == 1.5708

@@ -57,12 +57,14 @@ class Plan:
     text: str = ""
     notes: list[str] = field(default_factory=list)  # assumptions, e.g. "no distance given: 1 m"
     usage: Usage = field(default_factory=Usage)
-    planner: str = ""
+    planner: str = ""  # the planner's name, e.g. "offline" or "llamacpp:qwen2.5"
+    planned_by: str = ""  # offline | llm | explicit: the kind of planner that made it
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "text": self.text,
             "planner": self.planner,
+            "planned_by": self.planned_by,
             "steps": [s.to_dict() for s in self.steps],
             "notes": list(self.notes),
         }

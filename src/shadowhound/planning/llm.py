@@ -34,6 +34,8 @@ StepRunner = Callable[[SkillCall], str]
 class LLMPlanner:
     """A planner that asks a language model. Build it with the settings of one backend."""
 
+    kind = "llm"
+
     def __init__(self, settings: ShadowHoundConfig) -> None:
         self.settings = settings
         self.llm = settings.llm
@@ -59,7 +61,7 @@ class LLMPlanner:
             reply, raw = self._ask(messages, style, ctx, usage)
             calls, problems = self._checked(reply, ctx)
             if not problems and calls:
-                return Plan(calls, text=text, usage=usage, planner=self.name,
+                return Plan(calls, text=text, usage=usage, planner=self.name, planned_by="llm",
                             notes=[reply.answer] if reply.answer else [])
             if not problems:  # no steps: the model says why in words
                 raise PlanningError(reply.answer or "The model proposed no steps.", usage=usage)

@@ -35,6 +35,7 @@ class RulePlanner:
     """Plans English requests with hand-written rules; fast, deterministic and offline."""
 
     name = "offline"
+    kind = "offline"
     needs_context = False  # plans from the words alone
 
     def __init__(
@@ -115,7 +116,8 @@ class RulePlanner:
                 f"I found no request in {text.strip()[:80]!r}. " + CAPABILITIES,
                 not_understood=[text.strip()[:200]],
             )
-        return Plan(steps=steps, text=text, notes=list(dict.fromkeys(notes)), planner=self.name)
+        return Plan(steps=steps, text=text, notes=list(dict.fromkeys(notes)), planner=self.name,
+                    planned_by=self.kind)
 
     # ---- one clause ---------------------------------------------------------------------------
 
