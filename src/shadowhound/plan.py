@@ -28,6 +28,7 @@ class Usage:
     completion_tokens: int = 0
     round_trips: int = 0
     estimated: bool = False  # True when the server reported no usage and tokens were counted
+    invalid_plans: int = 0  # model replies that failed validation (each one goes to repair)
 
     @property
     def total_tokens(self) -> int:
@@ -38,6 +39,7 @@ class Usage:
         self.completion_tokens += other.completion_tokens
         self.round_trips += other.round_trips
         self.estimated = self.estimated or other.estimated
+        self.invalid_plans += other.invalid_plans
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -46,6 +48,7 @@ class Usage:
             "total_tokens": self.total_tokens,
             "round_trips": self.round_trips,
             "estimated": self.estimated,
+            "invalid_plans": self.invalid_plans,
         }
 
 

@@ -65,6 +65,7 @@ class LLMPlanner:
                             notes=[reply.answer] if reply.answer else [])
             if not problems:  # no steps: the model says why in words
                 raise PlanningError(reply.answer or "The model proposed no steps.", usage=usage)
+            usage.invalid_plans += 1
             if attempt < self.llm.repair_attempts:
                 messages += [raw, {"role": "user", "content": _repair_request(problems, style)}]
         raise PlanningError(
