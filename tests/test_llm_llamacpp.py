@@ -82,8 +82,11 @@ def free_port() -> int:
 class LlamaServer:
     """`python -m llama_cpp.server` with SmolLM2 on a free 127.0.0.1 port, output in `log`."""
 
-    def __init__(self, model: Path, log: IO[bytes], threads: int = 2) -> None:
-        self.model, self.log, self.threads = model, log, threads
+    def __init__(self, model: Path, log: IO[bytes], threads: int = 2,
+                 verbose: bool = False) -> None:
+        """`verbose` makes the server log, per request, the prompt tokens it reused from its
+        cache and those it evaluated (the benchmark reads them)."""
+        self.model, self.log, self.threads, self.verbose = model, log, threads, verbose
         self.port = free_port()
         self.proc: subprocess.Popen[bytes] | None = None
 
@@ -95,7 +98,7 @@ class LlamaServer:
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "llama_cpp.server", "--model", str(self.model),
              "--host", "127.0.0.1", "--port", str(self.port), "--model_alias", MODEL_ALIAS,
-             "--n_ctx", "4096", "--n_threads", str(self.threads), "--verbose", "False"],
+             "--n_ctx", "4096", "--n_threads", str(self.threads), "--verbose", str(self.verbose)],
             stdin=subprocess.DEVNULL, stdout=self.log, stderr=subprocess.STDOUT,
             env=loopback_env(PYTHONUNBUFFERED="1"),
         )
