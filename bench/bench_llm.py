@@ -240,6 +240,10 @@ def _yes(flag: bool) -> str:
     return "yes" if flag else "no"
 
 
+def _repairs(outcomes: list[Any]) -> int:
+    return sum(max(0, o.usage.round_trips - 1) for o in outcomes)
+
+
 def _invalid_after_repair(outcomes: list[Any]) -> int:
     return sum("not valid after a repair attempt" in o.response for o in outcomes)
 
@@ -265,7 +269,10 @@ def main() -> None:
     cards = {c.planner: c for c in real["cards"]}
     outcomes = real["outcomes"]
     offline_label, hybrid_label, plain_label, strict_label = (p for p, _ in PLANNERS)
-    offline_passed = [i for i, o in enumerate(outcomes[offline_label]) if o.passed]
+    # Cases the offline planner passes by planning them (not by refusing, as some cases expect).
+    offline_passed = [i for i, o in enumerate(outcomes[offline_label])
+                      if o.passed and o.planned_by == "offline"]
+    refused = [o for o in outcomes[offline_label] if o.planned_by != "offline"]
     hybrid_calls_there = sum(outcomes[hybrid_label][i].usage.round_trips for i in offline_passed)
     saved = cards[strict_label].model_calls - cards[hybrid_label].model_calls
     lines = [
@@ -309,9 +316,11 @@ def main() -> None:
         "",
         scorecard_table(real["cards"]),
         "",
-        f"- Hybrid: the {len(offline_passed)} cases the offline planner passes cost "
-        f"{hybrid_calls_there} model calls; {saved} model calls saved against the strict-schema "
-        f"model alone ({cards[hybrid_label].model_calls} vs "
+        f"- Hybrid: the {len(offline_passed)} cases the offline planner plans and passes cost "
+        f"{hybrid_calls_there} model calls; the {len(refused)} it refuses (as those cases "
+        f"expect: {', '.join(repr(o.case.mission) for o in refused)}) go to the model unless "
+        f"the agent refuses them first (the empty mission). {saved} model calls saved against "
+        f"the strict-schema model alone ({cards[hybrid_label].model_calls} vs "
         f"{cards[strict_label].model_calls}).",
         f"- Strict schema vs plain: model replies that failed validation "
         f"{cards[strict_label].invalid_plans} vs {cards[plain_label].invalid_plans}; missions "
@@ -319,8 +328,8 @@ def main() -> None:
         f"{_invalid_after_repair(outcomes[strict_label])} vs "
         f"{_invalid_after_repair(outcomes[plain_label])}; model calls "
         f"{cards[strict_label].model_calls} vs {cards[plain_label].model_calls} "
-        f"(repair round trips {cards[strict_label].model_calls - cards[strict_label].cases} vs "
-        f"{cards[plain_label].model_calls - cards[plain_label].cases}); passed "
+        f"(repair round trips {_repairs(outcomes[strict_label])} vs "
+        f"{_repairs(outcomes[plain_label])}); passed "
         f"{cards[strict_label].passed} vs {cards[plain_label].passed}.",
         "",
         "| mission | offline | hybrid: passed (model calls) | plain: passed (calls, invalid) "

@@ -282,3 +282,34 @@ def test_react_mode_is_bounded(server: LlamaServer, registered: set[str]) -> Non
     out = check_mission(proc, registered, server)
     assert len(out["steps"]) <= REACT_MAX_STEPS, out["steps"]
     assert elapsed < 60, f"react mode took {elapsed:.1f} s"
+
+
+# Missions that name arguments a small model likes to invent ("meters", "direction", "angle").
+STRICT_MISSIONS = ["turn left 90 degrees", "walk backward half a meter", "wait two seconds"]
+
+
+@pytest.mark.parametrize("mission", STRICT_MISSIONS)
+def test_the_strict_schema_admits_only_real_skills_with_their_own_arguments(
+        server: LlamaServer, mission: str) -> None:
+    """Whatever SmolLM2 plans under the grammar compiled from the plan schema, every step names
+    a real skill with only its own arguments of the right types: nothing for the registry to
+    refuse as unknown, missing or mistyped."""
+    from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, load_config
+
+    settings = load_config("llamacpp", {
+        "llm": {"base_url": server.url, "model": MODEL_ALIAS, "hybrid": False,
+                "plan_format": "json_schema", "max_tokens": 256, "timeout": 120,
+                "repair_attempts": 0},
+        "memory": {"enabled": False}}, environ={})
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
+    agent.initialize()
+    try:
+        result = agent.execute_mission(mission)
+    finally:
+        agent.cleanup()
+    where = f"\n{result.response}\n{server.log_tail()}"
+    assert result.usage.round_trips == 1 and not result.usage.estimated, where
+    for word in ("unknown skill", "unknown argument", "missing required", "valid number",
+                 "arguments are not valid JSON", "has no skill name"):
+        assert word not in result.response, where
+    assert "HTTP" not in result.response, where  # the server accepted the schema

@@ -61,10 +61,34 @@ def test_invalid_plans_are_outside_the_schema(dialect, bad):
 @pytest.mark.parametrize("dialect", ["json_schema", "llamacpp"])
 def test_valid_plans_are_inside_the_schema(dialect):
     assert valid(plan(("body.stand", {}), ("nav.move", {"distance": 1.0}),
-                      ("nav.move", {"distance": -2, "speed": 0.3}),
-                      ("nav.goto", {"place": "kitchen"}), ("body.sport", {"trick": "hello"}),
+                      ("nav.move", {"distance": -2}), ("nav.goto", {"place": "kitchen"}),
+                      ("nav.goto", {"x": 1, "y": -2.5}), ("body.sport", {"trick": "hello"}),
                       ("nav.patrol", {})), dialect)
     assert valid({"steps": [], "answer": "I cannot fly."}, dialect)
+
+
+@pytest.mark.parametrize("dialect", DIALECTS)
+@pytest.mark.parametrize("args", [{"x": 1.0}, {"y": 1.0}, {"x": 1, "y": 2, "place": "kitchen"},
+                                  {}, {"speed": 0.5}])
+def test_a_half_target_is_outside_the_schema(dialect, args):
+    """nav.goto takes x and y, or a place: its alternatives are steps of their own."""
+    step = {"skill": "nav.goto", "args": args}
+    if dialect == "openai":  # strict: every argument of the alternative present, maybe null
+        step["args"] = {"heading_degrees": None, "speed": None, **args}
+    assert not valid({"steps": [step], "answer": ""}, dialect)
+    with pytest.raises(SkillValidationError):
+        REGISTRY.validate(SkillCall("nav.goto", args))
+
+
+def test_optional_numbers_are_offered_only_where_their_range_is_enforced():
+    with_speed = plan(("nav.move", {"distance": 1.0, "speed": 0.3}))
+    assert valid(with_speed, "json_schema")
+    assert not valid(plan(("nav.move", {"distance": 1.0, "speed": 10})), "json_schema")
+    # llama-cpp-python's grammar cannot hold a number in a range: an optional one is left out
+    # (the skill's default applies) rather than let a model write speed 0 or 10.
+    assert not valid(with_speed, "llamacpp")
+    assert not valid(plan(("nav.patrol", {"laps": 3})), "llamacpp")
+    assert valid(plan(("nav.patrol", {"laps": 3})), "json_schema")
 
 
 def test_ranges_are_enforced_where_the_dialect_has_them():
@@ -109,7 +133,7 @@ def test_openai_strict_subset(where):
 
 
 def test_openai_optional_arguments_are_nullable_and_accepted_as_null():
-    move = schema.args_schema(REGISTRY.get("nav.move"), "openai")
+    [move] = schema.args_schema(REGISTRY.get("nav.move"), "openai")
     assert move["required"] == ["distance", "speed"]
     assert {"type": "null"} in move["properties"]["speed"]["anyOf"]
     step = {"skill": "nav.move", "args": {"distance": 1.0, "speed": None}}
@@ -118,9 +142,10 @@ def test_openai_optional_arguments_are_nullable_and_accepted_as_null():
         "distance": 1.0}
 
 
-# Any step a schema admits names a real skill with only its own, well-typed arguments: the
-# registry may still refuse a value (a range the grammar lacks, a place and x together), but
-# never for an unknown skill, an invented or missing argument, or a wrong type.
+# Any step a schema admits names a real skill with only its own, well-typed arguments in a
+# combination it accepts: the registry may still refuse a value (a required distance beyond
+# its range where the grammar has no ranges, a name that breaks its pattern), but never for an
+# unknown skill, an invented or missing argument, a wrong type, or a half target.
 _VALUES = st.one_of(st.integers(-3, 3), st.floats(-2, 2), st.sampled_from(
     ["hello", "kitchen", "1 m", "", "moonwalk"]), st.none(), st.booleans())
 _ARG_NAMES = sorted({n for s in REGISTRY for n in s.args_model.model_fields} | {"meters", "foo"})
@@ -139,6 +164,7 @@ def test_schema_valid_steps_are_registry_valid_in_name_and_type(name, args, dial
     except SkillValidationError as exc:
         for problem in exc.problems:
             assert "unknown" not in problem and "missing" not in problem, problem
+            assert "value error" not in problem, problem  # e.g. x without y
             assert "valid number" not in problem and "valid string" not in problem, problem
 
 

@@ -17,7 +17,14 @@ Dialects (`dialect_of` picks one per backend):
   `schema`, compiled to a GBNF grammar. Its converter handles `anyOf`, `const`, `enum`,
   `required`, `additionalProperties` and `minLength`; llama-cpp-python ignores numeric ranges
   (a TODO in its converter), so they are not sent, nor `maxLength`, which it unrolls into a
-  grammar rule per character (a 35 kB grammar for this registry instead of a few kB).
+  grammar rule per character (a 35 kB grammar for this registry instead of a few kB). An
+  optional number with a range (speed, heading, laps) is not offered at all: the grammar could
+  not keep it in range, and the skill's default is always valid. A required one (a distance)
+  stays; the registry checks its range and the repair turn says what is allowed.
+
+A skill whose arguments come in alternative sets declares them as `oneOf` of `required` sets
+(nav.goto: x and y, or a place); each set becomes a step of its own, so a half target ("x"
+without "y") is outside the schema.
 
 The schema is a guarantee only where the server enforces it: every plan is still validated
 against the registry, and an invalid one still gets a repair turn.
@@ -57,19 +64,36 @@ def dialect_of(backend: str) -> Dialect:
     return "json_schema"
 
 
-def args_schema(skill: Skill, dialect: Dialect) -> dict[str, Any]:
-    """The skill's arguments as a closed object schema in `dialect`."""
-    return _args_schema(skill, dialect)
+def args_schema(skill: Skill, dialect: Dialect) -> list[dict[str, Any]]:
+    """The skill's arguments as closed object schemas in `dialect`: one per alternative set of
+    arguments the skill accepts (nav.goto: x and y, or a place), else one."""
+    return [_args_schema(skill, dialect, a) for a in _alternatives(skill)]
+
+
+def _alternatives(skill: Skill) -> list[tuple[str, ...]]:
+    """The argument sets a skill accepts one of (`oneOf` of `required` in its schema, e.g.
+    nav.goto's x and y, or place); one empty set for a skill without alternatives."""
+    alternatives = skill.parameters_schema().get("oneOf", [])
+    return [tuple(a.get("required", [])) for a in alternatives] or [()]
 
 
 @functools.lru_cache(maxsize=512)
-def _args_schema(skill: Skill, dialect: Dialect) -> dict[str, Any]:
+def _args_schema(skill: Skill, dialect: Dialect,
+                 alternative: tuple[str, ...] = ()) -> dict[str, Any]:
     full = skill.parameters_schema()
-    required = list(full.get("required", []))
+    required = list(full.get("required", [])) + list(alternative)
+    others = {n for a in _alternatives(skill) for n in a} - set(alternative)
     props: dict[str, Any] = {}
     for name, prop in full.get("properties", {}).items():
         branches = [b for b in prop.get("anyOf", [prop]) if b.get("type") != "null"]
         nullable = len(branches) < len(prop.get("anyOf", [prop]))
+        if name in others:
+            continue  # it belongs to another alternative: "x" in the step that goes to a place
+        if (dialect == "llamacpp" and name not in required
+                and any(k in branches[0] for k in _RANGES)):
+            # The grammar cannot hold a number in its range, and the argument is optional:
+            # not offered at all, so the skill's default applies (speed, heading, laps).
+            continue
         base = {k: v for k, v in branches[0].items()
                 if k in ("type", "enum", *_KEEP[dialect])}
         if dialect == "openai" and name not in required:
@@ -97,11 +121,12 @@ def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
     steps = [
         {
             "type": "object",
-            "properties": {"skill": _name(s, dialect), "args": _args_schema(s, dialect)},
+            "properties": {"skill": _name(s, dialect), "args": args},
             "required": ["skill", "args"],
             "additionalProperties": False,
         }
         for s in skills
+        for args in args_schema(s, dialect)
     ]
     answer: dict[str, Any] = {"type": "string"}
     if dialect == "json_schema":
@@ -134,6 +159,22 @@ def response_format(backend: str, registry: SkillRegistry) -> dict[str, Any]:
     return {"type": "json_schema", "json_schema": spec}
 
 
+def _strict_parameters(skill: Skill) -> dict[str, Any]:
+    """One strict object for a tool: OpenAI wants an object at the root of `parameters`, so a
+    skill with alternatives (nav.goto) gets all their arguments, null-able; the registry checks
+    which combination was given."""
+    alternatives = _alternatives(skill)
+    if len(alternatives) == 1:
+        return _args_schema(skill, "openai")
+    merged: dict[str, Any] = {}
+    for alternative in alternatives:
+        for name, prop in _args_schema(skill, "openai", alternative)["properties"].items():
+            merged.setdefault(name, prop if name not in alternative else
+                              {"anyOf": [prop, {"type": "null"}]})
+    return {"type": "object", "properties": merged, "required": list(merged),
+            "additionalProperties": False}
+
+
 def strict_tools(registry: SkillRegistry) -> list[dict[str, Any]]:
     """The skills as OpenAI function tools with `strict: true` argument schemas."""
     return [
@@ -142,7 +183,7 @@ def strict_tools(registry: SkillRegistry) -> list[dict[str, Any]]:
             "function": {
                 "name": s.tool_name,
                 "description": s.description,
-                "parameters": _args_schema(s, "openai"),
+                "parameters": _strict_parameters(s),
                 "strict": True,
             },
         }
