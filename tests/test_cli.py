@@ -246,7 +246,8 @@ def test_run_json_interrupted_while_planning_is_one_json_error(tmp_path):
     with ScriptedLLM(models=("m",)) as srv:
         srv.script(delay(60, json_plan([{"skill": "body.stand", "args": {}}])))
         proc = start_json_run("--backend", "llamacpp", "--base-url", srv.url, "--model", "m",
-                              "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+                              "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path),
+                                               "SHADOWHOUND_LLM__HYBRID": "false"})
         deadline = time.monotonic() + 60
         while not srv.requests and time.monotonic() < deadline and proc.poll() is None:
             time.sleep(0.05)

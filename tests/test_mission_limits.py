@@ -57,7 +57,7 @@ def shared_srv():
 def make_agent(srv, safety=None, **llm):
     settings = load_config("llamacpp", {
         "llm": {"base_url": srv.url, "model": "test-model", "max_retries": 0, "timeout": 5,
-                **llm},
+                "hybrid": False, **llm},
         "safety": safety or {}, "memory": {"enabled": False}}, environ={})
     robot = SimRobot(time_scale=0.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))

@@ -161,7 +161,8 @@ class RobotAgent:
     def run_plan(self, calls: list[SkillCall], text: str = "",
                  mission_id: str | None = None) -> MissionResult:
         """Run explicit skill calls (from the web, a test, a script) through the same checks."""
-        plan = Plan(list(calls), text=text or "explicit plan", planner="explicit")
+        plan = Plan(list(calls), text=text or "explicit plan", planner="explicit",
+                    planned_by="explicit")
         return self._execute(plan.text, FixedPlanner(plan), mission_id)
 
     def dry_run(self, text: str, mission_id: str | None = None) -> MissionResult:
@@ -424,7 +425,7 @@ class RobotAgent:
         if refusals and status is MissionStatus.FAILED:
             answer = f"{answer} Refused: {'; '.join(refusals)}."
         plan = Plan([SkillCall(s.skill, s.args, s.label) for s in steps], text=text,
-                    usage=usage, planner=getattr(planner, "name", "react"))
+                    usage=usage, planner=getattr(planner, "name", "react"), planned_by="llm")
         return self._finish(mission_id, text, started, timing, steps, plan, status, answer,
                             error=None if status is MissionStatus.SUCCEEDED else answer,
                             refusals=refusals)
@@ -716,7 +717,7 @@ class RobotAgent:
         result = MissionResult(
             mission_id, text, status is MissionStatus.SUCCEEDED, response, status, steps,
             self._state_or_none(), timing, usage or (plan.usage if plan else Usage()), plan,
-            refusals or [], error,
+            refusals or [], error, planner=getattr(self._planner, "kind", ""),
         )
         self._history.append(result)
         self._set_status(status)

@@ -167,8 +167,12 @@ class LLMConfig(_Section):
     mode: Literal["plan", "react"] = Field(
         "plan", description="plan: whole plan in one request; react: tool loop with observations"
     )
-    plan_format: Literal["auto", "json_schema", "tools"] = Field(
-        "auto", description="how plan mode asks for a plan; auto picks json_schema"
+    plan_format: Literal["auto", "json_schema", "tools", "plain"] = Field(
+        "auto", description="how plan mode asks for a plan: json_schema (the strict plan schema "
+        "the server enforces), tools, or plain (JSON asked for in words); auto picks json_schema"
+    )
+    hybrid: bool = Field(
+        True, description="offline rules first; the model plans only what they do not understand"
     )
     repair_attempts: int = Field(1, ge=0, le=3, description="round trips to fix an invalid plan")
     react_max_steps: int = Field(8, ge=1, le=100, description="skill calls in one react mission")

@@ -9,6 +9,7 @@ Case format (YAML list), see docs/missions.md:
 from __future__ import annotations
 
 import math
+import statistics
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,7 +18,8 @@ from typing import Any
 import yaml
 
 from .agent import RobotAgent, RobotAgentConfig
-from .config import MemoryConfig, ShadowHoundConfig
+from .config import ConfigError, MemoryConfig, ShadowHoundConfig
+from .plan import Usage
 from .robot.sim import SimRobot
 
 POSITION_TOLERANCE = 0.05  # metres
@@ -43,10 +45,82 @@ class CaseOutcome:
     failures: list[str] = field(default_factory=list)
     actual: dict[str, Any] = field(default_factory=dict)
     response: str = ""
+    usage: Usage = field(default_factory=Usage)
+    planning_seconds: float = 0.0  # wall time spent planning (and re-planning)
+    planned_by: str = ""  # offline | llm | "" (no plan)
 
     def to_dict(self) -> dict[str, Any]:
         return {"mission": self.case.mission, "expect": self.case.expect, "passed": self.passed,
-                "failures": self.failures, "actual": self.actual, "response": self.response}
+                "failures": self.failures, "actual": self.actual, "response": self.response,
+                "usage": self.usage.to_dict(), "planning_seconds": round(self.planning_seconds, 6),
+                "planned_by": self.planned_by}
+
+
+@dataclass(frozen=True)
+class Scorecard:
+    """How one planner did on a case file: the figures `shadowhound eval` compares."""
+
+    planner: str
+    cases: int
+    passed: int
+    model_calls: int  # round trips to the model, all cases
+    prompt_tokens: int
+    completion_tokens: int
+    invalid_plans: int  # model replies that failed validation (each went to repair)
+    offline_planned: int  # cases the offline rules planned (no model call)
+    latency_p50: float  # planning seconds per case
+    latency_p95: float
+
+    @property
+    def pass_rate(self) -> float:
+        return self.passed / self.cases if self.cases else 0.0
+
+    @property
+    def calls_per_mission(self) -> float:
+        return self.model_calls / self.cases if self.cases else 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"planner": self.planner, "cases": self.cases, "passed": self.passed,
+                "pass_rate": round(self.pass_rate, 4), "model_calls": self.model_calls,
+                "calls_per_mission": round(self.calls_per_mission, 3),
+                "prompt_tokens": self.prompt_tokens, "completion_tokens": self.completion_tokens,
+                "invalid_plans": self.invalid_plans, "offline_planned": self.offline_planned,
+                "latency_p50_ms": round(self.latency_p50 * 1e3, 3),
+                "latency_p95_ms": round(self.latency_p95 * 1e3, 3)}
+
+
+# What a planner spec "BACKEND[:OPTION...]" may say after the backend, as llm settings.
+PLANNER_OPTIONS: dict[str, dict[str, Any]] = {
+    "hybrid": {"hybrid": True},
+    "llm": {"hybrid": False},  # every mission to the model
+    "json_schema": {"plan_format": "json_schema"},
+    "plain": {"plan_format": "plain"},
+    "tools": {"plan_format": "tools"},
+    "react": {"mode": "react"},
+}
+
+
+def planner_options(spec: str) -> tuple[str, dict[str, Any]]:
+    """`"llamacpp:llm:plain"` -> ("llamacpp", llm settings). Raises ConfigError if unknown."""
+    backend, *options = spec.split(":")
+    llm: dict[str, Any] = {}
+    for option in options:
+        if option not in PLANNER_OPTIONS:
+            raise ConfigError(f"unknown planner option {option!r} in {spec!r}; allowed after "
+                              f"the backend: {', '.join(PLANNER_OPTIONS)}")
+        llm.update(PLANNER_OPTIONS[option])
+    return backend, llm
+
+
+def scorecard(planner: str, outcomes: list[CaseOutcome]) -> Scorecard:
+    times = sorted(o.planning_seconds for o in outcomes) or [0.0]
+    p95 = statistics.quantiles(times, n=20, method="inclusive")[18] if len(times) > 1 else times[0]
+    return Scorecard(
+        planner, len(outcomes), sum(o.passed for o in outcomes),
+        sum(o.usage.round_trips for o in outcomes), sum(o.usage.prompt_tokens for o in outcomes),
+        sum(o.usage.completion_tokens for o in outcomes),
+        sum(o.usage.invalid_plans for o in outcomes),
+        sum(o.planned_by == "offline" for o in outcomes), statistics.median(times), p95)
 
 
 def load_cases(path: str | Path) -> list[MissionCase]:
@@ -110,7 +184,9 @@ def run_case(case: MissionCase, settings: ShadowHoundConfig) -> CaseOutcome:
         if not ok:
             failures.append(f"{key}: expected {want!r}, got {got!r}")
     agent.cleanup()
-    return CaseOutcome(case, not failures, failures, actual, result.response)
+    return CaseOutcome(case, not failures, failures, actual, result.response, result.usage,
+                       result.timing.agent_duration,
+                       result.plan.planned_by if result.plan else "")
 
 
 def run_cases(cases: list[MissionCase], settings: ShadowHoundConfig,

@@ -48,14 +48,24 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message}", self.format_usage())
 
 
-def _common(parser: argparse.ArgumentParser, suppress: bool) -> None:
+BACKENDS = ["offline", "openai", "ollama", "vllm", "llamacpp"]
+
+
+def _common(parser: argparse.ArgumentParser, suppress: bool, compare: bool = False) -> None:
     default: Any = argparse.SUPPRESS if suppress else None
     parser.add_argument("--config", "-c", metavar="PROFILE|PATH", default=default,
                         help="profile name (" + ", ".join(available_profiles()) +
                         ") or a YAML file; default $SHADOWHOUND_CONFIG or offline")
-    parser.add_argument("--backend", default=default,
-                        choices=["offline", "openai", "ollama", "vllm", "llamacpp"],
-                        help="planner backend; without --config it also picks that profile")
+    if compare:  # eval: several planners side by side
+        parser.add_argument("--backend", default=default, action="append",
+                            metavar="BACKEND[:OPTION...]",
+                            help="a planner to evaluate; repeat to compare several. BACKEND is "
+                                 f"one of {', '.join(BACKENDS)}; OPTIONs: hybrid, llm (hybrid "
+                                 "off), json_schema, plain, tools, react; e.g. --backend offline "
+                                 "--backend llamacpp --backend llamacpp:llm:plain")
+    else:
+        parser.add_argument("--backend", default=default, choices=BACKENDS,
+                            help="planner backend; without --config it also picks that profile")
     parser.add_argument("--model", default=default, help="language model name (llm.model)")
     parser.add_argument("--base-url", default=default, metavar="URL",
                         help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:8000/v1")
@@ -97,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     _common(chat, suppress=True)
 
     evaluate = sub.add_parser("eval", help="run mission cases from a YAML file and score them")
-    _common(evaluate, suppress=True)
+    _common(evaluate, suppress=True, compare=True)
     evaluate.add_argument("file", help="YAML list of {mission, expect} cases")
     evaluate.add_argument("--json", action="store_true", help="print the report as JSON")
 
@@ -170,19 +180,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _settings(args: argparse.Namespace) -> ShadowHoundConfig:
+def _settings(args: argparse.Namespace, planner: str | None = None) -> ShadowHoundConfig:
+    """The settings of the command line, for `planner` ("BACKEND[:OPTION...]", see eval)."""
+    from ..evaluation import planner_options
+
     overrides: dict[str, Any] = {}
     profile = args.config
-    if args.backend:
-        overrides["backend"] = args.backend
-        if profile is None and args.backend in available_profiles():
-            profile = args.backend  # --backend ollama alone means the ollama profile
+    if planner is None and isinstance(args.backend, str):
+        planner = args.backend
+    backend, options = planner_options(planner) if planner else ("", {})
+    if backend:
+        if backend not in BACKENDS:
+            raise ConfigError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
+        overrides["backend"] = backend
+        if profile is None and backend in available_profiles():
+            profile = backend  # --backend ollama alone means the ollama profile
     if args.time_scale is not None:
         overrides["sim"] = {"time_scale": args.time_scale}
     if getattr(args, "robot", None):
         overrides["robot"] = args.robot
     llm = {k: v for k, v in (("model", args.model), ("base_url", args.base_url),
-                             ("mode", args.mode)) if v is not None}
+                             ("mode", args.mode)) if v is not None} | options
     if llm:
         overrides["llm"] = llm
     return load_config(profile, overrides)

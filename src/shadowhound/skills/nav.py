@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from ..state import Pose2D, normalize_angle
 from . import motion
@@ -51,6 +51,10 @@ class RotateArgs(SkillArgs):
 
 
 class GotoArgs(SkillArgs):
+    # The targets `_target` accepts, in JSON Schema: plan schemas offer each as its own step.
+    model_config = ConfigDict(json_schema_extra={"oneOf": [{"required": ["x", "y"]},
+                                                           {"required": ["place"]}]})
+
     x: OptionalLength = Field(
         None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom"
     )
