@@ -183,7 +183,8 @@ def planner_first_request(mode: str) -> int:
     with ScriptedLLM() as srv:
         srv.script(reply, json_plan([]) if mode == "plan" else tool_calls())
         settings = load_config("llamacpp", {"llm": {"base_url": srv.url, "model": "m",
-                                                     "mode": mode, "check_on_start": False},
+                                                     "mode": mode, "check_on_start": False,
+                                                     "hybrid": False},  # the model plans
                                             "memory": {"enabled": False}})
         agent = RobotAgent(RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=0.0),
                                             settings=settings))
