@@ -23,6 +23,7 @@ ODOM_TYPE = "nav_msgs/msg/Odometry"
 STATE_TYPE = "go2_interfaces/msg/Go2State"
 REQUEST_TYPE = "go2_interfaces/msg/WebRtcReq"
 BATTERY_TYPE = "sensor_msgs/msg/BatteryState"
+BATTERY_GRACE = 5.0  # extra seconds to wait for a slow battery topic
 # go2_ros2_sdk's own type hashes (ROS 2 Jazzy), as its go2_interfaces builds them.
 UPSTREAM_HASHES = {
     STATE_TYPE: "RIHS01_26947c9882eb8f10418057a5777d99d4b3163c30f479a5626f034a65c3ea2848",
@@ -254,6 +255,12 @@ def observe(namespace: str = "", *, seconds: float = 3.0, cmd_vel_topic: str = "
         end = time.monotonic() + seconds
         while time.monotonic() < end:
             executor.spin_once(timeout_sec=0.05)
+        # Battery sources often publish at 1 Hz or slower: give a configured one that has a
+        # publisher up to BATTERY_GRACE more seconds for its first message.
+        if battery_topic and node.get_publishers_info_by_topic(obs.names["battery"]):
+            grace = time.monotonic() + BATTERY_GRACE
+            while not obs.battery_levels and time.monotonic() < grace:
+                executor.spin_once(timeout_sec=0.05)
         obs.ended = time.monotonic()
         me = node.get_name()
         for key, full in obs.names.items():
