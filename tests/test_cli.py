@@ -261,7 +261,7 @@ def test_run_json_interrupted_while_planning_is_one_json_error(tmp_path):
 
 
 def test_run_json_interrupted_while_moving_is_the_result_with_an_error(tmp_path):
-    proc = start_json_run("--time-scale", "1", "walk forward 4 meters",
+    proc = start_json_run("--time-scale", "1", "walk backward 4 meters",
                           env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
     assert proc.stderr is not None
     for line in proc.stderr:  # progress: wait until the robot walks

@@ -26,6 +26,7 @@ from .robot.go2_api import TRICKS
 from .skills.context import PlanEnv, PlanProblem
 from .skills.registry import ValidatedCall
 from .state import Pose2D, Posture, RobotState, normalize_angle
+from .world import check_leg
 
 # What may still run when the battery is below the floor: nothing that walks.
 LOW_BATTERY_SKILLS = ("nav.stop", "body.sit", "body.lie_down", "sys.status")
@@ -103,7 +104,11 @@ class Governor:
         """
         if not call.skill.moves or call.skill.predict is None:
             return ""
-        expected = call.skill.predict(before.pose, call.args, env)
+        try:
+            expected = call.skill.predict(before.pose, call.args, env)
+        except PlanProblem:  # the map changed on the way (a re-plan): the skill itself
+            return ""  # measured its arrival in closed loop
+
         if not expected:
             return ""
         want = expected[-1]
@@ -221,6 +226,7 @@ class Governor:
         outside = self._outside_fence(pose, poses)
         if outside:
             reasons.append(outside)
+        reasons += _in_the_way(call, pose, poses, env)
         return reasons, poses, approval
 
     def _outside_fence(self, pose: Pose2D, poses: list[Pose2D]) -> str:
@@ -243,6 +249,24 @@ class Governor:
                     return _fence_message(breach, a, b, (name, where), margin)
             previous = p
         return ""
+
+
+def _in_the_way(call: ValidatedCall, pose: Pose2D, poses: list[Pose2D], env: PlanEnv
+                ) -> list[str]:
+    """With a map, every straight leg of a moving step must stay in mapped free space, the body
+    clear of everything on it: "nav.move 4 m: the red ball is in the way at 2.6 m"."""
+    if env.belief is None or not call.skill.moves:
+        return []
+    distance = getattr(call.args, "distance", None)
+    what = call.name if distance is None else f"{call.name} {distance:g} m"
+    previous = pose
+    for p in poses:
+        leg = check_leg(env.belief, (previous.x, previous.y), (p.x, p.y))
+        if not leg.clear:
+            at = "" if len(poses) == 1 else f" (on its leg from {_xy((previous.x, previous.y))})"
+            return [f"{what}: {leg.message()}{at}"]
+        previous = p
+    return []
 
 
 def _fence_message(breach: geofence.Breach, a: tuple[float, float], b: tuple[float, float],
