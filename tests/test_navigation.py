@@ -5,13 +5,22 @@ The simulator's default scene: a red ball at (3, 0), a blue box at (2.5, 2), wal
 """
 
 import math
+import threading
 
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot, SkillCall
+from shadowhound import (
+    RobotAgent,
+    RobotAgentConfig,
+    ShadowHoundConfig,
+    SimRobot,
+    SkillCall,
+    default_registry,
+)
 from shadowhound.robot.scene import DEFAULT_WORLD, World, WorldObject
 from shadowhound.robot.sensors import penetration
+from shadowhound.skills import PlanEnv, SkillContext
 from shadowhound.skills.context import robot_belief
 
 BODY = 0.35
@@ -175,3 +184,22 @@ def test_public_missions_in_random_scenes_never_touch_anything(mission, world, s
     assert deepest(robot) == 0.0, result.response
     assert "blocked by" not in result.response
     agent.cleanup()
+
+
+def test_goto_progress_is_the_distance_along_the_planned_path():
+    robot = SimRobot(time_scale=0.0)
+    settings = ShadowHoundConfig()
+    env = PlanEnv(settings, robot.get_state().pose, belief=robot_belief(robot))
+    seen = []
+    ctx = SkillContext(robot, env, threading.Event(), on_progress=seen.append)
+    call = default_registry().validate(SkillCall("nav.goto", {"x": 4.0, "y": 0.0}))
+    corners = call.skill.predict(robot.get_state().pose, call.args, env)
+    assert len(corners) >= 2  # a detour: corners before the goal
+    ctx.start_clock(call.skill.timeout_for(call.args, env))
+    call.skill.run(ctx, call.args)
+    assert seen == sorted(seen) and seen[-1] == 1.0  # never backwards, ends complete
+    first = math.hypot(corners[0].x, corners[0].y)
+    legs = zip(corners, corners[1:], strict=False)
+    total = first + sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in legs)
+    # While turning at the first corner progress holds at the first leg's share of the path.
+    assert any(abs(f - first / total) < 1e-9 for f in seen)
