@@ -203,3 +203,16 @@ def test_goto_progress_is_the_distance_along_the_planned_path():
     total = first + sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in legs)
     # While turning at the first corner progress holds at the first leg's share of the path.
     assert any(abs(f - first / total) < 1e-9 for f in seen)
+
+
+def test_a_path_re_planned_on_the_way_is_checked_by_the_governors_rules():
+    """The stale map hid the ball; the detour round it would leave the narrow geofence, so the
+    walk stops where it is instead of taking a path no plan check has seen."""
+    stale = World(objects=tuple(o for o in DEFAULT_WORLD.objects if o.name != "red ball"))
+    corridor = [(-1.0, -0.6), (5.0, -0.6), (5.0, 0.6), (-1.0, 0.6)]
+    agent, robot = make(map_world=stale, geofence_polygon=corridor)
+    result = agent.execute_mission("go to x=4, y=0")
+    assert not result.success
+    assert "re-planned, but the new path is refused" in result.response
+    assert "geofence polygon" in result.response
+    assert robot.get_state().x < 2.5 and deepest(robot) < 1e-9  # touched (stale map), no more

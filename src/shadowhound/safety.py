@@ -216,6 +216,18 @@ class Governor:
             approval = (f"{trick} is a risky trick (it can hurt people or the robot) and needs "
                         "approval, or safety.allow_risky_tricks: true")
         poses = call.skill.predict(pose, args, env) if call.skill.predict else []
+        distance = getattr(args, "distance", None)
+        what = name if distance is None else f"{name} {distance:g} m"
+        reasons += self.path_problems(pose, poses, env, what)
+        return reasons, poses, approval
+
+    def path_problems(self, pose: Pose2D, poses: list[Pose2D], env: PlanEnv, what: str
+                      ) -> list[str]:
+        """Why the straight legs from `pose` through `poses` may not be walked: the step limit
+        (per straight leg), the geofences and, with a map, anything in the way. Skills that
+        re-plan on the way (nav.goto) check their new path here too."""
+        lim = self.limits
+        reasons: list[str] = []
         for leg in _legs(pose, poses):
             if leg > lim.max_step_distance + 1e-9:
                 reasons.append(
@@ -226,8 +238,8 @@ class Governor:
         outside = self._outside_fence(pose, poses)
         if outside:
             reasons.append(outside)
-        reasons += _in_the_way(call, pose, poses, env)
-        return reasons, poses, approval
+        reasons += _in_the_way(what, pose, poses, env)
+        return reasons
 
     def _outside_fence(self, pose: Pose2D, poses: list[Pose2D]) -> str:
         """Why the path from `pose` through `poses` breaks a geofence ("" when it does not).
@@ -251,14 +263,11 @@ class Governor:
         return ""
 
 
-def _in_the_way(call: ValidatedCall, pose: Pose2D, poses: list[Pose2D], env: PlanEnv
-                ) -> list[str]:
+def _in_the_way(what: str, pose: Pose2D, poses: list[Pose2D], env: PlanEnv) -> list[str]:
     """With a map, every straight leg of a moving step must stay in mapped free space, the body
-    clear of everything on it: "nav.move 4 m: the red ball is in the way at 2.6 m"."""
-    if env.belief is None or not call.skill.moves:
+    clear of everything on it: "nav.move 4 m: the red ball is in the way at 2.4 m"."""
+    if env.belief is None:
         return []
-    distance = getattr(call.args, "distance", None)
-    what = call.name if distance is None else f"{call.name} {distance:g} m"
     previous = pose
     for p in poses:
         leg = check_leg(env.belief, (previous.x, previous.y), (p.x, p.y))

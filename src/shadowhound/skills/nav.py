@@ -165,23 +165,37 @@ def walk(ctx: SkillContext, goal: tuple[float, float], linear: float, angular: f
     walked = 0.0
     belief = ctx.env.belief
     for attempt in range(MAX_REPLANS + 1):
+        pose = ctx.robot.get_state().pose
         try:
-            points = route(ctx.env, ctx.robot.get_state().pose, goal)
+            points = route(ctx.env, pose, goal)
         except PlanProblem as exc:
             raise SkillError(str(exc)) from exc
+        if attempt:  # a new path the plan check never saw: the governor's rules check it now
+            _check_new_path(ctx, pose, points)
         before = ctx.robot.get_state().distance_travelled
         try:
             return walked + motion.follow(ctx, points, linear, angular, done=walked)
         except SkillError as exc:
             walked += ctx.robot.get_state().distance_travelled - before
             blocked = ctx.robot.get_state().blocked_by
-            scan = ctx.robot.get_scan() if belief is not None and blocked else None
-            if scan is None or attempt == MAX_REPLANS:
+            if belief is None or not blocked or attempt == MAX_REPLANS:
                 raise
-            apply_scan(belief.grid, scan)  # type: ignore[union-attr]
-            belief.changed()  # type: ignore[union-attr]
+            scan = ctx.robot.get_scan()
+            if scan is None:
+                raise
+            apply_scan(belief.grid, scan)
+            belief.changed()
             ctx.notes.append(f"{exc}; re-planned from a fresh scan")
     raise AssertionError("unreachable")  # the loop returns or raises
+
+
+def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, float]]) -> None:
+    from ..safety import Governor  # here: the governor's module imports the skills
+
+    poses = _predict_walk_points(pose, points, ctx.env)
+    problems = Governor(ctx.config.safety).path_problems(pose, poses, ctx.env, "the new path")
+    if problems:
+        raise SkillError("re-planned, but the new path is refused: " + "; ".join(problems))
 
 
 def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
@@ -207,8 +221,13 @@ def _arrive(pose: Pose2D, x: float, y: float, env: PlanEnv) -> Pose2D:
 
 def _predict_walk(pose: Pose2D, goal: tuple[float, float], env: PlanEnv) -> list[Pose2D]:
     """The poses at the corners of the walk's path (every leg checked by the governor)."""
+    return _predict_walk_points(pose, route(env, pose, goal), env)
+
+
+def _predict_walk_points(pose: Pose2D, points: list[tuple[float, float]], env: PlanEnv
+                         ) -> list[Pose2D]:
     poses: list[Pose2D] = []
-    for x, y in route(env, pose, goal):
+    for x, y in points:
         poses.append(_arrive(poses[-1] if poses else pose, x, y, env))
     return poses
 
