@@ -28,7 +28,7 @@ from .robot.sim import SimRobot
 
 POSITION_TOLERANCE = 0.05  # metres
 YAW_TOLERANCE_DEG = 3.0
-_EXPECT_KEYS = {"success", "x", "y", "yaw_deg", "posture", "moved"}
+_EXPECT_KEYS = {"success", "x", "y", "yaw_deg", "posture", "moved", "near"}
 _POSTURES = {"standing", "sitting", "lying"}
 
 
@@ -89,10 +89,20 @@ def load_cases(path: str | Path) -> list[MissionCase]:
         for key in ("success", "moved"):
             if key in expect and not isinstance(expect[key], bool):
                 raise CaseFileError(f"{where}: expect.{key} must be true or false")
+        if "near" in expect:
+            _check_near(expect["near"], where)
         if "posture" in expect and expect["posture"] not in _POSTURES:
             raise CaseFileError(f"{where}: expect.posture must be one of {sorted(_POSTURES)}")
         cases.append(MissionCase(entry["mission"], dict(expect), *_scene_and_start(entry, where)))
     return cases
+
+
+def _check_near(near: Any, where: str) -> None:
+    if (not isinstance(near, dict) or set(near) != {"x", "y", "within"}
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                       and math.isfinite(v) for v in near.values()) or near["within"] <= 0):
+        raise CaseFileError(f"{where}: expect.near must be {{x: metres, y: metres, within: "
+                            f"metres > 0}}, got {near!r}")
 
 
 def _scene_and_start(entry: dict[str, Any], where: str
@@ -138,6 +148,12 @@ def run_case(case: MissionCase, settings: ShadowHoundConfig) -> CaseOutcome:
     if depth > 1e-9:
         failures.append(f"the body overlapped {what} by {depth:.3f} m")
     for key, want in case.expect.items():
+        if key == "near":
+            off = math.hypot(st.x - want["x"], st.y - want["y"])
+            if off > want["within"]:
+                failures.append(f"near: expected within {want['within']:g} m of "
+                                f"({want['x']:g}, {want['y']:g}), ended {off:.2f} m away")
+            continue
         got = actual[key]
         if key in ("x", "y"):
             ok = abs(got - want) <= POSITION_TOLERANCE
