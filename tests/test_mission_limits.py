@@ -26,6 +26,7 @@ from shadowhound import (
 from shadowhound import events as ev
 from shadowhound.budget import MissionBudget
 from shadowhound.robot.go2_api import TRICKS
+from shadowhound.robot.scene import World
 from shadowhound.safety import Governor
 from shadowhound.skills import NoArgs, PlanEnv, Skill
 from tests.llm_server import Reply, ScriptedLLM, json_plan, text, tool_calls
@@ -54,12 +55,16 @@ def shared_srv():
         yield server
 
 
+# The limits, not the furniture, are under test: the robot walks in an empty room.
+EMPTY_ROOM = World(objects=())
+
+
 def make_agent(srv, safety=None, **llm):
     settings = load_config("llamacpp", {
         "llm": {"base_url": srv.url, "model": "test-model", "max_retries": 0, "timeout": 5,
                 "hybrid": False, **llm},
         "safety": safety or {}, "memory": {"enabled": False}}, environ={})
-    robot = SimRobot(time_scale=0.0)
+    robot = SimRobot(time_scale=0.0, world=EMPTY_ROOM)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
     agent.initialize()
     return agent, robot
@@ -174,7 +179,7 @@ def test_an_approval_covers_the_call_shown_not_later_lookalikes(srv):
 def test_the_last_gate_refuses_a_risky_call_nobody_approved():
     """Whatever path a call takes to the robot, the step re-check wants this call approved."""
     settings = ShadowHoundConfig()
-    robot = SimRobot(time_scale=0.0)
+    robot = SimRobot(time_scale=0.0, world=EMPTY_ROOM)
     state = robot.get_state()
     env = PlanEnv(settings, state.pose, budget=MissionBudget.start(state, robot.now))
     governor, registry = Governor(settings.safety), default_registry()
@@ -199,7 +204,7 @@ def test_a_skill_that_walks_further_than_it_predicts_is_stopped_at_the_mission_l
 
     registry = default_registry()
     registry.register(Skill("test.wander", "walks on and on", NoArgs, wander, timeout=600))
-    robot = SimRobot(time_scale=0.0)
+    robot = SimRobot(time_scale=0.0, world=EMPTY_ROOM)
     settings = ShadowHoundConfig(safety={"max_mission_distance": 3, "geofence_radius": 100})
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings, registry=registry))
     result = agent.run_plan([SkillCall("test.wander")])

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from shadowhound import Posture, RobotAgent, RobotAgentConfig, RobotError, SimRobot
 from shadowhound.config import SimConfig
-from shadowhound.robot.scene import DEFAULT_WORLD
+from shadowhound.robot.scene import DEFAULT_WORLD, World
 from shadowhound.robot.sensors import penetration
 
 
@@ -66,7 +66,8 @@ def test_tricks_need_standing_and_do_not_translate(robot):
         robot.perform("moonwalk-ish")
 
 
-def test_battery_drains_with_time_and_distance(robot):
+def test_battery_drains_with_time_and_distance():
+    robot = SimRobot(SimConfig(collisions=False))  # ten metres straight on: a ghost
     robot.sleep(100.0)
     idle = 100.0 - robot.get_state().battery
     assert idle == pytest.approx(1.0, rel=1e-6)
@@ -226,7 +227,9 @@ def test_random_motion_never_makes_the_body_overlap_an_object_or_wall(start, com
 
 
 def test_walking_into_the_red_ball_stops_at_contact_and_names_it():
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(_COLLIDING)))
+    # The map the robot was given predates the ball, so the governor lets the walk start.
+    stale = World(objects=tuple(o for o in DEFAULT_WORLD.objects if o.name != "red ball"))
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(_COLLIDING, map_world=stale)))
     result = agent.execute_mission("walk forward 4 meters")
     assert not result.success
     assert "blocked by the red ball 0.35 m ahead" in result.response
@@ -278,7 +281,8 @@ def test_a_body_put_inside_an_object_may_only_move_out_of_it():
 
 
 def test_without_collisions_the_body_passes_through_as_before():
-    robot = SimRobot()
+    robot = SimRobot(SimConfig(collisions=False))
+    assert robot.belief() is None  # and the robot is told of no map
     robot.send_velocity(1.0, 0.0, 0.0)
     robot.sleep(5.0)
     assert robot.get_state().x > 3.5 and robot.get_state().blocked_by == ""

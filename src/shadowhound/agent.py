@@ -44,6 +44,7 @@ from .skills import (
     ValidatedCall,
     default_registry,
 )
+from .skills.context import robot_belief
 from .state import CameraFrame, RobotState
 
 log = logging.getLogger(__name__)
@@ -629,7 +630,7 @@ class RobotAgent:
         """The mission's environment, with a fresh budget: made once per mission."""
         state = self.robot.get_state()
         return PlanEnv(self.settings, state.pose, self._known_places(),
-                       MissionBudget.start(state, self.robot.now))
+                       MissionBudget.start(state, self.robot.now), robot_belief(self.robot))
 
     def _planning_context(self, text: str = "", planner: Any = None) -> PlanningContext | None:
         """What the planner may read; None for planners that read nothing (the offline rules),

@@ -137,10 +137,9 @@ class SimConfig(_Section):
     body_radius: float = Field(
         0.35, ge=0.05, le=2.0, description="metres: the body's collision circle in the scene"
     )
-    # Off by default until nav.goto plans around obstacles (issue 15, phase 2): the public
-    # missions (a 2 m square, "go to the kitchen") walk through the default scene's objects.
     collisions: bool = Field(
-        False, description="the body stops at contact with the scene's objects and walls"
+        True, description="the body stops at contact with the scene's objects and walls, and "
+        "the robot is given the scene's map (off: a ghost that walks through them, no map)"
     )
     battery_drain_idle: float = Field(0.01, ge=0, description="percent per second standing")
     battery_drain_per_metre: float = Field(0.05, ge=0, description="percent per metre walked")
@@ -224,11 +223,11 @@ class ShadowHoundConfig(_Section):
     agent: AgentConfig = Field(default_factory=AgentConfig)
     memory: MemoryConfig = Field(default_factory=MemoryConfig)
     places: dict[str, tuple[float, float]] = Field(
-        default_factory=lambda: {"kitchen": (3.0, 2.0), "charging dock": (-2.4, -1.0)},
+        default_factory=lambda: {"kitchen": (4.0, 2.5), "charging dock": (-2.4, -1.0)},
         description="named places in the odom frame, metres",
     )
     patrol_route: list[tuple[float, float]] = Field(
-        default_factory=lambda: [(2.0, 0.0), (2.0, 2.0), (0.0, 2.0)],
+        default_factory=lambda: [(2.0, 0.0), (2.0, 1.2), (0.0, 1.2)],
         description="waypoints visited by nav.patrol before it returns to where it started",
     )
 

@@ -4,6 +4,10 @@ Case format (YAML list), see docs/missions.md:
 
     - mission: "walk forward 1 meter then turn left 90 degrees"
       expect: {success: true, x: 1.0, y: 0.0, yaw_deg: 90, posture: standing, moved: true}
+
+A case may give its own `scene` (a world as in `World.from_dict`; default: the simulator's
+default scene) and `start` pose ([x, y] or [x, y, yaw_deg]). Every case also fails when the
+robot's body overlapped an object or a wall at any moment (the simulator's true path).
 """
 
 from __future__ import annotations
@@ -20,11 +24,13 @@ import yaml
 from .agent import RobotAgent, RobotAgentConfig
 from .config import ConfigError, MemoryConfig, ShadowHoundConfig
 from .plan import Usage
+from .robot.scene import World
+from .robot.sensors import penetration
 from .robot.sim import SimRobot
 
 POSITION_TOLERANCE = 0.05  # metres
 YAW_TOLERANCE_DEG = 3.0
-_EXPECT_KEYS = {"success", "x", "y", "yaw_deg", "posture", "moved"}
+_EXPECT_KEYS = {"success", "x", "y", "yaw_deg", "posture", "moved", "near"}
 _POSTURES = {"standing", "sitting", "lying"}
 
 
@@ -36,6 +42,8 @@ class CaseFileError(ValueError):
 class MissionCase:
     mission: str
     expect: dict[str, Any]
+    scene: World | None = None  # None: the simulator's default scene
+    start: tuple[float, float, float] = (0.0, 0.0, 0.0)  # x, y (metres), yaw (radians)
 
 
 @dataclass
@@ -155,25 +163,71 @@ def load_cases(path: str | Path) -> list[MissionCase]:
         for key in ("success", "moved"):
             if key in expect and not isinstance(expect[key], bool):
                 raise CaseFileError(f"{where}: expect.{key} must be true or false")
+        if "near" in expect:
+            _check_near(expect["near"], where)
         if "posture" in expect and expect["posture"] not in _POSTURES:
             raise CaseFileError(f"{where}: expect.posture must be one of {sorted(_POSTURES)}")
-        cases.append(MissionCase(entry["mission"], dict(expect)))
+        cases.append(MissionCase(entry["mission"], dict(expect), *_scene_and_start(entry, where)))
     return cases
+
+
+def _check_near(near: Any, where: str) -> None:
+    if (not isinstance(near, dict) or set(near) != {"x", "y", "within"}
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                       and math.isfinite(v) for v in near.values()) or near["within"] <= 0):
+        raise CaseFileError(f"{where}: expect.near must be {{x: metres, y: metres, within: "
+                            f"metres > 0}}, got {near!r}")
+
+
+def _scene_and_start(entry: dict[str, Any], where: str
+                     ) -> tuple[World | None, tuple[float, float, float]]:
+    scene = None
+    if entry.get("scene") is not None:
+        try:
+            scene = World.from_dict(entry["scene"])
+        except ValueError as exc:
+            raise CaseFileError(f"{where}: scene: {exc}") from exc
+    raw = entry.get("start", [0.0, 0.0])
+    if (not isinstance(raw, list) or len(raw) not in (2, 3)
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                       and math.isfinite(v) for v in raw)):
+        raise CaseFileError(f"{where}: start must be [x, y] or [x, y, yaw_deg] in numbers, "
+                            f"got {raw!r}")
+    yaw = math.radians(raw[2]) if len(raw) == 3 else 0.0
+    return scene, (float(raw[0]), float(raw[1]), yaw)
 
 
 def run_case(case: MissionCase, settings: ShadowHoundConfig) -> CaseOutcome:
     """Run one case on a fresh simulated robot at the origin, standing, time scale 0."""
     # Every case starts fresh: no history, no taught places from earlier runs.
     settings = settings.model_copy(update={"memory": MemoryConfig()})
-    robot = SimRobot(settings.sim, time_scale=0.0)
+    robot = SimRobot(settings.sim, time_scale=0.0, world=case.scene)
+    robot.reset(*case.start)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
+    began = robot.now()
     result = agent.execute_mission(case.mission)
     st = robot.get_state()
     actual = {"success": result.success, "x": round(st.x, 4), "y": round(st.y, 4),
               "yaw_deg": round(math.degrees(st.yaw), 2), "posture": st.posture.value,
               "moved": robot.received_motion}
+    # Measured, not expected: how far the body walked, in how long, after how many re-plans.
+    path = robot.true_path
+    actual["path_length"] = round(sum(math.dist(a[1:], b[1:])
+                                      for a, b in zip(path, path[1:], strict=False)), 3)
+    actual["seconds"] = round(robot.now() - began, 2)
+    actual["replans"] = sum(s.output.count("re-planned") for s in result.steps)
     failures = []
+    depth, what = max((penetration(robot.world, x, y, robot.config.body_radius)
+                       for _t, x, y in path), key=lambda d: d[0])
+    if depth > 1e-9:
+        failures.append(f"the body overlapped {what} by {depth:.3f} m")
     for key, want in case.expect.items():
+        if key == "near":
+            off = math.hypot(st.x - want["x"], st.y - want["y"])
+            if off > want["within"]:
+                failures.append(f"near: expected within {want['within']:g} m of "
+                                f"({want['x']:g}, {want['y']:g}), ended {off:.2f} m away")
+            continue
         got = actual[key]
         if key in ("x", "y"):
             ok = abs(got - want) <= POSITION_TOLERANCE

@@ -155,7 +155,7 @@ def test_estop_during_a_move_brings_the_drivers_velocity_to_zero(rig) -> None:
     estop = agent.client.publisher(Empty, "/shadowhound/estop")
     release = agent.client.publisher(Empty, "/shadowhound/estop_release")
     mark, requests = agent.status.mark(), driver.requests.mark()
-    agent.missions.publish(String(data="walk forward 3 meters"))
+    agent.missions.publish(String(data="walk backward 3 meters"))
     driver.wait_moving()
     estop.publish(Empty())
     try:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import sys
 import threading
 from typing import Any, TextIO
@@ -140,9 +141,13 @@ def _dry_run(agent: Any, args: argparse.Namespace) -> int:
         for step in result.steps:
             params = ", ".join(f"{k}={v}" for k, v in step.args.items())
             print(f"  [{step.index}] {step.skill}({params})")
-        path = " -> ".join(f"({p.x:.2f}, {p.y:.2f})" for p in result.predicted_path)
+        points = result.predicted_path
+        path = " -> ".join(f"({p.x:.2f}, {p.y:.2f})" for p in points)
         if path:
-            print(f"predicted path: {path}")
+            # With a map, nav.goto's planned path around obstacles: every corner is a waypoint.
+            legs = zip(points, points[1:], strict=False)
+            length = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in legs)
+            print(f"predicted path ({length:.2f} m, {len(points)} waypoints): {path}")
         print(result.response)
     return code
 

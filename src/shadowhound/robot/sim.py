@@ -32,6 +32,7 @@ from typing import Any
 
 from ..config import SimConfig
 from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
+from ..world import Belief
 from . import scene, sensors
 from .base import RobotError
 from .go2_api import TRICKS
@@ -80,6 +81,7 @@ class SimRobot:
         *,
         time_scale: float | None = None,
         world: Any = None,
+        map_world: Any = None,
         name: str = "sim-go2",
     ) -> None:
         self.config = config or SimConfig()
@@ -90,6 +92,8 @@ class SimRobot:
         self.name = name
         self._world = world
         self.world: scene.World = world if world is not None else scene.DEFAULT_WORLD
+        # What the robot's map was made of: the scene itself, or an older one (a stale map).
+        self.map_world: scene.World = map_world if map_world is not None else self.world
         self._lock = threading.RLock()
         self._wake = threading.Event()
         self._state = RobotState()
@@ -108,6 +112,7 @@ class SimRobot:
         self._true_path_dropped = 0
         self._true_odometer = 0.0
         self._depth = 0.0  # how far the body overlaps the scene (0 unless reset into it)
+        self._belief: Belief | None = None  # the scene's map, built on first use
 
     # -- clock ---------------------------------------------------------------------------
 
@@ -353,6 +358,18 @@ class SimRobot:
         """A 360-beam range scan (0.1 to 8 m) from the robot's true pose, on the sim clock."""
         state = self.get_state()
         return sensors.cast_scan(self.world, state.pose, stamp=state.stamp)
+
+    def belief(self) -> Belief | None:
+        """What the robot is told of its world: the scene's map and objects, a fresh copy (a
+        mission may update it from scans). None with collisions off: then the scene is not
+        physical, and nothing in it is in the way."""
+        if not self.config.collisions:
+            return None
+        if self._belief is None:
+            self._belief = sensors.scene_belief(self.map_world, self.config.body_radius)
+        b = self._belief
+        grid = b.grid.copy()
+        return Belief(grid, b.objects, b.robot_radius, b.room, replace(b.inflated, grid=grid))
 
     def close(self) -> None:
         self.stop()

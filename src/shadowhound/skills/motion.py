@@ -11,6 +11,7 @@ for `stall_timeout`.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from ..state import normalize_angle
 from .context import SkillContext, SkillError
@@ -144,6 +145,43 @@ def go_to(ctx: SkillContext, x: float, y: float, linear: float, angular: float) 
     c, s = math.cos(st.yaw), math.sin(st.yaw)
     dx, dy = x - st.x, y - st.y
     return drive_local(ctx, dx * c + dy * s, -dx * s + dy * c, linear)
+
+
+def follow(ctx: SkillContext, points: list[tuple[float, float]], linear: float,
+           angular: float, done: float = 0.0) -> float:
+    """Walk the straight legs through `points` (odom frame): at each, face the next point, then
+    walk to it. Progress is the distance along the path (after `done` metres already walked
+    of the route) over its whole length. Returns metres covered."""
+    report = ctx.on_progress
+    st = ctx.robot.get_state()
+    corners = [(st.x, st.y), *points]
+    legs = [math.dist(a, b) for a, b in zip(corners, corners[1:], strict=False)]
+    total = done + sum(legs)
+    walked = 0.0
+
+    def along(at: float) -> None:
+        report(min(1.0, at / total) if total else 1.0)
+
+    def from_here(at: float, leg: float) -> Callable[[float], None]:
+        return lambda fraction: along(at + fraction * leg)
+
+    try:
+        for (x, y), leg in zip(points, legs, strict=True):
+            st = ctx.robot.get_state()
+            if math.hypot(x - st.x, y - st.y) >= ctx.config.motion.position_tolerance:
+                ctx.on_progress = from_here(done, 0.0)  # turning: no distance yet
+                bearing = math.atan2(y - st.y, x - st.x)
+                rotate(ctx, normalize_angle(bearing - st.yaw), angular)
+                st = ctx.robot.get_state()
+                c, s = math.cos(st.yaw), math.sin(st.yaw)
+                dx, dy = x - st.x, y - st.y
+                ctx.on_progress = from_here(done, leg)
+                walked += drive_local(ctx, dx * c + dy * s, -dx * s + dy * c, linear)
+            done += leg
+            along(done)
+    finally:
+        ctx.on_progress = report
+    return walked
 
 
 def settle(ctx: SkillContext) -> None:

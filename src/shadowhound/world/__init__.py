@@ -15,9 +15,10 @@ from .grid import (
     OccupancyGrid,
 )
 from .inflation import DEFAULT_ROBOT_RADIUS, InflatedGrid, inflate
-from .legs import LegCheck, check_leg
+from .legs import LegCheck, blocker_near, check_leg
 from .objects import Belief, KnownObject
 from .planner import Path, PlanError, line_is_clear, plan_path
+from .route import plan_route
 from .scan_update import apply_scan
 from .standoff import DEFAULT_STANDOFF, Standoff, standoff_point
 
@@ -40,9 +41,11 @@ __all__ = [
     "PlanError",
     "Standoff",
     "apply_scan",
+    "blocker_near",
     "check_leg",
     "inflate",
     "line_is_clear",
     "plan_path",
+    "plan_route",
     "standoff_point",
 ]

@@ -54,7 +54,7 @@ def check_leg(belief: Belief, start: tuple[float, float], end: tuple[float, floa
                 last_clearance = clearance
                 continue
         at = math.hypot(dx * (i - 1), dy * (i - 1))
-        return LegCheck(False, length, at, _blocker(belief, x, y))
+        return LegCheck(False, length, at, blocker_near(belief, x, y))
     return LegCheck(True, length)
 
 
@@ -78,7 +78,8 @@ def _clearance(belief: Belief, p: tuple[float, float]) -> float:
     return _nearest_occupied(belief, *p)[0]
 
 
-def _blocker(belief: Belief, x: float, y: float) -> str:
+def blocker_near(belief: Belief, x: float, y: float) -> str:
+    """What keeps the body from (x, y): "the red ball", "the wall", "unmapped space"..."""
     grid = belief.grid
     if not grid.contains(grid.cell_of(x, y)):
         return "unmapped space"
