@@ -696,7 +696,7 @@ class RobotAgent:
 
     def _refuse(self, mission_id: str, text: str, started: float, reason: str,
                 record: bool = True) -> MissionResult:
-        result = MissionResult(mission_id, text, False, f"Refused: {reason}.",
+        result = MissionResult(mission_id, text, False, f"Refused: {reason.rstrip('.')}.",
                                MissionStatus.FAILED, robot=self._state_or_none(), error=reason,
                                refusals=[reason])
         result.timing.total_duration = time.perf_counter() - started

@@ -148,6 +148,8 @@ def _dry_run(agent: Any, args: argparse.Namespace) -> int:
             legs = zip(points, points[1:], strict=False)
             length = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in legs)
             print(f"predicted path ({length:.2f} m, {len(points)} waypoints): {path}")
+        for note in result.plan.notes if result.plan else []:
+            print(f"note: {note}")  # e.g. how a misspelt word was read
         print(result.response)
     return code
 
