@@ -157,7 +157,7 @@ async def estop_runs(client: Any, runs: int) -> list[float]:
                               seen: list[str] = progress) -> None:
             seen.append(message or "")
 
-        text = "walk forward 3 meters" if i % 2 == 0 else "walk backward 3 meters"
+        text = "walk forward 2 meters" if i % 2 == 0 else "walk backward 2 meters"
         mission = asyncio.create_task(client.call_tool("run_mission", {"text": text},
                                                        progress_callback=on_progress))
         while not any("nav.move(" in m for m in progress):
@@ -327,7 +327,7 @@ def render(m: dict[str, Any], load: str) -> str:
         "as Server-Sent Events waited about 40 ms for the client's delayed ACK (MCP median "
         "52-56 ms). `nav_rotate` by "
         "1 degree runs on a time-scale-0 robot through the mission worker, validation and the "
-        "governor. E-stop: the robot walks 3 m on a real-time clock; 0-0.3 s after the walking "
+        "governor. E-stop: the robot walks 2 m on a real-time clock; 0-0.3 s after the walking "
         "step starts the client calls `emergency_stop`; the server stops the robot before "
         "answering and the answer carries the state read after the stop (checked stopped and "
         "latched), so call to answer is an upper bound of call to stopped. Size: characters of "

@@ -245,7 +245,7 @@ def test_emergency_stop_mid_mission_stops_the_robot_and_latches(transport, http_
     async def scenario() -> None:
         async with client_for(transport, http_server, time_scale=REAL_TIME) as client:
             mission = asyncio.create_task(client.call_tool(
-                "run_mission", {"text": "walk forward 3 meters"}, progress_callback=on_progress))
+                "run_mission", {"text": "walk forward 2 meters"}, progress_callback=on_progress))
             await wait_for_step(progress, "nav.move")
             await asyncio.sleep(0.5)  # moving now
             stop = structured(await client.call_tool("emergency_stop", {}))
@@ -308,7 +308,7 @@ def test_http_client_going_away_mid_mission_stops_the_robot(http_server):
     async def scenario() -> None:
         async with connect("http", url=server.url) as client:
             mission = asyncio.create_task(client.call_tool(
-                "run_mission", {"text": "walk forward 3 meters"}, progress_callback=on_progress))
+                "run_mission", {"text": "walk forward 2 meters"}, progress_callback=on_progress))
             await wait_for_step(progress, "nav.move")
             await asyncio.sleep(0.3)
             mission.cancel()  # the client gives up on the call and leaves
@@ -324,7 +324,7 @@ def test_http_client_going_away_mid_mission_stops_the_robot(http_server):
             await asyncio.sleep(0.6)
             later = await robot(client)
             assert later["x"] == pytest.approx(first["x"], abs=1e-3)  # and stays stopped
-            assert later["x"] < 1.0  # far from the 3 m asked
+            assert later["x"] < 1.0  # far from the 2 m asked
 
     run(scenario())
     assert server.alive()
@@ -347,7 +347,7 @@ def test_stdio_client_going_away_mid_mission_stops_the_robot(tmp_path):
     assert json.loads(proc.stdout.readline())["id"] == 1
     send({"method": "notifications/initialized"})
     send({"id": 2, "method": "tools/call", "params": {
-        "name": "run_mission", "arguments": {"text": "walk forward 3 meters"},
+        "name": "run_mission", "arguments": {"text": "walk forward 2 meters"},
         "_meta": {"progressToken": "p"}}})
     while "nav.move" not in proc.stdout.readline():
         pass
@@ -357,7 +357,7 @@ def test_stdio_client_going_away_mid_mission_stops_the_robot(tmp_path):
                               "--limit", "1"], env=env, capture_output=True, text=True,
                              timeout=60)
     last = json.loads(history.stdout)[0]
-    assert last["mission"] == "walk forward 3 meters"
+    assert last["mission"] == "walk forward 2 meters"
     assert last["status"] in ("stopped", "interrupted"), last
     assert last["status"] == "stopped"
 

@@ -318,7 +318,7 @@ def test_without_a_battery_source_the_battery_is_unknown_everywhere(rig: Rig) ->
 
 def run_doctor(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "shadowhound", "doctor", "--go2",
-                           "--seconds", "3", *args],
+                           "--seconds", "8", *args],
                           capture_output=True, text=True, cwd=ROOT, timeout=120)
 
 
