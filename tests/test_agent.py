@@ -109,7 +109,7 @@ def test_estop_while_a_mission_runs_in_another_thread():
     agent = RobotAgent(RobotAgentConfig(robot=robot))
     box = {}
     worker = threading.Thread(target=lambda: box.update(r=agent.execute_mission(
-        "walk forward 3 meters")))
+        "walk forward 2 meters")))
     worker.start()
     deadline = time.monotonic() + 5
     while robot.get_state().vx < 0.2 and time.monotonic() < deadline:
@@ -223,10 +223,19 @@ def test_robot_status_and_skills(agent):
 
 
 def test_square_returns_to_start(agent):
-    result = agent.execute_mission("walk in a square with 2 meter sides")
+    result = agent.execute_mission("walk in a square with 1.5 meter sides")
     st = result.robot
     assert result.success and math.hypot(st.x, st.y) < 0.01
-    assert st.distance_travelled == pytest.approx(8.0, abs=0.02)
+    assert st.distance_travelled == pytest.approx(6.0, abs=0.02)
+
+
+def test_a_square_through_the_blue_box_is_refused_naming_it(agent, robot):
+    """Relative moves stay straight lines: a leg the map shows would hit something is refused
+    before anything moves, saying what and where (the 2 m square's second side ends 0.5 m from
+    the blue box at (2.5, 2))."""
+    result = agent.execute_mission("walk in a square with 2 meter sides")
+    assert not result.success and not robot.received_motion
+    assert "step 3 (nav.move): nav.move 2 m: the blue box is in the way at 1." in result.response
 
 
 def test_dry_run_predicts_without_moving(agent, robot):

@@ -125,10 +125,25 @@ def test_config_command_shows_no_secrets():
 def test_run_dry_run_shows_plan_and_path_without_moving():
     proc = shadowhound("run", "--dry-run", "walk forward 1 meter then come back")
     assert proc.returncode == 0
-    assert "[1] nav.move(distance=1.0)" in proc.stdout and "predicted path:" in proc.stdout
+    assert "[1] nav.move(distance=1.0)" in proc.stdout
+    assert "predicted path (2.00 m, 3 waypoints): (0.00, 0.00) -> (1.00, 0.00) -> (0.00, 0.00)" \
+        in proc.stdout
     assert "nothing moved" in proc.stdout
     out = json.loads(shadowhound("run", "--dry-run", "--json", "walk forward 9 meters").stdout)
     assert out["dry_run"] and not out["success"] and out["robot"]["distance_travelled"] == 0
+
+
+def test_dry_run_shows_the_path_around_the_red_ball_and_what_refuses_a_straight_leg():
+    """The default scene: the red ball stands at (3, 0)."""
+    around = shadowhound("run", "--dry-run", "go to x=4, y=0")
+    assert around.returncode == 0, around.stdout
+    line = next(x for x in around.stdout.splitlines() if x.startswith("predicted path ("))
+    length, corners = float(line.split("(")[1].split(" m")[0]), line.split(": ", 1)[1]
+    assert 4.0 < length < 4.0 * 1.15 and corners.count("->") >= 2  # a detour, not a line
+    assert corners.startswith("(0.00, 0.00)") and corners.endswith("(4.00, 0.00)")
+    straight = shadowhound("run", "--dry-run", "go forward 4 meters")
+    assert straight.returncode == 1
+    assert "nav.move 4 m: the red ball is in the way at 2.4 m" in straight.stdout
 
 
 def test_risky_trick_needs_approval_on_the_command_line():
@@ -246,7 +261,8 @@ def test_run_json_interrupted_while_planning_is_one_json_error(tmp_path):
     with ScriptedLLM(models=("m",)) as srv:
         srv.script(delay(60, json_plan([{"skill": "body.stand", "args": {}}])))
         proc = start_json_run("--backend", "llamacpp", "--base-url", srv.url, "--model", "m",
-                              "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+                              "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path),
+                                               "SHADOWHOUND_LLM__HYBRID": "false"})
         deadline = time.monotonic() + 60
         while not srv.requests and time.monotonic() < deadline and proc.poll() is None:
             time.sleep(0.05)
@@ -261,7 +277,7 @@ def test_run_json_interrupted_while_planning_is_one_json_error(tmp_path):
 
 
 def test_run_json_interrupted_while_moving_is_the_result_with_an_error(tmp_path):
-    proc = start_json_run("--time-scale", "1", "walk forward 4 meters",
+    proc = start_json_run("--time-scale", "1", "walk backward 4 meters",
                           env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
     assert proc.stderr is not None
     for line in proc.stderr:  # progress: wait until the robot walks

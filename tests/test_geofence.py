@@ -13,12 +13,13 @@ from hypothesis import strategies as st
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot, SkillCall
 from shadowhound.config import ConfigError, load_config
 from shadowhound.geofence import CircleFence, PolygonFence, leg_breach, polygon_problem
+from shadowhound.robot.scene import World
 
 U_FENCE = [(0, 0), (3, 0), (3, 3), (2, 3), (2, 1), (1, 1), (1, 3), (0, 3)]
 
 
 def agent_on_sim(**safety):
-    robot = SimRobot(time_scale=0.0)
+    robot = SimRobot(time_scale=0.0, world=World(objects=()))  # fences only: an empty room
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=ShadowHoundConfig(safety=safety)))
     agent.initialize()
     return agent, robot

@@ -45,7 +45,8 @@ def srv() -> Iterator[ScriptedLLM]:
 def make_agent(srv: ScriptedLLM, data_dir: Any = None, **llm: Any) -> tuple[RobotAgent, SimRobot]:
     memory = {"enabled": data_dir is not None, "data_dir": str(data_dir or "")}
     overrides = {"llm": {"base_url": srv.url, "model": "test-model", "max_retries": 2,
-                         "timeout": PATIENT, **llm}, "memory": memory}
+                         "timeout": PATIENT, "hybrid": False, **llm},  # the model plans all
+                 "memory": memory}
     settings = load_config("llamacpp", overrides, environ={})
     robot = SimRobot(time_scale=0.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))

@@ -82,8 +82,11 @@ def free_port() -> int:
 class LlamaServer:
     """`python -m llama_cpp.server` with SmolLM2 on a free 127.0.0.1 port, output in `log`."""
 
-    def __init__(self, model: Path, log: IO[bytes], threads: int = 2) -> None:
-        self.model, self.log, self.threads = model, log, threads
+    def __init__(self, model: Path, log: IO[bytes], threads: int = 2,
+                 verbose: bool = False) -> None:
+        """`verbose` makes the server log, per request, the prompt tokens it reused from its
+        cache and those it evaluated (the benchmark reads them)."""
+        self.model, self.log, self.threads, self.verbose = model, log, threads, verbose
         self.port = free_port()
         self.proc: subprocess.Popen[bytes] | None = None
 
@@ -95,7 +98,7 @@ class LlamaServer:
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "llama_cpp.server", "--model", str(self.model),
              "--host", "127.0.0.1", "--port", str(self.port), "--model_alias", MODEL_ALIAS,
-             "--n_ctx", "4096", "--n_threads", str(self.threads), "--verbose", "False"],
+             "--n_ctx", "4096", "--n_threads", str(self.threads), "--verbose", str(self.verbose)],
             stdin=subprocess.DEVNULL, stdout=self.log, stderr=subprocess.STDOUT,
             env=loopback_env(PYTHONUNBUFFERED="1"),
         )
@@ -189,8 +192,10 @@ def llm_args(srv: LlamaServer) -> list[str]:
     return ["--backend", "llamacpp", "--base-url", srv.url, "--model", MODEL_ALIAS]
 
 
-# CPU inference on 2 cores: generous per-request timeout, short answers.
-LLM_ENV = {"SHADOWHOUND_LLM__TIMEOUT": "60", "SHADOWHOUND_LLM__MAX_TOKENS": "256"}
+# CPU inference on 2 cores: generous per-request timeout, short answers. Hybrid off: the
+# offline rules would plan MISSION without asking the model, and these tests are the model's.
+LLM_ENV = {"SHADOWHOUND_LLM__TIMEOUT": "60", "SHADOWHOUND_LLM__MAX_TOKENS": "256",
+           "SHADOWHOUND_LLM__HYBRID": "false"}
 
 
 def check_mission(proc: subprocess.CompletedProcess[str], registered: set[str],
@@ -277,3 +282,34 @@ def test_react_mode_is_bounded(server: LlamaServer, registered: set[str]) -> Non
     out = check_mission(proc, registered, server)
     assert len(out["steps"]) <= REACT_MAX_STEPS, out["steps"]
     assert elapsed < 60, f"react mode took {elapsed:.1f} s"
+
+
+# Missions that name arguments a small model likes to invent ("meters", "direction", "angle").
+STRICT_MISSIONS = ["turn left 90 degrees", "walk backward half a meter", "wait two seconds"]
+
+
+@pytest.mark.parametrize("mission", STRICT_MISSIONS)
+def test_the_strict_schema_admits_only_real_skills_with_their_own_arguments(
+        server: LlamaServer, mission: str) -> None:
+    """Whatever SmolLM2 plans under the grammar compiled from the plan schema, every step names
+    a real skill with only its own arguments of the right types: nothing for the registry to
+    refuse as unknown, missing or mistyped."""
+    from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, load_config
+
+    settings = load_config("llamacpp", {
+        "llm": {"base_url": server.url, "model": MODEL_ALIAS, "hybrid": False,
+                "plan_format": "json_schema", "max_tokens": 256, "timeout": 120,
+                "repair_attempts": 0},
+        "memory": {"enabled": False}}, environ={})
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
+    agent.initialize()
+    try:
+        result = agent.execute_mission(mission)
+    finally:
+        agent.cleanup()
+    where = f"\n{result.response}\n{server.log_tail()}"
+    assert result.usage.round_trips == 1 and not result.usage.estimated, where
+    for word in ("unknown skill", "unknown argument", "missing required", "valid number",
+                 "arguments are not valid JSON", "has no skill name"):
+        assert word not in result.response, where
+    assert "HTTP" not in result.response, where  # the server accepted the schema

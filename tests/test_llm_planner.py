@@ -44,8 +44,10 @@ def srv():
 
 
 def make_agent(srv, robot=None, **llm):
+    """An agent whose every mission the model plans (hybrid off: these tests are the model's)."""
     settings = load_config("llamacpp", {"llm": {"base_url": srv.url, "model": "test-model",
-                                                "max_retries": 0, "timeout": 5, **llm}},
+                                                "max_retries": 0, "timeout": 5, "hybrid": False,
+                                                **llm}},
                            environ={})
     robot = robot or SimRobot(time_scale=0.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
@@ -68,8 +70,9 @@ def test_json_plan_in_one_round_trip(srv):
     assert request["model"] == "test-model" and request["temperature"] == 0
     # llama.cpp's dialect: json_object constrained by the plan's schema.
     assert request["response_format"]["type"] == "json_object"
-    items = request["response_format"]["schema"]["properties"]["steps"]["items"]
-    assert "nav.move" in items["properties"]["skill"]["enum"]
+    steps = request["response_format"]["schema"]["properties"]["steps"]["items"]["anyOf"]
+    assert {"type": "string", "const": "nav.move"} in [s["properties"]["skill"] for s in steps]
+    assert request["cache_prompt"] is True  # llama.cpp reuses the evaluated prompt prefix
     system = request["messages"][0]["content"]
     assert "nav.move(distance" in system and "Robot now: standing at x=0.00" in system
     assert request["messages"][1] == {"role": "user",
@@ -77,7 +80,8 @@ def test_json_plan_in_one_round_trip(srv):
 
 
 def test_openai_dialect_of_the_plan_schema(srv):
-    settings = load_config("vllm", {"llm": {"base_url": srv.url, "model": "test-model"}},
+    settings = load_config("vllm", {"llm": {"base_url": srv.url, "model": "test-model",
+                                            "hybrid": False}},
                            environ={})
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
     srv.script(json_plan(MOVE_1))
@@ -85,6 +89,7 @@ def test_openai_dialect_of_the_plan_schema(srv):
     fmt = srv.requests[0]["response_format"]
     assert fmt["type"] == "json_schema" and fmt["json_schema"]["name"] == "plan"
     assert "steps" in fmt["json_schema"]["schema"]["properties"]
+    assert "cache_prompt" not in srv.requests[0]  # vLLM caches shared prefixes by itself
 
 
 def test_parallel_tool_calls_in_tools_format(srv):
@@ -396,7 +401,7 @@ def cli(*args, env=None):
 def test_cli_run_with_a_scripted_openai_server(srv):
     srv.script(json_plan([{"skill": "nav.rotate", "args": {"degrees": 90}}]))
     proc = cli("run", "--backend", "openai", "--base-url", srv.url, "--model", "test-model",
-               "--json", "turn left")
+               "--json", "turn left", env={"SHADOWHOUND_LLM__HYBRID": "false"})
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["success"] and out["robot"]["yaw"] == 1.5708

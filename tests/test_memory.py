@@ -210,7 +210,7 @@ def test_language_model_gets_relevant_memories(tmp_path):
 
     with ScriptedLLM(models=("m",)) as srv:
         settings = load_config("llamacpp", {
-            "llm": {"base_url": srv.url, "model": "m"},
+            "llm": {"base_url": srv.url, "model": "m", "hybrid": False},
             "memory": {"enabled": True, "enable_rag": True, "data_dir": str(tmp_path)}},
             environ={})
         agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))

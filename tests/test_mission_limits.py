@@ -26,9 +26,11 @@ from shadowhound import (
 from shadowhound import events as ev
 from shadowhound.budget import MissionBudget
 from shadowhound.robot.go2_api import TRICKS
+from shadowhound.robot.scene import World
 from shadowhound.safety import Governor
 from shadowhound.skills import NoArgs, PlanEnv, Skill
 from tests.llm_server import Reply, ScriptedLLM, json_plan, text, tool_calls
+from tests.test_geofence import U_FENCE, orthogonal_polygons, ref_clearance
 
 # How far the simulated body may end past a limit through control error alone: each motion
 # stops within motion.position_tolerance (2 mm; a batch checked on predictions has at most 5
@@ -53,12 +55,16 @@ def shared_srv():
         yield server
 
 
+# The limits, not the furniture, are under test: the robot walks in an empty room.
+EMPTY_ROOM = World(objects=())
+
+
 def make_agent(srv, safety=None, **llm):
     settings = load_config("llamacpp", {
         "llm": {"base_url": srv.url, "model": "test-model", "max_retries": 0, "timeout": 5,
-                **llm},
+                "hybrid": False, **llm},
         "safety": safety or {}, "memory": {"enabled": False}}, environ={})
-    robot = SimRobot(time_scale=0.0)
+    robot = SimRobot(time_scale=0.0, world=EMPTY_ROOM)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
     agent.initialize()
     return agent, robot
@@ -173,7 +179,7 @@ def test_an_approval_covers_the_call_shown_not_later_lookalikes(srv):
 def test_the_last_gate_refuses_a_risky_call_nobody_approved():
     """Whatever path a call takes to the robot, the step re-check wants this call approved."""
     settings = ShadowHoundConfig()
-    robot = SimRobot(time_scale=0.0)
+    robot = SimRobot(time_scale=0.0, world=EMPTY_ROOM)
     state = robot.get_state()
     env = PlanEnv(settings, state.pose, budget=MissionBudget.start(state, robot.now))
     governor, registry = Governor(settings.safety), default_registry()
@@ -198,7 +204,7 @@ def test_a_skill_that_walks_further_than_it_predicts_is_stopped_at_the_mission_l
 
     registry = default_registry()
     registry.register(Skill("test.wander", "walks on and on", NoArgs, wander, timeout=600))
-    robot = SimRobot(time_scale=0.0)
+    robot = SimRobot(time_scale=0.0, world=EMPTY_ROOM)
     settings = ShadowHoundConfig(safety={"max_mission_distance": 3, "geofence_radius": 100})
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings, registry=registry))
     result = agent.run_plan([SkillCall("test.wander")])
@@ -234,14 +240,21 @@ plans = st.lists(steps, min_size=1, max_size=4)
 
 @st.composite
 def fences(draw):
-    """A radius, and sometimes a convex polygon around the origin (counter-clockwise)."""
+    """A radius, and sometimes a polygon: convex around the origin, the U of issue 12 or a
+    random orthogonal one with notches (the robot starts at the origin, inside or not)."""
     fence = {"geofence_radius": draw(st.sampled_from([2.0, 4.0, 6.0, 9.0, 12.0]))}
-    if draw(st.booleans()):
+    kind = draw(st.sampled_from(["none", "convex", "u", "orthogonal"]))
+    if kind == "convex":
         n, r = draw(st.integers(3, 7)), draw(st.floats(2.0, 8.0))
         turn = draw(st.floats(0, 2 * math.pi))
         fence["geofence_polygon"] = [(round(r * math.cos(turn + 2 * math.pi * k / n), 3),
                                       round(r * math.sin(turn + 2 * math.pi * k / n), 3))
                                      for k in range(n)]
+    elif kind == "u":  # shifted so that the robot starts inside the left arm of the U
+        fence["geofence_polygon"] = [(x - 0.5, y - 0.5) for x, y in U_FENCE]
+        fence["geofence_margin"] = draw(st.sampled_from([0.0, 0.2]))
+    elif kind == "orthogonal":
+        fence["geofence_polygon"] = draw(orthogonal_polygons())
     return fence
 
 
@@ -255,15 +268,6 @@ limits = st.fixed_dictionaries({
 
 def reply_for(plan, fmt):
     return json_plan(plan) if fmt == "json_schema" else as_tool_calls(plan)
-
-
-def outside_by(x, y, polygon):
-    """How far (x, y) is outside a counter-clockwise convex polygon (<= 0 inside)."""
-    worst = -math.inf
-    for (x1, y1), (x2, y2) in zip(polygon, polygon[1:] + polygon[:1], strict=True):
-        edge = math.hypot(x2 - x1, y2 - y1)
-        worst = max(worst, -((x2 - x1) * (y - y1) - (y2 - y1) * (x - x1)) / edge)
-    return worst
 
 
 def run_and_check(srv, script, limits_, fence, decisions, **llm):
@@ -302,10 +306,16 @@ def run_and_check(srv, script, limits_, fence, decisions, **llm):
 
     lim = agent.settings.safety
     assert robot.true_path_complete
-    for _t, x, y in robot.true_path:
-        assert math.hypot(x, y) <= lim.geofence_radius + METRES_SLACK, (x, y)
+    # The body: its centre keeps `geofence_margin` from every edge, or, when the robot started
+    # closer than that (or outside), never comes closer to the edge than where it started.
+    margin = lim.geofence_margin
+    path = robot.true_path
+    for _t, x, y in path:
+        assert math.hypot(x, y) <= lim.geofence_radius - margin + METRES_SLACK, (x, y)
         if lim.geofence_polygon:
-            assert outside_by(x, y, lim.geofence_polygon) <= METRES_SLACK, (x, y)
+            start = min(margin, ref_clearance(path[0][1:], lim.geofence_polygon))
+            clearance = ref_clearance((x, y), lim.geofence_polygon)
+            assert clearance >= start - METRES_SLACK, (x, y, clearance)
     assert robot.true_odometer <= lim.max_mission_distance + METRES_SLACK
     for skill, walked in step_travel:
         legs = 4 if skill == "nav.patrol" else 1  # patrol: three route legs and the way back

@@ -8,7 +8,7 @@ def test_import_is_light_and_exports_the_public_names():
         "from shadowhound import RobotAgent, MissionExecutor, MissionExecutorConfig, SimRobot, "
         "MockRobot\n"
         "heavy = [m for m in ('rclpy', 'fastapi', 'uvicorn', 'chromadb', 'torch', 'openai', "
-        "'onnxruntime', 'numpy') if m in sys.modules]\n"
+        "'onnxruntime', 'numpy', 'mcp', 'mcp_types') if m in sys.modules]\n"
         "print(','.join(heavy))\n"
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

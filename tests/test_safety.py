@@ -106,3 +106,14 @@ def test_patrol_legs_and_places_are_checked():
                                                               {"place": "attic"})]))[0]
     verdict = check([SkillCall("nav.goto", {"x": 30, "y": 0})], max_step_distance=100)
     assert "geofence" in verdict.refusals[0].reason
+
+
+def test_an_unknown_battery_is_said_not_pretended_and_a_known_low_one_refuses():
+    unknown = check([SkillCall("nav.move", {"distance": 1})], start=RobotState(battery=None))
+    assert unknown.refusals == []
+    assert unknown.notes == ["battery level unknown (the robot reports none): the battery floor "
+                             "of 15% (safety.battery_floor) cannot be checked"]
+    low = check([SkillCall("nav.move", {"distance": 1})], start=RobotState(battery=14.9))
+    assert "battery is at 15%, below the floor of 15%" in reasons(low)[0] and low.notes == []
+    assert check([SkillCall("nav.move", {"distance": 1})],
+                 start=RobotState(battery=15.0)).refusals == []

@@ -3,9 +3,13 @@ import threading
 import time
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from shadowhound import Posture, RobotAgent, RobotAgentConfig, RobotError, SimRobot
 from shadowhound.config import SimConfig
+from shadowhound.robot.scene import DEFAULT_WORLD, World
+from shadowhound.robot.sensors import penetration
 
 
 def test_starts_standing_at_origin_with_full_battery(robot):
@@ -62,7 +66,8 @@ def test_tricks_need_standing_and_do_not_translate(robot):
         robot.perform("moonwalk-ish")
 
 
-def test_battery_drains_with_time_and_distance(robot):
+def test_battery_drains_with_time_and_distance():
+    robot = SimRobot(SimConfig(collisions=False))  # ten metres straight on: a ghost
     robot.sleep(100.0)
     idle = 100.0 - robot.get_state().battery
     assert idle == pytest.approx(1.0, rel=1e-6)
@@ -193,3 +198,91 @@ def test_true_path_is_ground_truth_about_1_cm_apart_and_bounded():
     robot.reset(1.0, 2.0)  # a teleport is not a walk: the path starts again, the odometer stays
     assert robot.true_path == [(robot.now(), 1.0, 2.0), (robot.now(), 1.0, 2.0)]
     assert robot.true_path_complete and robot.true_odometer == pytest.approx(0.775, abs=1e-6)
+
+
+# -- collisions and the range scan (issue 15) ----------------------------------------------
+
+_COLLIDING = SimConfig(collisions=True)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    start=st.tuples(st.floats(-5.5, 5.5), st.floats(-5.5, 5.5), st.floats(-3.1, 3.1)),
+    commands=st.lists(st.tuples(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5),
+                                st.floats(-2.5, 2.5), st.floats(0.1, 3.0)),
+                      min_size=1, max_size=6),
+)
+def test_random_motion_never_makes_the_body_overlap_an_object_or_wall(start, commands):
+    robot = SimRobot(_COLLIDING)
+    x, y, yaw = start
+    if penetration(DEFAULT_WORLD, x, y, 0.35)[0] > 0:
+        return  # a start inside something is not a pose the robot can be in
+    robot.reset(x, y, yaw)
+    for vx, vy, wz, seconds in commands:
+        robot.send_velocity(vx, vy, wz)
+        robot.sleep(seconds)
+    assert robot.true_path_complete
+    for _t, px, py in robot.true_path:
+        assert penetration(DEFAULT_WORLD, px, py, 0.35)[0] <= 1e-9, (px, py)
+
+
+def test_walking_into_the_red_ball_stops_at_contact_and_names_it():
+    # The map the robot was given predates the ball, so the governor lets the walk start.
+    stale = World(objects=tuple(o for o in DEFAULT_WORLD.objects if o.name != "red ball"))
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(_COLLIDING, map_world=stale)))
+    result = agent.execute_mission("walk forward 4 meters")
+    assert not result.success
+    assert "blocked by the red ball 0.35 m ahead" in result.response
+    assert result.robot.x == pytest.approx(3.0 - 0.2 - 0.35, abs=0.01)
+    assert result.robot.blocked_by == "the red ball 0.35 m ahead"
+
+
+def test_the_scan_sees_the_red_ball_ahead_and_the_walls():
+    robot = SimRobot()
+    scan = robot.get_scan()
+    assert scan is not None and len(scan.ranges) == 360
+    assert scan.ranges[180] == pytest.approx(3.0 - 0.2)  # beam 180 looks straight ahead
+    assert scan.ranges[0] == pytest.approx(6.0)  # straight behind: the wall at x = -6
+    assert scan.pose == robot.get_state().pose
+
+
+def test_the_wall_stops_the_body_and_is_named():
+    robot = SimRobot(_COLLIDING)
+    robot.reset(0.0, 5.0, math.pi / 2)
+    robot.send_velocity(0.5, 0.0, 0.0)
+    robot.sleep(3.0)
+    state = robot.get_state()
+    assert state.y == pytest.approx(6.0 - 0.35, abs=1e-6)
+    assert state.blocked_by == "the wall 0.35 m ahead"
+    # Turning in place against the wall is free (the body is a circle), and walking away
+    # clears the contact.
+    robot.send_velocity(0.0, 0.0, 1.0)
+    robot.sleep(1.0)
+    assert robot.get_state().yaw != pytest.approx(math.pi / 2)
+    robot.send_velocity(0.0, 0.0, 0.0)
+    robot.sleep(1.0)
+    robot.reset(0.0, 5.65, math.pi / 2)
+    robot.send_velocity(-0.5, 0.0, 0.0)
+    robot.sleep(1.0)
+    state = robot.get_state()
+    assert state.y < 5.4 and state.blocked_by == ""
+
+
+def test_a_body_put_inside_an_object_may_only_move_out_of_it():
+    robot = SimRobot(_COLLIDING)
+    robot.reset(2.8, 0.0, 0.0)  # overlapping the red ball (x = 3, r = 0.2) by 0.55 m
+    robot.send_velocity(0.5, 0.0, 0.0)  # further in: refused
+    robot.sleep(1.0)
+    assert robot.get_state().x == pytest.approx(2.8)
+    assert "the red ball" in robot.get_state().blocked_by
+    robot.send_velocity(-0.5, 0.0, 0.0)  # out: allowed
+    robot.sleep(2.0)
+    assert robot.get_state().x < 2.45
+
+
+def test_without_collisions_the_body_passes_through_as_before():
+    robot = SimRobot(SimConfig(collisions=False))
+    assert robot.belief() is None  # and the robot is told of no map
+    robot.send_velocity(1.0, 0.0, 0.0)
+    robot.sleep(5.0)
+    assert robot.get_state().x > 3.5 and robot.get_state().blocked_by == ""

@@ -14,6 +14,7 @@ from shadowhound.skills import (
     SkillTimeout,
 )
 from shadowhound.skills.arguments import Count, Length, argument_kind, is_numeric
+from shadowhound.skills.context import robot_belief
 
 
 @pytest.fixture
@@ -24,8 +25,8 @@ def registry():
 def run(registry, robot, skill, settings=None, **args):
     settings = settings or ShadowHoundConfig()
     call = registry.validate(SkillCall(skill, args))
-    ctx = SkillContext(robot, PlanEnv(settings, robot.get_state().pose), threading.Event(),
-                       camera=robot.get_camera_frame)
+    env = PlanEnv(settings, robot.get_state().pose, belief=robot_belief(robot))
+    ctx = SkillContext(robot, env, threading.Event(), camera=robot.get_camera_frame)
     ctx.start_clock(call.skill.timeout_for(call.args, ctx.env))
     return call.skill.run(ctx, call.args)
 
@@ -173,9 +174,9 @@ def test_goto_point_and_place(registry, robot):
     run(registry, robot, "nav.goto", x=2.0, y=1.0)
     st = robot.get_state()
     assert (st.x, st.y) == (pytest.approx(2.0, abs=0.003), pytest.approx(1.0, abs=0.003))
-    run(registry, robot, "nav.goto", place="kitchen", heading_degrees=180)
+    run(registry, robot, "nav.goto", place="kitchen", heading_degrees=180)  # round the box
     st = robot.get_state()
-    assert (st.x, st.y) == (pytest.approx(3.0, abs=0.003), pytest.approx(2.0, abs=0.003))
+    assert (st.x, st.y) == (pytest.approx(4.0, abs=0.003), pytest.approx(2.5, abs=0.003))
     assert abs(math.degrees(st.yaw)) == pytest.approx(180, abs=0.1)
 
 

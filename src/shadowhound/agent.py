@@ -44,6 +44,7 @@ from .skills import (
     ValidatedCall,
     default_registry,
 )
+from .skills.context import robot_belief
 from .state import CameraFrame, RobotState
 
 log = logging.getLogger(__name__)
@@ -161,7 +162,8 @@ class RobotAgent:
     def run_plan(self, calls: list[SkillCall], text: str = "",
                  mission_id: str | None = None) -> MissionResult:
         """Run explicit skill calls (from the web, a test, a script) through the same checks."""
-        plan = Plan(list(calls), text=text or "explicit plan", planner="explicit")
+        plan = Plan(list(calls), text=text or "explicit plan", planner="explicit",
+                    planned_by="explicit")
         return self._execute(plan.text, FixedPlanner(plan), mission_id)
 
     def dry_run(self, text: str, mission_id: str | None = None) -> MissionResult:
@@ -424,7 +426,7 @@ class RobotAgent:
         if refusals and status is MissionStatus.FAILED:
             answer = f"{answer} Refused: {'; '.join(refusals)}."
         plan = Plan([SkillCall(s.skill, s.args, s.label) for s in steps], text=text,
-                    usage=usage, planner=getattr(planner, "name", "react"))
+                    usage=usage, planner=getattr(planner, "name", "react"), planned_by="llm")
         return self._finish(mission_id, text, started, timing, steps, plan, status, answer,
                             error=None if status is MissionStatus.SUCCEEDED else answer,
                             refusals=refusals)
@@ -628,7 +630,7 @@ class RobotAgent:
         """The mission's environment, with a fresh budget: made once per mission."""
         state = self.robot.get_state()
         return PlanEnv(self.settings, state.pose, self._known_places(),
-                       MissionBudget.start(state, self.robot.now))
+                       MissionBudget.start(state, self.robot.now), robot_belief(self.robot))
 
     def _planning_context(self, text: str = "", planner: Any = None) -> PlanningContext | None:
         """What the planner may read; None for planners that read nothing (the offline rules),
@@ -694,7 +696,7 @@ class RobotAgent:
 
     def _refuse(self, mission_id: str, text: str, started: float, reason: str,
                 record: bool = True) -> MissionResult:
-        result = MissionResult(mission_id, text, False, f"Refused: {reason}.",
+        result = MissionResult(mission_id, text, False, f"Refused: {reason.rstrip('.')}.",
                                MissionStatus.FAILED, robot=self._state_or_none(), error=reason,
                                refusals=[reason])
         result.timing.total_duration = time.perf_counter() - started
@@ -716,7 +718,7 @@ class RobotAgent:
         result = MissionResult(
             mission_id, text, status is MissionStatus.SUCCEEDED, response, status, steps,
             self._state_or_none(), timing, usage or (plan.usage if plan else Usage()), plan,
-            refusals or [], error,
+            refusals or [], error, planner=getattr(self._planner, "kind", ""),
         )
         self._history.append(result)
         self._set_status(status)

@@ -38,6 +38,7 @@ def check_plan(plan: Plan, registry: SkillRegistry, governor: Governor,
     steps = [StepResult(i, c.skill, plain_args(c.args), c.label)
              for i, c in enumerate(plan.steps, first)]
     verdict = governor.check_plan(calls, start, env)
+    plan.notes.extend(n for n in verdict.notes if n not in plan.notes)
 
     def renumber(r: Any) -> str:
         return str(r).replace(f"step {r.step} ", f"step {r.step + first - 1} ", 1)

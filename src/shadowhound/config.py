@@ -134,6 +134,13 @@ class SimConfig(_Section):
     max_angular_speed: float = Field(2.0, gt=0, description="hardware limit, rad/s")
     linear_accel: float = Field(1.0, gt=0, description="m/s^2")
     angular_accel: float = Field(3.0, gt=0, description="rad/s^2")
+    body_radius: float = Field(
+        0.35, ge=0.05, le=2.0, description="metres: the body's collision circle in the scene"
+    )
+    collisions: bool = Field(
+        True, description="the body stops at contact with the scene's objects and walls, and "
+        "the robot is given the scene's map (off: a ghost that walks through them, no map)"
+    )
     battery_drain_idle: float = Field(0.01, ge=0, description="percent per second standing")
     battery_drain_per_metre: float = Field(0.05, ge=0, description="percent per metre walked")
     camera_width: int = Field(160, ge=16, le=1920)
@@ -159,8 +166,12 @@ class LLMConfig(_Section):
     mode: Literal["plan", "react"] = Field(
         "plan", description="plan: whole plan in one request; react: tool loop with observations"
     )
-    plan_format: Literal["auto", "json_schema", "tools"] = Field(
-        "auto", description="how plan mode asks for a plan; auto picks json_schema"
+    plan_format: Literal["auto", "json_schema", "tools", "plain"] = Field(
+        "auto", description="how plan mode asks for a plan: json_schema (the strict plan schema "
+        "the server enforces), tools, or plain (JSON asked for in words); auto picks json_schema"
+    )
+    hybrid: bool = Field(
+        True, description="offline rules first; the model plans only what they do not understand"
     )
     repair_attempts: int = Field(1, ge=0, le=3, description="round trips to fix an invalid plan")
     react_max_steps: int = Field(8, ge=1, le=100, description="skill calls in one react mission")
@@ -212,11 +223,11 @@ class ShadowHoundConfig(_Section):
     agent: AgentConfig = Field(default_factory=AgentConfig)
     memory: MemoryConfig = Field(default_factory=MemoryConfig)
     places: dict[str, tuple[float, float]] = Field(
-        default_factory=lambda: {"kitchen": (3.0, 2.0), "charging dock": (-2.4, -1.0)},
+        default_factory=lambda: {"kitchen": (4.0, 2.5), "charging dock": (-2.4, -1.0)},
         description="named places in the odom frame, metres",
     )
     patrol_route: list[tuple[float, float]] = Field(
-        default_factory=lambda: [(2.0, 0.0), (2.0, 2.0), (0.0, 2.0)],
+        default_factory=lambda: [(2.0, 0.0), (2.0, 1.2), (0.0, 1.2)],
         description="waypoints visited by nav.patrol before it returns to where it started",
     )
 

@@ -50,7 +50,8 @@ def answer_offline(text: str, agent: RobotAgent) -> str:
         elif topic == "see":
             answers.append(describe_frame(agent.latest_frame(), text))
         elif topic == "battery":
-            answers.append(f"My battery is at {st.battery:.1f}%.")
+            answers.append(f"My battery is at {st.battery:.1f}%." if st.battery is not None
+                           else "I cannot tell my battery level: this robot reports none.")
         elif topic == "where":
             answers.append(f"I am at x={st.x:.2f} m, y={st.y:.2f} m, facing "
                            f"{math.degrees(st.yaw):.0f} degrees (odom frame).")
@@ -62,7 +63,7 @@ def answer_offline(text: str, agent: RobotAgent) -> str:
         elif topic == "status":
             diag = agent.get_diagnostics()
             answers.append(f"I am {st.posture.value}, status {diag['status']}, battery "
-                           f"{st.battery:.1f}%" + (", e-stop latched." if diag["estop"] else "."))
+                           f"{st.battery_text}" + (", e-stop latched." if diag["estop"] else "."))
     return " ".join(answers)
 
 

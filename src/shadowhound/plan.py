@@ -28,6 +28,7 @@ class Usage:
     completion_tokens: int = 0
     round_trips: int = 0
     estimated: bool = False  # True when the server reported no usage and tokens were counted
+    invalid_plans: int = 0  # model replies that failed validation (each one goes to repair)
 
     @property
     def total_tokens(self) -> int:
@@ -38,6 +39,7 @@ class Usage:
         self.completion_tokens += other.completion_tokens
         self.round_trips += other.round_trips
         self.estimated = self.estimated or other.estimated
+        self.invalid_plans += other.invalid_plans
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -46,6 +48,7 @@ class Usage:
             "total_tokens": self.total_tokens,
             "round_trips": self.round_trips,
             "estimated": self.estimated,
+            "invalid_plans": self.invalid_plans,
         }
 
 
@@ -57,12 +60,14 @@ class Plan:
     text: str = ""
     notes: list[str] = field(default_factory=list)  # assumptions, e.g. "no distance given: 1 m"
     usage: Usage = field(default_factory=Usage)
-    planner: str = ""
+    planner: str = ""  # the planner's name, e.g. "offline" or "llamacpp:qwen2.5"
+    planned_by: str = ""  # offline | llm | explicit: the kind of planner that made it
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "text": self.text,
             "planner": self.planner,
+            "planned_by": self.planned_by,
             "steps": [s.to_dict() for s in self.steps],
             "notes": list(self.notes),
         }

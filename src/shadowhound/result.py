@@ -107,6 +107,7 @@ class MissionResult:
     error: str | None = None
     dry_run: bool = False
     predicted_path: list[Pose2D] = field(default_factory=list)  # dry runs: poses, start first
+    planner: str = ""  # the planning configured: offline | llm | hybrid (see plan.planned_by)
 
     def __iter__(self) -> Iterator[Any]:
         yield self.response
@@ -122,6 +123,8 @@ class MissionResult:
             "error": self.error,
             "refusals": list(self.refusals),
             "dry_run": self.dry_run,
+            "planner": self.planner,
+            "planned_by": self.plan.planned_by if self.plan else "",
             "predicted_path": [{"x": round(p.x, 4), "y": round(p.y, 4), "yaw": round(p.yaw, 4)}
                                for p in self.predicted_path],
             "plan": self.plan.to_dict() if self.plan else None,

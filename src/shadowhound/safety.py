@@ -26,6 +26,7 @@ from .robot.go2_api import TRICKS
 from .skills.context import PlanEnv, PlanProblem
 from .skills.registry import ValidatedCall
 from .state import Pose2D, Posture, RobotState, normalize_angle
+from .world import check_leg
 
 # What may still run when the battery is below the floor: nothing that walks.
 LOW_BATTERY_SKILLS = ("nav.stop", "body.sit", "body.lie_down", "sys.status")
@@ -53,6 +54,7 @@ class PlanCheck:
     approvals: list[Refusal] = field(default_factory=list)
     path: list[Pose2D] = field(default_factory=list)
     distance: float = 0.0
+    notes: list[str] = field(default_factory=list)  # what the check could not establish
 
 
 class Governor:
@@ -68,6 +70,10 @@ class Governor:
         """Check every step from `start`. None stands for a step that failed validation: it
         is skipped and the rest still checked."""
         check = PlanCheck(path=[start.pose])
+        if start.battery is None:  # say so, rather than pass a level nobody measured
+            check.notes.append(f"battery level unknown (the robot reports none): the battery "
+                               f"floor of {self.limits.battery_floor:g}% "
+                               "(safety.battery_floor) cannot be checked")
         pose, posture = start.pose, start.posture
         budget = env.budget
         walked = budget.travelled(start) if budget else 0.0
@@ -103,7 +109,11 @@ class Governor:
         """
         if not call.skill.moves or call.skill.predict is None:
             return ""
-        expected = call.skill.predict(before.pose, call.args, env)
+        try:
+            expected = call.skill.predict(before.pose, call.args, env)
+        except PlanProblem:  # the map changed on the way (a re-plan): the skill itself
+            return ""  # measured its arrival in closed loop
+
         if not expected:
             return ""
         want = expected[-1]
@@ -183,9 +193,10 @@ class Governor:
             reasons.append(f"{name} is not in safety.allow_skills ({', '.join(lim.allow_skills)})")
         if _matches(name, lim.deny_skills):
             reasons.append(f"{name} is in safety.deny_skills")
-        if start.battery < lim.battery_floor and name not in LOW_BATTERY_SKILLS:
+        level = start.battery  # None: unknown, said once in check_plan's notes
+        if level is not None and level < lim.battery_floor and name not in LOW_BATTERY_SKILLS:
             reasons.append(
-                f"the battery is at {start.battery:.0f}%, below the floor of "
+                f"the battery is at {level:.0f}%, below the floor of "
                 f"{lim.battery_floor:g}% (safety.battery_floor): only "
                 f"{', '.join(LOW_BATTERY_SKILLS)} are allowed"
             )
@@ -211,6 +222,18 @@ class Governor:
             approval = (f"{trick} is a risky trick (it can hurt people or the robot) and needs "
                         "approval, or safety.allow_risky_tricks: true")
         poses = call.skill.predict(pose, args, env) if call.skill.predict else []
+        distance = getattr(args, "distance", None)
+        what = name if distance is None else f"{name} {distance:g} m"
+        reasons += self.path_problems(pose, poses, env, what)
+        return reasons, poses, approval
+
+    def path_problems(self, pose: Pose2D, poses: list[Pose2D], env: PlanEnv, what: str
+                      ) -> list[str]:
+        """Why the straight legs from `pose` through `poses` may not be walked: the step limit
+        (per straight leg), the geofences and, with a map, anything in the way. Skills that
+        re-plan on the way (nav.goto) check their new path here too."""
+        lim = self.limits
+        reasons: list[str] = []
         for leg in _legs(pose, poses):
             if leg > lim.max_step_distance + 1e-9:
                 reasons.append(
@@ -221,7 +244,8 @@ class Governor:
         outside = self._outside_fence(pose, poses)
         if outside:
             reasons.append(outside)
-        return reasons, poses, approval
+        reasons += _in_the_way(what, pose, poses, env)
+        return reasons
 
     def _outside_fence(self, pose: Pose2D, poses: list[Pose2D]) -> str:
         """Why the path from `pose` through `poses` breaks a geofence ("" when it does not).
@@ -243,6 +267,21 @@ class Governor:
                     return _fence_message(breach, a, b, (name, where), margin)
             previous = p
         return ""
+
+
+def _in_the_way(what: str, pose: Pose2D, poses: list[Pose2D], env: PlanEnv) -> list[str]:
+    """With a map, every straight leg of a moving step must stay in mapped free space, the body
+    clear of everything on it: "nav.move 4 m: the red ball is in the way at 2.4 m"."""
+    if env.belief is None:
+        return []
+    previous = pose
+    for p in poses:
+        leg = check_leg(env.belief, (previous.x, previous.y), (p.x, p.y))
+        if not leg.clear:
+            at = "" if len(poses) == 1 else f" (on its leg from {_xy((previous.x, previous.y))})"
+            return [f"{what}: {leg.message()}{at}"]
+        previous = p
+    return []
 
 
 def _fence_message(breach: geofence.Breach, a: tuple[float, float], b: tuple[float, float],

@@ -46,16 +46,24 @@ class RobotState:
     vy: float = 0.0
     wz: float = 0.0
     posture: Posture = Posture.STANDING
-    battery: float = 100.0  # percent
+    battery: float | None = 100.0  # percent; None = unknown (a Go2 without a battery source)
     distance_travelled: float = 0.0  # metres, path length since the robot started
     angle_turned: float = 0.0  # radians, absolute rotation since the robot started
     stamp: float = 0.0  # seconds on the robot's clock
     estopped: bool = False
     connected: bool = True
+    # What stops the body when it presses against something, as people say it ("the red ball
+    # 0.35 m ahead"); empty when nothing does or the robot cannot tell.
+    blocked_by: str = ""
 
     @property
     def pose(self) -> Pose2D:
         return Pose2D(self.x, self.y, self.yaw)
+
+    @property
+    def battery_text(self) -> str:
+        """The battery level for people: "87.0%", or "unknown" (never a guess)."""
+        return "unknown" if self.battery is None else f"{self.battery:.1f}%"
 
     @property
     def is_moving(self) -> bool:
@@ -69,12 +77,13 @@ class RobotState:
             "yaw": round(self.yaw, 4),
             "yaw_deg": round(math.degrees(self.yaw), 2),
             "posture": self.posture.value,
-            "battery": round(self.battery, 2),
+            "battery": None if self.battery is None else round(self.battery, 2),
             "distance_travelled": round(self.distance_travelled, 4),
             "angle_turned": round(self.angle_turned, 4),
             "moving": self.is_moving,
             "estopped": self.estopped,
             "connected": self.connected,
+            "blocked_by": self.blocked_by,
             "stamp": round(self.stamp, 3),
         }
 
@@ -114,3 +123,38 @@ class CameraFrame:
         out["bytes"] = len(self.data)
         out["sightings"] = [s.describe() for s in self.sightings]
         return out
+
+
+@dataclass(frozen=True)
+class Scan:
+    """A planar range scan in the layout of sensor_msgs/LaserScan, taken at `pose` (odom frame).
+
+    Beam i points at `pose.yaw + angle_min + i * angle_increment`. A range outside
+    [range_min, range_max] (or infinite) means no return within reach on that beam.
+    """
+
+    ranges: tuple[float, ...]
+    angle_min: float = -math.pi
+    angle_increment: float = 2.0 * math.pi / 360
+    range_min: float = 0.1
+    range_max: float = 8.0
+    pose: Pose2D = field(default_factory=Pose2D)
+    stamp: float = 0.0  # seconds on the robot's clock
+
+    def __post_init__(self) -> None:
+        if not self.ranges:
+            raise ValueError("a scan needs at least one beam")
+        if not 0 <= self.range_min < self.range_max or not math.isfinite(self.range_max):
+            raise ValueError(
+                f"need 0 <= range_min < range_max (finite), got {self.range_min}, {self.range_max}"
+            )
+        if not self.angle_increment > 0:
+            raise ValueError(f"angle_increment must be > 0, got {self.angle_increment}")
+
+    def beam_angle(self, i: int) -> float:
+        """The beam's direction in the odom frame, radians."""
+        return self.pose.yaw + self.angle_min + i * self.angle_increment
+
+    def is_hit(self, r: float) -> bool:
+        """Whether a range is a real return (an obstacle surface), not a miss or an error."""
+        return self.range_min <= r < self.range_max

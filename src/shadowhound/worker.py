@@ -19,11 +19,13 @@ from typing import Any
 
 from .agent import RobotAgent
 from .events import MISSION_STARTED, MissionEvent
+from .plan import SkillCall
 from .result import MissionResult
 
 log = logging.getLogger(__name__)
 
 _STOP = object()
+ESTOP_DROP_REASON = "the e-stop was pressed before it started"  # why queued jobs were dropped
 
 
 @dataclass(eq=False)
@@ -31,7 +33,7 @@ class MissionJob:
     """A mission to run. `on_event` sees the agent's events while this job runs."""
 
     command: str
-    source: str = "topic"  # topic | action | web
+    source: str = "topic"  # topic | action | web | mcp
     mission_id: str = field(default_factory=lambda: uuid.uuid4().hex[:12])  # the agent's id too
     dry_run: bool = False
     on_event: Callable[[MissionEvent], None] | None = None
@@ -41,6 +43,7 @@ class MissionJob:
     done: threading.Event = field(default_factory=threading.Event)
     cancelled: threading.Event = field(default_factory=threading.Event)
     on_done: Callable[[MissionJob], None] | None = None  # after `done` is set
+    calls: list[SkillCall] | None = None  # explicit skill calls to run instead of planning
 
 
 class MissionWorker:
@@ -133,8 +136,12 @@ class MissionWorker:
                     job.dropped = "cancelled before it started"
                     continue
                 self._on_start(job)
-                run = self._agent.dry_run if job.dry_run else self._agent.execute_mission
-                job.result = run(job.command, mission_id=job.mission_id)
+                if job.calls is not None:  # the same checks as a planned step
+                    job.result = self._agent.run_plan(job.calls, job.command,
+                                                      mission_id=job.mission_id)
+                else:
+                    run = self._agent.dry_run if job.dry_run else self._agent.execute_mission
+                    job.result = run(job.command, mission_id=job.mission_id)
             except Exception as exc:  # the worker must survive anything a mission does
                 log.exception("mission %r crashed", job.command[:80])
                 job.dropped = f"internal error: {exc!r}"

@@ -165,16 +165,18 @@ class Agent:
 class NodeProcess:
     """`python -m shadowhound node --ros-args ...` in a child process, output in a file.
 
-    `command="sim-driver"` starts the simulated Go2 driver instead."""
+    `command="sim-driver"` starts the simulated Go2 driver instead; `options` go before
+    `--ros-args` (the driver's own options, e.g. ("--odom-delay", "0.5"))."""
 
-    def __init__(self, *ros_args: str, command: str = "node") -> None:
+    def __init__(self, *ros_args: str, command: str = "node",
+                 options: tuple[str, ...] = ()) -> None:
         self.command = command
         fd, name = tempfile.mkstemp(prefix=f"{command.replace('-', '_')}_", suffix=".log")
         self.log = Path(name)
         env = dict(os.environ, PYTHONUNBUFFERED="1", RCUTILS_LOGGING_BUFFERED_STREAM="0")
         with os.fdopen(fd, "w") as log:
             self.proc = subprocess.Popen(
-                [sys.executable, "-m", "shadowhound", command, "--ros-args", *ros_args],
+                [sys.executable, "-m", "shadowhound", command, *options, "--ros-args", *ros_args],
                 stdout=log, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
             )
 

@@ -16,13 +16,16 @@ from tests.ros.needs import require
 require("rclpy", "shadowhound_interfaces", "go2_interfaces")
 
 from geometry_msgs.msg import Twist  # noqa: E402
+from go2_interfaces.msg import WebRtcReq  # noqa: E402
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
 from shadowhound.robot.base import RobotError  # noqa: E402
 from shadowhound.robot.go2_ros import Go2RosConfig, Go2RosRobot  # noqa: E402
 from shadowhound.ros.sim_driver import Faults, SimDriver  # noqa: E402
 from shadowhound.state import Posture  # noqa: E402
-from tests.ros.rosclient import ROOT, RosClient, wait_until  # noqa: E402
+from tests.ros.rosclient import ROOT, Inbox, RosClient, wait_until  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 NS = "/inproc"
@@ -37,10 +40,13 @@ def client() -> Iterator[RosClient]:
 
 @pytest.fixture(scope="module")
 def driver(client: RosClient) -> Iterator[SimDriver]:
-    d = SimDriver(context=client.context, namespace=NS)
-    client.executor.add_node(d)
+    d = SimDriver(context=client.context, namespace=NS,
+                  options={"posture_seconds": 0.5, "odom_delay": 0.2})
+    for node in d.nodes:  # the driver and its twist_mux-like relay
+        client.executor.add_node(node)
     yield d
-    client.executor.remove_node(d)
+    for node in d.nodes:
+        client.executor.remove_node(node)
     d.close()
     d.destroy_node()
 
@@ -53,52 +59,108 @@ def robot(client: RosClient, driver: SimDriver) -> Iterator[Go2RosRobot]:
     r.close()
 
 
-def test_state_camera_caps_and_the_10_hz_keep_alive(client: RosClient, driver: SimDriver,
-                                                     robot: Go2RosRobot) -> None:
+def api_ids(requests: Inbox, mark: int = 0) -> list[int]:
+    return [json.loads(m.data)["api_id"] for m in requests.since(mark)]
+
+
+def test_state_camera_caps_keep_alive_and_stop_move(client: RosClient, driver: SimDriver,
+                                                    robot: Go2RosRobot) -> None:
     twists = client.subscribe(Twist, f"{NS}/cmd_vel")
     requests = client.subscribe(String, f"{NS}/sim_driver/requests")
-    wait_until(lambda: twists.subscription.get_publisher_count() > 0, 10, "the robot's cmd_vel")
+    wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the driver")
     state = robot.get_state()
     assert state.connected and state.posture is Posture.STANDING
+    assert state.battery is None  # go2_ros2_sdk publishes no battery level: unknown
     frame = wait_until(robot.get_camera_frame, 10, "a camera frame")
     assert (frame.encoding, frame.width, frame.height) == ("rgb8", 160, 120)
     robot.send_velocity(5.0, 0.0, 9.0)  # beyond the Go2 caps (1 m/s, 2 rad/s)
     try:
         first = twists.wait_for(lambda m: m.linear.x > 0, 5, "a Twist")
         assert (first.linear.x, first.angular.z) == (1.0, 2.0)
-        # No further calls: the keep-alive repeats the command (go2_ros2_sdk needs a stream).
+        # The relay subscribes cmd_vel, so that is where velocity goes (through twist_mux).
+        assert robot.velocity_topic == f"{NS}/cmd_vel"
+        # No further calls: the keep-alive repeats the command (a Move lapses after ~1 s).
         wait_until(lambda: sum(m.linear.x == 1.0 for m in twists.items) >= 4, 5, "keep-alive")
+        wait_until(lambda: driver.truth().moving, 10, "the true robot to walk")
     finally:
+        mark, sent = twists.mark(), requests.mark()
         robot.stop()
-    mark = twists.mark()
-    twists.wait_for(lambda m: m.linear.x == 0 and m.angular.z == 0, 5, "a zero Twist")
-    requests.wait_for(lambda m: json.loads(m.data)["api_id"] == 1003, 5, "StopMove")
-    wait_until(lambda: not driver.sim.get_state().is_moving, 10, "the simulator to stop")
-    assert all(m.linear.x == 0 for m in twists.since(mark))  # the keep-alive went quiet
+    requests.wait_for(lambda m: json.loads(m.data)["api_id"] == 1003, 5, "StopMove", sent)
+    wait_until(lambda: not driver.truth().moving, 10, "the true robot to stop")
+    # The driver drops zero Twists: a stop is StopMove, and no zero Twist is ever sent.
+    assert all(m.linear.x == 1.0 for m in twists.items), [m.linear.x for m in twists.items]
+    assert all(m.linear.x == 1.0 for m in twists.since(mark))  # the keep-alive went quiet
+    robot.send_velocity(0.0, 0.0, 0.0)  # already stopped: nothing more to send
+    assert api_ids(requests, sent).count(1003) == 1
 
 
-def test_postures_wait_for_the_driver_and_tricks_need_standing(driver: SimDriver,
-                                                               robot: Go2RosRobot) -> None:
-    robot.set_posture(Posture.SITTING)  # returns once go2_states.progress is back to 0
-    assert driver.sim.get_state().posture is Posture.SITTING
-    assert robot.get_state().posture is Posture.SITTING
-    with pytest.raises(RobotError, match="cannot perform hello while the robot is sitting"):
+def test_postures_are_read_from_go2_states_and_sent_only_when_needed(
+        client: RosClient, driver: SimDriver, robot: Go2RosRobot) -> None:
+    requests = client.subscribe(String, f"{NS}/sim_driver/requests")
+    wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the driver")
+    robot.set_posture(Posture.STANDING)  # standing already: no StandUp, no BalanceStand
+    robot.set_posture(Posture.LYING)  # returns once go2_states shows the posture reached
+    assert driver.truth().posture is Posture.LYING and not driver.truth().changing
+    assert robot.get_state().posture is Posture.LYING
+    with pytest.raises(RobotError, match="cannot perform hello while the robot is lying"):
         robot.perform("hello")
     robot.set_posture(Posture.STANDING)
-    assert driver.sim.get_state().posture is Posture.STANDING
+    truth = driver.truth()
+    assert truth.posture is Posture.STANDING and truth.mode in (1, 3)  # balanced: can walk
+    wait_until(lambda: len(api_ids(requests)) >= 3, 5, "the driver's records")
+    assert api_ids(requests) == [1005, 1004, 1002]  # StandDown; StandUp, BalanceStand
+    robot.set_posture(Posture.SITTING)
+    robot.set_posture(Posture.STANDING)  # RiseSit ends balanced: no BalanceStand after it
+    assert driver.truth().mode in (1, 3)
+    # Standing with locked joints (someone sent StandUp): "stand up" only balances.
+    client.publisher(WebRtcReq, f"{NS}/webrtc_req").publish(WebRtcReq(
+        id=0, topic="rt/api/sport/request", api_id=1004, parameter="", priority=0))
+    wait_until(lambda: driver.truth().mode == 6 and not driver.truth().changing, 10,
+               "the robot standing locked")
+    wait_until(lambda: robot.get_state().posture is Posture.STANDING, 5, "go2_states")
+    robot.set_posture(Posture.STANDING)
+    assert driver.truth().mode in (1, 3)
+    wait_until(lambda: len(api_ids(requests)) >= 7, 5, "the driver's records")
+    assert api_ids(requests)[3:] == [1009, 1010, 1004, 1002]
 
 
-def test_the_estop_refuses_motion_until_released(client: RosClient, robot: Go2RosRobot) -> None:
+def test_firmware_tricks_are_refused_unless_enabled(robot: Go2RosRobot) -> None:
+    with pytest.raises(RobotError, match=r"backflip \(api id 1044\) runs only on Go2 firmware "
+                                         "that has it"):
+        robot.perform("backflip")
+
+
+def test_enabled_firmware_tricks_switch_to_the_ai_motion_mode_first(
+        client: RosClient, driver: SimDriver, robot: Go2RosRobot) -> None:
+    requests = client.subscribe(String, f"{NS}/sim_driver/requests")
+    enabled = Go2RosRobot(Go2RosConfig(namespace=NS[1:], firmware_tricks=True,
+                                       node_name="shadowhound_go2_firmware"),
+                          context=client.context)
+    try:
+        wait_until(lambda: enabled.last_state().connected, 30, "odometry")
+        assert not driver.truth().ai_mode
+        enabled.perform("moonwalk")  # 1305: only in the "ai" motion mode
+        assert driver.truth().ai_mode
+        records = [json.loads(m.data) for m in requests.items]
+        moonwalk = [r for r in records if r["api_id"] == 1305]
+        assert moonwalk and moonwalk[0]["accepted"], records
+    finally:
+        enabled.close()
+
+
+def test_the_estop_sends_stop_move_and_refuses_motion_until_released(
+        client: RosClient, driver: SimDriver, robot: Go2RosRobot) -> None:
     twists = client.subscribe(Twist, f"{NS}/cmd_vel")
-    wait_until(lambda: twists.subscription.get_publisher_count() > 0, 10, "the robot's cmd_vel")
+    requests = client.subscribe(String, f"{NS}/sim_driver/requests")
+    wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the driver")
     robot.emergency_stop()
     try:
+        requests.wait_for(lambda m: json.loads(m.data)["api_id"] == 1003, 5, "StopMove")
         assert robot.get_state().estopped
         robot.send_velocity(0.3, 0.0, 0.0)  # ignored, like the simulator
         with pytest.raises(RobotError, match="e-stop is latched"):
             robot.set_posture(Posture.SITTING)
-        twists.wait_for(lambda m: m.linear.x == 0, 5, "the e-stop's zero Twist")
-        assert all(m.linear.x == 0 for m in twists.items)
+        assert twists.items == []
     finally:
         robot.release_estop()
     robot.send_velocity(0.1, 0.0, 0.0)
@@ -106,15 +168,66 @@ def test_the_estop_refuses_motion_until_released(client: RosClient, robot: Go2Ro
     twists.wait_for(lambda m: m.linear.x == 0.1, 5, "motion after the release")
 
 
+_SPEEDS = st.sampled_from([0.0, 0.0, 0.2, -0.3])
+_OPERATIONS = st.lists(st.one_of(
+    st.tuples(st.just("move"), _SPEEDS, _SPEEDS, _SPEEDS),
+    st.just(("zero",)), st.just(("stop",)), st.just(("estop",))), min_size=1, max_size=6)
+
+
+@settings(max_examples=8, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(operations=_OPERATIONS)
+def test_every_stop_is_a_stop_move_and_no_zero_twist_is_ever_sent(
+        client: RosClient, driver: SimDriver, robot: Go2RosRobot,
+        operations: list[tuple[object, ...]]) -> None:
+    """The whole kind: whatever the sequence of commands, each stop (stop, e-stop, a zero
+    command after motion) reaches the driver as StopMove, and no all-zero Twist goes out
+    (the driver would drop it and the robot keep walking)."""
+    twists = client.subscribe(Twist, f"{NS}/cmd_vel")
+    requests = client.subscribe(WebRtcReq, f"{NS}/webrtc_req")
+    wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the robot")
+    expected, moving = 0, False
+    try:
+        for op in [*operations, ("stop",)]:
+            if op[0] == "move":
+                values = (float(op[1]), float(op[2]), float(op[3]))  # type: ignore[arg-type]
+                robot.send_velocity(*values)
+                expected += moving and not any(values)
+                moving = any(values)
+            elif op[0] == "zero":
+                robot.send_velocity(0.0, 0.0, 0.0)
+                expected += moving
+                moving = False
+            elif op[0] == "stop":
+                robot.stop()
+                expected, moving = expected + 1, False
+            else:
+                robot.emergency_stop()
+                robot.release_estop()
+                expected, moving = expected + 1, False
+
+        def stops() -> int:
+            return sum(m.api_id == 1003 for m in requests.items)
+
+        wait_until(lambda: stops() >= expected, 10, f"{expected} StopMoves")
+        assert stops() == expected
+        assert all(m.linear.x or m.linear.y or m.angular.z for m in twists.items)
+    finally:
+        client.node.destroy_subscription(twists.subscription)
+        client.node.destroy_subscription(requests.subscription)
+    wait_until(lambda: not driver.truth().moving, 10, "the true robot to stop")
+
+
 def test_without_a_driver_commands_time_out_and_motion_is_refused(client: RosClient) -> None:
-    lonely = Go2RosRobot(Go2RosConfig(namespace="nobody", command_timeout=0.3, settle=0.1),
+    lonely = Go2RosRobot(Go2RosConfig(namespace="nobody", command_timeout=0.3),
                          context=client.context)
     try:
         state = lonely.get_state()  # at rest: the last (here: no) state, marked disconnected
         assert state.connected is False
         with pytest.raises(RobotError, match="no odometry received on /nobody/odom"):
             lonely.send_velocity(0.2, 0.0, 0.0)
-        with pytest.raises(RobotError, match="/nobody/go2_states no messages"):
+        with pytest.raises(RobotError, match="cannot tell the robot's posture: "
+                                             "/nobody/go2_states shows no messages"):
             lonely.set_posture(Posture.SITTING)
     finally:
         lonely.close()

@@ -161,7 +161,7 @@ def test_dry_run_plans_and_checks_without_moving(agent: Agent) -> None:
 
 def test_cancel_stops_the_robot_and_a_second_goal_is_rejected(agent: Agent) -> None:
     feedback: list = []
-    handle = send_goal(agent, "walk forward 3 meters", feedback=feedback)
+    handle = send_goal(agent, "walk forward 2 meters", feedback=feedback)
     assert handle.accepted
     wait_moving(agent)
     assert not send_goal(agent, "turn left 10 degrees").accepted  # one mission at a time
@@ -173,7 +173,7 @@ def test_cancel_stops_the_robot_and_a_second_goal_is_rejected(agent: Agent) -> N
     assert "mission cancelled" in response.result.response
     stopped = wait_until(lambda: (s := agent.robot_state()) and not s["moving"] and s, 5,
                          "the robot to stop")
-    assert stopped["x"] < 2.5
+    assert stopped["x"] < 1.8  # cancelled before the end (x = 2.0)
     # the node takes goals again
     assert get_result(send_goal(agent, "turn right 5 degrees")).result.success
 
@@ -193,7 +193,7 @@ def test_estop_stops_latches_and_releases(agent: Agent, client: RosClient) -> No
     wait_until(lambda: estop.get_subscription_count() and release.get_subscription_count(),
                TIMEOUT, "the e-stop subscriptions")
     mark = agent.status.mark()
-    agent.missions.publish(String(data="walk forward 3 meters"))
+    agent.missions.publish(String(data="walk forward 2 meters"))
     wait_moving(agent)
     diag_mark = agent.diagnostics.mark()
     estop.publish(Empty())

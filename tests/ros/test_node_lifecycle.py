@@ -81,7 +81,7 @@ def test_sigint_and_sigterm_stop_the_robot_and_exit_0() -> None:
             runs[sig] = (process, Agent(client, ns))
         for sig, (process, agent) in runs.items():
             agent.wait_ready(process)
-            agent.missions.publish(String(data="walk forward 3 meters"))
+            agent.missions.publish(String(data="walk backward 3 meters"))
             wait_until(lambda a=agent: a.robot_state()["moving"], 30, "the robot to move")
             mark = agent.status.mark()
             assert process.stop(sig) == 0, process.output()

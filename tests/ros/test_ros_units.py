@@ -113,6 +113,22 @@ def test_diagnostic_level_follows_the_agent_status(diagnostics: dict, level: int
     assert convert.diagnostic_level(diagnostics) == level
 
 
+def test_an_unknown_battery_warns_in_diagnostics_and_is_never_a_number() -> None:
+    from shadowhound.state import RobotState
+
+    robot = RobotState(battery=None).to_dict()
+    assert robot["battery"] is None
+    diagnostics = {"status": "idle", "robot": robot}
+    assert convert.diagnostic_level(diagnostics) == convert.WARN
+    assert convert.diagnostic_message(diagnostics) == \
+        "idle; battery level unknown (no battery source)"
+    assert dict(convert.diagnostic_values(diagnostics))["battery"] == "unknown"
+    assert convert.diagnostic_level({"status": "failed", "robot": robot}) == convert.WARN
+    known = {"status": "idle", "robot": RobotState(battery=42.0).to_dict()}
+    assert convert.diagnostic_level(known) == convert.OK
+    assert dict(convert.diagnostic_values(known))["battery"] == "42.0"
+
+
 def test_diagnostic_values_are_strings_with_the_documented_keys() -> None:
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0)))
     values = dict(convert.diagnostic_values(agent.get_diagnostics(), {"robot": "sim-go2"}))

@@ -115,7 +115,7 @@ def test_estop_latches_drops_the_queue_and_refuses_missions(client: TestClient) 
 def test_cancel_a_running_mission_and_refuse_cancelling_a_finished_one() -> None:
     agent = make_agent(time_scale=0.05)  # real clock, 20x faster: the mission runs ~0.5 s
     with TestClient(create_app(agent), base_url="http://127.0.0.1") as client:
-        first = client.post("/api/mission", json={"command": "walk forward 4 meters"}).json()
+        first = client.post("/api/mission", json={"command": "walk backward 4 meters"}).json()
         queued = client.post("/api/mission", json={"command": "turn left 90 degrees"}).json()
         assert queued["queued_ahead"] >= 1
         wait_for(lambda: client.get("/api/status").json()["running"] == first["mission_id"],

@@ -73,10 +73,10 @@ def test_dashboard_runs_a_mission_and_the_estop_stops_the_robot(
             page.screenshot(path=str(ARTIFACTS / "dashboard-mission.png"), full_page=True)
 
             # 2. A longer mission, stopped with the STOP button while the robot walks.
-            page.fill("#command", "walk forward 5 meters")
+            page.fill("#command", "walk backward 5 meters")
             page.click("#run")
             page.wait_for_selector('#steps li[data-status="running"]')
-            wait_for(lambda: _map_x(page) > 1.4, 10, "the robot to walk on")
+            wait_for(lambda: _map_x(page) < -1.4, 10, "the robot to walk on")
             page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
             assert _in_viewport(page, "#estop"), "the STOP button must stay on screen"
             page.click("#estop")
@@ -88,7 +88,7 @@ def test_dashboard_runs_a_mission_and_the_estop_stops_the_robot(
             assert "e-stop" in page.text_content("#result")
             page.wait_for_selector('#status-pill[data-status="stopped"]')
             x = agent.get_robot_state().x
-            assert 1.4 < x < 5.5
+            assert 1.4 < -x < 5.5
             page.evaluate("window.scrollTo(0, 0)")
             page.screenshot(path=str(ARTIFACTS / "dashboard-estop.png"), full_page=True)
 

@@ -141,13 +141,13 @@ def test_estop_over_http_stops_a_running_mission(serve: Serve) -> None:
     agent = make_agent(time_scale=0.5)  # real time, twice as fast
     server = serve(agent)
     with httpx.Client(base_url=server.url, timeout=10) as client:
-        mission = client.post("/api/mission", json={"command": "walk forward 4 meters"}).json()
-        wait_for(lambda: agent.get_robot_state().vx > 0.2, what="the robot to walk")
+        mission = client.post("/api/mission", json={"command": "walk backward 4 meters"}).json()
+        wait_for(lambda: agent.get_robot_state().vx < -0.2, what="the robot to walk")
         reply = client.post("/api/estop").json()
         assert reply["robot"]["estopped"] is True
         # The hard stop zeroes velocity before the answer is sent.
         assert reply["robot"]["moving"] is False
         record = finished(client, mission["mission_id"])
         assert record["status"] == "stopped" and "e-stop" in record["response"]
-        assert agent.get_robot_state().x < 3.5
+        assert -agent.get_robot_state().x < 3.5
         client.post("/api/estop/release")

@@ -29,7 +29,7 @@ def srv() -> Iterator[ScriptedLLM]:
 def llm_agent(srv: ScriptedLLM, data_dir: Path):  # noqa: ANN201 - a RobotAgent
     return make_agent(backend="llamacpp",
                       llm={"base_url": srv.url, "model": "test-model", "timeout": 30,
-                           "max_retries": 2, "check_on_start": False},
+                           "max_retries": 2, "check_on_start": False, "hybrid": False},
                       memory={"enabled": True, "data_dir": str(data_dir)})
 
 

@@ -25,11 +25,14 @@ ARGUMENTS = {
     "web_interface_port": "8080",
     "enable_web_ui": "false",
     "robot_namespace": "",
-    "cmd_vel_topic": "cmd_vel",
+    "cmd_vel_topic": "",
     "webrtc_topic": "webrtc_req",
     "odom_topic": "odom",
     "go2_states_topic": "go2_states",
     "odom_timeout": "0.5",
+    "odom_latency": "-1.0",
+    "battery_topic": "",
+    "go2_firmware_tricks": "false",
 }
 
 

@@ -21,6 +21,7 @@ from .tools import (
     cmd_config,
     cmd_doctor,
     cmd_history,
+    cmd_mcp,
     cmd_node,
     cmd_places,
     cmd_recall,
@@ -47,14 +48,24 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message}", self.format_usage())
 
 
-def _common(parser: argparse.ArgumentParser, suppress: bool) -> None:
+BACKENDS = ["offline", "openai", "ollama", "vllm", "llamacpp"]
+
+
+def _common(parser: argparse.ArgumentParser, suppress: bool, compare: bool = False) -> None:
     default: Any = argparse.SUPPRESS if suppress else None
     parser.add_argument("--config", "-c", metavar="PROFILE|PATH", default=default,
                         help="profile name (" + ", ".join(available_profiles()) +
                         ") or a YAML file; default $SHADOWHOUND_CONFIG or offline")
-    parser.add_argument("--backend", default=default,
-                        choices=["offline", "openai", "ollama", "vllm", "llamacpp"],
-                        help="planner backend; without --config it also picks that profile")
+    if compare:  # eval: several planners side by side
+        parser.add_argument("--backend", default=default, action="append",
+                            metavar="BACKEND[:OPTION...]",
+                            help="a planner to evaluate; repeat to compare several. BACKEND is "
+                                 f"one of {', '.join(BACKENDS)}; OPTIONs: hybrid, llm (hybrid "
+                                 "off), json_schema, plain, tools, react; e.g. --backend offline "
+                                 "--backend llamacpp --backend llamacpp:llm:plain")
+    else:
+        parser.add_argument("--backend", default=default, choices=BACKENDS,
+                            help="planner backend; without --config it also picks that profile")
     parser.add_argument("--model", default=default, help="language model name (llm.model)")
     parser.add_argument("--base-url", default=default, metavar="URL",
                         help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:8000/v1")
@@ -96,15 +107,25 @@ def build_parser() -> argparse.ArgumentParser:
     _common(chat, suppress=True)
 
     evaluate = sub.add_parser("eval", help="run mission cases from a YAML file and score them")
-    _common(evaluate, suppress=True)
+    _common(evaluate, suppress=True, compare=True)
     evaluate.add_argument("file", help="YAML list of {mission, expect} cases")
     evaluate.add_argument("--json", action="store_true", help="print the report as JSON")
 
     show = sub.add_parser("config", help="print the effective configuration (no secrets)")
     _common(show, suppress=True)
 
-    doctor = sub.add_parser("doctor", help="check the configuration, the backend and the model")
+    doctor = sub.add_parser("doctor", help="check the configuration, the backend and the model "
+                                           "(and with --go2 the Go2 driver's ROS 2 link)")
     _common(doctor, suppress=True)
+    doctor.add_argument("--go2", action="store_true",
+                        help="check the go2_ros2_sdk driver (also when the profile's robot is go2)")
+    doctor.add_argument("--namespace", default="", help="the robot's namespace, e.g. robot0")
+    doctor.add_argument("--cmd-vel-topic", default="",
+                        help="velocity topic to check ('' = as the robot discovers it)")
+    doctor.add_argument("--battery-topic", default="",
+                        help="sensor_msgs/BatteryState topic ('' = none)")
+    doctor.add_argument("--seconds", type=float, default=3.0,
+                        help="how long to watch the topics (default 3)")
 
     history = sub.add_parser("history", help="list past missions, or show one (memory.enabled)")
     _common(history, suppress=True)
@@ -132,26 +153,54 @@ def build_parser() -> argparse.ArgumentParser:
                        help="bearer token the API requires (default $SHADOWHOUND_TOKEN; the "
                             "environment is safer: a command line is visible in ps)")
 
+    mcp = sub.add_parser("mcp", help="run the MCP server for Claude Desktop and other MCP "
+                                     "clients (needs the 'mcp' extra)",
+                         description="Serve ShadowHound's tools to MCP clients: over stdio "
+                                     "(default; the client starts this command) or Streamable "
+                                     "HTTP (--http).")
+    _common(mcp, suppress=True)
+    mcp.add_argument("--robot", choices=["sim", "go2"], default=None,
+                     help="robot to drive (default: the profile's, normally sim; go2 needs the "
+                          "'ros' extra and go2_ros2_sdk)")
+    mcp.add_argument("--http", action="store_true",
+                     help="serve Streamable HTTP at http://HOST:PORT/mcp instead of stdio")
+    mcp.add_argument("--host", default="127.0.0.1",
+                     help="HTTP address; anything but a literal loopback address needs a token")
+    mcp.add_argument("--port", type=int, default=8765, help="HTTP port (default 8765)")
+    mcp.add_argument("--token", default=None,
+                     help="bearer token HTTP clients must send (default $SHADOWHOUND_TOKEN)")
+
     sub.add_parser("node", help="run the ROS 2 MissionNode (needs the 'ros' extra): "
                                 "shadowhound node --ros-args -p name:=value ...",
                    add_help=False)
-    sub.add_parser("sim-driver", help="run a simulated Go2 with go2_ros2_sdk's ROS 2 topics "
-                                      "(for robot:=go2 without a robot): shadowhound sim-driver "
-                                      "--ros-args ...", add_help=False)
+    sub.add_parser("sim-driver", help="run a simulated Go2 behind go2_ros2_sdk's ROS 2 topics, "
+                                      "behaving as the real driver does (for robot:=go2 without "
+                                      "a robot): shadowhound sim-driver [options] [--ros-args "
+                                      "...]; see shadowhound sim-driver --help", add_help=False)
     return parser
 
 
-def _settings(args: argparse.Namespace) -> ShadowHoundConfig:
+def _settings(args: argparse.Namespace, planner: str | None = None) -> ShadowHoundConfig:
+    """The settings of the command line, for `planner` ("BACKEND[:OPTION...]", see eval)."""
+    from ..evaluation import planner_options
+
     overrides: dict[str, Any] = {}
     profile = args.config
-    if args.backend:
-        overrides["backend"] = args.backend
-        if profile is None and args.backend in available_profiles():
-            profile = args.backend  # --backend ollama alone means the ollama profile
+    if planner is None and isinstance(args.backend, str):
+        planner = args.backend
+    backend, options = planner_options(planner) if planner else ("", {})
+    if backend:
+        if backend not in BACKENDS:
+            raise ConfigError(f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
+        overrides["backend"] = backend
+        if profile is None and backend in available_profiles():
+            profile = backend  # --backend ollama alone means the ollama profile
     if args.time_scale is not None:
         overrides["sim"] = {"time_scale": args.time_scale}
+    if getattr(args, "robot", None):
+        overrides["robot"] = args.robot
     llm = {k: v for k, v in (("model", args.model), ("base_url", args.base_url),
-                             ("mode", args.mode)) if v is not None}
+                             ("mode", args.mode)) if v is not None} | options
     if llm:
         overrides["llm"] = llm
     return load_config(profile, overrides)
@@ -182,7 +231,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         settings = _settings(args)
         handler = {"run": cmd_run, "skills": cmd_skills, "chat": cmd_chat, "eval": cmd_eval,
                    "config": cmd_config, "doctor": cmd_doctor, "history": cmd_history,
-                   "places": cmd_places, "recall": cmd_recall, "serve": cmd_serve}[args.command]
+                   "places": cmd_places, "recall": cmd_recall, "serve": cmd_serve,
+                   "mcp": cmd_mcp}[args.command]
         return handler(args, settings)
     except ConfigError as exc:
         return report_error(_kind(exc), str(exc), EXIT_USAGE, json_out=json_out, mission=mission)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import queue
 import sys
 import threading
@@ -120,7 +121,7 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         print(result.response)
         print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
               f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
-              f"battery={st.battery:.1f}%")
+              f"battery={st.battery_text}")
     return code
 
 
@@ -141,9 +142,15 @@ def _dry_run(agent: Any, args: argparse.Namespace) -> int:
         for step in result.steps:
             params = ", ".join(f"{k}={v}" for k, v in step.args.items())
             print(f"  [{step.index}] {step.skill}({params})")
-        path = " -> ".join(f"({p.x:.2f}, {p.y:.2f})" for p in result.predicted_path)
+        points = result.predicted_path
+        path = " -> ".join(f"({p.x:.2f}, {p.y:.2f})" for p in points)
         if path:
-            print(f"predicted path: {path}")
+            # With a map, nav.goto's planned path around obstacles: every corner is a waypoint.
+            legs = zip(points, points[1:], strict=False)
+            length = sum(math.hypot(b.x - a.x, b.y - a.y) for a, b in legs)
+            print(f"predicted path ({length:.2f} m, {len(points)} waypoints): {path}")
+        for note in result.plan.notes if result.plan else []:
+            print(f"note: {note}")  # e.g. how a misspelt word was read
         print(result.response)
     return code
 
@@ -222,33 +229,64 @@ def _chat_line(agent: Any, line: str) -> str:
 
 
 def cmd_eval(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
-    from ..evaluation import CaseFileError, load_cases, run_cases
+    """Run a case file with one planner, or several side by side (`--backend` repeated)."""
+    from ..evaluation import CaseFileError, load_cases, run_cases, scorecard
+    from . import _settings
 
     try:
         cases = load_cases(args.file)
     except CaseFileError as exc:
         print(f"shadowhound: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    specs = args.backend if isinstance(args.backend, list) else [None]
+    planners = [(spec or settings.backend, _settings(args, spec) if spec else settings)
+                for spec in specs]  # every spec checked before the first case runs
+    several = len(planners) > 1
 
-    def show(outcome: Any) -> None:
-        if args.json:
-            return
-        mark = "PASS" if outcome.passed else "FAIL"
-        print(f"{mark}  {outcome.case.mission!r}")
-        for failure in outcome.failures:
-            print(f"      {failure}  [{outcome.response}]")
+    reports = []
+    for label, planner_settings in planners:
+        def show(outcome: Any, label: str = label) -> None:
+            if args.json:
+                return
+            mark = "PASS" if outcome.passed else "FAIL"
+            print(f"{mark}  {f'[{label}] ' if several else ''}{outcome.case.mission!r}")
+            for failure in outcome.failures:
+                print(f"      {failure}  [{outcome.response}]")
 
-    outcomes = run_cases(cases, settings, on_case=show)
-    passed = sum(o.passed for o in outcomes)
-    total = len(outcomes)
-    rate = passed / total if total else 0.0
+        outcomes = run_cases(cases, planner_settings, on_case=show)
+        card = scorecard(label, outcomes)
+        reports.append((card, outcomes))
+        if not args.json:
+            print(f"{f'{label}: ' if several else ''}{card.passed}/{card.cases} cases passed "
+                  f"({100 * card.pass_rate:.1f}%)")
     if args.json:
-        json.dump({"total": total, "passed": passed, "failed": total - passed,
-                   "pass_rate": round(rate, 4), "cases": [o.to_dict() for o in outcomes]},
-                  sys.stdout, indent=2)
+        json.dump(_eval_json(reports, several), sys.stdout, indent=2)
         sys.stdout.write("\n")
-    else:
-        print(f"{passed}/{total} cases passed ({100 * rate:.1f}%)")
-    return EXIT_OK if passed == total and total else EXIT_FAILED
+    elif several:
+        print(scorecard_table([card for card, _ in reports]))
+    ok = all(card.passed == card.cases and card.cases for card, _ in reports)
+    return EXIT_OK if ok else EXIT_FAILED
 
 
+def _eval_json(reports: list[tuple[Any, list[Any]]], several: bool) -> dict[str, Any]:
+    def one(card: Any, outcomes: list[Any]) -> dict[str, Any]:
+        return {"total": card.cases, "passed": card.passed, "failed": card.cases - card.passed,
+                "pass_rate": round(card.pass_rate, 4), "scorecard": card.to_dict(),
+                "cases": [o.to_dict() for o in outcomes]}
+
+    if several:
+        return {"planners": [one(card, outcomes) for card, outcomes in reports]}
+    return one(*reports[0])
+
+
+def scorecard_table(cards: list[Any]) -> str:
+    """One row per planner: pass rate, model calls, tokens, planning latency, invalid plans."""
+    head = ["planner", "passed", "model calls/mission", "planned offline", "prompt tokens",
+            "completion tokens", "planning p50 ms", "planning p95 ms", "invalid plans"]
+    rows = [[c.planner, f"{c.passed}/{c.cases} ({100 * c.pass_rate:.0f}%)",
+             f"{c.calls_per_mission:.2f}", f"{c.offline_planned}/{c.cases}",
+             str(c.prompt_tokens), str(c.completion_tokens), f"{c.latency_p50 * 1e3:.1f}",
+             f"{c.latency_p95 * 1e3:.1f}", str(c.invalid_plans)] for c in cards]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines += ["| " + " | ".join(row) + " |" for row in rows]
+    return "\n".join(lines)

@@ -1,5 +1,5 @@
 """Commands that inspect or serve: `skills`, `config`, `doctor`, `history`, `places`,
-`recall`, `serve`, and the ROS entry points `node` and `sim-driver`."""
+`recall`, `serve`, `mcp`, and the ROS entry points `node` and `sim-driver`."""
 
 from __future__ import annotations
 
@@ -74,14 +74,34 @@ def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
           f"{'allowed' if s.allow_risky_tricks else 'refused'}")
     if settings.backend == "offline":
         print("ok  planner: offline rules (no network, no model)")
-        return EXIT_OK
-    from ..llm import LLMBackend
+    else:
+        from ..llm import LLMBackend
 
-    for line in LLMBackend(settings.backend, settings.llm).check():
-        print(f"ok  {line}")
-    print(f"ok  planning mode {settings.llm.mode!r}, plan format {settings.llm.plan_format!r}, "
-          f"vision {'on' if settings.llm.vision else 'off'}")
+        for line in LLMBackend(settings.backend, settings.llm).check():
+            print(f"ok  {line}")
+        print(f"ok  planning mode {settings.llm.mode!r}, plan format "
+              f"{settings.llm.plan_format!r}, vision {'on' if settings.llm.vision else 'off'}")
+    if args.go2 or settings.robot == "go2":
+        return _doctor_go2(args)
     return EXIT_OK
+
+
+def _doctor_go2(args: argparse.Namespace) -> int:
+    """The Go2 driver's link, in words (see ros/go2_doctor.py)."""
+    try:
+        from ..ros.go2_doctor import diagnose, observe
+    except ImportError as exc:
+        print(f"fail Go2 checks need ROS 2 (rclpy) and go2_interfaces: {exc}\n"
+              "     fix: source ROS 2 and your go2_ros2_sdk workspace, or run "
+              "scripts/build_ros.sh")
+        return EXIT_FAILED
+    print(f"...  watching the Go2 driver's topics for {args.seconds:g} s")
+    findings = diagnose(observe(args.namespace, seconds=args.seconds,
+                                cmd_vel_topic=args.cmd_vel_topic,
+                                battery_topic=args.battery_topic))
+    for finding in findings:
+        print(finding)
+    return EXIT_FAILED if any(f.level == "fail" for f in findings) else EXIT_OK
 
 
 # -- memory --------------------------------------------------------------------------------------
@@ -176,6 +196,16 @@ def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     return int(serve_main(settings, args.host, args.port, args.token))
 
 
+# -- mcp -----------------------------------------------------------------------------------------
+
+
+def cmd_mcp(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    from ..mcp import main as mcp_main
+
+    return int(mcp_main(settings, http=args.http, host=args.host, port=args.port,
+                        token=args.token))
+
+
 # -- node ----------------------------------------------------------------------------------------
 
 
@@ -190,7 +220,7 @@ def cmd_node(ros_argv: list[str]) -> int:
     return node_main(ros_argv)
 
 
-def cmd_sim_driver(ros_argv: list[str]) -> int:
+def cmd_sim_driver(argv: list[str]) -> int:
     try:
         from ..ros.sim_driver import main as driver_main
     except ImportError as exc:
@@ -198,6 +228,6 @@ def cmd_sim_driver(ros_argv: list[str]) -> int:
               f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
               file=sys.stderr)
         return EXIT_USAGE
-    return driver_main(ros_argv)
+    return driver_main(argv)
 
 

@@ -1,8 +1,8 @@
 """Prompts and schemas generated from the skill registry: compact, so small models plan well.
 
 Plan mode sends one system prompt listing every skill on one line each, and asks for a JSON
-plan (constrained by `PLAN_SCHEMA` where the server supports it). Tool mode and react mode send
-the skills as function tools with schemas stripped to what a model needs.
+plan (constrained by `llm.schema`'s plan schema where the server enforces one). Tool mode and
+react mode send the skills as function tools with schemas stripped to what a model needs.
 """
 
 from __future__ import annotations
@@ -83,34 +83,12 @@ def tools(registry: SkillRegistry) -> list[dict[str, Any]]:
     ]
 
 
-def plan_schema(registry: SkillRegistry) -> dict[str, Any]:
-    """JSON Schema of a whole plan, for response_format json_schema / Ollama's format."""
-    return {
-        "type": "object",
-        "properties": {
-            "steps": {
-                "type": "array",
-                "items": {
-                    "type": "object",
-                    "properties": {
-                        "skill": {"type": "string", "enum": registry.names},
-                        "args": {"type": "object"},
-                    },
-                    "required": ["skill", "args"],
-                },
-            },
-            "answer": {"type": "string"},
-        },
-        "required": ["steps"],
-    }
-
-
 def state_line(state: RobotState | None) -> str:
     if state is None:
         return ""
     return (
         f"Robot now: {state.posture.value} at x={state.x:.2f} y={state.y:.2f}, facing "
-        f"{math.degrees(state.yaw):.0f} degrees, battery {state.battery:.0f}%."
+        f"{math.degrees(state.yaw):.0f} degrees, battery {state.battery_text}."
     )
 
 
@@ -130,6 +108,25 @@ def memory_lines(memories: list[str]) -> str:
     return ("Relevant memories:\n" + "\n".join(f"- {m}" for m in memories)) if memories else ""
 
 
+@functools.lru_cache(maxsize=64)
+def _stable_prefix(skills: tuple[Skill, ...], style: str) -> str:
+    parts = [_INTRO]
+    # React also lists the skills: some servers drop `tools` (llama-cpp-python's default chat
+    # format does), and the model must still know what it may call.
+    if style in ("plan", "react"):
+        parts.append("Skills:\n" + "\n".join(skill_line(s) for s in skills))
+    parts.append(_RULES)
+    parts.append({"plan": _PLAN_REPLY, "tools": _TOOLS_REPLY, "react": _REACT_REPLY}[style])
+    return "\n".join(parts)
+
+
+def stable_prefix(registry: SkillRegistry, *, style: str) -> str:
+    """What every mission's system message starts with, byte for byte, for one registry and
+    style: the intro, the skills, the rules and the reply format. Servers that cache prompts
+    (llama.cpp's `cache_prompt`, OpenAI's and vLLM's prefix caching) evaluate it once."""
+    return _stable_prefix(tuple(registry), style)
+
+
 def system_prompt(
     registry: SkillRegistry,
     *,
@@ -140,14 +137,12 @@ def system_prompt(
     history_size: int = 0,
     memories: list[str] | None = None,
 ) -> str:
-    """The system message. `style` is plan (skills listed, JSON reply), tools or react."""
-    parts = [_INTRO]
-    # React also lists the skills: some servers drop `tools` (llama-cpp-python's default chat
-    # format does), and the model must still know what it may call.
-    if style in ("plan", "react"):
-        parts.append("Skills:\n" + "\n".join(skill_line(s) for s in registry))
-    parts += [places_line(places or {}), state_line(state),
-              history_lines(history or [], history_size), memory_lines(memories or [])]
-    parts.append(_RULES)
-    parts.append({"plan": _PLAN_REPLY, "tools": _TOOLS_REPLY, "react": _REACT_REPLY}[style])
+    """The system message. `style` is plan (skills listed, JSON reply), tools or react.
+
+    The stable prefix comes first; what changes from mission to mission (places, recent
+    missions, memories, the robot's state) comes last, so only that tail is evaluated anew.
+    """
+    parts = [stable_prefix(registry, style=style),
+             places_line(places or {}), history_lines(history or [], history_size),
+             memory_lines(memories or []), state_line(state)]
     return "\n".join(p for p in parts if p)

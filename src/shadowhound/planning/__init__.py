@@ -31,7 +31,8 @@ class Planner(Protocol):
     """Turns a request into a Plan, or raises PlanningError saying what it did not understand.
 
     A planner may set `needs_context = False` when it ignores the PlanningContext; it then gets
-    None and the agent spends nothing on building one.
+    None and the agent spends nothing on building one. `kind` (offline | llm | hybrid |
+    explicit) is what `MissionResult.planner` records; a planner without one records "".
     """
 
     name: str
@@ -43,6 +44,7 @@ class FixedPlanner:
     """Returns a plan given in advance (explicit skill calls from an API, a script or a test)."""
 
     name = "explicit"
+    kind = "explicit"
     needs_context = False
 
     def __init__(self, plan: Plan) -> None:
@@ -53,14 +55,24 @@ class FixedPlanner:
 
 
 def make_planner(settings: ShadowHoundConfig) -> Planner:
-    """The planner for `settings.backend`: the rule planner offline, else an LLMPlanner."""
-    if settings.backend == "offline":
-        from .rules import RulePlanner
+    """The planner for `settings`: the offline rules, or a language model behind them.
 
+    With a model configured, plan mode is hybrid unless `llm.hybrid` is off: the offline rules
+    plan what they understand whole, at no model call, and the model plans the rest. React
+    mode is the model's loop from the first step.
+    """
+    from .rules import RulePlanner
+
+    if settings.backend == "offline":
         return RulePlanner()
     from .llm import LLMPlanner
 
-    return LLMPlanner(settings)
+    model = LLMPlanner(settings)
+    if settings.llm.hybrid and settings.llm.mode == "plan":
+        from .hybrid import HybridPlanner
+
+        return HybridPlanner(RulePlanner(), model)
+    return model
 
 
 __all__ = ["FixedPlanner", "Planner", "PlanningContext", "make_planner"]

@@ -92,8 +92,9 @@ _TRAIL = re.compile(
 _PLEASE = re.compile(r"\bplease\b")
 
 
-def normalize(clause: str) -> tuple[str, list[str]]:
-    """Lower-case, punctuation-free clause with fillers stripped and numbers in digits."""
+def normalize(clause: str, *, digits: bool = True) -> tuple[str, list[str]]:
+    """Lower-case, punctuation-free clause with fillers stripped and numbers in digits (or, with
+    `digits=False`, still in words, as spelling correction needs them)."""
     notes: list[str] = []
     text = clause.lower().translate(_CHARMAP)
     text = _CONTRACTION.sub(lambda m: _CONTRACTIONS[m.group(0)], text).replace("'", "")
@@ -105,7 +106,7 @@ def normalize(clause: str) -> tuple[str, list[str]]:
             break
     if " few" in f" {text}":
         notes.append(f"'a few' in '{clause}' taken as 3")
-    text = to_digits(text)
+    text = to_digits(text) if digits else text
     return " ".join(text.split()), notes
 
 

@@ -30,6 +30,10 @@ STOP = re.compile(
     r"|^(?:stand|stay|hold|keep)\s+still$|^(?:do\s+not|never)\s+move$|^hold\s+it$"
     r"|^(?:that\s+is\s+)?enough$"
 )
+CONDITION = re.compile(
+    r"\b(?:if|unless|until|till|whenever|when|while|as\s+soon\s+as|as\s+long\s+as|in\s+case"
+    r"|once\s+(?:you|i|we|it|they|the)|provided)\b"
+)
 NEGATION = re.compile(r"\b(?:do\s+not|does\s+not|never|not|no\s+longer|can\s+not|will\s+not)\b")
 WAIT = re.compile(
     r"^(?:wait|pause|hold\s+on|hold\s+(?:your\s+)?position|hold\s+it|hold|hang\s+on|hang\s+tight"
@@ -45,6 +49,11 @@ POSTURE = re.compile(
     r"|(?P<stand>stand(?:\s+(?:back\s+)?up)?|get\s+(?:back\s+)?up|rise(?:\s+up)?|stand\s+tall"
     r"|stand\s+upright|get\s+on\s+(?:your\s+)?feet|on\s+(?:your\s+)?feet|up|wake\s+up))"
     r"(?:\s+(?P<rest>.+))?$"
+)
+# What a posture may add that changes nothing: where (the spot it is on) and how.
+POSTURE_EXTRA = re.compile(
+    r"\b(?:on\s+(?:the\s+|your\s+)?(?:floor|ground)|(?:right\s+)?(?:here|there)|right\s+now|now"
+    r"|where\s+you\s+are|straight|upright|nicely|calmly|quietly|properly|for\s+(?:me|us))\b"
 )
 
 GO = (

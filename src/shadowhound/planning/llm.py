@@ -19,7 +19,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ..config import ShadowHoundConfig
-from ..llm import prompts
+from ..llm import prompts, schema
 from ..llm.backend import BackendError, LLMBackend
 from ..llm.parse import ParsedReply, parse_reply
 from ..plan import Plan, PlanningError, SkillCall, Usage
@@ -34,6 +34,8 @@ StepRunner = Callable[[SkillCall], str]
 
 class LLMPlanner:
     """A planner that asks a language model. Build it with the settings of one backend."""
+
+    kind = "llm"
 
     def __init__(self, settings: ShadowHoundConfig) -> None:
         self.settings = settings
@@ -60,10 +62,11 @@ class LLMPlanner:
             reply, raw = self._ask(messages, style, ctx, usage)
             calls, problems = self._checked(reply, ctx)
             if not problems and calls:
-                return Plan(calls, text=text, usage=usage, planner=self.name,
+                return Plan(calls, text=text, usage=usage, planner=self.name, planned_by="llm",
                             notes=[reply.answer] if reply.answer else [])
             if not problems:  # no steps: the model says why in words
                 raise PlanningError(reply.answer or "The model proposed no steps.", usage=usage)
+            usage.invalid_plans += 1
             if attempt < self.llm.repair_attempts:
                 messages += [raw, {"role": "user", "content": _repair_request(problems, style)}]
         raise PlanningError(
@@ -92,12 +95,12 @@ class LLMPlanner:
         options: dict[str, Any] = {}
         fmt = self._format()
         if style == "tools":
-            options["tools"] = prompts.tools(ctx.registry)
+            options["tools"] = self._tools(ctx)
             if self.settings.backend == "openai":
                 options["parallel_tool_calls"] = True
         elif fmt == "json_schema":
-            options["response_format"] = _response_format(self.settings.backend,
-                                                          prompts.plan_schema(ctx.registry))
+            options["response_format"] = schema.response_format(self.settings.backend,
+                                                                ctx.registry)
         try:
             completion = self._complete(messages, usage, ctx, **options)
         except BackendError as exc:
@@ -123,8 +126,10 @@ class LLMPlanner:
                   **options: Any) -> Any:
         if ctx.cancelled is not None and ctx.cancelled.is_set():
             raise PlanningError("mission cancelled before the model was asked", usage=usage)
+        hints = schema.request_hints(self.settings.backend)
         try:  # a cancel ends the wait at once (BackendCancelled) and nothing more is sent
-            completion = self.backend.complete(messages, cancelled=ctx.cancelled, **options)
+            completion = self.backend.complete(messages, cancelled=ctx.cancelled, **options,
+                                               extra_body=hints or None)
         except BackendError:
             usage.round_trips += 1  # a failed request is still a round trip
             raise
@@ -145,6 +150,11 @@ class LLMPlanner:
             calls.append(SkillCall(valid.name, valid.args_dict(), call.label))
         return calls, problems
 
+    def _tools(self, ctx: PlanningContext) -> list[dict[str, Any]]:
+        if self.settings.backend == "openai":  # the one API that enforces `strict` tools
+            return schema.strict_tools(ctx.registry)
+        return prompts.tools(ctx.registry)
+
     def _system(self, ctx: PlanningContext, style: str) -> str:
         return prompts.system_prompt(
             ctx.registry, style=style, state=ctx.state, places=ctx.places, history=ctx.history,
@@ -161,7 +171,7 @@ class LLMPlanner:
             {"role": "system", "content": self._system(ctx, "react")},
             {"role": "user", "content": text},
         ]
-        tools = prompts.tools(ctx.registry)
+        tools = self._tools(ctx)
         executed = 0
         while True:
             if usage.total_tokens >= self.llm.react_token_budget:
@@ -227,15 +237,6 @@ class LLMPlanner:
         except (BackendError, ValueError) as exc:
             return f"I could not look at the image: {exc}"
         return str(completion.message.get("content") or "").strip() or "(no answer)"
-
-
-def _response_format(backend: str, schema: dict[str, Any]) -> dict[str, Any]:
-    """A plan-constrained response format in the dialect the server speaks."""
-    if backend == "llamacpp":
-        # llama.cpp (llama-server and llama-cpp-python) constrain json_object with a schema.
-        return {"type": "json_object", "schema": schema}
-    return {"type": "json_schema", "json_schema": {"name": "plan", "schema": schema,
-                                                   "strict": False}}
 
 
 def _context(context: Any) -> PlanningContext:

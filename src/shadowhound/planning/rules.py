@@ -17,6 +17,7 @@ from shadowhound.plan import Plan, PlanningError, SkillCall
 from shadowhound.planning import _english as en
 from shadowhound.planning import _numbers as nums
 from shadowhound.planning import _phrases as phrases
+from shadowhound.planning import _spelling as spelling
 from shadowhound.planning import _vocabulary as vocab
 from shadowhound.planning._errors import CAPABILITIES, NotUnderstood, describe, failure
 from shadowhound.planning._memory_phrases import memory_steps
@@ -29,12 +30,15 @@ MAX_CHARS = 2000
 MAX_STEPS = 1000  # guards memory against "repeat 1000000 times"; motion limits live elsewhere
 
 _fmt = nums.format_number
+# What a clause asks: its steps (None: repeat everything so far), repeat count, how, its verb.
+_Read = tuple[list[SkillCall] | None, int, str, str]
 
 
 class RulePlanner:
     """Plans English requests with hand-written rules; fast, deterministic and offline."""
 
     name = "offline"
+    kind = "offline"
     needs_context = False  # plans from the words alone
 
     def __init__(
@@ -76,20 +80,16 @@ class RulePlanner:
                 continue
             try:
                 norm, clause_notes = en.normalize(label)
-                norm, count, how = phrases.repetition(norm)
-                if not norm and not how:
+                read = self._forgiving(norm, label, clause_notes, last_verb, bool(steps))
+                if read is None:
                     continue  # only fillers such as "please" or "hey dog"
-                if not norm or phrases.REPEAT_ALL.match(norm):
-                    if not steps:
-                        raise NotUnderstood("there is nothing before it to repeat")
+                new, count, how, last_verb = read
+                if new is None:  # "repeat that": everything so far, again
                     total = count + 1 if how == "more" else (count if how == "times" else 2)
                     _check_size(steps, len(steps) * total)
                     steps = steps * total
                     notes.extend(clause_notes)
                     continue
-                new, last_verb = self._clause(norm, label, clause_notes, last_verb)
-                if new is None:
-                    raise NotUnderstood()
             except NotUnderstood as exc:
                 failed.append((label, exc.reason))
                 last_verb = ""
@@ -115,9 +115,56 @@ class RulePlanner:
                 f"I found no request in {text.strip()[:80]!r}. " + CAPABILITIES,
                 not_understood=[text.strip()[:200]],
             )
-        return Plan(steps=steps, text=text, notes=list(dict.fromkeys(notes)), planner=self.name)
+        return Plan(steps=steps, text=text, notes=list(dict.fromkeys(notes)), planner=self.name,
+                    planned_by=self.kind)
 
     # ---- one clause ---------------------------------------------------------------------------
+
+    def _forgiving(self, norm: str, label: str, notes: list[str], last_verb: str,
+                   after_steps: bool) -> _Read | None:
+        """`_read`, and if the clause is not understood as written, `_read` again with its
+        misspellings read as the planner's own words; the notes say what was read as what.
+        Raises NotUnderstood naming the words that stand in the way."""
+        tried = list(notes)
+        try:
+            read = self._read(norm, label, tried, last_verb, after_steps)
+        except NotUnderstood as exc:
+            reason = exc.reason
+        else:
+            notes[:] = tried
+            return read
+        reading = spelling.read(en.normalize(label, digits=False)[0])
+        understood = []
+        for text, fixes in reading.alternatives():
+            tried = list(notes)
+            try:
+                read = self._read(nums.to_digits(text), label, tried, last_verb, after_steps)
+            except NotUnderstood as exc:
+                reason = reason or exc.reason
+                continue
+            understood.append((read, tried, fixes))
+        plans = {repr(read[:3] if read else read) for read, _, _ in understood}
+        if len(plans) == 1:  # one reading makes sense (or all mean the same): take it, say so
+            read, tried, fixes = understood[0]
+            notes[:] = tried + [f"read '{a}' as '{b}' in '{label}'" for a, b in fixes]
+            return read
+        raise NotUnderstood("; ".join(r for r in (reason, reading.problems()) if r))
+
+    def _read(self, norm: str, label: str, notes: list[str], last_verb: str,
+              after_steps: bool) -> _Read | None:
+        """What a normalised clause asks: (steps, count, how, verb); steps None for "repeat
+        all"; None for a clause of fillers only."""
+        norm, count, how = phrases.repetition(norm)
+        if not norm and not how:
+            return None
+        if not norm or phrases.REPEAT_ALL.match(norm):
+            if not after_steps:
+                raise NotUnderstood("there is nothing before it to repeat")
+            return None, count, how, ""
+        new, verb = self._clause(norm, label, notes, last_verb)
+        if new is None:
+            raise NotUnderstood()
+        return new, count, how, verb
 
     def _clause(
         self, text: str, label: str, notes: list[str], last_verb: str
@@ -127,6 +174,10 @@ class RulePlanner:
             return [SkillCall("nav.stop", {}, label)], ""
         if phrases.NEGATION.search(text):
             raise NotUnderstood("I do not plan around 'not'; say what to do instead")
+        condition = phrases.CONDITION.search(text)
+        if condition:
+            raise NotUnderstood(f"I do not plan around conditions ('{condition[0]}'); say what "
+                                "to do, or ask a language-model planner")
         for handler in (self._wait, self._posture, self._trick, self._goto, self._patrol):
             steps = handler(text, label, notes)
             if steps is not None:
@@ -188,9 +239,11 @@ class RulePlanner:
             return None
         kind = next(k for k in ("lie", "sit", "stand") if m[k])
         steps = [SkillCall(vocab.POSTURE_SKILL[kind], {}, label)]
-        if m["rest"]:
+        # Words that only say where or how ("on the floor", "right here") change nothing.
+        rest = canon(phrases.POSTURE_EXTRA.sub(" ", m["rest"] or ""))
+        if rest:
             try:
-                seconds = self._duration(m["rest"], label, notes)
+                seconds = self._duration(rest, label, notes)
             except NotUnderstood:
                 return None  # e.g. "stand on your front legs" is a trick, not a posture
             if seconds is not None:  # "sit for 10 seconds": sit, then stay so

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
 
-from ..state import CameraFrame, Posture, RobotState
+from ..state import CameraFrame, Posture, RobotState, Scan
 
 
 class RobotError(Exception):
@@ -52,6 +52,10 @@ class Robot(Protocol):
 
     def get_camera_frame(self) -> CameraFrame | None:
         """The robot's own latest camera frame, if it has a camera."""
+        ...
+
+    def get_scan(self) -> Scan | None:
+        """The latest planar range scan, or None for a robot without a range sensor."""
         ...
 
     def close(self) -> None:

@@ -1,11 +1,19 @@
-"""Unitree Go2 sport API ids (topic rt/api/sport/request), as used by go2_ros2_sdk.
+"""Unitree Go2 sport API ids (topic rt/api/sport/request), as used by go2_ros2_sdk, and what
+the robot reports back: sport modes, postures, body heights.
 
-Pure data: the simulator, the ROS adapter and the `body.sport` skill all read this table.
+Pure data and two small rules of go2_ros2_sdk's: the simulated driver, the ROS robot, the
+simulator and the `body.sport` skill all read these tables, so each fact lives here once.
+Mode numbers are Unitree's SportModeState.mode; body heights and posture times are the
+simulator's figures (firmware knowledge: check them on a robot).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from enum import IntEnum
+
+from ..state import Posture
 
 SPORT_TOPIC = "rt/api/sport/request"
 
@@ -19,6 +27,9 @@ EULER = 1007
 MOVE = 1008
 SIT = 1009
 RISE_SIT = 1010
+
+MOTION_SWITCHER_TOPIC = "rt/api/motion_switcher/request"
+MOTION_SWITCH = 1002  # on MOTION_SWITCHER_TOPIC, parameter {"name": "ai"} or {"name": "normal"}
 
 
 @dataclass(frozen=True)
@@ -59,3 +70,96 @@ TRICKS: dict[str, Trick] = {
         Trick("bound", 1304, "bounding gait in place", 4.0, risky=True),
     )
 }
+
+# Tricks the robot performs only on firmware that has them and after switching to the "ai"
+# motion mode (MOTION_SWITCH with {"name": "ai"}); otherwise it ignores them.
+AI_MODE_TRICKS = frozenset({1042, 1043, 1044, 1301, 1302, 1303, 1304, 1305})
+
+
+class SportMode(IntEnum):
+    """`go2_states.mode`: the robot's sport mode (Unitree SportModeState.mode)."""
+
+    IDLE = 0
+    BALANCE_STAND = 1
+    POSE = 2
+    LOCOMOTION = 3
+    LIE_DOWN = 5
+    JOINT_LOCK = 6  # standing with locked joints (after StandUp): Moves are ignored
+    DAMPING = 7
+    RECOVERY_STAND = 8
+    SIT = 10
+    FRONT_FLIP = 11
+    FRONT_JUMP = 12
+    FRONT_POUNCE = 13
+
+
+# The posture each mode means. RECOVERY_STAND is a change under way, so it has none.
+MODE_POSTURE: dict[int, Posture] = {
+    SportMode.IDLE: Posture.STANDING, SportMode.BALANCE_STAND: Posture.STANDING,
+    SportMode.POSE: Posture.STANDING, SportMode.LOCOMOTION: Posture.STANDING,
+    SportMode.JOINT_LOCK: Posture.STANDING, SportMode.FRONT_FLIP: Posture.STANDING,
+    SportMode.FRONT_JUMP: Posture.STANDING, SportMode.FRONT_POUNCE: Posture.STANDING,
+    SportMode.LIE_DOWN: Posture.LYING, SportMode.DAMPING: Posture.LYING,
+    SportMode.SIT: Posture.SITTING,
+}
+# Modes in which the robot obeys Move (1008); in any other it ignores Moves.
+WALKING_MODES = frozenset({SportMode.BALANCE_STAND, SportMode.LOCOMOTION})
+# Body height (m) of each posture once reached; `go2_states.body_height` moves between them
+# while a posture changes (the mode changes at once, so only the height tells the end).
+BODY_HEIGHT: dict[Posture, float] = {Posture.STANDING: 0.32, Posture.SITTING: 0.20,
+                                     Posture.LYING: 0.08}
+BODY_HEIGHT_TOLERANCE = 0.02
+
+
+def posture_of(mode: int, body_height: float) -> Posture | None:
+    """The posture `go2_states` reports: the mode's posture once the body height has reached
+    it, else None (a posture change is under way, or the mode is not a posture)."""
+    posture = MODE_POSTURE.get(mode)
+    if posture is None or not math.isfinite(body_height):
+        return None
+    return posture if abs(body_height - BODY_HEIGHT[posture]) <= BODY_HEIGHT_TOLERANCE else None
+
+
+@dataclass(frozen=True)
+class PostureChange:
+    """A sport command that changes posture. It takes time, ignores Moves meanwhile, and does
+    not raise `progress`; the mode changes to `mode` when it starts, to `mode_after` at the end."""
+
+    api_id: int
+    name: str
+    needs: frozenset[Posture]  # postures it starts from (others: the robot ignores it)
+    target: Posture
+    mode: SportMode
+    mode_after: SportMode
+    share: float  # fraction of the full posture time it takes (the simulator's estimate)
+
+
+_ANY = frozenset(Posture)
+_STANDING = frozenset({Posture.STANDING})
+POSTURE_CHANGES: dict[int, PostureChange] = {
+    c.api_id: c
+    for c in (
+        PostureChange(STAND_UP, "StandUp", _ANY, Posture.STANDING, SportMode.JOINT_LOCK,
+                      SportMode.JOINT_LOCK, 1.0),
+        PostureChange(BALANCE_STAND, "BalanceStand", _STANDING, Posture.STANDING,
+                      SportMode.BALANCE_STAND, SportMode.BALANCE_STAND, 0.3),
+        PostureChange(STAND_DOWN, "StandDown", _STANDING, Posture.LYING, SportMode.LIE_DOWN,
+                      SportMode.LIE_DOWN, 1.0),
+        PostureChange(SIT, "Sit", _STANDING, Posture.SITTING, SportMode.SIT, SportMode.SIT, 1.0),
+        PostureChange(RISE_SIT, "RiseSit", frozenset({Posture.SITTING}), Posture.STANDING,
+                      SportMode.BALANCE_STAND, SportMode.BALANCE_STAND, 1.0),
+        PostureChange(RECOVERY_STAND, "RecoveryStand", _ANY, Posture.STANDING,
+                      SportMode.RECOVERY_STAND, SportMode.BALANCE_STAND, 1.3),
+        PostureChange(DAMP, "Damp", _ANY, Posture.LYING, SportMode.DAMPING, SportMode.DAMPING,
+                      0.3),
+    )
+}
+
+
+def move_parameter(x: float, y: float, z: float) -> dict[str, float] | None:
+    """What go2_ros2_sdk sends for a Twist (x, y forward/left m/s, z yaw rate rad/s): None for
+    an all-zero Twist, which it drops (a zero Twist stops nothing), else the Move (1008)
+    parameter, rounded to 2 decimals."""
+    if x == 0.0 and y == 0.0 and z == 0.0:
+        return None
+    return {"x": round(x, 2), "y": round(y, 2), "z": round(z, 2)}

@@ -1,15 +1,22 @@
 """Go2RosRobot: a Unitree Go2 driven through go2_ros2_sdk's ROS 2 topics (the Robot protocol).
 
-- motion: geometry_msgs/Twist on `cmd_vel`, capped, and re-published at 10 Hz while non-zero
-  (go2_ros2_sdk and twist_mux drop a stream that goes quiet; the skills also command every tick);
-- postures and tricks: go2_interfaces/WebRtcReq on `webrtc_req` with sport api ids on
-  `rt/api/sport/request`; each waits for `go2_states.progress` to return to 0 (the robot queues
-  sport commands) or, if the robot never reports busy, for a short settle;
-- state: pose and body velocity from `odom` (nav_msgs/Odometry), posture from acknowledged
-  commands; odometry older than `odom_timeout` while motion is under way makes `get_state`
-  raise RobotError, so the motion step fails at once with a clear message and the agent stops
-  the robot (after a stop the last state is returned with `connected` False, and motion is
-  refused until odometry is back);
+Written against how the driver really behaves (docs/go2.md):
+
+- motion: geometry_msgs/Twist, capped, re-published at 10 Hz while non-zero (the robot drops
+  a Move after about a second). The topic follows the launch layout: `cmd_vel` when something
+  (twist_mux) subscribes it, else `cmd_vel_out`, which the driver itself listens on, both
+  relative to the namespace; or the one configured.
+- stopping: every stop (end of a step, settle, stall, cancel, e-stop, close) sends StopMove
+  (sport api 1003). The driver drops all-zero Twists, so a zero Twist is never sent.
+- state: odometry carries the pose only and arrives late; `MotionTracker` predicts the pose
+  now from what was commanded since, and reports the robot still only once odometry shows it
+  still. Odometry older than `odom_timeout` while motion is under way makes `get_state` raise
+  RobotError (after a stop the last state is returned with `connected` False).
+- posture: from `go2_states` (mode and body height, read through go2_api's one table), at start
+  and after each posture command; a posture command is done when the posture is reached
+  (`progress` is no help: it stays 0 while postures run). No command when already there.
+- battery: a sensor_msgs/BatteryState topic when one is configured and publishing, else
+  unknown (None): the driver publishes no battery level.
 - camera: `camera/image_raw` (sensor_msgs/Image) or a topic ending in `compressed`.
 
 The robot has its own rclpy node and executor thread, so it works inside the MissionNode
@@ -18,6 +25,7 @@ process (sharing its context) or in a plain script (it then initialises a privat
 
 from __future__ import annotations
 
+import json
 import math
 import threading
 import time
@@ -31,53 +39,55 @@ from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import CompressedImage, Image
+from sensor_msgs.msg import BatteryState, CompressedImage, Image
 
 from ..camera import to_camera_frame
 from ..ros.convert import raw_image_frame
-from ..state import CameraFrame, Posture, RobotState, normalize_angle
+from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
 from . import go2_api
 from .base import RobotError
+from .go2_motion import MotionTracker
+from .go2_posture import STEPS, PostureWatch
+from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
 
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _SENSOR = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                      reliability=ReliabilityPolicy.BEST_EFFORT)
 _KEEPALIVE_PERIOD = 0.1  # 10 Hz, as DIMOS streams Twist to the Go2
-
-# Sport api ids that take the robot from one posture to the next (sitting is left with RiseSit).
-_STEPS: dict[tuple[Posture, Posture], tuple[int, ...]] = {
-    (Posture.STANDING, Posture.STANDING): (go2_api.STAND_UP, go2_api.BALANCE_STAND),
-    (Posture.LYING, Posture.STANDING): (go2_api.STAND_UP, go2_api.BALANCE_STAND),
-    (Posture.SITTING, Posture.STANDING): (go2_api.RISE_SIT, go2_api.BALANCE_STAND),
-    (Posture.STANDING, Posture.SITTING): (go2_api.SIT,),
-    (Posture.STANDING, Posture.LYING): (go2_api.STAND_DOWN,),
-}
+_NAME = {go2_api.STAND_UP: "StandUp", go2_api.BALANCE_STAND: "BalanceStand",
+         go2_api.RISE_SIT: "RiseSit", go2_api.SIT: "Sit", go2_api.STAND_DOWN: "StandDown"}
 
 
 @dataclass(frozen=True)
 class Go2RosConfig:
-    """Where go2_ros2_sdk's topics are and how long to wait for them.
+    """Where go2_ros2_sdk's topics are, how long to wait for them, and how the robot moves.
 
     Topic names are relative to `namespace` (e.g. `robot0` for go2_ros2_sdk's multi-robot
-    `robot{i}/` prefix) unless they start with '/'. An empty camera topic turns the camera off.
+    `robot{i}/` prefix) unless they start with '/'. An empty `cmd_vel_topic` is discovered
+    (see go2_topics); an empty camera or battery topic turns that off.
     """
 
     namespace: str = ""
-    cmd_vel_topic: str = "cmd_vel"
+    cmd_vel_topic: str = ""
     webrtc_topic: str = "webrtc_req"
     odom_topic: str = "odom"
     state_topic: str = "go2_states"
     camera_topic: str = "camera/image_raw"
+    battery_topic: str = ""  # sensor_msgs/BatteryState; '' = no source: battery unknown
+    battery_timeout: float = 30.0  # seconds after which a battery reading is unknown again
     odom_timeout: float = 0.5  # seconds without odometry before get_state raises
+    odom_latency: float | None = None  # seconds odometry lags the robot; None = measured
     command_timeout: float = 10.0  # seconds a posture (or a trick beyond its length) may take
-    settle: float = 0.5  # seconds to wait for a busy report before taking a command as done
     max_linear_speed: float = 1.0  # m/s, the Go2 caps DIMOS uses
     max_angular_speed: float = 2.0  # rad/s
+    linear_accel: float = 1.0  # m/s^2 the robot speeds up and brakes at (prediction model)
+    angular_accel: float = 3.0  # rad/s^2
+    firmware_tricks: bool = False  # flips, handstand, 1301-1305: only if the firmware has them
     node_name: str = "shadowhound_go2"
 
 
 class Go2RosRobot:
-    """The Robot protocol over go2_ros2_sdk. Posture starts as standing (how a Go2 boots)."""
+    """The Robot protocol over go2_ros2_sdk."""
 
     def __init__(self, config: Go2RosConfig | None = None, *,
                  context: Context | None = None) -> None:
@@ -90,19 +100,26 @@ class Go2RosRobot:
         elif context is None:
             context = rclpy.get_default_context()
         self._context = context
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # state; held briefly, never while publishing
+        self._send_lock = threading.Lock()  # orders Twists and StopMoves as they go out
         self._wake = threading.Event()  # stop() and e-stop wake sleeps and waits early
-        self._odom: tuple[float, RobotState] | None = None  # (monotonic receipt, state)
-        self._state_seq = 0  # go2_states received so far
-        self._progress: list[tuple[float, int]] = []  # recent (receipt, progress), newest last
+        self._tracker = MotionTracker(linear_accel=c.linear_accel,
+                                      angular_accel=c.angular_accel, latency=c.odom_latency)
+        self._odom_at: float | None = None  # monotonic receipt of the last odometry
+        self._travel = (0.0, 0.0)  # distance travelled, angle turned (odometry)
+        self._posture = Posture.STANDING  # until go2_states says otherwise
+        self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
-        self._posture = Posture.STANDING
         self._command = (0.0, 0.0, 0.0)
         self._halted = True  # no velocity commanded since the last stop()
         self._last_sent = 0.0
         self._estopped = False
         self._closed = False
         self._started = time.monotonic()
+        self._velocity_topic = c.cmd_vel_topic
+        self._postures = PostureWatch(self._check_estop, "", c.command_timeout,
+                                      stale=max(1.0, c.odom_timeout))
+        self._rediscover = True  # look up who subscribes at the next velocity command
         # use_global_arguments=False: the mission node's own remappings and parameters
         # (`-r __ns:=...`) must not move the robot's topics; `namespace` does that explicitly.
         self.node = Node(c.node_name, namespace="/" + c.namespace.strip("/"), context=context,
@@ -112,6 +129,7 @@ class Go2RosRobot:
         except Exception as exc:  # rclpy raises several types for bad names
             self.node.destroy_node()
             raise RobotError(f"cannot create the Go2 topics: {exc}") from exc
+        self._postures.topic = self.topic(c.state_topic)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name="go2-ros", daemon=True)
@@ -119,10 +137,13 @@ class Go2RosRobot:
 
     def _build_interfaces(self) -> None:
         c, n = self.config, self.node
-        self._twist_pub = n.create_publisher(Twist, c.cmd_vel_topic, _RELIABLE)
+        names = [c.cmd_vel_topic] if c.cmd_vel_topic else list(VELOCITY_TOPICS)
+        self._twist_pubs = {name: n.create_publisher(Twist, name, _RELIABLE) for name in names}
         self._request_pub = n.create_publisher(WebRtcReq, c.webrtc_topic, _RELIABLE)
-        n.create_subscription(Odometry, c.odom_topic, self._on_odom, _SENSOR)
+        n.create_subscription(Odometry, c.odom_topic, self._on_odom, _RELIABLE)
         n.create_subscription(Go2State, c.state_topic, self._on_state, _RELIABLE)
+        if c.battery_topic:
+            n.create_subscription(BatteryState, c.battery_topic, self._on_battery, _RELIABLE)
         if c.camera_topic:
             compressed = c.camera_topic.rstrip("/").endswith("compressed")
             n.create_subscription(CompressedImage if compressed else Image, c.camera_topic,
@@ -141,26 +162,47 @@ class Go2RosRobot:
         """The full name of one of the robot's topics (for messages to people)."""
         return self.node.resolve_topic_name(name)
 
+    @property
+    def velocity_topic(self) -> str:
+        """The full name of the topic velocity goes to (discovered unless configured)."""
+        return self.topic(self._discover_velocity_topic())
+
+    @property
+    def odom_latency(self) -> float:
+        """Seconds odometry lags the robot, as configured or as measured."""
+        with self._lock:
+            return self._tracker.latency
+
     # -- callbacks (executor thread; short) ----------------------------------------------
 
     def _on_odom(self, msg: Odometry) -> None:
-        p, q, t = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist
+        p, q = msg.pose.pose.position, msg.pose.pose.orientation
         yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        now = time.monotonic()
         with self._lock:
-            previous = self._odom[1] if self._odom else None
-            step = math.hypot(p.x - previous.x, p.y - previous.y) if previous else 0.0
-            turn = abs(normalize_angle(yaw - previous.yaw)) if previous else 0.0
-            state = RobotState(
-                x=p.x, y=p.y, yaw=normalize_angle(yaw), vx=t.linear.x, vy=t.linear.y,
-                wz=t.angular.z, posture=self._posture, stamp=time.monotonic(),
-                distance_travelled=(previous.distance_travelled if previous else 0.0) + step,
-                angle_turned=(previous.angle_turned if previous else 0.0) + turn)
-            self._odom = (time.monotonic(), state)
+            last = self._tracker.last_sample()
+            if last is not None:
+                step = math.hypot(p.x - last.x, p.y - last.y)
+                turn = abs(normalize_angle(yaw - last.yaw))
+                self._travel = (self._travel[0] + step, self._travel[1] + turn)
+            before = self._tracker.latency
+            self._tracker.odometry(now, p.x, p.y, yaw)
+            self._odom_at = now
+            after = self._tracker.latency
+        if abs(after - before) >= 0.01:
+            self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
     def _on_state(self, msg: Go2State) -> None:
-        with self._lock:
-            self._state_seq += 1
-            self._progress = [*self._progress[-49:], (time.monotonic(), int(msg.progress))]
+        posture = self._postures.update(int(msg.mode), float(msg.body_height))
+        if posture is not None:
+            with self._lock:
+                self._posture = posture
+
+    def _on_battery(self, msg: BatteryState) -> None:
+        percent = float(msg.percentage) * 100.0
+        if math.isfinite(percent) and 0.0 <= percent <= 100.0:
+            with self._lock:
+                self._battery = (time.monotonic(), percent)
 
     def _on_image(self, msg: Image) -> None:
         try:
@@ -181,15 +223,23 @@ class Go2RosRobot:
 
     def _keep_alive(self) -> None:
         with self._lock:
-            command, due = self._command, time.monotonic() - self._last_sent >= 0.08
-        if any(command) and due and not self._estopped:
-            self._publish_twist(command)
+            idle = not any(self._command)
+        if idle:
+            return
+        topic = self._discover_velocity_topic()
+        with self._send_lock:
+            with self._lock:
+                command, due = self._command, time.monotonic() - self._last_sent >= 0.08
+                estopped = self._estopped
+            if any(command) and due and not estopped:
+                self._publish_twist(command, topic)
 
     def _warn_without_odometry(self) -> None:
-        if self._odom is None:
+        if self._odom_at is None:
             self.node.get_logger().warning(
                 f"no odometry on {self.topic(self.config.odom_topic)} yet: is go2_ros2_sdk (or "
-                "`shadowhound sim-driver`) running, with the same ROS_DOMAIN_ID and RMW?",
+                "`shadowhound sim-driver`) running, with the same ROS_DOMAIN_ID and RMW? "
+                "`shadowhound doctor --go2` checks the link",
                 throttle_duration_sec=30.0)
 
     # -- Robot protocol ------------------------------------------------------------------
@@ -210,51 +260,78 @@ class Go2RosRobot:
 
     def last_state(self) -> RobotState:
         """The last known state without raising: `connected` is False when odometry is stale."""
+        now = time.monotonic()
         with self._lock:
-            odom, posture, estopped = self._odom, self._posture, self._estopped
-        fresh = odom is not None and time.monotonic() - odom[0] <= self.config.odom_timeout
-        base = odom[1] if odom is not None else RobotState()
-        return replace(base, posture=posture, estopped=estopped, connected=fresh,
-                       stamp=time.monotonic())
+            x, y, yaw = self._tracker.pose(now)
+            vx, vy, wz = self._tracker.velocity(now)
+            odom_at, travel, battery = self._odom_at, self._travel, self._battery
+            posture, estopped = self._posture, self._estopped
+        fresh = odom_at is not None and now - odom_at <= self.config.odom_timeout
+        level = battery[1] if battery and now - battery[0] <= self.config.battery_timeout \
+            else None
+        return RobotState(x=x, y=y, yaw=yaw, vx=vx, vy=vy, wz=wz, posture=posture,
+                          battery=level, distance_travelled=travel[0], angle_turned=travel[1],
+                          stamp=now, estopped=estopped, connected=fresh)
 
     def _odometry_problem(self) -> str:
         topic = self.topic(self.config.odom_topic)
-        if self._odom is None:
+        if self._odom_at is None:
             waited = time.monotonic() - self._started
             return (f"no odometry received on {topic} in {waited:.1f} s: is go2_ros2_sdk "
                     "running, with the same ROS_DOMAIN_ID and RMW?")
-        age = time.monotonic() - self._odom[0]
+        age = time.monotonic() - self._odom_at
         return (f"no odometry on {topic} for {age:.1f} s: is go2_ros2_sdk running and the "
                 "robot connected (WebRTC allows one client: close the phone app)?")
 
     def send_velocity(self, vx: float, vy: float, wz: float) -> None:
+        """Body-frame velocity; all zero is a stop (StopMove), since the driver drops zero
+        Twists."""
         values = (float(vx), float(vy), float(wz))
         if not all(math.isfinite(v) for v in values):
             raise RobotError(f"velocity must be finite numbers, got {values}")
+        if not any(values):
+            with self._lock:
+                halted = self._halted
+            if not halted:
+                self.stop()
+            return
         c = self.config
         norm = math.hypot(values[0], values[1])
         scale = c.max_linear_speed / norm if norm > c.max_linear_speed else 1.0
         command = (values[0] * scale, values[1] * scale,
                    max(-c.max_angular_speed, min(c.max_angular_speed, values[2])))
-        if any(command) and not self.last_state().connected:
+        if not self.last_state().connected:
             raise RobotError(self._odometry_problem() + " Not moving without odometry.")
         with self._lock:
-            if self._estopped:
-                return  # like the simulator: motion is ignored while the e-stop is latched
-            self._command = command
-            self._halted = False
-        self._publish_twist(command)
+            self._rediscover = self._rediscover or self._halted  # starting: look again
+        topic = self._discover_velocity_topic()
+        with self._send_lock:
+            with self._lock:
+                if self._estopped:
+                    return  # like the simulator: motion is ignored while the e-stop is latched
+                self._command = command
+                self._halted = False
+                # The robot ignores velocity unless standing: predict no motion then.
+                walks = self._posture is Posture.STANDING
+                self._tracker.command(time.monotonic(),
+                                      *(command if walks else (0.0, 0.0, 0.0)))
+            self._publish_twist(command, topic)
 
     def stop(self) -> None:
+        """StopMove now (thread-safe); the keep-alive goes quiet. Under the send lock, so no
+        Twist read before the stop can go out after it (the robot would walk on for a second)."""
+        now = time.monotonic()
+        with self._send_lock:
+            with self._lock:
+                self._command = (0.0, 0.0, 0.0)
+                self._halted = True
+            self._request(go2_api.STOP_MOVE)
         with self._lock:
-            self._command = (0.0, 0.0, 0.0)
-            self._halted = True
-        self._publish_twist((0.0, 0.0, 0.0))
-        self._request(go2_api.STOP_MOVE, priority=1)
+            self._tracker.command(now, 0.0, 0.0, 0.0)
         self._wake.set()
 
     def emergency_stop(self) -> None:
-        """Zero Twist and StopMove now; motion is ignored until `release_estop`."""
+        """StopMove now; motion and postures are refused until `release_estop`."""
         with self._lock:
             self._estopped = True
         self.stop()
@@ -264,33 +341,51 @@ class Go2RosRobot:
             self._estopped = False
 
     def set_posture(self, posture: Posture) -> None:
+        """Go to `posture` through standing, one sport command at a time, each done when
+        go2_states shows the posture it leads to. Nothing is sent when already there."""
         posture = Posture(posture)
+        self._check_estop("changing posture")
+        current = self._postures.current()
+        if current is posture and (posture is not Posture.STANDING or self._postures.balanced()):
+            return
         with self._lock:
-            current, estopped = self._posture, self._estopped
-        if estopped:
-            raise RobotError("e-stop is latched; release it before changing posture")
-        with self._lock:
-            self._command = (0.0, 0.0, 0.0)
-        self._publish_twist((0.0, 0.0, 0.0))  # the robot must be still before it changes posture
+            moving = not self._halted
+        if moving:
+            self.stop()  # the robot must be still before it changes posture
         path = [current, posture]
         if Posture.STANDING not in path:  # sitting <-> lying goes through standing
             path = [current, Posture.STANDING, posture]
-        for a, b in zip(path, path[1:], strict=False):
-            for api_id in _STEPS[(a, b)]:
-                self._run_request(api_id, f"{b.value} (api id {api_id})", 0.0)
-            with self._lock:
-                self._posture = b
+        # Standing with locked joints (after a StandUp from elsewhere) only needs balancing.
+        steps = [(go2_api.BALANCE_STAND,)] if current is posture else \
+            [STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
+        for b, api_ids in zip(path[1:], steps, strict=True):
+            for api_id in api_ids:
+                balance = api_id == go2_api.BALANCE_STAND
+                if balance and self._postures.balanced():
+                    continue  # RiseSit already ends balanced: no redundant command
+                self._request(api_id)
+                self._postures.reach(b, f"{_NAME[api_id]} (api id {api_id})", balance)
 
     def perform(self, trick: str) -> None:
         info = go2_api.TRICKS.get(trick)
         if info is None:
             raise RobotError(f"unknown trick {trick!r}; known: {', '.join(go2_api.TRICKS)}")
-        with self._lock:
-            posture, estopped = self._posture, self._estopped
-        if estopped or posture is not Posture.STANDING:
-            why = "the e-stop is latched" if estopped else f"the robot is {posture.value}"
-            raise RobotError(f"cannot perform {trick} while {why}; stand up first")
-        self._run_request(info.api_id, f"{trick} (api id {info.api_id})", info.duration)
+        ai_mode = info.api_id in go2_api.AI_MODE_TRICKS
+        if ai_mode and not self.config.firmware_tricks:
+            raise RobotError(
+                f"{trick} (api id {info.api_id}) runs only on Go2 firmware that has it, in the "
+                "'ai' motion mode; it is off unless enabled (ROS parameter "
+                "go2_firmware_tricks, see docs/go2.md)")
+        self._check_estop(f"performing {trick}")
+        posture = self._postures.current()
+        if posture is not Posture.STANDING:
+            raise RobotError(f"cannot perform {trick} while the robot is {posture.value}; "
+                             "stand up first")
+        if ai_mode:  # recent firmware runs these only in the "ai" motion mode
+            self._request(go2_api.MOTION_SWITCH, {"name": "ai"}, go2_api.MOTION_SWITCHER_TOPIC)
+        self._request(info.api_id)
+        self._postures.pause(info.duration, f"{trick} (api id {info.api_id})")
+        self._postures.reach(Posture.STANDING, trick)
 
     def now(self) -> float:
         return time.monotonic()
@@ -302,6 +397,10 @@ class Go2RosRobot:
 
     def get_camera_frame(self) -> CameraFrame | None:
         return self._frame
+
+    def get_scan(self) -> Scan | None:
+        """None: the driver's `scan` topic is not subscribed yet (issue 15, phase 2)."""
+        return None
 
     def close(self) -> None:
         if self._closed:
@@ -315,42 +414,48 @@ class Go2RosRobot:
         if self._own_context:
             rclpy.try_shutdown(context=self._context)
 
-    # -- sport requests ------------------------------------------------------------------
+    # -- topics out ----------------------------------------------------------------------
 
-    def _publish_twist(self, command: tuple[float, float, float]) -> None:
+    def _discover_velocity_topic(self) -> str:
+        """The configured topic, or the one the launch layout needs (see go2_topics). Looked
+        up again at each start from rest, since the driver may have come up since."""
+        with self._lock:
+            chosen, look = self._velocity_topic, self._rediscover
+            self._rediscover = False
+        if self.config.cmd_vel_topic or (chosen and not look):
+            return chosen or self.config.cmd_vel_topic
+        found = choose_velocity_topic(
+            {name: [(i.node_name, i.topic_type) for i in
+                    self.node.get_subscriptions_info_by_topic(self.topic(name))]
+             for name in VELOCITY_TOPICS})
+        if found is None:
+            return chosen or VELOCITY_TOPICS[-1]  # nothing listens yet: the driver's own
+        if found != chosen:
+            self.node.get_logger().info(f"velocity commands go to {self.topic(found)}")
+        with self._lock:
+            self._velocity_topic = found
+        return found
+
+    def _publish_twist(self, command: tuple[float, float, float], topic: str) -> None:
+        """Publish one Twist; the caller holds the send lock."""
         msg = Twist()
         msg.linear.x, msg.linear.y, msg.angular.z = command
         with self._lock:
             self._last_sent = time.monotonic()
         if self._context.ok():
-            self._twist_pub.publish(msg)
+            self._twist_pubs[topic].publish(msg)
 
-    def _request(self, api_id: int, parameter: str = "", priority: int = 0) -> None:
+    def _request(self, api_id: int, parameter: dict[str, object] | None = None,
+                 topic: str = go2_api.SPORT_TOPIC) -> None:
         if self._context.ok():
-            self._request_pub.publish(WebRtcReq(id=0, topic=go2_api.SPORT_TOPIC, api_id=api_id,
-                                                parameter=parameter, priority=priority))
+            self._request_pub.publish(WebRtcReq(
+                id=0, topic=topic, api_id=api_id,
+                parameter=json.dumps(parameter) if parameter else "", priority=0))
 
-    def _run_request(self, api_id: int, what: str, expected: float) -> None:
-        """Send one sport request and wait until the robot is idle again (see module doc)."""
-        sent = time.monotonic()
-        self._request(api_id)
-        deadline = sent + expected + self.config.command_timeout
-        busy = False
-        while True:
-            with self._lock:
-                reports = [p for t, p in self._progress if t > sent]
-                estopped = self._estopped
-            if estopped:
-                raise RobotError(f"the e-stop was pressed while waiting for {what}")
-            busy = busy or any(p != 0 for p in reports)
-            idle = bool(reports) and reports[-1] == 0
-            if idle and (busy or time.monotonic() - sent >= self.config.settle):
-                return
-            if time.monotonic() > deadline:
-                topic = self.topic(self.config.state_topic)
-                seen = "never reported idle" if reports else "no messages"
-                raise RobotError(
-                    f"no completion of {what} within {deadline - sent:.0f} s: {topic} "
-                    f"{seen} (progress should return to 0); check that go2_ros2_sdk is running "
-                    "and connected, and that nothing else (the phone app) holds the robot")
-            time.sleep(0.01)
+    # -- postures ------------------------------------------------------------------------
+
+    def _check_estop(self, doing: str) -> None:
+        with self._lock:
+            estopped = self._estopped
+        if estopped:
+            raise RobotError(f"e-stop is latched; release it before {doing}")

@@ -9,6 +9,12 @@ Like the real Go2, velocity commands are *ignored* while sitting or lying (they 
 with accepted=False); the motion skills stand the robot up first (MotionConfig.auto_stand).
 Tricks run only while standing and never translate the robot.
 
+With SimConfig.collisions the body is a circle (body_radius) in the scene (robot/scene.py):
+it cannot enter an object or a wall. A substep that would push it in is cut short at contact,
+the body's velocity drops to zero, and the state's `blocked_by` says what stopped it ("the red
+ball 0.35 m ahead"), so the motion skills' stall check fails with that name. A 360-beam range
+scan (`get_scan`) comes from the same ray casting as the camera.
+
 Clock: with time_scale 0 simulated time advances only when the controller sleeps, as fast
 as the CPU allows. With time_scale s > 0 each simulated second takes s real seconds (or longer,
 when the controller or the CPU cannot keep up): while a controller ticks, time passes in its
@@ -25,7 +31,9 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..config import SimConfig
-from ..state import CameraFrame, Posture, RobotState, normalize_angle
+from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
+from ..world import Belief
+from . import scene, sensors
 from .base import RobotError
 from .go2_api import TRICKS
 
@@ -73,6 +81,7 @@ class SimRobot:
         *,
         time_scale: float | None = None,
         world: Any = None,
+        map_world: Any = None,
         name: str = "sim-go2",
     ) -> None:
         self.config = config or SimConfig()
@@ -82,6 +91,9 @@ class SimRobot:
             raise ValueError("time_scale must be a finite number >= 0 (0 = as fast as possible)")
         self.name = name
         self._world = world
+        self.world: scene.World = world if world is not None else scene.DEFAULT_WORLD
+        # What the robot's map was made of: the scene itself, or an older one (a stale map).
+        self.map_world: scene.World = map_world if map_world is not None else self.world
         self._lock = threading.RLock()
         self._wake = threading.Event()
         self._state = RobotState()
@@ -99,6 +111,8 @@ class SimRobot:
             [(0.0, 0.0, 0.0)], maxlen=self.config.true_path_size)
         self._true_path_dropped = 0
         self._true_odometer = 0.0
+        self._depth = 0.0  # how far the body overlaps the scene (0 unless reset into it)
+        self._belief: Belief | None = None  # the scene's map, built on first use
 
     # -- clock ---------------------------------------------------------------------------
 
@@ -183,6 +197,22 @@ class SimRobot:
         c, si = math.cos(mid_yaw), math.sin(mid_yaw)
         dx = (mvx * c - mvy * si) * dt
         dy = (mvx * si + mvy * c) * dt
+        blocked_by = s.blocked_by if not (dx or dy) else ""
+        depth, what = (sensors.penetration(self.world, s.x + dx, s.y + dy, cfg.body_radius)
+                       if cfg.collisions else (0.0, ""))
+        if depth > self._depth + 1e-12:
+            # Cut the substep short at contact: the largest fraction that goes no deeper.
+            lo, hi = 0.0, 1.0
+            for _ in range(30):
+                mid = (lo + hi) / 2
+                d, _ = sensors.penetration(self.world, s.x + dx * mid, s.y + dy * mid,
+                                           cfg.body_radius)
+                lo, hi = (mid, hi) if d <= self._depth + 1e-12 else (lo, mid)
+            dx, dy = dx * lo, dy * lo
+            vx = vy = 0.0
+            blocked_by = self._describe_block(s.x + dx, s.y + dy, mid_yaw, what)
+        else:
+            self._depth = depth
         step = math.hypot(dx, dy)
         drain = cfg.battery_drain_idle * dt + cfg.battery_drain_per_metre * step
         self._state = replace(
@@ -193,16 +223,34 @@ class SimRobot:
             vx=vx,
             vy=vy,
             wz=wz,
-            battery=max(0.0, s.battery - drain),
+            battery=max(0.0, (s.battery or 0.0) - drain),  # the simulator always knows it
             distance_travelled=s.distance_travelled + step,
             angle_turned=s.angle_turned + abs(mwz * dt),
             stamp=self._sim_time + dt,
+            blocked_by=blocked_by,
         )
         self._sim_time += dt
         self._true_odometer += step
         _t, last_x, last_y = self._true_path[-1]
         if math.hypot(s.x + dx - last_x, s.y + dy - last_y) >= _PATH_SPACING:
             self._note_true_point()
+
+    def _describe_block(self, x: float, y: float, yaw: float, what: str) -> str:
+        """ "the red ball 0.35 m ahead": the blocker, its surface's distance and side."""
+        radius = self.config.body_radius
+        depth, _ = sensors.penetration(self.world, x, y, radius)
+        obj = self.world.find(what[4:]) if what != "the wall" else None
+        if obj is not None:
+            bearing = math.atan2(obj.y - y, obj.x - x)
+        else:  # the nearest wall is the one the body presses on
+            x_min, x_max, y_min, y_max = self.world.bounds
+            gaps = {0.0: x_max - x, math.pi: x - x_min, math.pi / 2: y_max - y,
+                    -math.pi / 2: y - y_min}
+            bearing = min(gaps, key=lambda a: gaps[a])
+        side = normalize_angle(bearing - yaw)
+        where = ("ahead" if abs(side) <= math.pi / 4 else "behind" if abs(side) >= 3 * math.pi / 4
+                 else "to the left" if side > 0 else "to the right")
+        return f"{what} {max(0.0, radius - depth):.2f} m {where}"
 
     # -- Robot protocol ------------------------------------------------------------------
 
@@ -258,7 +306,8 @@ class SimRobot:
             self._state = replace(self._state, estopped=False)
             self._record("estop_release", None, True)
 
-    def set_posture(self, posture: Posture) -> None:
+    def set_posture(self, posture: Posture, seconds: float | None = None) -> None:
+        """Change posture, taking the Go2's typical time (or `seconds` for the whole change)."""
         posture = Posture(posture)
         with self._lock:
             self._catch_up()
@@ -276,7 +325,7 @@ class SimRobot:
             path = [current, Posture.STANDING, posture]
         for a, b in zip(path, path[1:], strict=False):
             self._settle()
-            self.sleep(_POSTURE_SECONDS[(a, b)])
+            self.sleep(_POSTURE_SECONDS[(a, b)] if seconds is None else seconds / (len(path) - 1))
             with self._lock:
                 self._state = replace(self._state, posture=b)
 
@@ -297,16 +346,30 @@ class SimRobot:
         self.sleep(info.duration)
 
     def get_camera_frame(self) -> CameraFrame | None:
-        from . import scene  # rendering is only needed when someone looks
-
-        world = self._world if self._world is not None else scene.DEFAULT_WORLD
         state = self.get_state()
         return scene.camera_frame(
-            world,
+            self.world,
             state.pose,
             width=self.config.camera_width,
             height=self.config.camera_height,
         )
+
+    def get_scan(self) -> Scan | None:
+        """A 360-beam range scan (0.1 to 8 m) from the robot's true pose, on the sim clock."""
+        state = self.get_state()
+        return sensors.cast_scan(self.world, state.pose, stamp=state.stamp)
+
+    def belief(self) -> Belief | None:
+        """What the robot is told of its world: the scene's map and objects, a fresh copy (a
+        mission may update it from scans). None with collisions off: then the scene is not
+        physical, and nothing in it is in the way."""
+        if not self.config.collisions:
+            return None
+        if self._belief is None:
+            self._belief = sensors.scene_belief(self.map_world, self.config.body_radius)
+        b = self._belief
+        grid = b.grid.copy()
+        return Belief(grid, b.objects, b.robot_radius, b.room, replace(b.inflated, grid=grid))
 
     def close(self) -> None:
         self.stop()
@@ -369,6 +432,8 @@ class SimRobot:
             self._true_path.clear()
             self._true_path_dropped = 0
             self._note_true_point()
+            self._depth = max(0.0, sensors.penetration(self.world, x, y,
+                                                       self.config.body_radius)[0])
 
     def _settle(self) -> None:
         """Let the body come to rest (bounded) before a posture change."""

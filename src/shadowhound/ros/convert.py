@@ -49,10 +49,17 @@ def raw_image_frame(data: bytes | bytearray | memoryview, width: int, height: in
 
 
 def diagnostic_level(diagnostics: dict[str, Any]) -> int:
-    """OK while idle/planning/executing/succeeded, WARN after failed/stopped, ERROR on e-stop."""
+    """OK while idle/planning/executing/succeeded, WARN after failed/stopped or while the
+    battery level is unknown, ERROR on e-stop."""
     if diagnostics.get("estop"):
         return ERROR
-    return _LEVEL_OF_STATUS.get(str(diagnostics.get("status")), WARN)
+    level = _LEVEL_OF_STATUS.get(str(diagnostics.get("status")), WARN)
+    return max(level, WARN) if _battery_unknown(diagnostics) else level
+
+
+def _battery_unknown(diagnostics: dict[str, Any]) -> bool:
+    robot = diagnostics.get("robot") or {}
+    return "battery" in robot and robot["battery"] is None
 
 
 def diagnostic_message(diagnostics: dict[str, Any]) -> str:
@@ -66,7 +73,8 @@ def diagnostic_message(diagnostics: dict[str, Any]) -> str:
     errors = diagnostics.get("errors") or []
     if status in ("failed", "stopped") and errors:
         return f"{status}: {errors[-1]}"
-    return status
+    return status + ("; battery level unknown (no battery source)"
+                     if _battery_unknown(diagnostics) else "")
 
 
 def diagnostic_values(diagnostics: dict[str, Any],
@@ -88,7 +96,7 @@ def diagnostic_values(diagnostics: dict[str, Any],
         "pose_x": robot.get("x"),
         "pose_y": robot.get("y"),
         "pose_yaw": robot.get("yaw"),
-        "battery": robot.get("battery"),
+        "battery": "unknown" if _battery_unknown(diagnostics) else robot.get("battery"),
         "posture": robot.get("posture"),
         "moving": robot.get("moving"),
         "memory_recall": memory.get("recall"),  # "unavailable" when its store is broken

@@ -178,9 +178,14 @@ class MissionNode(Node):
                  f"{s.camera_topic} ({'compressed' if s.camera_compressed else 'raw'})")
         topic = getattr(self.agent.robot, "topic", None)
         if s.robot == "go2" and topic is not None:
-            log.info(f"Go2 through go2_ros2_sdk: velocity on {topic(s.cmd_vel_topic)}, sport "
+            velocity = topic(s.cmd_vel_topic) if s.cmd_vel_topic else \
+                f"{topic('cmd_vel')} or {topic('cmd_vel_out')} (whichever is subscribed)"
+            battery = topic(s.battery_topic) if s.battery_topic else \
+                "none (battery reported unknown)"
+            log.info(f"Go2 through go2_ros2_sdk: velocity on {velocity}, sport "
                      f"commands on {topic(s.webrtc_topic)}, odometry from "
-                     f"{topic(s.odom_topic)}, state from {topic(s.go2_states_topic)}")
+                     f"{topic(s.odom_topic)}, state from {topic(s.go2_states_topic)}, battery "
+                     f"{battery}")
         if ExecuteMission is None:
             log.warning("shadowhound_interfaces is not installed: the execute_mission action "
                         "and the chat service are off (build it with scripts/build_ros.sh)")

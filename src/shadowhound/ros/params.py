@@ -35,12 +35,19 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     "enable_web_ui": (False, "serve the web dashboard on 127.0.0.1:web_interface_port"),
     "robot_namespace": ("", "go2: go2_ros2_sdk's robot namespace, e.g. robot0 ('' = none); "
                             "the Go2 topics below are relative to it"),
-    "cmd_vel_topic": ("cmd_vel", "go2: geometry_msgs/Twist velocity out"),
+    "cmd_vel_topic": ("", "go2: geometry_msgs/Twist velocity out; '' = discovered: cmd_vel when "
+                          "something (twist_mux) subscribes it, else the driver's cmd_vel_out"),
     "webrtc_topic": ("webrtc_req", "go2: go2_interfaces/WebRtcReq sport commands out"),
     "odom_topic": ("odom", "go2: nav_msgs/Odometry in"),
     "go2_states_topic": ("go2_states", "go2: go2_interfaces/Go2State in"),
     "odom_timeout": (0.5, "go2: seconds without odometry before a motion step fails "
                           "(0.05..10)"),
+    "odom_latency": (-1.0, "go2: seconds odometry lags the robot (0..2); -1 = measured at "
+                           "each start from rest"),
+    "battery_topic": ("", "go2: sensor_msgs/BatteryState in ('' = none: the battery level is "
+                          "reported unknown; go2_ros2_sdk publishes none)"),
+    "go2_firmware_tricks": (False, "go2: allow the tricks that need firmware support and the "
+                                   "'ai' motion mode (flips, handstand, 1301-1305)"),
 }
 
 # Motion control for real odometry, used with robot go2 for every field the profile (or the
@@ -50,6 +57,7 @@ GO2_MOTION = {"position_tolerance": 0.02, "yaw_tolerance": math.radians(0.5),
               "control_rate_hz": 10.0}
 
 CAMERA_TYPES = ("auto", "raw", "compressed")
+_OPTIONAL_TOPICS = ("cmd_vel_topic", "battery_topic")  # '' = discovered / none
 ROBOTS = ("sim", "go2")
 _TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 
@@ -74,11 +82,14 @@ class NodeSettings:
     web_interface_port: int = 8080
     enable_web_ui: bool = False
     robot_namespace: str = ""
-    cmd_vel_topic: str = "cmd_vel"
+    cmd_vel_topic: str = ""
     webrtc_topic: str = "webrtc_req"
     odom_topic: str = "odom"
     go2_states_topic: str = "go2_states"
     odom_timeout: float = 0.5
+    odom_latency: float = -1.0
+    battery_topic: str = ""
+    go2_firmware_tricks: bool = False
 
     @property
     def camera_compressed(self) -> bool:
@@ -101,7 +112,10 @@ class NodeSettings:
         """Keyword arguments for Go2RosConfig."""
         return {"namespace": self.robot_namespace, "cmd_vel_topic": self.cmd_vel_topic,
                 "webrtc_topic": self.webrtc_topic, "odom_topic": self.odom_topic,
-                "state_topic": self.go2_states_topic, "odom_timeout": self.odom_timeout}
+                "state_topic": self.go2_states_topic, "odom_timeout": self.odom_timeout,
+                "odom_latency": None if self.odom_latency < 0 else self.odom_latency,
+                "battery_topic": self.battery_topic,
+                "firmware_tricks": self.go2_firmware_tricks}
 
 
 _WANTED = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
@@ -134,8 +148,10 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
         out[f.name] = value
     unknown_topics = [n for n in ("camera_topic", "mission_topic", "status_topic",
                                   "robot_status_topic", "diagnostics_topic", "cmd_vel_topic",
-                                  "webrtc_topic", "odom_topic", "go2_states_topic")
-                      if n in out and not _TOPIC.match(out[n])]
+                                  "webrtc_topic", "odom_topic", "go2_states_topic",
+                                  "battery_topic")
+                      if n in out and not _TOPIC.match(out[n])
+                      and (out[n] or n not in _OPTIONAL_TOPICS)]
     problems += [f"{n} {out[n]!r} is not a valid ROS topic name (letters, digits, '_' and "
                  "'/' separators, not starting with a digit)" for n in unknown_topics]
     if "camera_type" in out and out["camera_type"] not in CAMERA_TYPES:
@@ -150,6 +166,9 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
     timeout = out.get("odom_timeout")
     if timeout is not None and not (math.isfinite(timeout) and 0.05 <= timeout <= 10):
         problems.append(f"odom_timeout must be a number of seconds in 0.05..10, got {timeout}")
+    latency = out.get("odom_latency")
+    if latency is not None and not (latency == -1.0 or 0 <= latency <= 2):
+        problems.append(f"odom_latency must be -1 (measured) or seconds in 0..2, got {latency}")
     port = out.get("web_interface_port")
     if port is not None and not 1 <= port <= 65535:
         problems.append(f"web_interface_port must be in 1..65535, got {port}")
@@ -169,50 +188,3 @@ def describe_parameters() -> str:
     lines = [f"  {name} (default {default!r}): {text}"
              for name, (default, text) in PARAMETERS.items()]
     return "\n".join(lines)
-
-
-# -- shadowhound sim-driver ------------------------------------------------------------------
-
-# Name -> (default, help). The default also fixes the expected type.
-DRIVER_PARAMETERS: dict[str, tuple[Any, str]] = {
-    "odom_rate_hz": (50.0, "odom publishing rate (1..200)"),
-    "state_rate_hz": (10.0, "go2_states publishing rate (1..100)"),
-    "camera_rate_hz": (5.0, "camera/image_raw rate (0 = no camera, up to 30)"),
-    "camera_width": (160, "camera image width in pixels (16..640)"),
-    "camera_height": (120, "camera image height in pixels (12..480)"),
-    "cmd_vel_timeout": (0.5, "seconds without cmd_vel before the velocity returns to zero "
-                             "(0.05..5)"),
-}
-_RANGES = {"odom_rate_hz": (1, 200), "state_rate_hz": (1, 100), "camera_rate_hz": (0, 30),
-           "camera_width": (16, 640), "camera_height": (12, 480), "cmd_vel_timeout": (0.05, 5)}
-
-
-@dataclass(frozen=True)
-class DriverSettings:
-    """Checked driver parameters."""
-
-    odom_rate_hz: float = 50.0
-    state_rate_hz: float = 10.0
-    camera_rate_hz: float = 5.0
-    camera_width: int = 160
-    camera_height: int = 120
-    cmd_vel_timeout: float = 0.5
-
-
-def parse_driver(values: dict[str, Any]) -> DriverSettings:
-    """Check raw parameter values; raises ParameterError listing every problem at once."""
-    problems, out = [], {}
-    for name, (default, _help) in DRIVER_PARAMETERS.items():
-        value = values.get(name, default)
-        wanted = (int,) if isinstance(default, int) else (int, float)
-        low, high = _RANGES[name]
-        if isinstance(value, bool) or not isinstance(value, wanted):
-            problems.append(f"{name} must be {'an integer' if wanted == (int,) else 'a number'}"
-                            f", got {type(value).__name__} {value!r}")
-        elif not (math.isfinite(value) and low <= value <= high):
-            problems.append(f"{name} must be in {low}..{high}, got {value}")
-        else:
-            out[name] = type(default)(value)
-    if problems:
-        raise ParameterError("invalid ROS parameters: " + "; ".join(problems))
-    return DriverSettings(**out)

@@ -24,11 +24,13 @@ EXIT_OK, EXIT_USAGE = 0, 2
 
 
 def run_node(prog: str, node_name: str, argv: Sequence[str] | None, usage: str,
-             make: Callable[[], Node], close: Callable[[Node], None], goodbye: str) -> int:
+             make: Callable[[], Node], close: Callable[[Node], None], goodbye: str,
+             extra_nodes: Callable[[Node], Sequence[Node]] = lambda _node: ()) -> int:
     """Start the node `make()` builds, spin until a signal, then `close` it and exit 0.
 
     Parameters come as `--ros-args -p NAME:=VALUE`; invalid ones (a ConfigError from `make`)
     exit 2 with the message. The package's `logging` goes to the node's ROS logger.
+    `extra_nodes(node)` are spun by the same executor (the node destroys them itself).
     """
     args = list(sys.argv[1:] if argv is None else argv)
     try:
@@ -62,7 +64,8 @@ def run_node(prog: str, node_name: str, argv: Sequence[str] | None, usage: str,
     package_log.addHandler(handler)
     package_log.setLevel(logging.INFO)
     executor = SingleThreadedExecutor()  # callbacks are short; slow work runs on other threads
-    executor.add_node(node)
+    for each in (node, *extra_nodes(node)):
+        executor.add_node(each)
     spinner = threading.Thread(target=_spin, args=(executor, stop), name="ros-executor")
     spinner.start()
     try:

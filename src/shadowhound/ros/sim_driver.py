@@ -1,351 +1,168 @@
-"""`shadowhound sim-driver`: go2_ros2_sdk's topics and behaviour, backed by a SimRobot in real time.
+"""`shadowhound sim-driver`: a simulated Go2 behind go2_ros2_sdk's topics, as the real driver
+behaves (read from its source; see docs/go2.md), backed by SimRobots in real time.
 
-For running missions without a robot (`shadowhound node --ros-args -p robot:=go2` in another
-terminal) and for the end-to-end tests. Names are relative, so `-r __ns:=/robot0` gives
-go2_ros2_sdk's multi-robot `robot0/` prefix.
-
-- subscribes `cmd_vel` (geometry_msgs/Twist) and `webrtc_req` (go2_interfaces/WebRtcReq: sport
-  api ids on rt/api/sport/request, see go2_api); postures and tricks run one at a time, in
-  order, and `go2_states.progress` is 1 while one runs or waits, like the real robot's queue;
-- publishes `odom` (nav_msgs/Odometry, frames odom -> base_link), `go2_states`
-  (go2_interfaces/Go2State) and `camera/image_raw` (sensor_msgs/Image rgb8, best effort);
-- like the real robot, velocity is ignored while sitting or lying, and, like go2_ros2_sdk's
-  twist handling, the velocity returns to zero when `cmd_vel` goes quiet for `cmd_vel_timeout`;
-- `sim_driver/fault` (std_msgs/String JSON) injects faults: {"odom": false} (stop publishing
-  odometry), {"states": false}, {"camera": false}, {"delay_ms": 200} (every command arrives
-  late), {"drop_commands": true} (commands are lost); {} clears them all;
-- `sim_driver/requests` (std_msgs/String JSON) reports every sport request it received:
-  api_id, name, accepted, note, and `mono` (the driver's CLOCK_MONOTONIC, for latency figures).
-
-Callbacks only hand commands to a command thread (which applies the injected delay) and
-postures and tricks to a request thread (they take seconds); one executor serves the rest.
+Per robot (names prefixed `robot{i}/` with `--robots 2` or more, as go2_ros2_sdk does):
+- `cmd_vel_out` (geometry_msgs/Twist) in: an all-zero Twist is dropped; any other becomes a
+  Move rounded to 2 decimals, sent at once; the robot runs it until it lapses
+  (`--move-timeout`) or StopMove arrives. `cmd_vel` reaches it only through the twist_mux-like
+  relay (ros/twist_mux.py; on unless `--no-relay`; not namespaced, so it feeds `cmd_vel_out`);
+- `webrtc_req` (go2_interfaces/WebRtcReq) in: `parameter` must be '' or JSON (else dropped),
+  an empty `topic` means the sport topic, `id` and `priority` are ignored; requests are
+  queued and handed to the robot by a 10 Hz loop;
+- `odom` out: pose only (the twist stays zero), at `--odom-rate-hz`, each the true pose of
+  `--odom-delay` seconds before, stamped when published; frames odom -> base_link;
+- `go2_states` out: mode per posture, `progress` only for tricks, velocity (odom frame) and
+  body height from the truth; `camera/image_raw` out (best effort);
+- `battery_state` (sensor_msgs/BatteryState) out only with `--battery PERCENT`;
+- `sim_driver/truth` (std_msgs/String JSON) out: the ground truth (true pose, velocity,
+  posture, mode, counts of Moves and StopMoves received ...), kept apart from what the driver
+  publishes; `sim_driver/requests` out: one JSON record per sport request; `sim_driver/fault`
+  in: fault injection ({"odom": false}, {"states": false}, {"camera": false},
+  {"delay_ms": 200}, {"drop_commands": true}; {} clears them).
 """
 
 from __future__ import annotations
 
-import heapq
-import itertools
-import json
-import math
-import queue
 import sys
-import threading
-import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 from typing import Any
 
-from geometry_msgs.msg import Twist
-from go2_interfaces.msg import Go2State, WebRtcReq
-from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import Image
-from std_msgs.msg import String
 
 from ..config import SimConfig
-from ..robot import go2_api, scene
-from ..robot.base import RobotError
 from ..robot.sim import SimRobot
-from ..state import Posture
-from .params import DRIVER_PARAMETERS, DriverSettings, ParameterError, parse_driver
+from .params import ParameterError
 from .process import run_node
+from .sim_go2 import Faults, SimGo2, Truth
+from .sim_options import OPTIONS, DriverSettings, build_parser, parse_settings, split_argv
+from .twist_mux import TwistMux
+
+__all__ = ["Faults", "SimDriver", "Truth", "main"]
 
 NODE_NAME = "shadowhound_sim_driver"
-EXIT_OK, EXIT_USAGE = 0, 2
-_RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-_SENSOR = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                     reliability=ReliabilityPolicy.BEST_EFFORT)
-# Unitree SportModeState.mode values the driver reports.
-_MODE_BALANCE_STAND, _MODE_POSE, _MODE_LOCOMOTION, _MODE_LIE_DOWN, _MODE_SIT = 1, 2, 3, 5, 10
-_BODY_HEIGHT = {Posture.STANDING: 0.32, Posture.SITTING: 0.20, Posture.LYING: 0.08}
-_NAMES = {go2_api.DAMP: "Damp", go2_api.BALANCE_STAND: "BalanceStand",
-          go2_api.STOP_MOVE: "StopMove", go2_api.STAND_UP: "StandUp",
-          go2_api.STAND_DOWN: "StandDown", go2_api.MOVE: "Move", go2_api.SIT: "Sit",
-          go2_api.RISE_SIT: "RiseSit", **{t.api_id: t.name for t in go2_api.TRICKS.values()}}
-# Sport api id -> (posture it needs, posture it leads to). Others are tricks or not simulated.
-_POSTURES = {
-    go2_api.STAND_UP: (None, Posture.STANDING),
-    go2_api.BALANCE_STAND: (Posture.STANDING, Posture.STANDING),
-    go2_api.RISE_SIT: (Posture.SITTING, Posture.STANDING),
-    go2_api.SIT: (Posture.STANDING, Posture.SITTING),
-    go2_api.STAND_DOWN: (None, Posture.LYING),
-}
-_TRICK_IDS = {t.api_id for t in go2_api.TRICKS.values()}
-
-@dataclass
-class Faults:
-    """Injected faults (all off by default)."""
-
-    odom: bool = True
-    states: bool = True
-    camera: bool = True
-    delay: float = 0.0  # seconds every command is held back
-    drop_commands: bool = False
-
-    @classmethod
-    def from_json(cls, text: str) -> Faults:
-        """Parse a fault message; raises ValueError naming what is wrong."""
-        data = json.loads(text) if text.strip() else {}
-        if not isinstance(data, dict):
-            raise ValueError("a fault message must be a JSON object")
-        unknown = set(data) - {"odom", "states", "camera", "delay_ms", "drop_commands"}
-        if unknown:
-            raise ValueError(f"unknown fault(s) {sorted(unknown)}; known: odom, states, camera, "
-                             "delay_ms, drop_commands")
-        flags = {k: data[k] for k in ("odom", "states", "camera", "drop_commands") if k in data}
-        if not all(isinstance(v, bool) for v in flags.values()):
-            raise ValueError("odom, states, camera and drop_commands take true or false")
-        delay = data.get("delay_ms", 0)
-        if isinstance(delay, bool) or not isinstance(delay, (int, float)) \
-                or not 0 <= delay <= 10_000:
-            raise ValueError("delay_ms must be a number of milliseconds in 0..10000")
-        return cls(**flags, delay=delay / 1000.0)
+PROG = "shadowhound sim-driver"
 
 
 class SimDriver(Node):
-    """A simulated go2_ros2_sdk driver node. Give `sim` to drive an existing SimRobot."""
+    """The simulated driver node. `options` override its ROS parameters (names as in
+    sim_options.OPTIONS); give `sim` to drive an existing SimRobot (one robot only)."""
 
-    def __init__(self, sim: SimRobot | None = None, *, node_name: str = NODE_NAME,
-                 **node_kwargs: Any) -> None:
+    def __init__(self, sim: SimRobot | None = None, *, options: Mapping[str, Any] | None = None,
+                 node_name: str = NODE_NAME, **node_kwargs: Any) -> None:
         super().__init__(node_name, **node_kwargs)
-        self.settings = self._read_parameters()
-        self.sim = sim or SimRobot(SimConfig(time_scale=1.0), name="sim-driver")
-        self.faults = Faults()
-        self._busy = 0  # sport requests waiting or running
-        self._busy_lock = threading.Lock()
-        self._last_twist = 0.0  # monotonic time of the last velocity command applied
-        self._moving_command = False
-        self._commands: list[tuple[float, int, Callable[[], None]]] = []  # (due, seq, apply)
-        self._order = itertools.count()
-        self._commands_ready = threading.Condition()
-        self._requests: queue.Queue[int | None] = queue.Queue()
-        self._closing = False
-        s = self.settings
-        self._odom_pub = self.create_publisher(Odometry, "odom", _RELIABLE)
-        self._state_pub = self.create_publisher(Go2State, "go2_states", _RELIABLE)
-        self._camera_pub = self.create_publisher(Image, "camera/image_raw", _SENSOR)
-        self._record_pub = self.create_publisher(String, "sim_driver/requests",
-                                                 QoSProfile(depth=50))
-        self.create_subscription(Twist, "cmd_vel", self._on_twist, _RELIABLE)
-        self.create_subscription(WebRtcReq, "webrtc_req", self._on_request, _RELIABLE)
-        self.create_subscription(String, "sim_driver/fault", self._on_fault, _RELIABLE)
-        self.create_timer(1.0 / s.odom_rate_hz, self._publish_odom)
-        self.create_timer(1.0 / s.state_rate_hz, self._publish_state)
-        self.create_timer(0.05, self._watchdog)
+        self.settings = s = parse_settings({**self._read_parameters(), **(options or {})})
+        if sim is not None and s.robots != 1:
+            raise ParameterError("a given SimRobot makes one robot; robots must be 1")
+        self.robots = [SimGo2(self, s, f"robot{i}/" if s.robots > 1 else "",
+                              sim or self._new_sim(s)) for i in range(s.robots)]
+        self.relay = TwistMux(s.relay_timeout, context=self.context,
+                              namespace=self.get_namespace()) if s.relay else None
+        self.create_timer(0.1, self._forward_requests)  # the driver's 10 Hz request loop
+        self.create_timer(1.0 / s.state_rate_hz, self._each("publish_state"))
+        self.create_timer(1.0 / s.truth_rate_hz, self._each("publish_truth"))
         if s.camera_rate_hz > 0:
-            self.create_timer(1.0 / s.camera_rate_hz, self._publish_camera)
-        self._threads = [threading.Thread(target=self._apply_commands, name="sim-commands",
-                                          daemon=True),
-                         threading.Thread(target=self._run_requests, name="sim-requests",
-                                          daemon=True)]
-        for thread in self._threads:
-            thread.start()
+            self.create_timer(1.0 / s.camera_rate_hz, self._each("publish_camera"))
+        if s.battery is not None:
+            self.create_timer(1.0, self._each("publish_battery"))
+        for robot in self.robots:
+            robot.start()
+        first = self.robots[0]
         self.get_logger().info(
-            f"simulated Go2 ready: {self.resolve_topic_name('cmd_vel')}, "
-            f"{self.resolve_topic_name('webrtc_req')} in; odom {s.odom_rate_hz:g} Hz, "
-            f"go2_states {s.state_rate_hz:g} Hz, camera {s.camera_rate_hz:g} Hz out; faults on "
-            f"{self.resolve_topic_name('sim_driver/fault')}")
+            f"simulated Go2 x{s.robots} ready: {first.topic('cmd_vel_out')} and "
+            f"{first.topic('webrtc_req')} in"
+            + (f" ({self.relay.resolve_topic_name('cmd_vel')} relayed)" if self.relay else "")
+            + f"; odom {s.odom_rate_hz:g} Hz {s.odom_delay:g} s late, go2_states "
+            f"{s.state_rate_hz:g} Hz; battery "
+            + ("none" if s.battery is None else f"{s.battery:g}% on {s.battery_topic}")
+            + f"; truth on {first.topic('sim_driver/truth')}")
 
-    def _read_parameters(self) -> DriverSettings:
-        unknown = sorted(set(getattr(self, "_parameter_overrides", {}))
-                         - set(DRIVER_PARAMETERS) - {"use_sim_time"})
-        if unknown:
-            raise ParameterError(f"unknown ROS parameter(s): {', '.join(unknown)}; known: "
-                                 f"{', '.join(DRIVER_PARAMETERS)}")
-        values = {name: self.declare_parameter(
-            name, default, ParameterDescriptor(description=text, dynamic_typing=True)).value
-            for name, (default, text) in DRIVER_PARAMETERS.items()}
-        return parse_driver(values)
+    @property
+    def nodes(self) -> list[Node]:
+        """This node and the relay (if any): what an executor must spin."""
+        return [self, *([self.relay] if self.relay else [])]
+
+    @property
+    def sim(self) -> SimRobot:
+        """The (first) robot's simulator."""
+        return self.robots[0].sim
+
+    def truth(self, robot: int = 0) -> Truth:
+        """Ground truth of robot `robot`, for in-process tests."""
+        return self.robots[robot].body.truth()
+
+    def truth_dict(self, robot: int = 0) -> dict[str, Any]:
+        """The ground truth as published on sim_driver/truth."""
+        return self.robots[robot].truth_dict()
 
     def close(self) -> None:
-        """Stop the robot and the worker threads."""
-        self._closing = True
-        self.sim.stop()
-        with self._commands_ready:
-            self._commands_ready.notify()
-        self._requests.put(None)
-        for thread in self._threads:
-            thread.join(2.0)
+        """Stop every robot and the worker threads."""
+        for robot in self.robots:
+            robot.close()
 
-    # -- commands in (callbacks hand over; the command thread applies after any delay) ------
+    def destroy_node(self) -> None:
+        if self.relay is not None:
+            self.relay.destroy_node()
+        super().destroy_node()
 
-    def _on_twist(self, msg: Twist) -> None:
-        if not self.faults.drop_commands:
-            self._schedule(lambda: self._apply_velocity(msg.linear.x, msg.linear.y,
-                                                        msg.angular.z))
+    def _new_sim(self, s: DriverSettings) -> SimRobot:
+        return SimRobot(SimConfig(time_scale=1.0, battery_drain_idle=s.battery_drain),
+                        name="sim-driver")
 
-    def _on_request(self, msg: WebRtcReq) -> None:
-        api_id, parameter = int(msg.api_id), str(msg.parameter)
-        if self.faults.drop_commands:
-            self._record(api_id, False, "dropped (fault injection)")
-        elif msg.topic != go2_api.SPORT_TOPIC:
-            self._record(api_id, False, f"topic {msg.topic!r} is not {go2_api.SPORT_TOPIC}")
-        else:
-            self._schedule(lambda: self._apply_request(api_id, parameter))
+    def _read_parameters(self) -> dict[str, Any]:
+        given = set(getattr(self, "_parameter_overrides", {})) - {"use_sim_time"}
+        unknown = sorted(given - set(OPTIONS))
+        if unknown:
+            raise ParameterError(f"unknown ROS parameter(s): {', '.join(unknown)}; known: "
+                                 f"{', '.join(OPTIONS)}")
+        declared = {name: self.declare_parameter(
+            name, getattr(DriverSettings(), name),
+            ParameterDescriptor(description=option.help, dynamic_typing=True)).value
+            for name, option in OPTIONS.items()}  # all declared, so `ros2 param` lists them
+        return {name: declared[name] for name in given}  # only those set win over defaults
 
-    def _on_fault(self, msg: String) -> None:
-        try:
-            self.faults = Faults.from_json(msg.data)
-        except ValueError as exc:  # json.JSONDecodeError is a ValueError
-            self.get_logger().warning(f"ignored a fault message {msg.data!r}: {exc}")
-            return
-        self.get_logger().warning(f"fault injection now: {self.faults}")
+    def _each(self, method: str) -> Any:
+        return lambda: [getattr(robot, method)() for robot in self.robots]
 
-    def _schedule(self, apply: Callable[[], None]) -> None:
-        with self._commands_ready:
-            due = time.monotonic() + self.faults.delay
-            heapq.heappush(self._commands, (due, next(self._order), apply))
-            self._commands_ready.notify()
-
-    def _apply_commands(self) -> None:
-        while True:
-            with self._commands_ready:
-                while not self._closing and (not self._commands
-                                             or self._commands[0][0] > time.monotonic()):
-                    wait = self._commands[0][0] - time.monotonic() if self._commands else None
-                    self._commands_ready.wait(wait)
-                if self._closing:
-                    return
-                _due, _seq, apply = heapq.heappop(self._commands)
-            apply()
-
-    def _apply_velocity(self, vx: float, vy: float, wz: float) -> None:
-        if not all(math.isfinite(v) for v in (vx, vy, wz)):
-            self.get_logger().warning(f"ignored a non-finite cmd_vel {(vx, vy, wz)}")
-            return
-        self._last_twist = time.monotonic()
-        self._moving_command = bool(vx or vy or wz)
-        self.sim.send_velocity(vx, vy, wz)  # ignored by the simulator unless standing
-
-    def _apply_request(self, api_id: int, parameter: str) -> None:
-        if api_id == go2_api.STOP_MOVE:
-            self._moving_command = False
-            self.sim.stop()
-            self._record(api_id, True)
-        elif api_id == go2_api.MOVE:
-            try:
-                move = json.loads(parameter)
-                self._apply_velocity(float(move["x"]), float(move["y"]), float(move["z"]))
-            except (ValueError, KeyError, TypeError) as exc:
-                self._record(api_id, False, f"bad parameter {parameter!r}: {exc!r}")
-                return
-            self._record(api_id, True)
-        elif api_id in _POSTURES or api_id in _TRICK_IDS:
-            with self._busy_lock:
-                self._busy += 1
-            self._record(api_id, True, "queued")
-            self._publish_state()  # report busy at once, as the robot acknowledges
-            self._requests.put(api_id)
-        else:
-            self._record(api_id, False, "not simulated")
-
-    # -- postures and tricks (the request thread; each takes seconds) -----------------------
-
-    def _run_requests(self) -> None:
-        while (api_id := self._requests.get()) is not None:
-            try:
-                note = self._perform(api_id)
-            except RobotError as exc:
-                note = f"ignored: {exc}"
-            if note:
-                self.get_logger().info(f"{_NAMES.get(api_id, api_id)}: {note}")
-            with self._busy_lock:
-                self._busy -= 1
-            self._publish_state()
-
-    def _perform(self, api_id: int) -> str:
-        """Run one sport request on the simulator; a note when the robot ignored it."""
-        posture = self.sim.get_state().posture
-        if api_id in _POSTURES:
-            needs, target = _POSTURES[api_id]
-            if needs is not None and posture is not needs:
-                return f"ignored: the robot is {posture.value}, not {needs.value}"
-            if target is not posture:
-                self.sim.set_posture(target)
-            return ""
-        trick = _NAMES[api_id]
-        if trick not in go2_api.TRICKS:
-            return "not simulated"
-        self.sim.perform(trick)  # raises RobotError unless standing
-        return ""
-
-    # -- state out ---------------------------------------------------------------------------
-
-    def _watchdog(self) -> None:
-        quiet = time.monotonic() - self._last_twist
-        if self._moving_command and quiet > self.settings.cmd_vel_timeout:
-            self._moving_command = False
-            self.sim.send_velocity(0.0, 0.0, 0.0)
-            self.get_logger().info(f"cmd_vel quiet for {quiet:.2f} s: velocity set to zero",
-                                   throttle_duration_sec=5.0)
-
-    def _publish_odom(self) -> None:
-        if not self.faults.odom:
-            return
-        st = self.sim.get_state()
-        msg = Odometry()
-        msg.header.stamp = self.get_clock().now().to_msg()
-        msg.header.frame_id, msg.child_frame_id = "odom", "base_link"
-        msg.pose.pose.position.x, msg.pose.pose.position.y = st.x, st.y
-        msg.pose.pose.position.z = _BODY_HEIGHT[st.posture]
-        msg.pose.pose.orientation.z = math.sin(st.yaw / 2.0)
-        msg.pose.pose.orientation.w = math.cos(st.yaw / 2.0)
-        msg.twist.twist.linear.x, msg.twist.twist.linear.y = st.vx, st.vy  # body frame
-        msg.twist.twist.angular.z = st.wz
-        self._odom_pub.publish(msg)
-
-    def _publish_state(self) -> None:
-        if not self.faults.states or self._closing:
-            return
-        st = self.sim.get_state()
-        with self._busy_lock:
-            busy = self._busy > 0
-        mode = {Posture.SITTING: _MODE_SIT, Posture.LYING: _MODE_LIE_DOWN}.get(
-            st.posture, _MODE_LOCOMOTION if st.is_moving else _MODE_BALANCE_STAND)
-        c, s = math.cos(st.yaw), math.sin(st.yaw)
-        self._state_pub.publish(Go2State(
-            mode=_MODE_POSE if busy and st.posture is Posture.STANDING else mode,
-            progress=1 if busy else 0, gait_type=1 if st.is_moving else 0,
-            foot_raise_height=0.08, body_height=_BODY_HEIGHT[st.posture],
-            position=[st.x, st.y, _BODY_HEIGHT[st.posture]],
-            velocity=[st.vx * c - st.vy * s, st.vx * s + st.vy * c, 0.0]))  # odom frame
-
-    def _publish_camera(self) -> None:
-        if not self.faults.camera:
-            return
-        s = self.settings
-        msg = Image(width=s.camera_width, height=s.camera_height, encoding="rgb8",
-                    step=3 * s.camera_width)
-        msg.header.stamp = self.get_clock().now().to_msg()
-        msg.header.frame_id = "camera_link"
-        msg.data = scene.render(scene.DEFAULT_WORLD, self.sim.get_state().pose, s.camera_width,
-                                s.camera_height)
-        self._camera_pub.publish(msg)
-
-    def _record(self, api_id: int, accepted: bool, note: str = "") -> None:
-        record = {"api_id": api_id, "name": _NAMES.get(api_id, "unknown"), "accepted": accepted,
-                  "note": note, "mono": time.monotonic()}
-        self._record_pub.publish(String(data=json.dumps(record)))
+    def _forward_requests(self) -> None:
+        for robot in self.robots:
+            robot.forward_requests()
 
 
-_USAGE = f"""usage: shadowhound sim-driver [--ros-args -p NAME:=VALUE -r __ns:=/robot0 ...]
+_DESCRIPTION = f"""A simulated Unitree Go2 behind go2_ros2_sdk's ROS 2 topics, behaving as the real
+driver does, as the ROS 2 node '{NODE_NAME}' (plus 'twist_mux', the relay). Run a mission on
+it with `shadowhound node --ros-args -p robot:=go2` in another terminal.
 
-A simulated Unitree Go2 with go2_ros2_sdk's topics (cmd_vel, webrtc_req in; odom, go2_states,
-camera/image_raw out) as the ROS 2 node '{NODE_NAME}'. Run a mission on it with
-`shadowhound node --ros-args -p robot:=go2` in another terminal. Parameters:
-{chr(10).join(f"  {n} (default {d!r}): {t}" for n, (d, t) in DRIVER_PARAMETERS.items())}
-Faults: publish JSON on sim_driver/fault, e.g. '{{"odom": false}}'; '{{}}' clears them.
-Exit codes: 0 after Ctrl-C / SIGTERM, 2 for invalid parameters.
-"""
+Topics per robot (robot{{i}}/ prefix with --robots 2+): cmd_vel_out, webrtc_req in; odom (no
+twist, late by --odom-delay), go2_states, camera/image_raw, battery_state (--battery only)
+out; sim_driver/truth (JSON ground truth), sim_driver/requests (JSON per sport request) out;
+sim_driver/fault in. The relay: cmd_vel, cmd_vel_joy in, cmd_vel_out out.
+
+Every option is also a ROS parameter with the same name in snake case (--ros-args -p
+odom_delay:=0.5); an option given here wins. -r __ns:=/NS moves every topic, the relay's too."""
+_EPILOG = """faults: publish JSON on sim_driver/fault, e.g. '{"odom": false}', '{"delay_ms": 200}',
+'{"drop_commands": true}'; '{}' clears them.
+exit codes: 0 after Ctrl-C / SIGTERM, 2 for invalid options or parameters."""
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """`shadowhound sim-driver --ros-args ...`"""
-    return run_node("shadowhound sim-driver", NODE_NAME, argv, _USAGE, SimDriver,
-                    lambda driver: driver.close(),  # type: ignore[attr-defined]
-                    "shutting down: the simulated robot stops")
+    """`shadowhound sim-driver [options] [--ros-args ...]`"""
+    own, ros_args = split_argv(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(PROG, _DESCRIPTION, _EPILOG)
+    options = vars(parser.parse_args(own))  # exits 2 with a message on bad options
+    return run_node(PROG, NODE_NAME, ros_args, parser.format_help(),
+                    lambda: SimDriver(options=options),
+                    _close, "shutting down: the simulated robots stop", extra_nodes=_relay)
+
+
+def _close(driver: Node) -> None:
+    assert isinstance(driver, SimDriver)
+    driver.close()
+
+
+def _relay(driver: Node) -> list[Node]:
+    assert isinstance(driver, SimDriver)
+    return driver.nodes[1:]
 
 
 if __name__ == "__main__":

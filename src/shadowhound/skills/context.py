@@ -12,6 +12,7 @@ from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
 from ..robot.base import Robot
 from ..state import CameraFrame, Pose2D, Posture
+from ..world import Belief
 
 
 class SkillError(Exception):
@@ -38,12 +39,15 @@ class PlanEnv:
     teach or forget a place update it, so later steps of the same plan see the change.
     `budget` is what the mission has used of its limits so far (the agent sets it once per
     mission; None checks a plan on its own, as if the mission had just begun).
+    `belief` is the robot's map and known objects (None: no map, so paths are straight lines
+    and nothing is known to be in the way). nav.goto updates its grid from scans when blocked.
     """
 
     config: ShadowHoundConfig
     mission_start: Pose2D = field(default_factory=Pose2D)
     places: dict[str, tuple[float, float]] = field(default_factory=dict)
     budget: MissionBudget | None = None
+    belief: Belief | None = None
 
     def __post_init__(self) -> None:
         self.places = {**self.config.places, **self.places}
@@ -60,6 +64,12 @@ class PlanEnv:
             return (0.0, 0.0)
         known = ", ".join([*self.places, "start", "home"])
         raise PlanProblem(f"unknown place {name!r}; known places: {known}")
+
+
+def robot_belief(robot: Robot) -> Belief | None:
+    """The map a robot offers (`belief()`: the simulator's scene), or None when it has none."""
+    source = getattr(robot, "belief", None)
+    return source() if callable(source) else None
 
 
 class SkillContext:

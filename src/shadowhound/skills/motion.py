@@ -3,17 +3,25 @@
 Every loop commands velocity, lets one control period pass, then measures the pose again;
 distance and angle are measured, never assumed from time. Velocity follows a ramp profile
 (v = sqrt(2 a d) near the goal) and a final proportional approach, so the robot stops on the
-target without overshoot. A loop fails if the robot makes no progress for `stall_timeout`.
+target without overshoot. Arrival is judged again on the pose at rest (after `settle`), and a
+short approach corrects what late odometry left; a loop fails if the robot makes no progress
+for `stall_timeout`.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from ..state import normalize_angle
 from .context import SkillContext, SkillError
 
 _SETTLE_SPEED = 0.01
+_SETTLE_SECONDS = 3.0  # longest wait for rest after a stop (odometry may be half a second late)
+_CORRECTIONS = 3  # approaches after the first when the pose at rest is off the goal
+# A correction moves slowly enough that odometry half a second later than the robot believes
+# costs at most the tolerance (late odometry is what leaves the first approach off the goal).
+_CORRECTION_SECONDS = 0.5
 
 
 def straight_timeout(distance: float, speed: float, accel: float) -> float:
@@ -50,32 +58,42 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
     start = robot.get_state()
     c, s = math.cos(start.yaw), math.sin(start.yaw)
     goal = math.hypot(tx, ty)
-    best, best_time = math.inf, robot.now()
-    while True:
-        st = robot.get_state()
-        dx, dy = st.x - start.x, st.y - start.y
-        lx, ly = dx * c + dy * s, -dx * s + dy * c  # displacement in the start frame
-        ex, ey = tx - lx, ty - ly
-        error = math.hypot(ex, ey)
-        if _arrived(error, math.hypot(st.vx, st.vy), m.position_tolerance, ctx.period):
-            break
-        if error < best - 1e-3:
-            best, best_time = error, robot.now()
-        elif robot.now() - best_time > m.stall_timeout:
-            robot.stop()
-            raise SkillError(
-                f"no progress for {m.stall_timeout:.1f} s with {error:.2f} m to go: "
-                "the robot is blocked, stalled or ignoring velocity commands"
-            )
-        v = abs(_profile(error, speed, m.linear_accel, ctx.period))
-        yaw_error = normalize_angle(start.yaw - st.yaw)
-        # Body-frame command toward the goal; the start frame and the body differ by yaw_error.
-        bx, by = ex / error * v, ey / error * v
-        cy, sy = math.cos(yaw_error), math.sin(yaw_error)
-        ctx.drive(bx * cy - by * sy, bx * sy + by * cy, _profile(yaw_error, 0.5, 2.0, ctx.period))
-        ctx.on_progress(min(1.0, 1.0 - error / goal) if goal else 1.0)
-        ctx.tick()
-    settle(ctx)
+    for attempt in range(1 + _CORRECTIONS):
+        best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
+        cap = speed if attempt == 0 else min(speed, m.position_tolerance / _CORRECTION_SECONDS)
+        while True:
+            st = robot.get_state()
+            dx, dy = st.x - start.x, st.y - start.y
+            lx, ly = dx * c + dy * s, -dx * s + dy * c  # displacement in the start frame
+            ex, ey = tx - lx, ty - ly
+            error = math.hypot(ex, ey)
+            if _arrived(error, math.hypot(st.vx, st.vy), m.position_tolerance, ctx.period):
+                break
+            if error < best - 1e-3:
+                best, best_time = error, robot.now()
+            elif robot.now() - best_time > m.stall_timeout:
+                robot.stop()
+                if st.blocked_by:
+                    raise SkillError(f"blocked by {st.blocked_by} with {error:.2f} m to go")
+                raise SkillError(
+                    f"no progress for {m.stall_timeout:.1f} s with {error:.2f} m to go: "
+                    "the robot is blocked, stalled or ignoring velocity commands"
+                )
+            v = abs(_profile(error, cap, m.linear_accel, ctx.period))
+            yaw_error = normalize_angle(start.yaw - st.yaw)
+            # Body-frame command toward the goal; the start frame and the body differ by
+            # yaw_error.
+            bx, by = ex / error * v, ey / error * v
+            cy, sy = math.cos(yaw_error), math.sin(yaw_error)
+            ctx.drive(bx * cy - by * sy, bx * sy + by * cy,
+                      _profile(yaw_error, 0.5, 2.0, ctx.period))
+            ctx.on_progress(min(1.0, 1.0 - error / goal) if goal else 1.0)
+            ctx.tick()
+        settle(ctx)
+        end = robot.get_state()
+        dx, dy = end.x - start.x, end.y - start.y
+        if math.hypot(tx - (dx * c + dy * s), ty - (-dx * s + dy * c)) < m.position_tolerance:
+            break  # judged on the pose at rest, not on the one the loop stopped on
     end = robot.get_state()
     return math.hypot(end.x - start.x, end.y - start.y)
 
@@ -86,26 +104,31 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
     m = ctx.config.motion
     last_yaw = robot.get_state().yaw
     turned = 0.0
-    best, best_time = math.inf, robot.now()
-    while True:
-        st = robot.get_state()
-        turned += normalize_angle(st.yaw - last_yaw)  # unwrapped, so 360 degree turns work
-        last_yaw = st.yaw
-        error = angle - turned
-        if _arrived(error, st.wz, m.yaw_tolerance, ctx.period):
-            break
-        if abs(error) < best - 1e-3:
-            best, best_time = abs(error), robot.now()
-        elif robot.now() - best_time > m.stall_timeout:
-            robot.stop()
-            raise SkillError(
-                f"no progress for {m.stall_timeout:.1f} s with {math.degrees(error):.0f} degrees "
-                "to go: the robot is blocked, stalled or ignoring velocity commands"
-            )
-        ctx.drive(0.0, 0.0, _profile(error, speed, m.angular_accel, ctx.period))
-        ctx.on_progress(min(1.0, 1.0 - abs(error) / abs(angle)) if angle else 1.0)
-        ctx.tick()
-    settle(ctx)
+    for attempt in range(1 + _CORRECTIONS):
+        best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
+        cap = speed if attempt == 0 else min(speed, m.yaw_tolerance / _CORRECTION_SECONDS)
+        while True:
+            st = robot.get_state()
+            turned += normalize_angle(st.yaw - last_yaw)  # unwrapped, so 360 degree turns work
+            last_yaw = st.yaw
+            error = angle - turned
+            if _arrived(error, st.wz, m.yaw_tolerance, ctx.period):
+                break
+            if abs(error) < best - 1e-3:
+                best, best_time = abs(error), robot.now()
+            elif robot.now() - best_time > m.stall_timeout:
+                robot.stop()
+                raise SkillError(
+                    f"no progress for {m.stall_timeout:.1f} s with {math.degrees(error):.0f} "
+                    "degrees to go: the robot is blocked, stalled or ignoring velocity commands"
+                )
+            ctx.drive(0.0, 0.0, _profile(error, cap, m.angular_accel, ctx.period))
+            ctx.on_progress(min(1.0, 1.0 - abs(error) / abs(angle)) if angle else 1.0)
+            ctx.tick()
+        settle(ctx)
+        yaw = robot.get_state().yaw
+        if abs(angle - turned - normalize_angle(yaw - last_yaw)) < m.yaw_tolerance:
+            break  # judged on the heading at rest, not on the one the loop stopped on
     yaw = robot.get_state().yaw
     return turned + normalize_angle(yaw - last_yaw)
 
@@ -124,10 +147,48 @@ def go_to(ctx: SkillContext, x: float, y: float, linear: float, angular: float) 
     return drive_local(ctx, dx * c + dy * s, -dx * s + dy * c, linear)
 
 
+def follow(ctx: SkillContext, points: list[tuple[float, float]], linear: float,
+           angular: float, done: float = 0.0) -> float:
+    """Walk the straight legs through `points` (odom frame): at each, face the next point, then
+    walk to it. Progress is the distance along the path (after `done` metres already walked
+    of the route) over its whole length. Returns metres covered."""
+    report = ctx.on_progress
+    st = ctx.robot.get_state()
+    corners = [(st.x, st.y), *points]
+    legs = [math.dist(a, b) for a, b in zip(corners, corners[1:], strict=False)]
+    total = done + sum(legs)
+    walked = 0.0
+
+    def along(at: float) -> None:
+        report(min(1.0, at / total) if total else 1.0)
+
+    def from_here(at: float, leg: float) -> Callable[[float], None]:
+        return lambda fraction: along(at + fraction * leg)
+
+    try:
+        for (x, y), leg in zip(points, legs, strict=True):
+            st = ctx.robot.get_state()
+            if math.hypot(x - st.x, y - st.y) >= ctx.config.motion.position_tolerance:
+                ctx.on_progress = from_here(done, 0.0)  # turning: no distance yet
+                bearing = math.atan2(y - st.y, x - st.x)
+                rotate(ctx, normalize_angle(bearing - st.yaw), angular)
+                st = ctx.robot.get_state()
+                c, s = math.cos(st.yaw), math.sin(st.yaw)
+                dx, dy = x - st.x, y - st.y
+                ctx.on_progress = from_here(done, leg)
+                walked += drive_local(ctx, dx * c + dy * s, -dx * s + dy * c, linear)
+            done += leg
+            along(done)
+    finally:
+        ctx.on_progress = report
+    return walked
+
+
 def settle(ctx: SkillContext) -> None:
-    """Command zero and wait (bounded) until the robot has come to rest."""
+    """Command zero and wait (bounded) until the robot has come to rest: on a robot whose
+    odometry is late (a Go2), until odometry shows it at rest."""
     ctx.drive(0.0, 0.0, 0.0)
-    for _ in range(int(2.0 / ctx.period) + 1):
+    for _ in range(int(_SETTLE_SECONDS / ctx.period) + 1):
         st = ctx.robot.get_state()
         if max(abs(st.vx), abs(st.vy), abs(st.wz)) < _SETTLE_SPEED:
             return

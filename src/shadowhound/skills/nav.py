@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import math
 
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
 
 from ..state import Pose2D, normalize_angle
+from ..world import PlanError, apply_scan, plan_route
 from . import motion
 from .arguments import (
     Angle,
@@ -19,12 +20,14 @@ from .arguments import (
     OptionalSpeed,
     SkillArgs,
 )
-from .context import PlanEnv, SkillContext
+from .context import PlanEnv, PlanProblem, SkillContext, SkillError
 from .registry import Skill
 
 # Schema ranges are sanity bounds on the form of a request; the configured safety limits
 # (SafetyConfig) are checked on top of them before anything moves.
 _MAX_DISTANCE = 1000.0
+# Times a walk re-plans after something it did not know of stopped it (then it gives up).
+MAX_REPLANS = 3
 
 
 class MoveArgs(SkillArgs):
@@ -51,6 +54,10 @@ class RotateArgs(SkillArgs):
 
 
 class GotoArgs(SkillArgs):
+    # The targets `_target` accepts, in JSON Schema: plan schemas offer each as its own step.
+    model_config = ConfigDict(json_schema_extra={"oneOf": [{"required": ["x", "y"]},
+                                                           {"required": ["place"]}]})
+
     x: OptionalLength = Field(
         None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom"
     )
@@ -140,10 +147,65 @@ def _goto_target(a: GotoArgs, env: PlanEnv) -> tuple[float, float]:
     return (a.x, a.y)
 
 
+def route(env: PlanEnv, start: Pose2D, goal: tuple[float, float]) -> list[tuple[float, float]]:
+    """The points a walk from `start` to `goal` passes, the goal last: with a map, the planned
+    collision-free path; without one, the goal alone (a straight line, as before maps)."""
+    if env.belief is None:
+        return [goal]
+    try:
+        path = plan_route(env.belief, (start.x, start.y), goal)
+    except PlanError as exc:
+        raise PlanProblem(f"no safe path to ({goal[0]:.2f}, {goal[1]:.2f}): {exc}") from exc
+    points = list(path.waypoints[1:]) or [goal]
+    if math.dist(points[-1], goal) < 1e-6:  # the exact goal, not its round trip through cells
+        points[-1] = goal
+    return points
+
+
+def walk(ctx: SkillContext, goal: tuple[float, float], linear: float, angular: float) -> float:
+    """Walk a planned path to `goal`. When something the map did not show stops the robot
+    (the state's `blocked_by`), update the map from a scan and plan again, at most MAX_REPLANS
+    times. Returns metres covered."""
+    walked = 0.0
+    belief = ctx.env.belief
+    for attempt in range(MAX_REPLANS + 1):
+        pose = ctx.robot.get_state().pose
+        try:
+            points = route(ctx.env, pose, goal)
+        except PlanProblem as exc:
+            raise SkillError(str(exc)) from exc
+        if attempt:  # a new path the plan check never saw: the governor's rules check it now
+            _check_new_path(ctx, pose, points)
+        before = ctx.robot.get_state().distance_travelled
+        try:
+            return walked + motion.follow(ctx, points, linear, angular, done=walked)
+        except SkillError as exc:
+            walked += ctx.robot.get_state().distance_travelled - before
+            blocked = ctx.robot.get_state().blocked_by
+            if belief is None or not blocked or attempt == MAX_REPLANS:
+                raise
+            scan = ctx.robot.get_scan()
+            if scan is None:
+                raise
+            apply_scan(belief.grid, scan)
+            belief.changed()
+            ctx.notes.append(f"{exc}; re-planned from a fresh scan")
+    raise AssertionError("unreachable")  # the loop returns or raises
+
+
+def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, float]]) -> None:
+    from ..safety import Governor  # here: the governor's module imports the skills
+
+    poses = _predict_walk_points(pose, points, ctx.env)
+    problems = Governor(ctx.config.safety).path_problems(pose, poses, ctx.env, "the new path")
+    if problems:
+        raise SkillError("re-planned, but the new path is refused: " + "; ".join(problems))
+
+
 def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     ctx.ensure_standing()
     x, y = _goto_target(a, ctx.env)
-    motion.go_to(ctx, x, y, _linear(ctx, a.speed), _angular(ctx, None))
+    walk(ctx, (x, y), _linear(ctx, a.speed), _angular(ctx, None))
     if a.heading_degrees is not None:
         yaw = ctx.robot.get_state().yaw
         turn = normalize_angle(math.radians(a.heading_degrees) - yaw)
@@ -161,18 +223,34 @@ def _arrive(pose: Pose2D, x: float, y: float, env: PlanEnv) -> Pose2D:
     return Pose2D(x, y, math.atan2(y - pose.y, x - pose.x))
 
 
+def _predict_walk(pose: Pose2D, goal: tuple[float, float], env: PlanEnv) -> list[Pose2D]:
+    """The poses at the corners of the walk's path (every leg checked by the governor)."""
+    return _predict_walk_points(pose, route(env, pose, goal), env)
+
+
+def _predict_walk_points(pose: Pose2D, points: list[tuple[float, float]], env: PlanEnv
+                         ) -> list[Pose2D]:
+    poses: list[Pose2D] = []
+    for x, y in points:
+        poses.append(_arrive(poses[-1] if poses else pose, x, y, env))
+    return poses
+
+
 def _predict_goto(pose: Pose2D, a: GotoArgs, env: PlanEnv) -> list[Pose2D]:
-    end = _arrive(pose, *_goto_target(a, env), env)
+    poses = _predict_walk(pose, _goto_target(a, env), env)
     if a.heading_degrees is not None:
-        end = Pose2D(end.x, end.y, normalize_angle(math.radians(a.heading_degrees)))
-    return [end]
+        end = poses[-1]
+        poses[-1] = Pose2D(end.x, end.y, normalize_angle(math.radians(a.heading_degrees)))
+    return poses
 
 
 def _goto_timeout(a: GotoArgs, env: PlanEnv) -> float:
-    # The distance is not known before the pose is; bound it by the geofence diameter.
-    reach = 2 * env.config.safety.geofence_radius
+    # The distance is not known before the pose is; bound it by the geofence diameter (with a
+    # map, twice that for detours, and a turn at each of a few corners).
+    detours = 1 if env.belief is None else 2
+    reach = 2 * env.config.safety.geofence_radius * detours
     m = env.config.motion
-    return motion.straight_timeout(reach, _linear(env, a.speed), m.linear_accel) + (
+    return motion.straight_timeout(reach, _linear(env, a.speed), m.linear_accel) + detours * 2 * (
         motion.rotate_timeout(2 * math.pi, _angular(env, None), m.angular_accel)
     )
 
@@ -190,8 +268,8 @@ def _run_patrol(ctx: SkillContext, a: PatrolArgs) -> str:
     points = _patrol_points(st.pose, ctx.env)
     walked = 0.0
     for _ in range(a.laps):
-        for x, y in points:
-            walked += motion.go_to(ctx, x, y, _linear(ctx, None), _angular(ctx, None))
+        for point in points:
+            walked += walk(ctx, point, _linear(ctx, None), _angular(ctx, None))
     laps = "lap" if a.laps == 1 else "laps"
     return f"patrolled {a.laps} {laps} of {len(points)} waypoints ({walked:.1f} m) and returned"
 
@@ -199,8 +277,8 @@ def _run_patrol(ctx: SkillContext, a: PatrolArgs) -> str:
 def _predict_patrol(pose: Pose2D, a: PatrolArgs, env: PlanEnv) -> list[Pose2D]:
     poses: list[Pose2D] = []
     for _ in range(a.laps):
-        for x, y in _patrol_points(pose, env):
-            poses.append(_arrive(poses[-1] if poses else pose, x, y, env))
+        for point in _patrol_points(pose, env):
+            poses += _predict_walk(poses[-1] if poses else pose, point, env)
     return poses
 
 
@@ -251,7 +329,7 @@ SKILLS = (
     Skill(
         "nav.goto",
         "Walk to a point (x, y in metres, odom frame) or to a named place "
-        "('start' = where this mission began, 'home' = the origin).",
+        "('start' = where this mission began, 'home' = the origin), around known obstacles.",
         GotoArgs,
         _run_goto,
         timeout=_goto_timeout,

@@ -15,10 +15,8 @@ from typing import Any
 
 from ..agent import RobotAgent
 from ..events import MissionEvent
-from ..worker import MissionJob, MissionWorker
+from ..worker import ESTOP_DROP_REASON, MissionJob, MissionWorker
 from .feed import EventFeed
-
-ESTOP_DROP_REASON = "the e-stop was pressed before it started"
 
 
 @dataclass(eq=False)

@@ -18,38 +18,19 @@ from fastapi import FastAPI
 from ..agent import RobotAgent
 from ..config import ConfigError, ShadowHoundConfig
 from .app import create_app
-from .security import LOOPBACK_HOSTS, is_loopback
+from .security import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, ServeError, check_binding
+
+__all__ = ["MIN_TOKEN_CHARS", "ServeError", "WebServer", "bind", "check_binding", "hosts_for",
+           "serve"]
 
 log = logging.getLogger(__name__)
-
-MIN_TOKEN_CHARS = 16
-_TOKEN_HINT = ("for example: export SHADOWHOUND_TOKEN=$(python3 -c "
-               "'import secrets; print(secrets.token_urlsafe(24))')")
-
-
-class ServeError(Exception):
-    """The server cannot start as asked. The message says why and what to do."""
-
-
-def check_binding(host: str, token: str | None) -> None:
-    """Refuse to listen beyond loopback without a strong enough token. Raises ServeError."""
-    if not is_loopback(host) and not token:
-        raise ServeError(f"refusing to listen on {host}: only a literal loopback address "
-                         "(127.x.x.x, ::1) or localhost counts as loopback (names are not "
-                         "resolved), and beyond loopback the dashboard needs a token; set "
-                         "SHADOWHOUND_TOKEN or pass --token, " + _TOKEN_HINT)
-    if token is not None and len(token) < MIN_TOKEN_CHARS:
-        raise ServeError(f"the token is {len(token)} characters long; use at least "
-                         f"{MIN_TOKEN_CHARS}, " + _TOKEN_HINT)
-    if token is not None and not all(c.isalnum() or c in "-._~" for c in token):
-        raise ServeError("the token may contain only letters, digits and - . _ ~ (it travels "
-                         "in headers, URLs and WebSocket subprotocols), " + _TOKEN_HINT)
-
 
 def bind(host: str, port: int) -> socket.socket:
     """A listening socket (port 0 picks a free one). Raises ServeError when it cannot."""
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
-    sock = socket.socket(family, socket.SOCK_STREAM)
+    # IPPROTO_TCP explicitly: asyncio sets TCP_NODELAY only on connections whose socket says
+    # TCP, and without it a streamed answer waits ~40 ms for the client's delayed ACK (Nagle).
+    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
     try:
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         sock.bind((host, port))

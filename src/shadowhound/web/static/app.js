@@ -199,7 +199,7 @@ function applyStatus(status) {
 
 function renderRobot(robot) {
   renderKv($("#robot"), {
-    posture: robot.posture, battery: robot.battery + " %", moving: robot.moving,
+    posture: robot.posture, battery: robot.battery === null ? "unknown" : robot.battery + " %", moving: robot.moving,
     "e-stop": robot.estopped, travelled: robot.distance_travelled + " m",
     connected: robot.connected,
   });

@@ -1,0 +1,201 @@
+"""The plan schema: generated from the skill registry, it admits only plans of real skills
+called with exactly their own arguments, in the dialect each server enforces.
+
+A plan is `{"steps": [step, ...], "answer": "..."}`; each step is one of the skills (`anyOf`
+over them): its name as a constant and an `args` object with exactly that skill's arguments
+(required ones required, types, enums, `additionalProperties: false`, ranges where the dialect
+has them). Numbers are plain JSON numbers in the units the prompt names: a grammar that lets a
+model write "3 cm" would also let it write "3 bananas".
+
+Dialects (`dialect_of` picks one per backend):
+- `openai`: OpenAI strict structured outputs (`strict: true`). Its subset wants every property
+  required (an optional argument is `null`-able instead), `enum` rather than `const`, and no
+  string lengths; numeric ranges are allowed.
+- `json_schema`: vLLM's structured outputs (`response_format` json_schema, enforced by its
+  grammar backend) and Ollama (the OpenAI-compatible `response_format` becomes its `format`).
+- `llamacpp`: llama-server and llama-cpp-python 0.3.x: `response_format` `json_object` with a
+  `schema`, compiled to a GBNF grammar. Its converter handles `anyOf`, `const`, `enum`,
+  `required`, `additionalProperties` and `minLength`; llama-cpp-python ignores numeric ranges
+  (a TODO in its converter), so they are not sent, nor `maxLength`, which it unrolls into a
+  grammar rule per character (a 35 kB grammar for this registry instead of a few kB). An
+  optional number with a range (speed, heading, laps) is not offered at all: the grammar could
+  not keep it in range, and the skill's default is always valid. A required one (a distance)
+  stays; the registry checks its range and the repair turn says what is allowed.
+
+A skill whose arguments come in alternative sets declares them as `oneOf` of `required` sets
+(nav.goto: x and y, or a place); each set becomes a step of its own, so a half target ("x"
+without "y") is outside the schema.
+
+The schema is a guarantee only where the server enforces it: every plan is still validated
+against the registry, and an invalid one still gets a repair turn.
+
+Everything here is cached per registry and dialect and built deterministically, so the bytes
+sent are identical from mission to mission (servers cache compiled grammars by schema): treat
+the returned dicts as read-only.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any, Literal
+
+from ..skills import Skill, SkillRegistry
+
+Dialect = Literal["openai", "json_schema", "llamacpp"]
+
+ANSWER_MAX_CHARS = 300  # a short reason when nothing can be done; also stops a model rambling
+
+_RANGES = ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum")
+_LENGTHS = ("minLength", "maxLength")
+# What each dialect keeps of a property's schema besides its type and enum.
+_KEEP: dict[str, tuple[str, ...]] = {
+    "openai": _RANGES,
+    "json_schema": _RANGES + _LENGTHS,
+    "llamacpp": ("minLength",),
+}
+
+
+def dialect_of(backend: str) -> Dialect:
+    """The schema dialect the server behind `backend` enforces."""
+    if backend == "openai":
+        return "openai"
+    if backend == "llamacpp":
+        return "llamacpp"
+    return "json_schema"
+
+
+def args_schema(skill: Skill, dialect: Dialect) -> list[dict[str, Any]]:
+    """The skill's arguments as closed object schemas in `dialect`: one per alternative set of
+    arguments the skill accepts (nav.goto: x and y, or a place), else one."""
+    return [_args_schema(skill, dialect, a) for a in _alternatives(skill)]
+
+
+def _alternatives(skill: Skill) -> list[tuple[str, ...]]:
+    """The argument sets a skill accepts one of (`oneOf` of `required` in its schema, e.g.
+    nav.goto's x and y, or place); one empty set for a skill without alternatives."""
+    alternatives = skill.parameters_schema().get("oneOf", [])
+    return [tuple(a.get("required", [])) for a in alternatives] or [()]
+
+
+@functools.lru_cache(maxsize=512)
+def _args_schema(skill: Skill, dialect: Dialect,
+                 alternative: tuple[str, ...] = ()) -> dict[str, Any]:
+    full = skill.parameters_schema()
+    required = list(full.get("required", [])) + list(alternative)
+    others = {n for a in _alternatives(skill) for n in a} - set(alternative)
+    props: dict[str, Any] = {}
+    for name, prop in full.get("properties", {}).items():
+        branches = [b for b in prop.get("anyOf", [prop]) if b.get("type") != "null"]
+        nullable = len(branches) < len(prop.get("anyOf", [prop]))
+        if name in others:
+            continue  # it belongs to another alternative: "x" in the step that goes to a place
+        if (dialect == "llamacpp" and name not in required
+                and any(k in branches[0] for k in _RANGES)):
+            # The grammar cannot hold a number in its range, and the argument is optional:
+            # not offered at all, so the skill's default applies (speed, heading, laps).
+            continue
+        base = {k: v for k, v in branches[0].items()
+                if k in ("type", "enum", *_KEEP[dialect])}
+        if dialect == "openai" and name not in required:
+            # Strict mode: every property is required. An optional argument the skill accepts
+            # as None may be null; one with another default (nav.patrol's laps) must be given.
+            base = {"anyOf": [base, {"type": "null"}]} if nullable else base
+        props[name] = base
+    if dialect == "openai":
+        required = list(props)
+    schema: dict[str, Any] = {"type": "object", "properties": props}
+    if required:
+        schema["required"] = required
+    schema["additionalProperties"] = False
+    return schema
+
+
+def _name(skill: Skill, dialect: Dialect) -> dict[str, Any]:
+    if dialect == "openai":
+        return {"type": "string", "enum": [skill.name]}
+    return {"type": "string", "const": skill.name}
+
+
+@functools.lru_cache(maxsize=64)
+def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
+    steps = [
+        {
+            "type": "object",
+            "properties": {"skill": _name(s, dialect), "args": args},
+            "required": ["skill", "args"],
+            "additionalProperties": False,
+        }
+        for s in skills
+        for args in args_schema(s, dialect)
+    ]
+    answer: dict[str, Any] = {"type": "string"}
+    if dialect == "json_schema":
+        answer["maxLength"] = ANSWER_MAX_CHARS
+    return {
+        "type": "object",
+        "properties": {
+            "steps": {"type": "array", "items": {"anyOf": steps}},
+            "answer": answer,
+        },
+        "required": ["steps", "answer"] if dialect == "openai" else ["steps"],
+        "additionalProperties": False,
+    }
+
+
+def plan_schema(registry: SkillRegistry, dialect: Dialect = "json_schema") -> dict[str, Any]:
+    """The JSON Schema of a whole plan over `registry`'s skills, in `dialect`."""
+    return _plan_schema(tuple(registry), dialect)
+
+
+def response_format(backend: str, registry: SkillRegistry) -> dict[str, Any]:
+    """The `response_format` that constrains a reply to a valid plan on `backend`'s server."""
+    dialect = dialect_of(backend)
+    schema = plan_schema(registry, dialect)
+    if dialect == "llamacpp":
+        return {"type": "json_object", "schema": schema}
+    spec: dict[str, Any] = {"name": "plan", "schema": schema}
+    if dialect == "openai":
+        spec["strict"] = True
+    return {"type": "json_schema", "json_schema": spec}
+
+
+def _strict_parameters(skill: Skill) -> dict[str, Any]:
+    """One strict object for a tool: OpenAI wants an object at the root of `parameters`, so a
+    skill with alternatives (nav.goto) gets all their arguments, null-able; the registry checks
+    which combination was given."""
+    alternatives = _alternatives(skill)
+    if len(alternatives) == 1:
+        return _args_schema(skill, "openai")
+    merged: dict[str, Any] = {}
+    for alternative in alternatives:
+        for name, prop in _args_schema(skill, "openai", alternative)["properties"].items():
+            merged.setdefault(name, prop if name not in alternative else
+                              {"anyOf": [prop, {"type": "null"}]})
+    return {"type": "object", "properties": merged, "required": list(merged),
+            "additionalProperties": False}
+
+
+def strict_tools(registry: SkillRegistry) -> list[dict[str, Any]]:
+    """The skills as OpenAI function tools with `strict: true` argument schemas."""
+    return [
+        {
+            "type": "function",
+            "function": {
+                "name": s.tool_name,
+                "description": s.description,
+                "parameters": _strict_parameters(s),
+                "strict": True,
+            },
+        }
+        for s in registry
+    ]
+
+
+def request_hints(backend: str) -> dict[str, Any]:
+    """Extra request fields that let the server reuse its prompt cache.
+
+    llama.cpp's server keeps the evaluated prompt and reuses the longest common prefix only
+    when asked (`cache_prompt`; llama-cpp-python reuses it anyway and ignores the field).
+    OpenAI and vLLM cache shared prefixes by themselves.
+    """
+    return {"cache_prompt": True} if backend == "llamacpp" else {}

@@ -1,0 +1,112 @@
+"""The MCP server (the `mcp` extra: the official MCP Python SDK).
+
+    shadowhound mcp                      # stdio, for Claude Desktop and other MCP clients
+    shadowhound mcp --http --port 8765   # Streamable HTTP at http://127.0.0.1:8765/mcp
+
+    from shadowhound.mcp import McpRobotServer   # the SDK Server for an agent: .server
+
+Importing `shadowhound` never imports this package, and importing this package does not import
+the SDK until `McpRobotServer` or `main` is used, so a missing extra gets a clear message.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ..config import ShadowHoundConfig
+    from .desk import McpDesk
+    from .server import McpRobotServer
+
+__all__ = ["McpDesk", "McpRobotServer", "main"]
+
+EXIT_OK, EXIT_USAGE = 0, 2
+_LAZY = {"McpRobotServer": "server", "McpDesk": "desk"}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        from importlib import import_module
+
+        return getattr(import_module(f".{_LAZY[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def main(settings: ShadowHoundConfig, *, http: bool = False, host: str = "127.0.0.1",
+         port: int = 8765, token: str | None = None) -> int:
+    """`shadowhound mcp`: serve until the client leaves (stdio) or Ctrl-C (HTTP).
+
+    `token` defaults to $SHADOWHOUND_TOKEN (HTTP only). Returns 2 with a message on stderr when
+    the extra is missing, the robot cannot be reached or the binding is not allowed. Nothing
+    is printed on stdout: over stdio it belongs to the protocol.
+    """
+    try:
+        import anyio
+
+        from .server import McpRobotServer
+        from .transport import ServeError, run_stdio, serve_http
+    except ModuleNotFoundError as exc:
+        print(f"shadowhound mcp: the MCP server needs the 'mcp' extra ({exc.name} is not "
+              "installed): pip install 'shadowhound[mcp]'", file=sys.stderr)
+        return EXIT_USAGE
+    from ..agent import RobotAgent, RobotAgentConfig
+    from ..config import ConfigError
+
+    token = (token or os.environ.get("SHADOWHOUND_TOKEN") or None) if http else None
+    try:
+        if http:
+            from ..web.security import check_binding
+
+            check_binding(host, token, what="the MCP server")  # before the robot is touched
+        agent = RobotAgent(RobotAgentConfig(robot=_robot(settings), settings=settings))
+        agent.initialize()
+    except (ConfigError, ServeError) as exc:
+        print(f"shadowhound mcp: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    robot_server = McpRobotServer(agent)
+
+    def ready(url: str) -> None:
+        print(f"ShadowHound MCP server on {url} (robot {agent.robot.name}"
+              + (", token required" if token else "") + "); Ctrl-C stops", file=sys.stderr,
+              flush=True)
+
+    try:
+        if http:
+            anyio.run(serve_http, robot_server, host, port, token, ready)
+        else:
+            anyio.run(run_stdio, robot_server)
+    except ServeError as exc:
+        print(f"shadowhound mcp: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("shadowhound mcp: stopped; the robot is stopped", file=sys.stderr)
+    finally:
+        agent.cleanup()
+    return EXIT_OK
+
+
+def _robot(settings: ShadowHoundConfig) -> Any:
+    """None for the simulator (the agent builds it); a Go2 over go2_ros2_sdk's default topics
+    for `robot: go2`, with the Go2 motion settings the profile leaves unset (as the node)."""
+    if settings.robot != "go2":
+        return None
+    from ..config import ConfigError
+
+    try:
+        from ..robot.go2_ros import Go2RosConfig, Go2RosRobot
+        from ..ros.params import GO2_MOTION
+    except ImportError as exc:
+        raise ConfigError(f"robot go2 needs rclpy and the go2_interfaces package ('ros' extra; "
+                          f"source your go2_ros2_sdk workspace or run scripts/build_ros.sh): "
+                          f"{exc}") from exc
+    from ..robot.base import RobotError
+
+    try:
+        robot = Go2RosRobot(Go2RosConfig())
+    except RobotError as exc:
+        raise ConfigError(f"robot go2: {exc}") from exc
+    unset = {k: v for k, v in GO2_MOTION.items() if k not in settings.motion.model_fields_set}
+    settings.motion = settings.motion.model_copy(update=unset)
+    return robot

@@ -1,0 +1,151 @@
+"""Serving the MCP server: over stdio (desktop clients start it as a child) or Streamable HTTP.
+
+HTTP follows `shadowhound serve`'s rules: it binds loopback unless a token is set; with a
+token every request needs `Authorization: Bearer <token>`; without one only loopback Host
+names are answered (DNS rebinding), and a request with an `Origin` must come from the
+server's own origin (the MCP spec's rule for HTTP servers: a web page may not drive it).
+Either way the robot is stopped when the server ends.
+"""
+
+from __future__ import annotations
+
+import hmac
+import json
+import socket
+from collections.abc import Awaitable, Callable, MutableMapping
+from typing import Any
+from urllib.parse import urlsplit
+
+import anyio
+import uvicorn
+from mcp.server.stdio import stdio_server
+from mcp.server.transport_security import TransportSecuritySettings
+
+from ..web.security import LOOPBACK_HOSTS, ServeError, _hostname, check_binding
+from .server import McpRobotServer
+
+Scope = MutableMapping[str, Any]
+Receive = Callable[[], Awaitable[MutableMapping[str, Any]]]
+Send = Callable[[MutableMapping[str, Any]], Awaitable[None]]
+ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
+
+MCP_PATH = "/mcp"
+MAX_BODY = 1024 * 1024  # bytes: a tool call is small; a huge one is refused before parsing
+
+__all__ = ["MCP_PATH", "McpGate", "ServeError", "bind", "http_app", "run_stdio",
+           "serve_http"]
+
+
+async def run_stdio(robot_server: McpRobotServer) -> None:
+    """Serve one client over stdin/stdout until it closes them; then stop the robot."""
+    server = robot_server.server
+    try:
+        async with stdio_server() as (read, write):
+            await server.run(read, write, server.create_initialization_options())
+    finally:
+        robot_server.close()
+
+
+class McpGate:
+    """Token, Host and Origin checks in front of the MCP endpoint (one ASGI layer)."""
+
+    def __init__(self, app: ASGIApp, token: str | None, allowed_hosts: set[str]) -> None:
+        self.app = app
+        self.token = token
+        self.allowed_hosts = allowed_hosts
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        headers = {k.decode("latin-1").lower(): v.decode("latin-1")
+                   for k, v in scope.get("headers", [])}
+        problem = self._check(headers)
+        if problem is None:
+            await self.app(scope, receive, send)
+            return
+        status, detail = problem
+        body = json.dumps({"jsonrpc": "2.0", "id": None,
+                           "error": {"code": -32600, "message": detail}}).encode()
+        extra = [(b"www-authenticate", b"Bearer")] if status == 401 else []
+        await send({"type": "http.response.start", "status": status,
+                    "headers": [(b"content-type", b"application/json"),
+                                (b"content-length", str(len(body)).encode()), *extra]})
+        await send({"type": "http.response.body", "body": body})
+
+    def _check(self, headers: dict[str, str]) -> tuple[int, str] | None:
+        raw_host = headers.get("host", "")
+        host = _hostname(raw_host)
+        if self.token is None and (host is None or host not in self.allowed_hosts):
+            return 421, (f"host {raw_host[:100]!r} is not allowed: without a token the MCP "
+                         "server answers only on loopback names")
+        origin = headers.get("origin")
+        if origin is not None and not _same_origin(origin, raw_host):
+            return 403, (f"origin {origin[:100]!r} is not allowed: the MCP server takes no "
+                         "requests from web pages of other origins")
+        if self.token is None:
+            return None
+        auth = headers.get("authorization", "")
+        offered = auth[7:].strip() if auth[:7].lower() == "bearer " else ""
+        if offered and hmac.compare_digest(offered.encode(), self.token.encode()):
+            return None
+        return 401, "a valid token is required: send 'Authorization: Bearer <token>'"
+
+
+def _same_origin(origin: str, host: str) -> bool:
+    """Whether a request's Origin is the server's own (the scheme http or https)."""
+    parts = urlsplit(origin.strip())
+    return parts.scheme.lower() in ("http", "https") and parts.netloc.lower() == host.lower() \
+        and not parts.path and not parts.query
+
+
+def http_app(robot_server: McpRobotServer, host: str, token: str | None) -> ASGIApp:
+    """The Streamable HTTP app at /mcp behind `McpGate` (which does the Host/Origin checks
+    itself, so the SDK's own loopback-only list does not refuse a token-holding client)."""
+    app = robot_server.server.streamable_http_app(
+        streamable_http_path=MCP_PATH, max_request_body_size=MAX_BODY, host=host,
+        transport_security=TransportSecuritySettings(enable_dns_rebinding_protection=False))
+    allowed = set(LOOPBACK_HOSTS) | ({host.lower()} if host not in ("0.0.0.0", "::") else set())
+    return McpGate(app, token, allowed)
+
+
+def bind(host: str, port: int) -> socket.socket:
+    """A listening socket (port 0 picks a free one). Raises ServeError when it cannot."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    # IPPROTO_TCP explicitly: asyncio sets TCP_NODELAY only on connections whose socket says
+    # TCP, and without it a streamed answer waits ~40 ms for the client's delayed ACK (Nagle).
+    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind((host, port))
+        sock.listen(128)
+    except (OSError, OverflowError) as exc:
+        sock.close()
+        raise ServeError(f"cannot listen on {host}:{port}: "
+                         f"{getattr(exc, 'strerror', None) or exc}") from exc
+    return sock
+
+
+async def serve_http(robot_server: McpRobotServer, host: str, port: int, token: str | None,
+                     on_ready: Callable[[str], None] | None = None) -> None:
+    """Serve Streamable HTTP until cancelled (Ctrl-C, SIGTERM); then stop the robot.
+
+    Raises ServeError before listening when the binding is not allowed.
+    """
+    check_binding(host, token, what="the MCP server")
+    sock = bind(host, port)
+    app = http_app(robot_server, host, token)
+    # No access log: nothing secret is in MCP URLs, but the log would be noise on stderr.
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", access_log=False,
+                                           lifespan="on", timeout_graceful_shutdown=2))
+    shown = f"[{host}]" if ":" in host else host
+    try:
+        async with anyio.create_task_group() as group:
+            group.start_soon(server.serve, [sock])
+            while not server.started:
+                await anyio.sleep(0.01)
+            if on_ready is not None:
+                on_ready(f"http://{shown}:{sock.getsockname()[1]}{MCP_PATH}")
+    finally:
+        sock.close()
+        robot_server.close()

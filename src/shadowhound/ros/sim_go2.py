@@ -1,0 +1,285 @@
+"""One simulated Go2 of `shadowhound sim-driver`: its topics, the driver's rules between them and
+the robot (robot/sim_sport.py), its late odometry, its truth and its injected faults.
+
+Callbacks only hand commands over: to the command thread (which applies any injected delay),
+and sport requests on to the driver's 10 Hz queue. Odometry has a thread of its own, so each
+pose is published exactly `odom_delay` after it was true.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import json
+import math
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from geometry_msgs.msg import Twist
+from go2_interfaces.msg import Go2State, WebRtcReq
+from nav_msgs.msg import Odometry
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import BatteryState, Image
+from std_msgs.msg import String
+
+from ..robot import go2_api, scene
+from ..robot.go2_api import SportMode
+from ..robot.sim import SimRobot
+from ..robot.sim_sport import SimSportMode, Truth
+from ..state import Posture
+from .sim_options import DriverSettings
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+
+__all__ = ["Faults", "SimGo2", "Truth"]
+
+_RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+_SENSOR = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                     reliability=ReliabilityPolicy.BEST_EFFORT)
+_NAMES = {go2_api.MOVE: "Move", go2_api.STOP_MOVE: "StopMove",
+          **{c.api_id: c.name for c in go2_api.POSTURE_CHANGES.values()},
+          **{t.api_id: t.name for t in go2_api.TRICKS.values()
+             if t.api_id not in go2_api.POSTURE_CHANGES}}
+
+
+@dataclass
+class Faults:
+    """Injected faults (all off by default)."""
+
+    odom: bool = True
+    states: bool = True
+    camera: bool = True
+    delay: float = 0.0  # seconds every command is held back
+    drop_commands: bool = False
+
+    @classmethod
+    def from_json(cls, text: str) -> Faults:
+        """Parse a fault message; raises ValueError naming what is wrong."""
+        data = json.loads(text) if text.strip() else {}
+        if not isinstance(data, dict):
+            raise ValueError("a fault message must be a JSON object")
+        unknown = set(data) - {"odom", "states", "camera", "delay_ms", "drop_commands"}
+        if unknown:
+            raise ValueError(f"unknown fault(s) {sorted(unknown)}; known: odom, states, camera, "
+                             "delay_ms, drop_commands")
+        flags = {k: data[k] for k in ("odom", "states", "camera", "drop_commands") if k in data}
+        if not all(isinstance(v, bool) for v in flags.values()):
+            raise ValueError("odom, states, camera and drop_commands take true or false")
+        delay = data.get("delay_ms", 0)
+        if isinstance(delay, bool) or not isinstance(delay, (int, float)) \
+                or not 0 <= delay <= 10_000:
+            raise ValueError("delay_ms must be a number of milliseconds in 0..10000")
+        return cls(**flags, delay=delay / 1000.0)
+
+
+class SimGo2:
+    """One robot's topics on the driver node, with `prefix` ('' or 'robot{i}/')."""
+
+    def __init__(self, node: Node, settings: DriverSettings, prefix: str, sim: SimRobot) -> None:
+        self.node, self.settings, self.prefix, self.sim = node, settings, prefix, sim
+        self.body = SimSportMode(sim, move_timeout=settings.move_timeout,
+                                 posture_seconds=settings.posture_seconds,
+                                 start=Posture(settings.start_posture))
+        self.faults = Faults()
+        self._counts = {"twists": 0, "twists_dropped": 0, "requests_dropped": 0}
+        self._pending: deque[tuple[int, Any, str, float]] = deque()  # the 10 Hz queue
+        self._commands: list[tuple[float, int, Callable[[], None]]] = []  # (due, seq, apply)
+        self._order = itertools.count()
+        self._ready = threading.Condition()
+        self._closing = threading.Event()
+        self._odom_pub = node.create_publisher(Odometry, self.topic("odom"), _RELIABLE)
+        self._state_pub = node.create_publisher(Go2State, self.topic("go2_states"), _RELIABLE)
+        self._camera_pub = node.create_publisher(Image, self.topic("camera/image_raw"),
+                                                 _SENSOR) if settings.camera_rate_hz > 0 else None
+        self._truth_pub = node.create_publisher(String, self.topic("sim_driver/truth"),
+                                                _RELIABLE)
+        self._record_pub = node.create_publisher(String, self.topic("sim_driver/requests"),
+                                                 QoSProfile(depth=50))
+        self._battery_pub = node.create_publisher(
+            BatteryState, self.topic(settings.battery_topic), _RELIABLE) \
+            if settings.battery is not None else None
+        node.create_subscription(Twist, self.topic("cmd_vel_out"), self._on_twist, _RELIABLE)
+        node.create_subscription(WebRtcReq, self.topic("webrtc_req"), self._on_request,
+                                 _RELIABLE)
+        node.create_subscription(String, self.topic("sim_driver/fault"), self._on_fault,
+                                 _RELIABLE)
+        self._threads = [threading.Thread(target=self._apply_commands, daemon=True,
+                                          name=f"sim-commands-{prefix}"),
+                         threading.Thread(target=self._run_odometry, daemon=True,
+                                          name=f"sim-odometry-{prefix}")]
+
+    def topic(self, name: str) -> str:
+        return self.node.resolve_topic_name(self.prefix + name)
+
+    def start(self) -> None:
+        for thread in self._threads:
+            thread.start()
+
+    def close(self) -> None:
+        self._closing.set()
+        with self._ready:
+            self._ready.notify()
+        self.body.close()
+        for thread in self._threads:
+            thread.join(2.0)
+
+    # -- commands in -----------------------------------------------------------------------
+
+    def _on_twist(self, msg: Twist) -> None:
+        if not self.faults.drop_commands:
+            x, y, z = msg.linear.x, msg.linear.y, msg.angular.z
+            self._schedule(lambda: self._apply_twist(x, y, z))
+
+    def _apply_twist(self, x: float, y: float, z: float) -> None:
+        self._counts["twists"] += 1
+        move = go2_api.move_parameter(x, y, z)
+        if move is None:  # go2_ros2_sdk drops an all-zero Twist: it stops nothing
+            self._counts["twists_dropped"] += 1
+            return
+        self.body.move(move["x"], move["y"], move["z"])
+
+    def _on_request(self, msg: WebRtcReq) -> None:
+        api_id, text, topic = int(msg.api_id), str(msg.parameter), str(msg.topic)
+        if self.faults.drop_commands:
+            self._record(api_id, time.monotonic(), None, False, "lost (fault injection)")
+        else:
+            self._schedule(lambda: self._accept_request(api_id, text, topic))
+
+    def _accept_request(self, api_id: int, text: str, topic: str) -> None:
+        arrived = time.monotonic()
+        try:
+            parameter = "" if text == "" else json.loads(text)
+        except ValueError as exc:  # the driver logs "Invalid JSON" and drops the request
+            self._counts["requests_dropped"] += 1
+            self._record(api_id, arrived, None, False, f"dropped by the driver: parameter is "
+                                                       f"not JSON ({exc})")
+            return
+        self._pending.append((api_id, parameter, topic or go2_api.SPORT_TOPIC, arrived))
+
+    def forward_requests(self) -> None:
+        """The driver's 10 Hz loop: every queued request goes to the robot, in order."""
+        while self._pending:
+            api_id, parameter, topic, arrived = self._pending.popleft()
+            self.body.request(api_id, parameter, topic,
+                              self._reporter(api_id, arrived, time.monotonic()))
+
+    def _reporter(self, api_id: int, arrived: float, sent: float) -> Callable[[bool, str], None]:
+        return lambda accepted, note: self._record(api_id, arrived, sent, accepted, note)
+
+    def _on_fault(self, msg: String) -> None:
+        try:
+            self.faults = Faults.from_json(msg.data)
+        except ValueError as exc:  # json.JSONDecodeError is a ValueError
+            self.node.get_logger().warning(f"ignored a fault message {msg.data!r}: {exc}")
+            return
+        self.node.get_logger().warning(f"{self.prefix}fault injection now: {self.faults}")
+
+    def _schedule(self, apply: Callable[[], None]) -> None:
+        with self._ready:
+            heapq.heappush(self._commands,
+                           (time.monotonic() + self.faults.delay, next(self._order), apply))
+            self._ready.notify()
+
+    def _apply_commands(self) -> None:
+        while True:
+            with self._ready:
+                while not self._closing.is_set() and (
+                        not self._commands or self._commands[0][0] > time.monotonic()):
+                    wait = self._commands[0][0] - time.monotonic() if self._commands else None
+                    self._ready.wait(wait)
+                if self._closing.is_set():
+                    return
+                _due, _seq, apply = heapq.heappop(self._commands)
+            apply()
+
+    def _record(self, api_id: int, arrived: float, sent: float | None, accepted: bool,
+                note: str) -> None:
+        record = {"api_id": api_id, "name": _NAMES.get(api_id, "unknown"),
+                  "accepted": accepted, "note": note, "mono": arrived, "sent": sent,
+                  "acted": time.monotonic()}
+        self._record_pub.publish(String(data=json.dumps(record)))
+
+    # -- state out -------------------------------------------------------------------------
+
+    def _run_odometry(self) -> None:
+        """Take the true pose every period; publish each one `odom_delay` later."""
+        period, delay = 1.0 / self.settings.odom_rate_hz, self.settings.odom_delay
+        due: deque[tuple[float, Truth]] = deque()
+        next_take = time.monotonic()
+        while True:
+            now = time.monotonic()
+            if now >= next_take:
+                due.append((now + delay, self.body.truth()))
+                next_take = max(next_take + period, now)
+            while due and due[0][0] <= time.monotonic():
+                truth = due.popleft()[1]
+                if self.faults.odom:
+                    self._publish_odom(truth)
+            wake = min(next_take, due[0][0]) if due else next_take
+            if self._closing.wait(max(0.0, wake - time.monotonic())):
+                return
+
+    def _publish_odom(self, t: Truth) -> None:
+        msg = Odometry()  # pose only: go2_ros2_sdk never fills the twist
+        msg.header.stamp = self.node.get_clock().now().to_msg()
+        msg.header.frame_id = "odom"
+        msg.child_frame_id = f"{self.prefix}base_link"
+        msg.pose.pose.position.x, msg.pose.pose.position.y = t.x, t.y
+        msg.pose.pose.position.z = t.body_height
+        msg.pose.pose.orientation.z = math.sin(t.yaw / 2.0)
+        msg.pose.pose.orientation.w = math.cos(t.yaw / 2.0)
+        self._odom_pub.publish(msg)
+
+    def publish_state(self) -> None:
+        if not self.faults.states or self._closing.is_set():
+            return
+        t = self.body.truth()
+        c, s = math.cos(t.yaw), math.sin(t.yaw)
+        standing = t.posture is Posture.STANDING and not t.changing
+        self._state_pub.publish(Go2State(
+            mode=t.mode, progress=self.body.progress,
+            gait_type=1 if t.mode == SportMode.LOCOMOTION else 0,
+            foot_raise_height=0.08 if standing else 0.0,
+            position=[t.x, t.y, t.body_height], body_height=t.body_height,
+            velocity=[t.vx * c - t.vy * s, t.vx * s + t.vy * c, 0.0]))  # odom frame
+
+    def battery_level(self, t: Truth) -> float | None:
+        """Percent left: the set start less what the simulator has drained since."""
+        start = self.settings.battery
+        return None if start is None else max(0.0, start - (100.0 - t.battery))
+
+    def publish_battery(self) -> None:
+        level = self.battery_level(self.body.truth())
+        if self._battery_pub is None or level is None:
+            return
+        msg = BatteryState(percentage=level / 100.0, present=True, voltage=math.nan,
+                           power_supply_status=BatteryState.POWER_SUPPLY_STATUS_DISCHARGING)
+        msg.header.stamp = self.node.get_clock().now().to_msg()
+        self._battery_pub.publish(msg)
+
+    def truth_dict(self) -> dict[str, Any]:
+        stamp = self.node.get_clock().now().nanoseconds / 1e9
+        t = self.body.truth()
+        return {**t.to_dict(), "stamp": stamp, "robot": self.prefix.rstrip("/") or "",
+                "battery": self.battery_level(t), "faults": vars(self.faults), **self._counts}
+
+    def publish_truth(self) -> None:
+        if not self._closing.is_set():
+            self._truth_pub.publish(String(data=json.dumps(self.truth_dict())))
+
+    def publish_camera(self) -> None:
+        if not self.faults.camera or self._camera_pub is None:
+            return
+        s = self.settings
+        msg = Image(width=s.camera_width, height=s.camera_height, encoding="rgb8",
+                    step=3 * s.camera_width)
+        msg.header.stamp = self.node.get_clock().now().to_msg()
+        msg.header.frame_id = f"{self.prefix}camera_link"
+        msg.data = scene.render(scene.DEFAULT_WORLD, self.sim.get_state().pose, s.camera_width,
+                                s.camera_height)
+        self._camera_pub.publish(msg)

@@ -1,0 +1,161 @@
+"""`shadowhound sim-driver`'s settings: one table, read from command-line options and ROS
+parameters alike (defaults < `--ros-args -p name:=value` < `--option value`).
+
+Pure Python (no rclpy), so the checks and the help text are testable on their own.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, fields
+from typing import Any
+
+from .params import ParameterError
+
+_TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
+
+
+@dataclass(frozen=True)
+class DriverSettings:
+    """Checked settings of the simulated driver."""
+
+    robots: int = 1
+    start_posture: str = "standing"
+    relay: bool = True
+    relay_timeout: float = 0.5
+    move_timeout: float = 1.0
+    odom_rate_hz: float = 20.0
+    odom_delay: float = 0.2
+    state_rate_hz: float = 10.0
+    posture_seconds: float = 1.5
+    battery: float | None = None
+    battery_topic: str = "battery_state"
+    battery_drain: float = 0.01
+    truth_rate_hz: float = 50.0
+    camera_rate_hz: float = 5.0
+    camera_width: int = 160
+    camera_height: int = 120
+
+
+@dataclass(frozen=True)
+class Option:
+    """One setting: its type, allowed range (numbers), metavar and help."""
+
+    kind: type
+    help: str
+    low: float = -math.inf
+    high: float = math.inf
+    metavar: str = ""
+    choices: tuple[str, ...] = ()  # for a str that is not a topic name
+
+
+OPTIONS: dict[str, Option] = {
+    "robots": Option(int, "robots to simulate; 2 or more name every topic robot{i}/..., as "
+                          "go2_ros2_sdk does with several ROBOT_IPs", 1, 8, "N"),
+    "start_posture": Option(str, "posture the robots start in (lying: mode LieDown, sitting: "
+                                 "Sit, standing: BalanceStand)", metavar="POSTURE",
+                            choices=("standing", "sitting", "lying")),
+    "relay": Option(bool, "a twist_mux-like relay (node 'twist_mux', not namespaced) from "
+                          "cmd_vel (priority 5) and cmd_vel_joy (10) to cmd_vel_out, as "
+                          "go2_ros2_sdk's launch starts with teleop; --no-relay: the driver "
+                          "hears cmd_vel_out only"),
+    "relay_timeout": Option(float, "seconds a relay input stays active after its last "
+                                   "message (twist_mux's timeout)", 0.05, 5, "SECONDS"),
+    "move_timeout": Option(float, "seconds the robot keeps executing a Move that is not "
+                                  "renewed (firmware behaviour)", 0.1, 5, "SECONDS"),
+    "odom_rate_hz": Option(float, "odom publishing rate", 1, 200, "HZ"),
+    "odom_delay": Option(float, "seconds odom lags the truth: each odom carries the true "
+                                "pose of this long ago (stamped when published)", 0, 5,
+                         "SECONDS"),
+    "state_rate_hz": Option(float, "go2_states publishing rate", 1, 100, "HZ"),
+    "posture_seconds": Option(float, "seconds a posture change (StandUp, StandDown, Sit, "
+                                     "RiseSit) takes; BalanceStand and Damp take 0.3 of it, "
+                                     "RecoveryStand 1.3", 0, 10, "SECONDS"),
+    "battery": Option(float, "publish sensor_msgs/BatteryState starting at this charge "
+                             "(go2_ros2_sdk publishes none)", 0, 100, "PERCENT"),
+    "battery_topic": Option(str, "topic of the battery state (relative, per robot)",
+                            metavar="TOPIC"),
+    "battery_drain": Option(float, "percent of charge used per second while on", 0, 10,
+                            "PERCENT"),
+    "truth_rate_hz": Option(float, "rate of the ground truth on sim_driver/truth", 1, 200,
+                            "HZ"),
+    "camera_rate_hz": Option(float, "camera/image_raw rate (0 = no camera)", 0, 30, "HZ"),
+    "camera_width": Option(int, "camera image width in pixels", 16, 640, "PIXELS"),
+    "camera_height": Option(int, "camera image height in pixels", 12, 480, "PIXELS"),
+}
+DEFAULTS = DriverSettings()
+_WANTED = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
+
+
+def parse_settings(values: Mapping[str, Any]) -> DriverSettings:
+    """Check raw values (missing ones take their defaults); raises ParameterError listing
+    every problem at once, each with what is allowed."""
+    unknown = sorted(set(values) - set(OPTIONS))
+    problems = [f"unknown setting(s) {', '.join(unknown)}; known: {', '.join(OPTIONS)}"] \
+        if unknown else []
+    out: dict[str, Any] = {}
+    for f in fields(DriverSettings):
+        option, value = OPTIONS[f.name], values.get(f.name, getattr(DEFAULTS, f.name))
+        if value is None and getattr(DEFAULTS, f.name) is None:
+            out[f.name] = None
+            continue
+        if option.kind is bool:
+            ok = isinstance(value, bool)
+        elif option.kind is int:
+            ok = isinstance(value, int) and not isinstance(value, bool)
+        elif option.kind is float:
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        else:
+            ok = isinstance(value, str)
+        if not ok:
+            problems.append(f"{f.name} must be {_WANTED[option.kind]}, got "
+                            f"{type(value).__name__} {value!r}")
+        elif option.kind in (int, float) and not (math.isfinite(value)
+                                                  and option.low <= value <= option.high):
+            problems.append(f"{f.name} must be in {option.low:g}..{option.high:g}, got {value}")
+        elif option.choices and value not in option.choices:
+            problems.append(f"{f.name} must be one of {', '.join(option.choices)}, got "
+                            f"{value!r}")
+        elif option.kind is str and not option.choices and not _TOPIC.match(value):
+            problems.append(f"{f.name} {value!r} is not a valid ROS topic name")
+        else:
+            out[f.name] = option.kind(value)
+    if problems:
+        raise ParameterError("invalid settings: " + "; ".join(problems))
+    return DriverSettings(**out)
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def build_parser(prog: str, description: str, epilog: str) -> argparse.ArgumentParser:
+    """The command line: one option per setting (argument_default SUPPRESS, so only options
+    given on the command line override the ROS parameters)."""
+    parser = argparse.ArgumentParser(prog=prog, description=description, epilog=epilog,
+                                     argument_default=argparse.SUPPRESS,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    for name, option in OPTIONS.items():
+        default = getattr(DEFAULTS, name)
+        if option.kind is bool:
+            parser.add_argument(_flag(name), dest=name, action=argparse.BooleanOptionalAction,
+                                help=f"{option.help} (default: {'on' if default else 'off'})")
+            continue
+        shown = "none" if default is None else f"{default:g}" if isinstance(default, float) \
+            else default
+        parser.add_argument(_flag(name), dest=name, type=option.kind, metavar=option.metavar,
+                            choices=option.choices or None,
+                            help=f"{option.help} (default: {shown})")
+    return parser
+
+
+def split_argv(argv: Sequence[str]) -> tuple[list[str], list[str]]:
+    """(the driver's own options, the ROS arguments from --ros-args on)."""
+    args = list(argv)
+    if "--ros-args" in args:
+        at = args.index("--ros-args")
+        return args[:at], args[at:]
+    return args, []

@@ -1,0 +1,51 @@
+"""The robot's belief about its world: occupancy grid, known objects, paths and checks.
+
+Pure Python (standard library only), importable without ROS. The simulator's ground truth
+lives in `robot/`; this package only holds what the robot has been told or has sensed.
+"""
+
+from .grid import (
+    DEFAULT_RESOLUTION,
+    FREE,
+    OCCUPIED,
+    OCCUPIED_THRESHOLD,
+    UNKNOWN,
+    Cell,
+    GridError,
+    OccupancyGrid,
+)
+from .inflation import DEFAULT_ROBOT_RADIUS, InflatedGrid, inflate
+from .legs import LegCheck, blocker_near, check_leg
+from .objects import Belief, KnownObject
+from .planner import Path, PlanError, line_is_clear, plan_path
+from .route import plan_route
+from .scan_update import apply_scan
+from .standoff import DEFAULT_STANDOFF, Standoff, standoff_point
+
+__all__ = [
+    "DEFAULT_RESOLUTION",
+    "DEFAULT_ROBOT_RADIUS",
+    "DEFAULT_STANDOFF",
+    "FREE",
+    "OCCUPIED",
+    "OCCUPIED_THRESHOLD",
+    "UNKNOWN",
+    "Belief",
+    "Cell",
+    "GridError",
+    "InflatedGrid",
+    "KnownObject",
+    "LegCheck",
+    "OccupancyGrid",
+    "Path",
+    "PlanError",
+    "Standoff",
+    "apply_scan",
+    "blocker_near",
+    "check_leg",
+    "inflate",
+    "line_is_clear",
+    "plan_path",
+    "plan_route",
+    "standoff_point",
+]

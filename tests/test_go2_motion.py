@@ -1,0 +1,173 @@
+"""MotionTracker: the Go2's pose now from late odometry. The truth is a SimRobot (on its own
+virtual clock) whose poses reach the tracker through a delay line, as the driver's do."""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from shadowhound.robot.go2_motion import MotionTracker, compose, relative
+from shadowhound.robot.sim import SimRobot
+
+
+class DelayedOdometry:
+    """A SimRobot seen through odometry at `rate` Hz that arrives `delay` seconds late."""
+
+    def __init__(self, tracker: MotionTracker, rate: float, delay: float) -> None:
+        self.sim = SimRobot(time_scale=0)
+        self.tracker, self.period, self.delay = tracker, 1.0 / rate, delay
+        self.pending: deque[tuple[float, tuple[float, float, float]]] = deque()
+        self.next_sample = 0.0
+
+    def command(self, vx: float, vy: float, wz: float) -> None:
+        self.sim.send_velocity(vx, vy, wz)
+        self.tracker.command(self.sim.now(), vx, vy, wz)
+
+    def run(self, seconds: float, step: float = 0.005) -> None:
+        end = self.sim.now() + seconds
+        while self.sim.now() < end - 1e-9:
+            self.sim.sleep(step)
+            now = self.sim.now()
+            while self.next_sample <= now + 1e-9:
+                s = self.sim.get_state()
+                self.pending.append((self.next_sample + self.delay, (s.x, s.y, s.yaw)))
+                self.next_sample += self.period
+            while self.pending and self.pending[0][0] <= now + 1e-9:
+                t, pose = self.pending.popleft()
+                self.tracker.odometry(t, *pose)
+
+    def error(self) -> tuple[float, float]:
+        """Metres and radians between the tracker's pose and the truth, now."""
+        s = self.sim.get_state()
+        x, y, yaw = self.tracker.pose(self.sim.now())
+        return math.hypot(x - s.x, y - s.y), abs(math.remainder(yaw - s.yaw, 2 * math.pi))
+
+
+def test_pose_math_round_trips() -> None:
+    a, b = (1.0, 2.0, 0.5), (-0.3, 4.0, -2.9)
+    back = compose(a, relative(a, b))
+    assert all(math.isclose(u, v, abs_tol=1e-9) for u, v in zip(back, b, strict=True))
+
+
+@settings(max_examples=25, deadline=None)
+@given(delay=st.floats(0.0, 0.6), rate=st.sampled_from([10.0, 20.0, 50.0]),
+       vx=st.floats(-0.6, 0.6), wz=st.floats(-1.0, 1.0))
+def test_latency_is_measured_and_the_pose_predicted_while_moving(delay: float, rate: float,
+                                                                  vx: float, wz: float) -> None:
+    tracker = MotionTracker(linear_accel=1.0, angular_accel=3.0)
+    robot = DelayedOdometry(tracker, rate, delay)
+    robot.run(1.0)
+    if abs(vx) < 0.05 and abs(wz) < 0.1:
+        vx = 0.3
+    robot.command(vx, 0.0, wz)
+    robot.run(1.5)
+    assert abs(tracker.latency - delay) <= 1.0 / rate / 2 + 0.02
+    # Moving: the prediction is as good as the latency measure (half a sample period).
+    metres, radians = robot.error()
+    assert metres < 0.6 * (1.0 / rate) + 0.005 and radians < 1.0 * (1.0 / rate) + 0.005
+    assert math.hypot(*tracker.velocity(robot.sim.now())[:2]) > 0.01 or abs(wz) > 0.1
+
+
+def test_velocity_is_zero_only_once_odometry_shows_the_robot_still() -> None:
+    tracker = MotionTracker()
+    robot = DelayedOdometry(tracker, 10.0, 0.5)
+    robot.run(0.5)
+    robot.command(0.4, 0.0, 0.0)
+    robot.run(2.0)
+    robot.command(0.0, 0.0, 0.0)  # StopMove
+    robot.run(0.6)  # the robot has stopped (0.4 s of braking), odometry not yet
+    assert not robot.sim.get_state().is_moving
+    assert tracker.velocity(robot.sim.now())[0] > 0.05
+    robot.run(0.8)
+    assert tracker.velocity(robot.sim.now()) == (0.0, 0.0, 0.0)
+    # Settled: the pose is odometry's own, and it is the truth.
+    last = tracker.last_sample()
+    assert last is not None and tracker.pose(robot.sim.now()) == (last.x, last.y, last.yaw)
+    assert robot.error()[0] < 1e-9
+
+
+def test_a_fixed_latency_is_used_as_given() -> None:
+    tracker = MotionTracker(latency=0.3)
+    robot = DelayedOdometry(tracker, 20.0, 0.1)
+    robot.run(0.5)
+    robot.command(0.4, 0.0, 0.0)
+    robot.run(1.0)
+    assert tracker.latency == 0.3
+
+
+def test_a_robot_that_ignores_commands_is_not_predicted_far() -> None:
+    """Prediction covers only the latency window: a dead link shows up as no progress."""
+    tracker = MotionTracker(latency=0.3)
+    tracker.odometry(0.0, 0.0, 0.0, 0.0)
+    tracker.command(0.0, 0.5, 0.0, 0.0)
+    for i in range(1, 50):
+        tracker.odometry(i * 0.1, 0.0, 0.0, 0.0)  # odometry says: not moving at all
+    x, _, _ = tracker.pose(5.0)
+    assert x <= 0.5 * (0.3 + 0.1) + 1e-6  # latency plus the time since the last sample
+
+
+def test_the_delay_is_fitted_once_odometry_shows_the_robot_still_again() -> None:
+    """A creeping start fools the first guess; the fit over the stop gets the delay right."""
+    tracker = MotionTracker()
+    robot = DelayedOdometry(tracker, 10.0, 0.8)
+    robot.run(1.5)
+    robot.command(0.004, 0.0, 0.0)  # slower than odometry can call moving
+    robot.run(2.0)
+    robot.command(0.4, 0.0, 0.3)
+    robot.run(2.0)
+    robot.command(0.0, 0.0, 0.0)
+    robot.run(2.0)
+    assert abs(tracker.latency - 0.8) <= 0.01
+    assert robot.error()[0] < 1e-6
+
+
+def test_commands_the_robot_never_obeyed_teach_no_delay() -> None:
+    """A dropped link: the model moved, odometry did not. The delay measured before stays."""
+    tracker = MotionTracker()
+    robot = DelayedOdometry(tracker, 20.0, 0.3)
+    robot.run(1.0)
+    robot.command(0.4, 0.0, 0.0)
+    robot.run(1.5)
+    robot.command(0.0, 0.0, 0.0)
+    robot.run(1.5)
+    assert abs(tracker.latency - 0.3) <= 0.01
+    robot.sim.emergency_stop()  # from now on the robot ignores every velocity command
+    robot.command(0.4, 0.0, 0.3)
+    robot.run(3.0)
+    robot.command(0.0, 0.0, 0.0)
+    robot.run(1.5)
+    robot.sim.release_estop()
+    robot.command(0.0, 0.0, -0.3)  # a turn the robot obeys, right after the ignored walk
+    robot.run(1.0)
+    robot.command(0.0, 0.0, 0.0)
+    robot.run(1.5)
+    assert abs(tracker.latency - 0.3) <= 0.01
+
+
+def test_a_robot_that_never_left_its_rest_is_where_odometry_says_once_stopped() -> None:
+    """Commands lost on the way (a dropped link): the model walked, the robot did not. Once
+    stopped, the pose is odometry's at once, not odometry plus a ghost of the model's walk
+    (the next step would start from a pose the robot never had)."""
+    tracker = MotionTracker(latency=0.5)
+    for i in range(10):
+        tracker.odometry(i * 0.1, 2.0, 1.0, 0.5)
+    tracker.command(1.0, 0.4, 0.0, 0.0)
+    for i in range(11, 30):
+        tracker.odometry(i * 0.1, 2.0, 1.0, 0.5)  # odometry: the robot stays put
+    tracker.command(3.0, 0.0, 0.0, 0.0)  # the stall is detected: stop
+    assert tracker.pose(3.01) == (2.0, 1.0, 0.5)
+
+
+def test_a_gap_in_odometry_is_no_velocity() -> None:
+    """Odometry stopped for seconds while the robot moved, then came back: the jump across
+    the gap is not a speed the robot has now."""
+    tracker = MotionTracker(latency=0.2)
+    tracker.odometry(0.0, 0.0, 0.0, 0.0)
+    tracker.odometry(0.05, 0.0, 0.0, 0.0)
+    tracker.odometry(3.0, 0.5, 0.0, 0.0)  # back after 3 s, half a metre further
+    tracker.odometry(3.05, 0.5, 0.0, 0.0)
+    assert tracker.measured_velocity() == (0.0, 0.0, 0.0)
+    assert tracker.velocity(3.06) == (0.0, 0.0, 0.0)
