@@ -9,6 +9,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 
 import httpx
 import pytest
@@ -73,7 +74,9 @@ def test_ctrl_c_stops_the_walking_robot_before_the_dashboards_are_disconnected()
                 client.stream("GET", "/api/events") as stream:
             client.post("/api/mission", json={"command": "walk forward 3 meters"})
             lines = stream.iter_lines()
+            deadline = time.monotonic() + 30
             for line in lines:
+                assert time.monotonic() < deadline, "the robot never walked"
                 if line.startswith("data: ") and json.loads(line[6:]).get("kind") == "state" \
                         and json.loads(line[6:])["robot"]["moving"]:
                     break
