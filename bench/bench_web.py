@@ -1,4 +1,4 @@
-"""Web benchmarks (issue 6): e-stop over HTTP, /api/status latency, MJPEG streaming CPU.
+"""Web benchmarks (issues 6, 18): e-stop idle and under load, /api/status latency, MJPEG CPU.
 
 Run:  .venv/bin/python bench/bench_web.py [--write] [--quick]
 --write replaces the "web" section of bench/RESULTS.md with the figures measured now.
@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import io
-import json
 import os
 import random
 import statistics
@@ -117,9 +116,92 @@ def _wait(check: Any, timeout: float = 15.0) -> Any:
 
 # -- measurements ---------------------------------------------------------------------------
 
-def bench_estop(runs: int) -> list[float]:
-    server = ServerProcess(time_scale=1.0)
-    latencies = []
+class Load:
+    """Clients in a thread of their own (one asyncio loop): `kind` is sse, ws or mjpeg."""
+
+    def __init__(self, url: str, kind: str, count: int) -> None:
+        import asyncio
+
+        self.url, self.kind, self.count = url, kind, count
+        self.connected = 0
+        self.messages = 0
+        self.loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self.loop.run_forever, daemon=True)
+        self._thread.start()
+        self._tasks = [asyncio.run_coroutine_threadsafe(self._client(), self.loop)
+                       for _ in range(count)]
+        _wait(lambda: self.connected >= count, 60)
+
+    async def _client(self) -> None:
+        import asyncio
+
+        host, port = self.url.removeprefix("http://").split(":")
+        if self.kind == "ws":
+            from websockets.asyncio.client import connect
+
+            async with connect(self.url.replace("http://", "ws://") + "/ws/status") as ws:
+                self.connected += 1
+                async for _message in ws:
+                    self.messages += 1
+            return
+        path = "/api/events" if self.kind == "sse" else "/api/camera/stream?fps=30"
+        reader, writer = await asyncio.open_connection(host, int(port))
+        writer.write(f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n".encode())
+        await writer.drain()
+        self.connected += 1
+        while chunk := await reader.read(1 << 16):
+            self.messages += chunk.count(b"data: " if self.kind == "sse" else b"--shadowhound")
+
+    def close(self) -> None:
+        import asyncio
+
+        async def end() -> None:
+            tasks = [t for t in asyncio.all_tasks() if t is not asyncio.current_task()]
+            for task in tasks:
+                task.cancel()
+            await asyncio.gather(*tasks, return_exceptions=True)
+
+        asyncio.run_coroutine_threadsafe(end(), self.loop).result(10)
+        self.loop.call_soon_threadsafe(self.loop.stop)
+        self._thread.join(5)
+
+
+class LoadProcess:
+    """`Load` in a process of its own, so the clients' work does not share this interpreter
+    with the timed requests. `messages` is known after `close()`."""
+
+    def __init__(self, url: str, kind: str, count: int) -> None:
+        self.proc = subprocess.Popen([sys.executable, __file__, "--load", kind, "--clients",
+                                      str(count), "--url", url], stdin=subprocess.PIPE,
+                                     stdout=subprocess.PIPE, text=True)
+        assert self.proc.stdout is not None
+        if self.proc.stdout.readline().strip() != "ready":
+            raise RuntimeError(f"the {kind} clients did not connect")
+        self.messages = 0
+
+    def close(self) -> None:
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.proc.stdin.close()
+        self.messages = int(self.proc.stdout.readline() or 0)
+        self.proc.wait(30)
+
+
+def run_load(url: str, kind: str, count: int) -> None:
+    """`--load`: connect the clients, say ready, read until stdin closes, print the count."""
+    load = Load(url, kind, count)
+    print("ready", flush=True)
+    sys.stdin.read()
+    messages = load.messages
+    load.close()
+    print(messages, flush=True)
+
+
+def bench_estop(runs: int, load: str = "", clients: int = 0) -> dict[str, Any]:
+    """E-stop round trips while a mission walks, with `clients` of kind `load` connected; then
+    GET /api/status at 100 requests/s for 5 s under the same load."""
+    server = ServerProcess(time_scale=1.0, camera_fps=30.0 if load == "mjpeg" else 0.0)
+    latencies: list[float] = []
+    crowd = LoadProcess(server.url, load, clients) if load else None
     try:
         with httpx.Client(base_url=server.url, timeout=10) as client:
             for run in range(runs):
@@ -135,55 +217,29 @@ def bench_estop(runs: int) -> list[float]:
                 _wait(lambda mid=mission_id: client.get(f"/api/missions/{mid}").json()["state"]
                       == "finished")
                 client.post("/api/estop/release")
+            status = _status_latencies(client, 5.0, 100.0)
     finally:
+        if crowd:
+            crowd.close()
         server.close()
+    received = crowd.messages if crowd else 0
+    return {"estop": latencies, "status": status, "received": received}
+
+
+def _status_latencies(client: httpx.Client, seconds: float, rate: float) -> list[float]:
+    """GET /api/status on a fixed schedule while a mission walks."""
+    client.post("/api/mission", json={"command": "walk forward 3 meters"})
+    latencies = []
+    period, start = 1.0 / rate, time.perf_counter()
+    for i in range(int(seconds * rate)):
+        pause = start + i * period - time.perf_counter()
+        if pause > 0:
+            time.sleep(pause)
+        t0 = time.perf_counter()
+        client.get("/api/status").raise_for_status()
+        latencies.append((time.perf_counter() - t0) * 1e3)
+    client.post("/api/estop")
     return latencies
-
-
-def bench_status(seconds: float, rate: float) -> dict[str, Any]:
-    from websockets.sync.client import connect
-
-    server = ServerProcess(time_scale=1.0)
-    latencies: list[float] = []
-    late = 0
-    stop = threading.Event()
-    received = [0]
-
-    def listen() -> None:
-        with connect(server.url.replace("http://", "ws://") + "/ws/status") as ws:
-            while not stop.is_set():
-                try:
-                    ws.recv(timeout=0.5)
-                    received[0] += 1
-                except TimeoutError:
-                    continue
-
-    listener = threading.Thread(target=listen, daemon=True)
-    listener.start()
-    try:
-        with httpx.Client(base_url=server.url, timeout=10) as client:
-            client.post("/api/mission", json={"command": "walk forward 5 meters"})
-            _wait(lambda: client.get("/api/status").json()["status"] == "executing")
-            period, count = 1.0 / rate, int(seconds * rate)
-            start = time.perf_counter()
-            for i in range(count):
-                due = start + i * period
-                pause = due - time.perf_counter()
-                if pause > 0:
-                    time.sleep(pause)
-                else:
-                    late += 1
-                t0 = time.perf_counter()
-                client.get("/api/status").raise_for_status()
-                latencies.append((time.perf_counter() - t0) * 1e3)
-            still_running = client.get("/api/status").json()["status"] == "executing"
-            client.post("/api/estop")
-    finally:
-        stop.set()
-        listener.join(5)
-        server.close()
-    return {"latencies": latencies, "late": late, "ws_messages": received[0],
-            "mission_running": still_running}
 
 
 def bench_mjpeg(seconds: float, clients: int = 3) -> dict[str, float]:
@@ -225,60 +281,71 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--write", action="store_true", help="update bench/RESULTS.md")
     parser.add_argument("--quick", action="store_true", help="fewer runs (a smoke test)")
+    parser.add_argument("--note", default="", help="a sentence for RESULTS.md (e.g. the load)")
     parser.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--time-scale", type=float, default=1.0, help=argparse.SUPPRESS)
     parser.add_argument("--camera-fps", type=float, default=0.0, help=argparse.SUPPRESS)
+    parser.add_argument("--load", default="", help=argparse.SUPPRESS)
+    parser.add_argument("--clients", type=int, default=0, help=argparse.SUPPRESS)
+    parser.add_argument("--url", default="", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.load:
+        run_load(args.url, args.load, args.clients)
+        return
     if args.serve:
         run_server(args.time_scale, args.camera_fps)
         return
     seconds = 3.0 if args.quick else 10.0
-    estop = bench_estop(10 if args.quick else 60)
-    status = bench_status(seconds, 100.0)
+    runs = 10 if args.quick else 40
+    scenarios = [("idle", "", 0), ("200 SSE clients", "sse", 200),
+                 ("200 WebSocket clients", "ws", 200), ("3 MJPEG streams at 30 frames/s",
+                                                        "mjpeg", 3)]
+    rows = []
+    for name, load, clients in scenarios:
+        measured = bench_estop(runs, load, clients)
+        estop, lat = measured["estop"], measured["status"]
+        rows.append((f"e-stop round trip, {name}", f"{p99(estop):.2f} ms", "p99 < 10 ms",
+                     f"p50 {statistics.median(estop):.2f} ms, p99 {p99(estop):.2f} ms, max "
+                     f"{max(estop):.2f} ms, {len(estop)} stops; GET /api/status p99 "
+                     f"{p99(lat):.2f} ms (target < 20 ms), max {max(lat):.2f} ms over "
+                     f"{len(lat)}; {measured['received']} messages to the clients"))
     mjpeg = bench_mjpeg(seconds)
-    lat = status["latencies"]
-    rows = [
-        ("e-stop request to robot stopped (HTTP round trip), p99",
-         f"{p99(estop):.2f} ms", "< 20 ms",
-         f"median {statistics.median(estop):.2f} ms, max {max(estop):.2f} ms, "
-         f"{len(estop)} runs"),
-        ("GET /api/status at 100 requests/s, p99", f"{p99(lat):.2f} ms", "< 10 ms",
-         f"median {statistics.median(lat):.2f} ms, max {max(lat):.2f} ms, {len(lat)} requests, "
-         f"{status['late']} sent late; mission running: {status['mission_running']}, "
-         f"{status['ws_messages']} WebSocket messages meanwhile"),
-        ("MJPEG 30 frames/s to 3 clients: server CPU", f"{mjpeg['streaming']:.1f} % of a core",
-         "< 15 %", f"{mjpeg['extra']:.1f} % above the {mjpeg['idle']:.1f} % of the camera "
-         f"feeder alone; {mjpeg['fps']:.1f} frames/s delivered per client"),
-    ]
-    print(json.dumps({"estop_ms": estop, "status_p99_ms": p99(lat), "mjpeg": mjpeg}, indent=1)
-          if os.environ.get("BENCH_JSON") else "")
+    rows.append(("MJPEG 30 frames/s to 3 clients: server CPU",
+                 f"{mjpeg['streaming']:.1f} % of a core", "< 15 %",
+                 f"{mjpeg['extra']:.1f} % above the {mjpeg['idle']:.1f} % of the camera "
+                 f"feeder alone; {mjpeg['fps']:.1f} frames/s delivered per client"))
     for name, value, target, note in rows:
         print(f"{name}: {value} (target {target}; {note})")
     if args.write:
-        write(rows)
+        write(rows, args.note)
 
 
-def write(rows: list[tuple[str, str, str, str]]) -> None:
+def write(rows: list[tuple[str, str, str, str]], note: str = "") -> None:
     lines = [
         "<!-- web:start -->",
         "## Web dashboard (`bench/bench_web.py`)",
         "",
         f"Measured {time.strftime('%Y-%m-%d')} on this machine (2 cores, shared with other "
         "work), Python " + sys.version.split()[0] + ". The server runs in its own process on "
-        "127.0.0.1 with the simulated robot on a real clock; clients are httpx and websockets.",
+        "127.0.0.1 with the simulated robot on a real clock; clients are httpx and websockets."
+        + (f" {note}" if note else ""),
         "",
         "| measure | result | target | notes |",
         "|---|---|---|---|",
         *[f"| {n} | {v} | {t} | {note} |" for n, v, t, note in rows],
         "",
         "Methods. E-stop: a mission walks; after a random 0-0.3 s the client posts "
-        "`/api/estop`. The handler calls the robot's hard stop in the event loop before it "
+        "`/api/estop`, idle or with 200 SSE clients (`/api/events`), 200 WebSocket clients "
+        "(`/ws/status`) or 3 MJPEG readers (`/api/camera/stream?fps=30`, camera fed at 30 "
+        "frames/s) connected and reading, all from one asyncio loop in a load process of their "
+        "own. "
+        "The e-stop lane (web/estop.py) calls the robot's hard stop before routing, before it "
         "answers, and the answer carries the state read after the stop (checked: stopped and "
         "latched), so the round trip is an upper bound of request-to-stop; it includes the "
         "HTTP parsing on both sides; a real Go2 adds its driver's command latency. "
-        "Status: one keep-alive connection on a fixed 10 ms "
-        "schedule while a mission runs and a WebSocket client receives the events and 5 Hz "
-        "state ticks. MJPEG: a thread in the server process feeds 640x480 JPEG frames (about "
+        "Status: after the stops, one keep-alive connection on a fixed 10 ms schedule for 5 s "
+        "while a mission walks, under the same clients (which get its events and the 5 Hz "
+        "state ticks). MJPEG: a thread in the server process feeds 640x480 JPEG frames (about "
         "37 kB, noisy like a camera's) at 30 frames/s through `update_camera_image`; three "
         "clients read `/api/camera/stream?fps=30`; CPU is utime+stime of the server process "
         "from /proc over 10 s. JPEG frames pass through without decoding or re-encoding, "

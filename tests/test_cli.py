@@ -288,3 +288,15 @@ def test_run_json_interrupted_while_moving_is_the_result_with_an_error(tmp_path)
     assert done.returncode == answer["exit_code"] == 130 and answer["success"] is False
     assert answer["status"] == "stopped" and "e-stop" in answer["error"]
     assert answer["robot"]["distance_travelled"] < 4
+
+
+def test_chat_estop_acts_while_a_mission_walks():
+    """/estop typed while /run walks is not queued behind the mission: it stops it."""
+    proc = subprocess.Popen([sys.executable, "-m", "shadowhound", "--time-scale", "1", "chat"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+                            env={k: v for k, v in os.environ.items() if k != "SHADOWHOUND_CONFIG"})
+    out, _ = proc.communicate("/run walk forward 3 meters\n/estop\n", timeout=60)
+    lines = out.strip().splitlines()
+    assert proc.returncode == 0
+    assert lines[0].startswith("e-stop latched")  # answered at once, before the mission's end
+    assert lines[1].startswith("failed: ") and "e-stop" in lines[1], lines

@@ -3,10 +3,13 @@ runs a mission on the real-time simulator, and stops cleanly on Ctrl-C and SIGTE
 
 from __future__ import annotations
 
+import contextlib
+import json
 import signal
 import socket
 import subprocess
 import sys
+import time
 
 import httpx
 import pytest
@@ -54,3 +57,37 @@ def test_serve_runs_the_dashboard_and_stops_cleanly(stop: signal.Signals) -> Non
         if process.poll() is None:
             process.kill()
             process.wait(5)
+
+
+def test_ctrl_c_stops_the_walking_robot_before_the_dashboards_are_disconnected() -> None:
+    """The robot's e-stop goes out on a watching dashboard's stream before the server closes
+    it: the stop does not wait for the graceful shutdown (which waits for open streams)."""
+    port = _free_port()
+    url = f"http://127.0.0.1:{port}"
+    real_time = SCRIPT.replace("'time_scale': 0.1", "'time_scale': 1.0")
+    process = subprocess.Popen([sys.executable, "-c", real_time, str(port)],
+                               stderr=subprocess.PIPE, text=True)
+    kinds: list[str] = []
+    try:
+        wait_for(lambda: _up(url) or process.poll() is not None, 30, "the server to start")
+        with httpx.Client(base_url=url, timeout=30) as client, \
+                client.stream("GET", "/api/events") as stream:
+            client.post("/api/mission", json={"command": "walk forward 3 meters"})
+            lines = stream.iter_lines()
+            deadline = time.monotonic() + 30
+            for line in lines:
+                assert time.monotonic() < deadline, "the robot never walked"
+                if line.startswith("data: ") and json.loads(line[6:]).get("kind") == "state" \
+                        and json.loads(line[6:])["robot"]["moving"]:
+                    break
+            process.send_signal(signal.SIGINT)
+            with contextlib.suppress(httpx.HTTPError):
+                for line in lines:
+                    if line.startswith("data: "):
+                        kinds.append(json.loads(line[6:])["kind"])
+        assert process.wait(15) == 0
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait(5)
+    assert "estop" in kinds, kinds

@@ -6,6 +6,7 @@ import argparse
 import json
 import logging
 import math
+import queue
 import sys
 import threading
 from typing import Any, TextIO
@@ -165,6 +166,19 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     interactive = sys.stdin.isatty()
     if interactive:
         print("ShadowHound chat. " + _CHAT_HELP)
+    # Missions and questions are answered in order on another thread, so this one keeps reading:
+    # a /estop typed while a mission walks or a model thinks acts at once.
+    lines: queue.Queue[str | None] = queue.Queue()
+    answered = threading.Event()
+
+    def answer() -> None:
+        try:
+            while (line := lines.get()) is not None:
+                print(_chat_line(agent, line), flush=True)
+        finally:
+            answered.set()
+
+    threading.Thread(target=answer, name="shadowhound-chat", daemon=True).start()
     try:
         while True:
             if interactive:
@@ -177,7 +191,13 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
                 continue
             if line in ("/quit", "/exit"):
                 break
-            print(_chat_line(agent, line), flush=True)
+            if line.split()[0] == "/estop":
+                print(_chat_line(agent, line), flush=True)
+            else:
+                lines.put(line)
+        lines.put(None)
+        while not answered.wait(0.1):  # an Event, not join: Ctrl-C here must still stop
+            pass
     except KeyboardInterrupt:
         agent.estop()
     finally:

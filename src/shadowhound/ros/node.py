@@ -1,17 +1,19 @@
 """MissionNode: the ROS 2 shell around RobotAgent (parse ROS input, call the agent, render).
 
 Interfaces (names relative to the node's namespace unless absolute):
-- subscribes `mission_command` (std_msgs/String), `/shadowhound/estop` and
-  `/shadowhound/estop_release` (std_msgs/Empty), the camera (sensor_msgs/Image or
-  CompressedImage, best effort, depth 1);
+- subscribes `mission_command` (std_msgs/String), the camera (sensor_msgs/Image or
+  CompressedImage, best effort, depth 1); `/shadowhound/estop` and `/shadowhound/estop_release`
+  (std_msgs/Empty) are taken by a companion node `<name>_estop` on a thread of its own, so no
+  other callback can delay an e-stop (estop_listener.py);
 - publishes `mission_status` (std_msgs/String), `/shadowhound/diagnostics`
   (diagnostic_msgs/DiagnosticArray, 1 Hz), `/shadowhound/robot_status` (std_msgs/String JSON,
   5 Hz);
 - serves the `execute_mission` action (shadowhound_interfaces/ExecuteMission) and the `chat`
   service (shadowhound_interfaces/Chat) when the interface package is installed.
 
-Missions run on one worker thread (see worker.py) and chat answers on another; every ROS
-callback is short, so one SingleThreadedExecutor serves them all (the action's execute
+Missions run on one worker thread (see worker.py), chat answers on another, camera frames are
+converted on a third (camera_intake.py); every ROS callback is short, so one
+SingleThreadedExecutor serves them all (the action's execute
 callback and the chat service are coroutines that await the other threads). Topic missions
 queue, action goals are rejected while a mission runs or waits.
 """
@@ -31,7 +33,7 @@ from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 from sensor_msgs.msg import CompressedImage, Image
-from std_msgs.msg import Empty, String
+from std_msgs.msg import String
 
 from .. import events as ev
 from ..agent import RobotAgent, RobotAgentConfig
@@ -39,6 +41,7 @@ from ..camera import to_camera_frame
 from ..result import MissionResult
 from ..robot.base import RobotError
 from ..worker import MissionJob, MissionWorker
+from .camera_intake import CameraIntake
 from .convert import (
     diagnostic_level,
     diagnostic_message,
@@ -47,6 +50,7 @@ from .convert import (
     robot_status_json,
     shorten,
 )
+from .estop_listener import EstopListener
 from .params import NODE_NAME, PARAMETERS, ParameterError, describe_parameters, parse_parameters
 from .process import run_node
 
@@ -138,14 +142,18 @@ class MissionNode(Node):
             self._robot_pub = self.create_publisher(String, s.robot_status_topic, 10)
             self._diag_pub = self.create_publisher(DiagnosticArray, s.diagnostics_topic, 10)
             self.create_subscription(String, s.mission_topic, self._on_mission, _COMMANDS)
-            self.create_subscription(Empty, ESTOP_TOPIC, self._on_estop, _COMMANDS)
-            self.create_subscription(Empty, ESTOP_RELEASE_TOPIC, self._on_estop_release,
-                                     _COMMANDS)
+            self._estop = EstopListener(
+                f"{self.get_name()}_estop", self.get_namespace(), self.context, _COMMANDS,
+                estop_topic=ESTOP_TOPIC, release_topic=ESTOP_RELEASE_TOPIC,
+                on_estop=self._on_estop, on_release=self._on_estop_release)
+            # The callback only keeps the newest frame; converting it happens off the executor.
             if s.camera_compressed:
-                self.create_subscription(CompressedImage, s.camera_topic, self._on_compressed,
+                self._camera = CameraIntake(self._on_compressed)
+                self.create_subscription(CompressedImage, s.camera_topic, self._camera.offer,
                                          _CAMERA)
             else:
-                self.create_subscription(Image, s.camera_topic, self._on_image, _CAMERA)
+                self._camera = CameraIntake(self._on_image)
+                self.create_subscription(Image, s.camera_topic, self._camera.offer, _CAMERA)
         except Exception as exc:  # rclpy raises several types for bad names
             raise ParameterError(f"cannot create the node's topics: {exc}") from exc
         self.create_timer(1.0, self._publish_diagnostics)
@@ -208,6 +216,12 @@ class MissionNode(Node):
         self._worker.stop()
         self._chat_thread.shutdown(wait=False, cancel_futures=True)
         self.agent.cleanup()
+        self._camera.close()
+        self._estop.close()
+
+    def destroy_node(self) -> None:
+        self._estop.close()
+        super().destroy_node()
 
     # -- missions from the topic -----------------------------------------------------------
 
@@ -239,14 +253,15 @@ class MissionNode(Node):
 
     # -- e-stop ------------------------------------------------------------------------------
 
-    def _on_estop(self, _msg: Empty) -> None:
+    def _on_estop(self) -> None:
+        """On the e-stop listener's own thread (see estop_listener.py)."""
         self.agent.estop()
         dropped = self._worker.drop_queued("the e-stop was pressed before it started")
         self.get_logger().warning(f"E-STOP latched: robot stopped, {len(dropped)} waiting "
                                   f"mission(s) dropped; publish on {ESTOP_RELEASE_TOPIC} to "
                                   "release")
 
-    def _on_estop_release(self, _msg: Empty) -> None:
+    def _on_estop_release(self) -> None:
         self.agent.release_estop()
         self.get_logger().info("e-stop released")
 
@@ -349,6 +364,7 @@ class MissionNode(Node):
     # -- camera ----------------------------------------------------------------------------
 
     def _on_image(self, msg: Image) -> None:
+        """On the camera intake's thread, like `_on_compressed`."""
         try:
             frame = raw_image_frame(msg.data, msg.width, msg.height, msg.encoding, msg.step)
             self.agent.update_camera_image(frame)

@@ -17,6 +17,7 @@ from fastapi.responses import JSONResponse
 from .. import __version__
 from ..agent import RobotAgent
 from .desk import MissionDesk, WebMission
+from .estop import stopped_already
 from .feed import EventFeed
 from .frames import FrameCache
 from .models import (
@@ -131,7 +132,9 @@ async def cancel_mission(request: Request, mission_id: str) -> dict[str, Any]:
 async def estop(request: Request) -> EstopAnswer:
     """Emergency stop: the robot stops before this answers; latched until released."""
     web = ctx(request)
-    dropped = web.desk.estop()
+    dropped = stopped_already(request.state)  # the e-stop lane stopped it before routing
+    if dropped is None:
+        dropped = web.desk.estop()
     return EstopAnswer(estop=True, dropped=dropped, robot=web.agent.get_robot_status(),
                        message="e-stop latched: the robot is stopped"
                                + (f" and {dropped} waiting mission(s) dropped" if dropped

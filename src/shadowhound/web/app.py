@@ -25,6 +25,7 @@ from ..agent import RobotAgent
 from ..worker import MissionWorker
 from . import api, live
 from .desk import MissionDesk
+from .estop import EstopLane
 from .feed import EventFeed
 from .frames import FrameCache
 from .models import MAX_BODY
@@ -82,6 +83,7 @@ def create_app(agent: RobotAgent, *, token: str | None = None,
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
     _add_page(app)
     _add_error_handlers(app)
+    app.add_middleware(EstopLane, estop=desk.estop)  # inside the gate: checked, then first
     app.add_middleware(Gate, token=token, allowed_hosts=allowed_hosts,
                        max_body=max_body, secrets=hidden)
     _document(app, token=token is not None, checks_hosts=allowed_hosts is not None,

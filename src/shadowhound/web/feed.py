@@ -1,8 +1,15 @@
 """Live events for browsers: a thread-safe fan-out from the agent's threads to asyncio clients.
 
-The agent emits events on the mission worker's thread (and on whatever thread pressed the
-e-stop); each WebSocket or SSE client reads its own bounded asyncio queue in the server's event
-loop. A slow client loses its oldest events rather than slowing the mission down.
+Publishing costs the server once per event, whatever the number of clients: the message is
+numbered, serialized and scrubbed once, appended to one shared ring, and each event loop with
+clients gets at most one wake-up (coalesced). Each client reads the ring from its own cursor;
+its bounded queue is the window between its cursor and the newest message. A client that falls
+further behind than that window is never waited on: it is told (a `lagged` message, after which
+its stream ends so it reconnects and reads the state) and the others go on. A client that keeps
+up gets every message, in order.
+
+Waking clients happens in slices of `WAKE_SLICE` per event-loop turn, so whatever else the loop
+has to do (an e-stop request, a status poll) waits for at most one slice, not for every client.
 """
 
 from __future__ import annotations
@@ -14,94 +21,197 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 log = logging.getLogger(__name__)
 
+WAKE_SLICE = 16  # clients woken per event-loop turn
+BATCH = 64  # messages handed to one client per read (bounds one client's turn in the loop)
+LAGGED = "lagged"
+
+
+@dataclass(frozen=True)
+class Packet:
+    """One message ready to send: its number (None for private messages), kind and JSON text."""
+
+    seq: int | None
+    kind: str
+    text: str
+
 
 class Subscription:
-    """One client's view of the feed: `await next()` returns the next message (a dict)."""
+    """One client's view of the feed: `await next()` returns the next messages, in order.
 
-    def __init__(self, feed: EventFeed, loop: asyncio.AbstractEventLoop, size: int) -> None:
+    After a `lagged` packet the client is behind for good: send it and end the stream.
+    """
+
+    def __init__(self, feed: EventFeed, loop: asyncio.AbstractEventLoop, cursor: int) -> None:
         self._feed = feed
-        self._loop = loop
-        self._queue: asyncio.Queue[dict[str, Any]] = asyncio.Queue(size)
-        self.dropped = 0
+        self.loop = loop
+        self.cursor = cursor  # the sequence number of the next message this client gets
+        self.lagged = False
+        self.closed = False
+        self._private: deque[Packet] = deque(maxlen=16)  # e.g. WebSocket pongs
+        self._waiter: asyncio.Future[None] | None = None
 
-    def _put(self, message: dict[str, Any]) -> None:
-        """Runs in the subscriber's loop (through call_soon_threadsafe)."""
-        if self._queue.full():
-            self._queue.get_nowait()  # the oldest is the least useful to a live display
-            self.dropped += 1
-        self._queue.put_nowait(message)
+    def deliver(self, message: dict[str, Any]) -> None:
+        """Queue a message for this client only (from the client's own loop)."""
+        self._private.append(Packet(None, str(message.get("kind", "")),
+                                    self._feed.encode(message)))
+        self.wake()
 
-    def deliver(self, message: dict[str, Any]) -> bool:
-        """Hand `message` over from any thread. False when the client's loop is gone."""
+    def wake(self) -> None:
+        """Runs in the client's loop."""
+        waiter = self._waiter
+        if waiter is not None and not waiter.done():
+            waiter.set_result(None)
+
+    async def next(self, timeout: float | None = None) -> list[Packet]:
+        """The messages after the last ones returned (at most BATCH); [] after `timeout` seconds
+        without any, or once closed. A last packet of kind `lagged` ends the subscription."""
+        packets = self._take()
+        if packets or self.closed or self.lagged:
+            return packets
+        waiter: asyncio.Future[None] = self.loop.create_future()
+        self._waiter = waiter
+        timer = None if timeout is None else self.loop.call_later(timeout, self.wake)
         try:
-            self._loop.call_soon_threadsafe(self._put, message)
-        except RuntimeError:  # the loop was closed: the client is gone
-            return False
-        return True
+            await waiter
+        finally:
+            self._waiter = None
+            if timer is not None:
+                timer.cancel()
+        return self._take()
 
-    async def next(self, timeout: float | None = None) -> dict[str, Any] | None:
-        """The next message, or None after `timeout` seconds without one."""
-        try:
-            return await asyncio.wait_for(self._queue.get(), timeout)
-        except asyncio.TimeoutError:
-            return None
+    def _take(self) -> list[Packet]:
+        if self.lagged:
+            return []
+        packets = list(self._private)
+        self._private.clear()
+        found, missed = self._feed.read(self.cursor, BATCH)
+        if missed:
+            self.lagged = True
+            packets.append(self._feed.lag_notice(self.cursor, missed))
+            return packets
+        if found:
+            self.cursor = found[-1].seq + 1  # type: ignore[operator]  # ring packets have a seq
+        return packets + found
 
     def close(self) -> None:
+        self.closed = True
         self._feed.unsubscribe(self)
+        if not self.loop.is_closed():
+            self.loop.call_soon_threadsafe(self.wake)
+
+
+class _Hub:
+    """The subscribers that live in one event loop, and whether a wake-up is on its way."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self.loop = loop
+        self.subscribers: list[Subscription] = []
+        self.wake_pending = False
 
 
 class EventFeed:
     """Numbered messages `{"seq", "kind", "time", ...}` to every subscriber.
 
-    Recent messages (not the periodic `state` ticks) are kept so that a client that reconnects
-    can ask for what it missed (SSE `Last-Event-ID`).
+    `queue_size` is how far (in messages) a client may fall behind before it is dropped and
+    told. Recent messages (not the periodic `state` ticks) are kept so that a client that
+    reconnects can ask for what it missed (SSE `Last-Event-ID`).
     """
 
     def __init__(self, backlog: int = 200, queue_size: int = 500,
                  scrub: Callable[[str], str] | None = None) -> None:
         self._lock = threading.Lock()
         self._seq = 0
-        self._recent: deque[dict[str, Any]] = deque(maxlen=backlog)
-        self._subscribers: list[Subscription] = []
-        self._queue_size = queue_size
+        self._ring: deque[Packet] = deque(maxlen=queue_size)
+        self._recent: deque[Packet] = deque(maxlen=backlog)
+        self._hubs: dict[asyncio.AbstractEventLoop, _Hub] = {}
         self._scrub = scrub or (lambda text: text)
+        self.queue_size = queue_size
 
     @property
     def clients(self) -> int:
         with self._lock:
-            return len(self._subscribers)
+            return sum(len(h.subscribers) for h in self._hubs.values())
 
     def publish(self, kind: str, data: dict[str, Any], *, keep: bool = True) -> dict[str, Any]:
-        """Send a message to every subscriber; returns it (with its sequence number)."""
-        with self._lock:
+        """Send a message to every subscriber (from any thread); returns it with its number."""
+        wake = []
+        with self._lock:  # numbering and the ring's order must agree
             self._seq += 1
             message = {"seq": self._seq, "kind": kind, "time": time.time(), **data}
+            packet = Packet(self._seq, kind, self.encode(message))
+            self._ring.append(packet)
             if keep:
-                self._recent.append(message)
-            subscribers = list(self._subscribers)
-        gone = [s for s in subscribers if not s.deliver(message)]
-        for subscription in gone:
-            self.unsubscribe(subscription)
+                self._recent.append(packet)
+            for hub in self._hubs.values():
+                if hub.subscribers and not hub.wake_pending:
+                    hub.wake_pending = True
+                    wake.append(hub)
+        for hub in wake:
+            try:
+                hub.loop.call_soon_threadsafe(self._wake, hub)
+            except RuntimeError:  # that loop was closed: its clients are gone
+                with self._lock:
+                    self._hubs.pop(hub.loop, None)
         return message
 
     def subscribe(self, loop: asyncio.AbstractEventLoop, since: int | None = None
-                  ) -> tuple[Subscription, list[dict[str, Any]]]:
-        """A new subscription, and the kept messages after sequence number `since`."""
-        subscription = Subscription(self, loop, self._queue_size)
+                  ) -> tuple[Subscription, list[Packet]]:
+        """A new subscription (from the next message on), and the kept messages after
+        sequence number `since`."""
         with self._lock:
-            self._subscribers.append(subscription)
-            missed = [] if since is None else [m for m in self._recent if m["seq"] > since]
+            subscription = Subscription(self, loop, self._seq + 1)
+            self._hubs.setdefault(loop, _Hub(loop)).subscribers.append(subscription)
+            missed = [] if since is None else [p for p in self._recent
+                                               if p.seq is not None and p.seq > since]
         return subscription, missed
 
     def unsubscribe(self, subscription: Subscription) -> None:
         with self._lock:
-            if subscription in self._subscribers:
-                self._subscribers.remove(subscription)
+            hub = self._hubs.get(subscription.loop)
+            if hub is not None and subscription in hub.subscribers:
+                hub.subscribers.remove(subscription)
+                if not hub.subscribers:
+                    self._hubs.pop(subscription.loop, None)
+
+    def read(self, cursor: int, limit: int) -> tuple[list[Packet], int]:
+        """(up to `limit` ring packets from sequence number `cursor` on, how many from `cursor`
+        on are no longer in the ring)."""
+        with self._lock:
+            if not self._ring or cursor > self._seq:
+                return [], 0
+            first = self._ring[0].seq
+            assert first is not None
+            if cursor < first:
+                return [], first - cursor
+            start = cursor - first
+            return [self._ring[i] for i in range(start, min(len(self._ring), start + limit))], 0
+
+    def lag_notice(self, cursor: int, missed: int) -> Packet:
+        message = {"seq": None, "kind": LAGGED, "time": time.time(), "next_seq": cursor,
+                   "missed": missed,
+                   "detail": f"this client fell more than {self.queue_size} events behind and "
+                             "is disconnected; reconnect (SSE: with Last-Event-ID to replay the "
+                             "kept events) and read GET /api/status"}
+        return Packet(None, LAGGED, self.encode(message))
 
     def encode(self, message: dict[str, Any]) -> str:
         """JSON text of a message with any secret value masked."""
         return self._scrub(json.dumps(message, default=str, separators=(",", ":")))
+
+    def _wake(self, hub: _Hub) -> None:
+        """In the hub's loop: wake its waiting clients, one slice per loop turn."""
+        with self._lock:
+            hub.wake_pending = False
+            subscribers = list(hub.subscribers)
+        self._wake_slice(hub.loop, subscribers)
+
+    def _wake_slice(self, loop: asyncio.AbstractEventLoop, rest: list[Subscription]) -> None:
+        for subscription in rest[:WAKE_SLICE]:
+            subscription.wake()
+        if len(rest) > WAKE_SLICE:
+            loop.call_soon(self._wake_slice, loop, rest[WAKE_SLICE:])

@@ -13,7 +13,7 @@ from fastapi import APIRouter, HTTPException, Query, Request, WebSocket, WebSock
 from fastapi.responses import Response, StreamingResponse
 
 from .api import WebContext, ctx, current_status
-from .feed import Subscription
+from .feed import Packet, Subscription
 from .frames import BOUNDARY, FrameUnavailable, frame_summary, mjpeg_part
 from .models import Problem
 from .security import WS_PROTOCOL
@@ -21,6 +21,7 @@ from .security import WS_PROTOCOL
 router = APIRouter()
 _NO_STORE = {"Cache-Control": "no-store"}
 STREAM_SHARE_SECONDS = 1 / 60  # stream clients asking within this share one frame
+LAGGED_CLOSE = 1013  # "try again later": the client fell behind and should reconnect
 
 
 @router.get("/api/camera/latest", tags=["camera"],
@@ -82,7 +83,8 @@ async def _mjpeg(web: WebContext, interval: float) -> AsyncIterator[bytes]:
 async def events(request: Request, since: int | None = Query(None, ge=0, le=2**53)
                  ) -> StreamingResponse:
     """Server-sent events: a `snapshot`, then every event as `id: <seq>` + JSON `data` (the
-    kind is inside). Reconnecting with `Last-Event-ID` (or `?since=`) replays what was missed."""
+    kind is inside). Reconnecting with `Last-Event-ID` (or `?since=`) replays what was missed.
+    A client more than 500 events behind gets a `lagged` message and the stream ends."""
     web = ctx(request)
     last_id = request.headers.get("last-event-id", "")
     if since is None and last_id.isdigit():
@@ -93,25 +95,33 @@ async def events(request: Request, since: int | None = Query(None, ge=0, le=2**5
 
 
 async def _sse(web: WebContext, subscription: Subscription,
-               missed: list[dict[str, Any]]) -> AsyncIterator[str]:
+               missed: list[Packet]) -> AsyncIterator[str]:
     try:
         yield "retry: 2000\n\n"
         yield f"data: {web.feed.encode(_snapshot(web))}\n\n"
-        for old in missed:
-            yield f"id: {old['seq']}\ndata: {web.feed.encode(old)}\n\n"
-        while True:
-            message = await subscription.next(timeout=15.0)
-            if message is None:
+        if missed:
+            yield "".join(_sse_event(p) for p in missed)
+        while not subscription.lagged:
+            packets = await subscription.next(timeout=15.0)
+            if packets:  # one write for all that is waiting
+                yield "".join(_sse_event(p) for p in packets)
+            else:
                 yield ": keep-alive\n\n"  # lets proxies and clients see the stream is alive
-            else:  # every feed message is numbered (only WebSocket pongs are not)
-                yield f"id: {message['seq']}\ndata: {web.feed.encode(message)}\n\n"
+        # Lagged: the stream ends here and EventSource reconnects with Last-Event-ID.
     finally:
         subscription.close()
 
 
+def _sse_event(packet: Packet) -> str:
+    # Every feed message is numbered; the lag notice is not (a reconnect resumes before it).
+    head = f"id: {packet.seq}\n" if packet.seq is not None else ""
+    return f"{head}data: {packet.text}\n\n"
+
+
 @router.websocket("/ws/status")
 async def ws_status(websocket: WebSocket) -> None:
-    """A `snapshot`, then every event as JSON text. Send "ping" to get {"kind": "pong"}."""
+    """A `snapshot`, then every event as JSON text. Send "ping" to get {"kind": "pong"}.
+    A client more than 500 events behind gets a `lagged` message, then close code 1013."""
     web: WebContext = websocket.app.state.web
     offered = websocket.scope.get("subprotocols", [])
     await websocket.accept(subprotocol=WS_PROTOCOL if WS_PROTOCOL in offered else None)
@@ -119,10 +129,12 @@ async def ws_status(websocket: WebSocket) -> None:
     reader = asyncio.create_task(_ws_read(websocket, subscription))
     try:
         await websocket.send_text(web.feed.encode(_snapshot(web)))
-        while not reader.done():
-            message = await subscription.next(timeout=1.0)
-            if message is not None:
-                await websocket.send_text(web.feed.encode(message))
+        while not reader.done() and not subscription.lagged:
+            for packet in await subscription.next(timeout=5.0):
+                await websocket.send_text(packet.text)
+        if subscription.lagged:  # told in the last message; the page reconnects
+            await websocket.close(code=LAGGED_CLOSE, reason="lagged: reconnect and read "
+                                                            "/api/status")
     except (WebSocketDisconnect, RuntimeError, OSError):
         pass  # the client went away while we were sending; nothing to clean but below
     finally:
@@ -134,11 +146,13 @@ async def ws_status(websocket: WebSocket) -> None:
 
 async def _ws_read(websocket: WebSocket, subscription: Subscription) -> None:
     """Answer pings through the subscription, so only one task ever sends on the socket."""
-    with contextlib.suppress(WebSocketDisconnect):
+    try:
         while True:
             text = await websocket.receive_text()
             if text.strip() == "ping" or _json_type(text) == "ping":
                 subscription.deliver({"kind": "pong"})
+    except WebSocketDisconnect:
+        subscription.wake()  # the sender stops waiting for events at once
 
 
 def _json_type(text: str) -> Any:

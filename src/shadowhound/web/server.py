@@ -54,6 +54,37 @@ def _config(app: FastAPI, log_level: str) -> uvicorn.Config:
                           timeout_graceful_shutdown=2, ws_ping_interval=20)
 
 
+class _StopFirst(uvicorn.Server):
+    """uvicorn's server; an exit signal (Ctrl-C, SIGTERM) also e-stops the robot at once.
+
+    uvicorn's graceful shutdown waits up to 2 s for open event streams before the app ends, and
+    a mission would walk on meanwhile. The stop runs on a thread that waits for the signal: the
+    handler itself interrupts the event loop's thread anywhere, even inside the agent's locks.
+    """
+
+    def __init__(self, config: uvicorn.Config, stop: Any) -> None:
+        super().__init__(config)
+        self._asked = threading.Event()
+        self._stop = stop
+        self._done = False
+        threading.Thread(target=self._stop_when_asked, name="shadowhound-stop",
+                         daemon=True).start()
+
+    def _stop_when_asked(self) -> None:
+        self._asked.wait()
+        if not self._done:
+            self._stop()
+
+    def handle_exit(self, sig: int, frame: Any) -> None:
+        self._asked.set()
+        super().handle_exit(sig, frame)
+
+    def finish(self) -> None:
+        """The server has ended: let the waiting thread go without stopping anything."""
+        self._done = True
+        self._asked.set()
+
+
 class WebServer:
     """Runs an app in a background thread: `start()` returns once it accepts connections."""
 
@@ -122,11 +153,13 @@ def serve(settings: ShadowHoundConfig, host: str = "127.0.0.1", port: int = 8080
     # the previous handlers; make SIGTERM an exception too so the robot is always released.
     main = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _raise_interrupt) if main else None
+    server = _StopFirst(_config(app, log_level), agent.estop)
     try:
-        uvicorn.Server(_config(app, log_level)).run(sockets=[sock])
+        server.run(sockets=[sock])
     except KeyboardInterrupt:
         print("shadowhound serve: stopped; the robot is stopped", file=out)
     finally:
+        server.finish()
         if main:
             signal.signal(signal.SIGTERM, previous)
         agent.cleanup()

@@ -1,0 +1,115 @@
+"""The event fan-out (web/feed.py) on its own: ordering, bounded queues, lagging clients."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import threading
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from shadowhound.web.feed import LAGGED, EventFeed, Packet
+
+
+def _seqs(packets: list[Packet]) -> list[int]:
+    return [p.seq for p in packets if p.seq is not None]
+
+
+@settings(max_examples=40, deadline=None)
+@given(bursts=st.lists(st.integers(1, 12), min_size=1, max_size=12),
+       size=st.integers(4, 12))
+def test_a_client_that_keeps_up_gets_every_event_in_order_and_a_slow_one_is_told(
+        bursts: list[int], size: int) -> None:
+    """Whatever the bursts, a reader that is never more than `size` behind loses nothing; a
+    reader that never reads gets a contiguous prefix, then `lagged`, then nothing more."""
+    feed = EventFeed(queue_size=size)
+
+    async def run() -> tuple[list[Packet], list[Packet], list[int]]:
+        loop = asyncio.get_running_loop()
+        fast, _ = feed.subscribe(loop)
+        slow, _ = feed.subscribe(loop)
+        got: list[Packet] = []
+        published: list[int] = []
+        for burst in bursts:
+            for _ in range(min(burst, size)):  # keeping up: never more than `size` behind
+                published.append(feed.publish("step", {"n": len(published)})["seq"])
+            while not got or (_seqs(got) and _seqs(got)[-1] < published[-1]):
+                got += await fast.next(timeout=5)
+        slow_got: list[Packet] = []
+        while not slow.lagged:
+            batch = await slow.next(timeout=0.01)
+            if not batch:
+                break
+            slow_got += batch
+        return got, slow_got, published
+
+    got, slow_got, published = asyncio.run(run())
+    assert _seqs(got) == published and LAGGED not in [p.kind for p in got]
+    assert [json.loads(p.text)["seq"] for p in got] == published  # the text is the message
+    behind = len(published) > size
+    assert (slow_got[-1].kind == LAGGED) == behind
+    if behind:
+        notice = json.loads(slow_got[-1].text)
+        assert notice["missed"] >= 1 and "reconnect" in notice["detail"]
+    assert _seqs(slow_got) == published[:len(_seqs(slow_got))]  # in order, none skipped
+
+
+def test_events_from_threads_reach_every_client_once_each_in_publish_order() -> None:
+    feed = EventFeed(queue_size=1000)
+    count, clients = 300, 50
+
+    async def run() -> list[list[int]]:
+        loop = asyncio.get_running_loop()
+        subs = [feed.subscribe(loop)[0] for _ in range(clients)]
+        publishers = [threading.Thread(target=lambda: [feed.publish("e", {}) for _ in
+                                                       range(count // 3)]) for _ in range(3)]
+        for t in publishers:
+            t.start()
+
+        async def read(sub: object) -> list[int]:
+            seen: list[int] = []
+            while len(seen) < count:
+                seen += _seqs(await sub.next(timeout=10))  # type: ignore[attr-defined]
+            return seen
+
+        seen = await asyncio.gather(*(read(s) for s in subs))
+        for t in publishers:
+            t.join()
+        return list(seen)
+
+    for seen in asyncio.run(run()):
+        assert seen == list(range(1, count + 1))
+
+
+def test_publishing_serializes_once_whatever_the_number_of_clients() -> None:
+    encoded: list[str] = []
+
+    def scrub(text: str) -> str:
+        encoded.append(text)
+        return text.replace("s3cret", "***")
+
+    feed = EventFeed(scrub=scrub)
+
+    async def run() -> list[list[Packet]]:
+        loop = asyncio.get_running_loop()
+        subs = [feed.subscribe(loop)[0] for _ in range(100)]
+        feed.publish("state", {"note": "s3cret"})
+        return [await s.next(timeout=5) for s in subs]
+
+    received = asyncio.run(run())
+    assert len(encoded) == 1  # once per event, not once per client
+    assert all(r[0] is received[0][0] and "***" in r[0].text for r in received)
+
+
+def test_a_closed_subscription_stops_waiting_and_is_forgotten() -> None:
+    feed = EventFeed()
+
+    async def run() -> list[Packet]:
+        sub, _ = feed.subscribe(asyncio.get_running_loop())
+        waiting = asyncio.ensure_future(sub.next())
+        await asyncio.sleep(0)
+        sub.close()
+        return await asyncio.wait_for(waiting, 5)
+
+    assert asyncio.run(run()) == [] and feed.clients == 0
