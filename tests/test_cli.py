@@ -295,7 +295,7 @@ def test_chat_estop_acts_while_a_mission_walks():
     proc = subprocess.Popen([sys.executable, "-m", "shadowhound", "--time-scale", "1", "chat"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
                             env={k: v for k, v in os.environ.items() if k != "SHADOWHOUND_CONFIG"})
-    out, _ = proc.communicate("/run walk forward 3 meters\n/estop\n", timeout=60)
+    out, _ = proc.communicate("/run walk backward 2 meters\n/estop\n", timeout=60)
     lines = out.strip().splitlines()
     assert proc.returncode == 0
     assert lines[0].startswith("e-stop latched")  # answered at once, before the mission's end

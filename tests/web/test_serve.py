@@ -72,7 +72,7 @@ def test_ctrl_c_stops_the_walking_robot_before_the_dashboards_are_disconnected()
         wait_for(lambda: _up(url) or process.poll() is not None, 30, "the server to start")
         with httpx.Client(base_url=url, timeout=30) as client, \
                 client.stream("GET", "/api/events") as stream:
-            client.post("/api/mission", json={"command": "walk forward 3 meters"})
+            client.post("/api/mission", json={"command": "walk backward 2 meters"})
             lines = stream.iter_lines()
             deadline = time.monotonic() + 30
             for line in lines:

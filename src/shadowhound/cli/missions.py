@@ -170,11 +170,16 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     # a /estop typed while a mission walks or a model thinks acts at once.
     lines: queue.Queue[str | None] = queue.Queue()
     answered = threading.Event()
+    printing = threading.Lock()
+
+    def say(text: str) -> None:  # two threads answer: each answer is one whole line
+        with printing:
+            print(text, flush=True)
 
     def answer() -> None:
         try:
             while (line := lines.get()) is not None:
-                print(_chat_line(agent, line), flush=True)
+                say(_chat_line(agent, line))
         finally:
             answered.set()
 
@@ -182,7 +187,8 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     try:
         while True:
             if interactive:
-                print("you> ", end="", flush=True)
+                with printing:
+                    print("you> ", end="", flush=True)
             line = sys.stdin.readline()
             if not line:
                 break
@@ -192,7 +198,7 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             if line in ("/quit", "/exit"):
                 break
             if line.split()[0] == "/estop":
-                print(_chat_line(agent, line), flush=True)
+                say(_chat_line(agent, line))
             else:
                 lines.put(line)
         lines.put(None)
