@@ -14,6 +14,7 @@ from shadowhound.checking import check_plan
 from shadowhound.mcp.desk import BUSY, McpDesk, ToolInputError
 from shadowhound.plan import Plan, SkillCall
 from shadowhound.skills import PlanEnv
+from shadowhound.skills.context import robot_belief
 from shadowhound.worker import MissionJob, MissionWorker
 
 
@@ -79,8 +80,8 @@ def test_a_skill_tool_runs_exactly_when_its_one_step_plan_passes_the_checks(call
     try:
         start = agent.get_robot_state()
         plan = Plan([SkillCall(tool, dict(args))], text="oracle", planner="explicit")
-        checked = check_plan(plan, agent.registry, agent.governor, config,
-                             PlanEnv(config, start.pose), start)
+        env = PlanEnv(config, start.pose, belief=robot_belief(agent.robot))  # the map, too
+        checked = check_plan(plan, agent.registry, agent.governor, config, env, start)
         allowed = not checked.problems and not checked.approvals
         try:
             job = desk.start_skill(tool, args)
