@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import hmac
 import json
-import socket
 from collections.abc import Awaitable, Callable, MutableMapping
 from typing import Any
 from urllib.parse import urlsplit
@@ -21,7 +20,7 @@ import uvicorn
 from mcp.server.stdio import stdio_server
 from mcp.server.transport_security import TransportSecuritySettings
 
-from ..web.security import LOOPBACK_HOSTS, ServeError, _hostname, check_binding
+from ..web.security import LOOPBACK_HOSTS, ServeError, _hostname, bind, check_binding
 from .server import McpRobotServer
 
 Scope = MutableMapping[str, Any]
@@ -108,22 +107,6 @@ def http_app(robot_server: McpRobotServer, host: str, token: str | None) -> ASGI
     allowed = set(LOOPBACK_HOSTS) | ({host.lower()} if host not in ("0.0.0.0", "::") else set())
     return McpGate(app, token, allowed)
 
-
-def bind(host: str, port: int) -> socket.socket:
-    """A listening socket (port 0 picks a free one). Raises ServeError when it cannot."""
-    family = socket.AF_INET6 if ":" in host else socket.AF_INET
-    # IPPROTO_TCP explicitly: asyncio sets TCP_NODELAY only on connections whose socket says
-    # TCP, and without it a streamed answer waits ~40 ms for the client's delayed ACK (Nagle).
-    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        sock.bind((host, port))
-        sock.listen(128)
-    except (OSError, OverflowError) as exc:
-        sock.close()
-        raise ServeError(f"cannot listen on {host}:{port}: "
-                         f"{getattr(exc, 'strerror', None) or exc}") from exc
-    return sock
 
 
 async def serve_http(robot_server: McpRobotServer, host: str, port: int, token: str | None,

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import logging
 import signal
-import socket
 import sys
 import threading
 import time
@@ -18,29 +17,12 @@ from fastapi import FastAPI
 from ..agent import RobotAgent
 from ..config import ConfigError, ShadowHoundConfig
 from .app import create_app
-from .security import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, ServeError, check_binding
+from .security import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, ServeError, bind, check_binding
 
 __all__ = ["MIN_TOKEN_CHARS", "ServeError", "WebServer", "bind", "check_binding", "hosts_for",
            "serve"]
 
 log = logging.getLogger(__name__)
-
-def bind(host: str, port: int) -> socket.socket:
-    """A listening socket (port 0 picks a free one). Raises ServeError when it cannot."""
-    family = socket.AF_INET6 if ":" in host else socket.AF_INET
-    # IPPROTO_TCP explicitly: asyncio sets TCP_NODELAY only on connections whose socket says
-    # TCP, and without it a streamed answer waits ~40 ms for the client's delayed ACK (Nagle).
-    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        sock.bind((host, port))
-        sock.listen(128)
-    except (OSError, OverflowError) as exc:  # OverflowError: a port outside 0-65535
-        sock.close()
-        why = getattr(exc, "strerror", None) or str(exc)
-        raise ServeError(f"cannot listen on {host}:{port}: {why}") from exc
-    sock.set_inheritable(True)
-    return sock
 
 
 def hosts_for(host: str) -> list[str]:
