@@ -70,17 +70,17 @@ def skill_line(skill: Skill) -> str:
 
 
 def tools(registry: SkillRegistry) -> list[dict[str, Any]]:
-    return [
-        {
-            "type": "function",
-            "function": {
-                "name": s.tool_name,
-                "description": s.description,
-                "parameters": compact_schema(s),
-            },
-        }
-        for s in registry
-    ]
+    return [function_tool(s, compact_schema(s)) for s in registry]
+
+
+def function_tool(skill: Skill, parameters: dict[str, Any], strict: bool = False,
+                  ) -> dict[str, Any]:
+    """One skill as an OpenAI-style function tool (`strict` only where the API takes it)."""
+    function: dict[str, Any] = {"name": skill.tool_name, "description": skill.description,
+                                "parameters": parameters}
+    if strict:
+        function["strict"] = True
+    return {"type": "function", "function": function}
 
 
 def state_line(state: RobotState | None) -> str:

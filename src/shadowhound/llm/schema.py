@@ -40,6 +40,7 @@ import functools
 from typing import Any, Literal
 
 from ..skills import Skill, SkillRegistry
+from .prompts import function_tool
 
 Dialect = Literal["openai", "json_schema", "llamacpp"]
 
@@ -177,18 +178,7 @@ def _strict_parameters(skill: Skill) -> dict[str, Any]:
 
 def strict_tools(registry: SkillRegistry) -> list[dict[str, Any]]:
     """The skills as OpenAI function tools with `strict: true` argument schemas."""
-    return [
-        {
-            "type": "function",
-            "function": {
-                "name": s.tool_name,
-                "description": s.description,
-                "parameters": _strict_parameters(s),
-                "strict": True,
-            },
-        }
-        for s in registry
-    ]
+    return [function_tool(s, _strict_parameters(s), strict=True) for s in registry]
 
 
 def request_hints(backend: str) -> dict[str, Any]:
