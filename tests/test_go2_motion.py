@@ -6,10 +6,11 @@ from __future__ import annotations
 import math
 from collections import deque
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shadowhound.robot.go2_motion import MotionTracker, compose, relative
+from shadowhound.robot.go2_motion import MotionTracker, StampClock, compose, relative
 from shadowhound.robot.sim import SimRobot
 
 
@@ -171,3 +172,37 @@ def test_a_gap_in_odometry_is_no_velocity() -> None:
     tracker.odometry(3.05, 0.5, 0.0, 0.0)
     assert tracker.measured_velocity() == (0.0, 0.0, 0.0)
     assert tracker.velocity(3.06) == (0.0, 0.0, 0.0)
+
+
+# -- StampClock: when a pose was sent, on our clock ---------------------------------------
+
+
+@settings(max_examples=60, deadline=None)
+@given(offset=st.floats(-50.0, 2e9), base=st.floats(0.01, 0.5),
+       lates=st.lists(st.floats(0.0, 0.4), min_size=5, max_size=60))
+def test_stamp_clock_removes_the_jitter_of_arrival_whatever_the_clocks(
+        offset: float, base: float, lates: list[float]) -> None:
+    """Poses sent every 50 ms arrive `base` + a random lateness later, on a sender clock
+    `offset` away from ours: once the fastest one has arrived, each maps to its send time plus
+    the steady delay, so the jitter is gone; times never go backwards."""
+    clock = StampClock()
+    lates = [0.0, *lates]  # the first crosses as fast as the link can
+    out, arrival = [], 0.0
+    for i, late in enumerate(lates):
+        sent = 100.0 + 0.05 * i
+        arrival = max(arrival, sent + base + late)  # in order
+        out.append(clock.local_time(sent + offset, arrival))
+    for i, t in enumerate(out):
+        assert t == pytest.approx(100.0 + 0.05 * i + base, abs=1e-3)
+    assert out == sorted(out)
+
+
+def test_stamp_clock_without_stamps_uses_arrival_and_starts_over_when_the_sender_jumps() -> None:
+    clock = StampClock()
+    assert clock.local_time(0.0, 5.0) == 5.0  # no stamp: arrival
+    assert clock.local_time(1000.0, 5.1) == pytest.approx(5.1)
+    assert clock.local_time(1000.05, 5.3) == pytest.approx(5.15)  # 0.15 s late: placed right
+    # The sender's clock is set an hour ahead: the old offset is forgotten, not applied.
+    assert clock.local_time(4600.0, 5.4) == pytest.approx(5.4)
+    assert clock.local_time(4600.05, 5.6) == pytest.approx(5.45)
+    assert clock.local_time(0.0, 5.5) == pytest.approx(5.5)  # never backwards

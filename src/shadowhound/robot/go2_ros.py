@@ -46,7 +46,7 @@ from ..ros.convert import raw_image_frame
 from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
 from . import go2_api
 from .base import RobotError
-from .go2_motion import MotionTracker
+from .go2_motion import MotionTracker, StampClock
 from .go2_posture import STEPS, PostureWatch
 from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
 
@@ -106,6 +106,7 @@ class Go2RosRobot:
         self._tracker = MotionTracker(linear_accel=c.linear_accel,
                                       angular_accel=c.angular_accel, latency=c.odom_latency)
         self._odom_at: float | None = None  # monotonic receipt of the last odometry
+        self._odom_clock = StampClock()  # when each pose was sent, on our clock
         self._travel = (0.0, 0.0)  # distance travelled, angle turned (odometry)
         self._posture = Posture.STANDING  # until go2_states says otherwise
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
@@ -179,14 +180,16 @@ class Go2RosRobot:
         p, q = msg.pose.pose.position, msg.pose.pose.orientation
         yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
         now = time.monotonic()
+        stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         with self._lock:
+            sent = self._odom_clock.local_time(stamp, now)
             last = self._tracker.last_sample()
             if last is not None:
                 step = math.hypot(p.x - last.x, p.y - last.y)
                 turn = abs(normalize_angle(yaw - last.yaw))
                 self._travel = (self._travel[0] + step, self._travel[1] + turn)
             before = self._tracker.latency
-            self._tracker.odometry(now, p.x, p.y, yaw)
+            self._tracker.odometry(sent, p.x, p.y, yaw)
             self._odom_at = now
             after = self._tracker.latency
         if abs(after - before) >= 0.01:
