@@ -175,11 +175,7 @@ def test_no_fact_about_a_skill_is_keyed_by_its_name_outside_the_skills():
     assert found == [], "declare it on the Skill instead: " + "; ".join(found)
 
 
-@pytest.mark.parametrize("skill", default_registry(), ids=lambda s: s.name)
-def test_every_builtin_skill_declares_consistent_facts(skill):
-    """What walks runs standing and may not run on a low battery; a skill that leaves a posture
-    of its own runs from any posture."""
-    if skill.moves:
-        assert skill.runs_standing and not skill.low_battery
-    if skill.posture is not None:
-        assert not skill.runs_standing
+def test_a_skill_that_walks_cannot_be_declared_fit_for_a_low_battery():
+    with pytest.raises(ValueError, match="'body.look_up' moves the robot, so it cannot be "
+                                         "allowed on a low battery"):
+        dataclasses.replace(look_up_skill.SKILL, moves=True, low_battery=True)

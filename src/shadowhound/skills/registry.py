@@ -85,6 +85,11 @@ class Skill:
     remembered_as: str | None = None
     phrase: Words | None = None  # a call in a few words ("move forward 2 m"); default: the name
 
+    def __post_init__(self) -> None:
+        if self.moves and self.low_battery:  # below the battery floor nothing may walk
+            raise ValueError(f"skill {self.name!r} moves the robot, so it cannot be allowed "
+                             "on a low battery (low_battery=True)")
+
     @property
     def tool_name(self) -> str:
         """Name usable as an OpenAI function name (no dots allowed there)."""
