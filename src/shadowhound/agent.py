@@ -70,12 +70,14 @@ class RobotAgent:
         self.config = config or RobotAgentConfig()
         self.settings = self.config.settings
         self.registry = self.config.registry or default_registry()
-        self.governor = Governor(self.settings.safety, self.settings.motion.auto_stand)
+        self.governor = Governor(self.settings.safety, self.settings.motion.auto_stand,
+                                 self.registry)
         self._approvals = ApprovalDesk()
         self.approvals_enabled = False
         self._watchdog: Watchdog | None = None
         self._stop_cause: str | None = None  # set when the agent itself stops a mission
-        self._memory = AgentMemory(self.settings)  # places for this process until initialize()
+        # Places for this process until initialize().
+        self._memory = AgentMemory(self.settings, skills=self.registry)
         self._robot = self.config.robot
         self._planner = self.config.planner
         self._events = ev.EventBus()
@@ -118,7 +120,8 @@ class RobotAgent:
             check()  # raises BackendUnavailable (a ConfigError) naming the URL and the model
         memory = self.settings.memory
         if memory.enabled or memory.enable_rag:
-            self._memory = AgentMemory.open(self.settings, getattr(self._planner, "backend", None))
+            self._memory = AgentMemory.open(self.settings, getattr(self._planner, "backend", None),
+                                            skills=self.registry)
             self.add_listener(self._memory.on_event)
         self._initialized = True
         return True
@@ -312,7 +315,7 @@ class RobotAgent:
                     status, error = self._run_steps(mission_id, more, more_valid, env, timing)
             if status is MissionStatus.FAILED and self._cancel.is_set():  # while re-planning
                 status, error = MissionStatus.STOPPED, self._stop_reason()
-        response = compose_response(status, steps, plan, error)
+        response = compose_response(status, steps, plan, error, self.registry)
         return self._finish(mission_id, text, started, timing, steps, plan, status, response,
                             error=error)
 

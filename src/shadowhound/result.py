@@ -5,10 +5,13 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .plan import Plan, Usage
 from .state import Pose2D, RobotState
+
+if TYPE_CHECKING:
+    from .skills import SkillRegistry
 
 
 class StepStatus(str, Enum):
@@ -138,18 +141,14 @@ class MissionResult:
         return f"{self.status.value}: {self.mission!r} -> {self.response}"
 
 
-# Skills whose output is an answer for the user rather than a record of motion.
-_REPORTING_SKILLS = frozenset({"perception.describe", "perception.look_around", "sys.status",
-                               "places.list", "memory.recall"})
-
-
 def compose_response(status: MissionStatus, steps: list[StepResult], plan: Plan,
-                     error: str | None) -> str:
-    """The sentence a person reads: what was done and, for reports, the answers themselves."""
+                     error: str | None, skills: SkillRegistry) -> str:
+    """The sentence a person reads: what was done and, for reports, the answers themselves
+    (the output of a skill of `skills` that declares `reports`)."""
     done = [s.output for s in steps if s.status is StepStatus.SUCCEEDED and s.output]
     if status is MissionStatus.SUCCEEDED:
-        reports = [s.output for s in steps if s.skill in _REPORTING_SKILLS]
-        actions = [s.output for s in steps if s.skill not in _REPORTING_SKILLS and s.output]
+        reports = [s.output for s in steps if _reports(skills, s.skill)]
+        actions = [s.output for s in steps if not _reports(skills, s.skill) and s.output]
         parts = ["Done: " + "; ".join(actions) + "."] if actions else []
         parts += [o[0].upper() + o[1:] + ("" if o.endswith(".") else ".") for o in reports]
         if plan.notes:
@@ -163,3 +162,8 @@ def compose_response(status: MissionStatus, steps: list[StepResult], plan: Plan,
     if done:
         text += " Completed before that: " + "; ".join(done) + "."
     return text + " The robot is stopped."
+
+
+def _reports(skills: SkillRegistry, name: str) -> bool:
+    skill = skills.find(name)
+    return skill is not None and skill.reports

@@ -19,19 +19,15 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from . import geofence
+from . import geofence, units
 from .budget import out_of_time
 from .config import SafetyConfig
-from .robot.go2_api import TRICKS
+from .skills import SkillRegistry, default_registry
+from .skills.arguments import argument_kind
 from .skills.context import PlanEnv, PlanProblem
 from .skills.registry import ValidatedCall
 from .state import Pose2D, Posture, RobotState, normalize_angle
 from .world import check_leg
-
-# What may still run when the battery is below the floor: nothing that walks.
-LOW_BATTERY_SKILLS = ("nav.stop", "body.sit", "body.lie_down", "sys.status")
-_POSTURE_OF = {"body.stand": Posture.STANDING, "body.sit": Posture.SITTING,
-               "body.lie_down": Posture.LYING}
 
 
 @dataclass(frozen=True)
@@ -58,11 +54,19 @@ class PlanCheck:
 
 
 class Governor:
-    """Checks steps against `SafetyConfig`. Stateless apart from its limits."""
+    """Checks steps against `SafetyConfig`. Stateless apart from its limits.
 
-    def __init__(self, limits: SafetyConfig, auto_stand: bool = True) -> None:
+    What it knows of a skill it reads from the skill's declarations (`Skill`: moves, runs
+    standing, posture after, low battery, risk, seconds, waits), never from its name. `skills`
+    (the agent's registry; default: the built-in skills) only names, in a refusal, what may
+    run on a low battery.
+    """
+
+    def __init__(self, limits: SafetyConfig, auto_stand: bool = True,
+                 skills: SkillRegistry | None = None) -> None:
         self.limits = limits
         self.auto_stand = auto_stand
+        self.skills = skills if skills is not None else default_registry()
 
     def check_plan(
         self, calls: Sequence[ValidatedCall | None], start: RobotState, env: PlanEnv
@@ -96,8 +100,7 @@ class Governor:
                 check.approvals.append(Refusal(index, call.name, needs_approval))
             check.path.extend(poses)
             pose = poses[-1] if poses else pose
-            posture = _POSTURE_OF.get(call.name, Posture.STANDING if call.skill.moves or
-                                      call.name == "body.sport" else posture)
+            posture = call.skill.posture_after(posture)
         return check
 
     def check_outcome(self, call: ValidatedCall, before: RobotState, after: RobotState,
@@ -176,11 +179,13 @@ class Governor:
 
     def _least_seconds(self, call: ValidatedCall, distance: float) -> float:
         """A lower bound on a step's robot time (never more than it can take): its distance at
-        the speed cap, its wait, its trick. Turns and posture changes count as free."""
-        trick = getattr(call.args, "trick", None)
-        return (distance / self.limits.max_linear_speed
-                + float(getattr(call.args, "seconds", None) or 0.0)
-                + (TRICKS[trick].duration if trick is not None else 0.0))
+        the speed cap, what the skill declares it surely takes (a wait, a trick). Turns and
+        posture changes count as free."""
+        return distance / self.limits.max_linear_speed + call.skill.least_seconds(call.args)
+
+    def _low_battery_skills(self) -> list[str]:
+        """The skills that may run below the battery floor (they walk nowhere)."""
+        return [s.name for s in self.skills if s.low_battery]
 
     def _check(
         self, call: ValidatedCall, pose: Pose2D, posture: Posture, start: RobotState,
@@ -194,38 +199,45 @@ class Governor:
         if _matches(name, lim.deny_skills):
             reasons.append(f"{name} is in safety.deny_skills")
         level = start.battery  # None: unknown, said once in check_plan's notes
-        if level is not None and level < lim.battery_floor and name not in LOW_BATTERY_SKILLS:
+        if level is not None and level < lim.battery_floor and not call.skill.low_battery:
             reasons.append(
                 f"the battery is at {level:.0f}%, below the floor of "
                 f"{lim.battery_floor:g}% (safety.battery_floor): only "
-                f"{', '.join(LOW_BATTERY_SKILLS)} are allowed"
+                f"{', '.join(self._low_battery_skills())} are allowed"
             )
-        speed = getattr(args, "speed", None)
-        if speed is not None:
-            rotate = name == "nav.rotate"
-            cap = lim.max_angular_speed if rotate else lim.max_linear_speed
-            unit, setting = ("rad/s", "max_angular_speed") if rotate else \
-                ("m/s", "max_linear_speed")
-            if speed > cap:
-                reasons.append(f"speed {speed:g} {unit} exceeds the cap of {cap:g} {unit} "
-                               f"(safety.{setting})")
-        seconds = getattr(args, "seconds", None)
+        reasons += self._speed_caps(call)
+        seconds = call.skill.waits(args) if call.skill.waits is not None else None
         if seconds is not None and seconds > lim.max_wait:
             reasons.append(f"waiting {seconds:g} s exceeds safety.max_wait ({lim.max_wait:g} s)")
-        needs_standing = call.skill.moves or name == "body.sport"
-        if needs_standing and posture is not Posture.STANDING and not self.auto_stand:
+        if call.skill.runs_standing and posture is not Posture.STANDING and not self.auto_stand:
             reasons.append(f"the robot will be {posture.value} here; add body.stand before it "
                            "(motion.auto_stand is off)")
         approval = ""
-        trick = getattr(args, "trick", None)
-        if trick is not None and TRICKS[trick].risky and not lim.allow_risky_tricks:
-            approval = (f"{trick} is a risky trick (it can hurt people or the robot) and needs "
-                        "approval, or safety.allow_risky_tricks: true")
+        risk = call.skill.why_risky(args)
+        if risk and not lim.allow_risky_tricks:
+            approval = f"{risk} and needs approval, or safety.allow_risky_tricks: true"
         poses = call.skill.predict(pose, args, env) if call.skill.predict else []
         distance = getattr(args, "distance", None)
         what = name if distance is None else f"{name} {distance:g} m"
         reasons += self.path_problems(pose, poses, env, what)
         return reasons, poses, approval
+
+    def _speed_caps(self, call: ValidatedCall) -> list[str]:
+        """Every speed argument against its cap, by the kind of quantity it is declared as."""
+        lim = self.limits
+        caps = {units.SPEED: (lim.max_linear_speed, "max_linear_speed"),
+                units.ANGULAR_SPEED: (lim.max_angular_speed, "max_angular_speed")}
+        reasons = []
+        for name, info in type(call.args).model_fields.items():
+            kind = argument_kind(info)
+            speed = getattr(call.args, name)
+            if kind not in caps or speed is None:
+                continue
+            cap, setting = caps[kind]
+            if speed > cap:
+                reasons.append(f"{name} {speed:g} {kind.unit} exceeds the cap of {cap:g} "
+                               f"{kind.unit} (safety.{setting})")
+        return reasons
 
     def path_problems(self, pose: Pose2D, poses: list[Pose2D], env: PlanEnv, what: str
                       ) -> list[str]:

@@ -187,6 +187,13 @@ def allowed(kind: Kind) -> str:
             f"({', '.join(kind.shown_units)}) such as '{kind.example}'")
 
 
+def format_number(value: float) -> str:
+    """A number as people write it: 2 rather than 2.0; exact otherwise (0.1, 1e+20)."""
+    if value == int(value) and abs(value) < 1e15:
+        return str(int(value))
+    return repr(value)
+
+
 def _read_text(text: str, kind: Kind) -> float:
     shown = _show(text)
     if len(text) > _MAX_TEXT:

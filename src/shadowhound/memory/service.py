@@ -6,6 +6,7 @@ Without `memory.enabled`, places last for the process and nothing is written to 
 A retrieval store that cannot be used (corrupt, a file in its place) turns retrieval memory off
 for the run, with a warning and a note in `status()`: memory is an aid, never a reason for a
 mission not to run. A broken history database is still an error: it holds the records.
+What retrieval memory keeps of a step is the step's skill's to say (`Skill.remembered_as`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from typing import Any
 
 from ..config import ConfigError, ShadowHoundConfig
 from ..events import MISSION_FINISHED, MISSION_STARTED, STEP_FINISHED, MissionEvent
+from ..skills import SkillRegistry, default_registry
 from .history import MemoryStoreError, MissionHistory
 from .places import PlaceBook
 from .recall import RecallStoreError
@@ -32,11 +34,14 @@ _STOPWORDS = frozenset((
 
 
 class AgentMemory:
-    """History, places and (optionally) recall for one agent."""
+    """History, places and (optionally) recall for one agent. `skills` (the agent's registry;
+    default: the built-in skills) say what of their steps retrieval memory keeps."""
 
     def __init__(self, settings: ShadowHoundConfig, history: MissionHistory | None = None,
-                 recall: Any = None, recall_problem: str | None = None) -> None:
+                 recall: Any = None, recall_problem: str | None = None, *,
+                 skills: SkillRegistry | None = None) -> None:
         self.settings = settings
+        self.skills = skills if skills is not None else default_registry()
         self.history = history
         self.places = PlaceBook(history)
         self.recall = recall
@@ -44,11 +49,12 @@ class AgentMemory:
         self.recall_problem = recall_problem
 
     @classmethod
-    def open(cls, settings: ShadowHoundConfig, backend: Any = None) -> AgentMemory:
+    def open(cls, settings: ShadowHoundConfig, backend: Any = None, *,
+             skills: SkillRegistry | None = None) -> AgentMemory:
         """Open what `settings.memory` asks for. Raises ConfigError with what to do."""
         cfg = settings.memory
         if not cfg.enabled and not cfg.enable_rag:
-            return cls(settings)
+            return cls(settings, skills=skills)
         data = Path(cfg.data_dir).expanduser()
         history = None
         if cfg.enabled:
@@ -60,7 +66,7 @@ class AgentMemory:
                 log.warning("%d mission(s) were running when the last process stopped; marked "
                             "interrupted", history.interrupted)
             history.prune(max_age_days=cfg.retention_days, max_missions=cfg.max_missions)
-        memory = cls(settings, history)
+        memory = cls(settings, history, skills=skills)
         if cfg.enable_rag:
             try:
                 memory.recall = cls._open_recall(settings, data, backend)
@@ -124,8 +130,10 @@ class AgentMemory:
             self.history.mission_started(event.mission_id, event.data["mission"], event.time)
         elif event.kind == STEP_FINISHED and self.recall is not None:
             step = event.data["step"]
-            if step["skill"] == "perception.describe" and step["status"] == "succeeded":
-                self._remember_safely(step["output"], "observation", mission=event.mission_id)
+            skill = self.skills.find(step["skill"])
+            if skill is not None and skill.remembered_as and step["status"] == "succeeded":
+                self._remember_safely(step["output"], skill.remembered_as,
+                                      mission=event.mission_id)
         elif event.kind == MISSION_FINISHED:
             result = event.data["result"]
             if self.history is not None:

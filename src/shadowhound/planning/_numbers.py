@@ -11,6 +11,7 @@ import re
 
 from shadowhound import units
 from shadowhound.planning._text import alternation, words
+from shadowhound.units import format_number
 
 DISTANCE = "distance"
 ANGLE = "angle"
@@ -48,12 +49,6 @@ def to_float(text: str) -> float:
     if not math.isfinite(value):
         raise ValueError(f"the number {text[:20]}... is too large")
     return value
-
-
-def format_number(value: float) -> str:
-    if value == int(value) and abs(value) < 1e15:
-        return str(int(value))
-    return repr(value)
 
 
 # ---- numbers written in words ----------------------------------------------------------------

@@ -1,4 +1,8 @@
-"""Skills: typed robot capabilities in one registry."""
+"""Skills: typed robot capabilities in one registry.
+
+Each area module (nav, body, sense, memory) holds its skills in `SKILLS`; a skill declares on
+its `Skill` everything the rest of the house needs to know of it, so a new skill is one file.
+"""
 
 from __future__ import annotations
 

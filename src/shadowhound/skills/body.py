@@ -40,13 +40,22 @@ def _run_sport(ctx: SkillContext, a: SportArgs) -> str:
     return f"performed {str(a.trick).replace('_', ' ')}"
 
 
+def _risk(a: SportArgs) -> str:
+    if not TRICKS[a.trick].risky:
+        return ""
+    return f"{a.trick} is a risky trick (it can hurt people or the robot)"
+
+
 SKILLS = (
     Skill("body.stand", "Stand up (from sitting or lying).", NoArgs,
-          _posture_runner(Posture.STANDING, "stood up"), timeout=10.0),
+          _posture_runner(Posture.STANDING, "stood up"), timeout=10.0,
+          posture=Posture.STANDING, phrase=lambda a: "stand up"),
     Skill("body.sit", "Sit down.", NoArgs, _posture_runner(Posture.SITTING, "sat down"),
-          timeout=10.0),
+          timeout=10.0, posture=Posture.SITTING, low_battery=True,
+          phrase=lambda a: "sit down"),
     Skill("body.lie_down", "Lie down.", NoArgs,
-          _posture_runner(Posture.LYING, "lay down"), timeout=10.0),
+          _posture_runner(Posture.LYING, "lay down"), timeout=10.0,
+          posture=Posture.LYING, low_battery=True, phrase=lambda a: "lie down"),
     Skill(
         "body.sport",
         "Perform a Unitree sport-mode trick in place. Risky tricks need "
@@ -54,5 +63,9 @@ SKILLS = (
         SportArgs,
         _run_sport,
         timeout=lambda a, env: TRICKS[a.trick].duration + 15.0,
+        needs_standing=True,
+        risk=_risk,
+        seconds=lambda a: TRICKS[a.trick].duration,
+        phrase=lambda a: f"do the {a.trick} trick",
     ),
 )

@@ -105,9 +105,10 @@ SKILLS = (
           PlaceArgs, _remember, timeout=5.0, predict=_predict_remember),
     Skill("places.forget", "Forget a taught place.", PlaceArgs, _forget, timeout=5.0,
           predict=_predict_forget),
-    Skill("places.list", "List the places the robot knows.", NoArgs, _list, timeout=5.0),
+    Skill("places.list", "List the places the robot knows.", NoArgs, _list, timeout=5.0,
+          reports=True),
     Skill("memory.note", "Remember a fact the user teaches (needs retrieval memory).",
           NoteArgs, _note, timeout=30.0),
     Skill("memory.recall", "Recall past missions, facts and observations about a topic.",
-          RecallArgs, _recall, timeout=30.0),
+          RecallArgs, _recall, timeout=30.0, reports=True),
 )

@@ -7,6 +7,7 @@ import math
 from pydantic import ConfigDict, Field, model_validator
 
 from ..state import Pose2D, normalize_angle
+from ..units import format_number as _n
 from ..world import PlanError, apply_scan, plan_route
 from . import motion
 from .arguments import (
@@ -287,6 +288,15 @@ def _patrol_timeout(a: PatrolArgs, env: PlanEnv) -> float:
     return a.laps * legs * _goto_timeout(GotoArgs(x=0.0, y=0.0, place=None), env)
 
 
+def _say_goto(a: GotoArgs) -> str:
+    if a.place is not None:
+        return {"start": "return to the start", "home": "go home"}.get(a.place,
+                                                                      f"go to {a.place}")
+    if a.x is None or a.y is None:  # only as proposed, unchecked (GotoArgs._target refuses it)
+        return "go to a point"
+    return f"go to ({_n(a.x)}, {_n(a.y)})"
+
+
 # -- nav.stop --------------------------------------------------------------------------------
 
 
@@ -305,6 +315,8 @@ SKILLS = (
         timeout=_straight_timeout,
         moves=True,
         predict=lambda p, a, env: [_offset(p, a.distance, 0.0)],
+        phrase=lambda a: f"move {'forward' if a.distance >= 0 else 'backward'} "
+                         f"{_n(abs(a.distance))} m",
     ),
     Skill(
         "nav.strafe",
@@ -314,6 +326,8 @@ SKILLS = (
         timeout=_straight_timeout,
         moves=True,
         predict=lambda p, a, env: [_offset(p, 0.0, a.distance)],
+        phrase=lambda a: f"step {'left' if a.distance >= 0 else 'right'} "
+                         f"{_n(abs(a.distance))} m",
     ),
     Skill(
         "nav.rotate",
@@ -325,6 +339,8 @@ SKILLS = (
         predict=lambda p, a, env: [
             Pose2D(p.x, p.y, normalize_angle(p.yaw + math.radians(a.degrees)))
         ],
+        phrase=lambda a: f"turn {'left' if a.degrees >= 0 else 'right'} "
+                         f"{_n(abs(a.degrees))} degrees",
     ),
     Skill(
         "nav.goto",
@@ -335,6 +351,7 @@ SKILLS = (
         timeout=_goto_timeout,
         moves=True,
         predict=_predict_goto,
+        phrase=_say_goto,
     ),
     Skill(
         "nav.patrol",
@@ -344,6 +361,8 @@ SKILLS = (
         timeout=_patrol_timeout,
         moves=True,
         predict=_predict_patrol,
+        phrase=lambda a: f"patrol {a.laps} lap{'s' if a.laps != 1 else ''}",
     ),
-    Skill("nav.stop", "Stop moving and stand still.", NoArgs, _run_stop, timeout=5.0),
+    Skill("nav.stop", "Stop moving and stand still.", NoArgs, _run_stop, timeout=5.0,
+          low_battery=True, phrase=lambda a: "stop"),
 )

@@ -4,6 +4,14 @@ Each skill has typed arguments (a pydantic model), a description, a timeout on t
 clock, and a prediction of where it takes the robot (used by the safety check before a plan
 runs). The CLI listing, the web page, language-model tool schemas and the offline planner all
 read this registry.
+
+A skill also declares every fact the rest of the house needs about it (whether it walks or
+runs standing, the posture it leaves, whether it may run on a low battery, what makes a call
+risky, the time it surely takes, whether its output is an answer for the user, what memory
+keeps of it, how a call is said in words). The governor, `result.compose_response`, the memory
+and the planners' messages read these declarations and never a skill's name, so adding a skill
+is one file: its `Skill(...)` in a module's `SKILLS` (listed once in `default_registry`), or one
+`SkillRegistry.register` call for a skill of your own.
 """
 
 from __future__ import annotations
@@ -16,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import ValidationError
 
 from ..plan import SkillCall
+from ..state import Posture
 from ..units import UnitError
 from .arguments import SkillArgs
 
@@ -35,19 +44,51 @@ class SkillValidationError(ValueError):
 Runner = Callable[["SkillContext", Any], str]
 Predictor = Callable[["Pose2D", Any, "PlanEnv"], list["Pose2D"]]
 Timeout = Callable[[Any, "PlanEnv"], float]
+Seconds = Callable[[Any], float]  # of a call's arguments
+Words = Callable[[Any], str]  # of a call's arguments
 
 
 @dataclass(frozen=True)
 class Skill:
-    """A robot capability. `run` returns a short sentence saying what happened."""
+    """A robot capability. `run` returns a short sentence saying what happened.
+
+    The fields after `predict` are what the rest of the house knows of the skill (the module
+    docstring says who reads them); the defaults fit a skill that keeps the robot still.
+    """
 
     name: str
     description: str
     args_model: type[SkillArgs]
     run: Runner
     timeout: float | Timeout = 30.0  # seconds on the robot's clock
-    moves: bool = False  # may translate or rotate the robot
+    moves: bool = False  # may translate or rotate the robot (then it also runs standing)
     predict: Predictor | None = None  # poses the robot passes through, for the safety check
+    # Runs standing although it does not walk (a trick): the robot stands up first
+    # (motion.auto_stand), or the governor refuses the step while it is sitting or lying.
+    needs_standing: bool = False
+    # The posture the skill leaves the robot in (body.sit); None: standing after a skill that
+    # runs standing, else the posture it found.
+    posture: Posture | None = None
+    low_battery: bool = False  # may run below safety.battery_floor: it walks nowhere
+    # Why this call needs a person's approval (or safety.allow_risky_tricks); "" when it does not.
+    risk: Words | None = None
+    # Robot seconds a call surely takes in place (a trick's routine): counted, with the time
+    # its path takes at the speed cap, toward safety.max_mission_duration before it runs.
+    seconds: Seconds | None = None
+    # Seconds a call holds still because it was asked to: at most safety.max_wait, and
+    # counted toward the mission's time like `seconds`.
+    waits: Seconds | None = None
+    # Its output answers the user (a view, a status, a list): the mission's response says it
+    # as a sentence of its own instead of listing it among what was done.
+    reports: bool = False
+    # Retrieval memory keeps each successful output as this kind (observation, fact, mission).
+    remembered_as: str | None = None
+    phrase: Words | None = None  # a call in a few words ("move forward 2 m"); default: the name
+
+    def __post_init__(self) -> None:
+        if self.moves and self.low_battery:  # below the battery floor nothing may walk
+            raise ValueError(f"skill {self.name!r} moves the robot, so it cannot be allowed "
+                             "on a low battery (low_battery=True)")
 
     @property
     def tool_name(self) -> str:
@@ -66,6 +107,29 @@ class Skill:
 
     def timeout_for(self, args: SkillArgs, env: PlanEnv) -> float:
         return self.timeout(args, env) if callable(self.timeout) else float(self.timeout)
+
+    @property
+    def runs_standing(self) -> bool:
+        """Whether the robot must be standing for it (every skill that walks or turns is)."""
+        return self.moves or self.needs_standing
+
+    def posture_after(self, before: Posture) -> Posture:
+        """The posture a call leaves the robot in, from the posture it starts in."""
+        if self.posture is not None:
+            return self.posture
+        return Posture.STANDING if self.runs_standing else before
+
+    def least_seconds(self, args: SkillArgs) -> float:
+        """Robot seconds a call surely takes besides walking (its trick, its wait)."""
+        return sum(float(f(args)) for f in (self.seconds, self.waits) if f is not None)
+
+    def why_risky(self, args: SkillArgs) -> str:
+        """Why a call needs approval ("" when it does not)."""
+        return self.risk(args) if self.risk is not None else ""
+
+    def say(self, args: SkillArgs) -> str:
+        """A call in a few words for people ("move forward 2 m"); the name without a phrase."""
+        return self.phrase(args) if self.phrase is not None else self.name
 
     def describe(self) -> dict[str, Any]:
         return {
@@ -121,8 +185,12 @@ class SkillRegistry:
     def names(self) -> list[str]:
         return list(self._skills)
 
+    def find(self, name: str) -> Skill | None:
+        """The skill called `name` (or its tool name), None when there is none."""
+        return self._skills.get(name) or self._by_tool_name(name)
+
     def get(self, name: str) -> Skill:
-        skill = self._skills.get(name) or self._by_tool_name(name)
+        skill = self.find(name)
         if skill is None:
             raise SkillValidationError(
                 [f"unknown skill {name!r}; available skills: {', '.join(self._skills)}"]

@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pydantic import Field
 
 from ..state import CameraFrame
+from ..units import format_number
 from . import motion
 from .arguments import Duration, NoArgs, SkillArgs
 from .context import SkillContext
@@ -89,6 +90,9 @@ SKILLS = (
         DescribeArgs,
         _run_describe,
         timeout=60.0,
+        reports=True,
+        remembered_as="observation",
+        phrase=lambda a: "describe what I see",
     ),
     Skill(
         "perception.look_around",
@@ -98,9 +102,12 @@ SKILLS = (
         timeout=120.0,
         moves=True,
         predict=lambda p, a, env: [p],
+        reports=True,
+        phrase=lambda a: "look around",
     ),
     Skill("sys.status", "Report pose, posture and battery. Does not move.", NoArgs, _run_status,
-          timeout=5.0),
+          timeout=5.0, low_battery=True, reports=True, phrase=lambda a: "report status"),
     Skill("sys.wait", "Stand still for a number of seconds.", WaitArgs, _run_wait,
-          timeout=lambda a, env: a.seconds + 5.0),
+          timeout=lambda a, env: a.seconds + 5.0, waits=lambda a: a.seconds,
+          phrase=lambda a: f"wait {format_number(a.seconds)} s"),
 )
