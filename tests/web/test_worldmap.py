@@ -124,3 +124,15 @@ def test_the_png_is_the_grid_row_for_row_and_the_version_tracks_every_cell(
     assert grid_version(changed) != version
     moved = OccupancyGrid(width, height, 0.1, Pose2D(-1.0, 2.05, 0.0), bytearray(grid.cells))
     assert grid_version(moved) != version
+
+
+def test_the_grid_image_needs_the_token_like_every_api_read(agent: RobotAgent) -> None:
+    from fastapi.testclient import TestClient
+
+    from shadowhound.web import create_app
+    from tests.web.conftest import TOKEN
+
+    with TestClient(create_app(agent, token=TOKEN), base_url="http://127.0.0.1") as c:
+        assert c.get("/api/map/grid.png").status_code == 401
+        ok = c.get("/api/map/grid.png", headers={"Authorization": f"Bearer {TOKEN}"})
+        assert ok.status_code == 200 and ok.content.startswith(b"\x89PNG")
