@@ -114,6 +114,21 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
             canvas = Canvas(page)
             assert canvas.along(planned, WALKED) > 0.6
             page.screenshot(path=str(ARTIFACTS / "dashboard-map-walked.png"), full_page=True)
+
+            # 4. A fresh page, a mission back (no dry run first): its planned path is drawn
+            #    from its plan_ready event; stopped early, most of it is still ahead, dashed.
+            back = [(p.x, p.y) for p in agent.dry_run("go to x=0, y=0").predicted_path]
+            page.reload(wait_until="domcontentloaded")
+            page.wait_for_selector('#conn[data-state="live"]')
+            page.wait_for_selector('#map[data-grid]:not([data-grid=""])')
+            page.fill("#command", "go to x=0, y=0")
+            page.click("#run")
+            page.wait_for_selector('#steps li[data-status="running"]')
+            page.click("#estop")
+            page.wait_for_selector('#result[data-kind="error"]')
+            assert agent.get_robot_state().x > 1.0  # stopped before the ball: most is ahead
+            canvas = Canvas(page)
+            assert canvas.along(back, PLANNED) > 0.15
         finally:
             browser.close()
     assert not errors, errors
