@@ -133,3 +133,24 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
             browser.close()
     assert not errors, errors
     assert len(set(grids)) == 1, grids  # the grid never changed: its image was fetched once
+
+
+def test_the_grid_is_drawn_behind_a_token_too(
+        serve: Callable[..., WebServer], tmp_path: Path) -> None:
+    from tests.web.conftest import TOKEN
+
+    sync_playwright = _playwright()
+    agent = make_agent()
+    server = serve(agent, token=TOKEN)
+    with sync_playwright() as p:
+        browser = p.chromium.launch_persistent_context(
+            str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS,
+            viewport=DESKTOP)
+        try:
+            page = browser.new_page()
+            page.set_default_timeout(20_000)
+            page.goto(server.url + "/#token=" + TOKEN, wait_until="domcontentloaded")
+            page.wait_for_selector('#map[data-grid]:not([data-grid=""])')
+            assert near(Canvas(page).at(0.5, 1.5), (254, 254, 254), 12)
+        finally:
+            browser.close()
