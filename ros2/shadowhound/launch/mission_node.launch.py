@@ -32,6 +32,7 @@ ARGUMENTS = {
     "odom_timeout": "0.5",
     "odom_latency": "-1.0",
     "battery_topic": "",
+    "detections_topic": "",
     "go2_firmware_tricks": "false",
 }
 

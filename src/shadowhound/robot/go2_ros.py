@@ -18,6 +18,8 @@ Written against how the driver really behaves (docs/go2.md):
 - battery: a sensor_msgs/BatteryState topic when one is configured and publishing, else
   unknown (None): the driver publishes no battery level.
 - camera: `camera/image_raw` (sensor_msgs/Image) or a topic ending in `compressed`.
+- detections (optional, `detections_topic`): shadowhound_interfaces/DetectionArray from any
+  detector; each detection becomes a sighting (`known_objects()`), see ros/detections.py.
 
 The robot has its own rclpy node and executor thread, so it works inside the MissionNode
 process (sharing its context) or in a plain script (it then initialises a private context).
@@ -43,7 +45,9 @@ from sensor_msgs.msg import BatteryState, CompressedImage, Image
 
 from ..camera import to_camera_frame
 from ..ros.convert import raw_image_frame
-from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
+from ..ros.detections import Frames, SightingBoard, sightings_from_msg
+from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, normalize_angle
+from ..world.objects import KnownObject
 from . import go2_api
 from .base import RobotError
 from .go2_motion import MotionTracker, StampClock
@@ -74,6 +78,7 @@ class Go2RosConfig:
     state_topic: str = "go2_states"
     camera_topic: str = "camera/image_raw"
     battery_topic: str = ""  # sensor_msgs/BatteryState; '' = no source: battery unknown
+    detections_topic: str = ""  # shadowhound_interfaces/DetectionArray; '' = none
     battery_timeout: float = 30.0  # seconds after which a battery reading is unknown again
     odom_timeout: float = 0.5  # seconds without odometry before get_state raises
     odom_latency: float | None = None  # seconds odometry lags the robot; None = measured
@@ -111,6 +116,8 @@ class Go2RosRobot:
         self._posture = Posture.STANDING  # until go2_states says otherwise
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
+        self._sightings = SightingBoard()
+        self._frames = Frames()  # odometry's own frame ids replace these when it arrives
         self._command = (0.0, 0.0, 0.0)
         self._halted = True  # no velocity commanded since the last stop()
         self._last_sent = 0.0
@@ -149,6 +156,14 @@ class Go2RosRobot:
             compressed = c.camera_topic.rstrip("/").endswith("compressed")
             n.create_subscription(CompressedImage if compressed else Image, c.camera_topic,
                                   self._on_compressed if compressed else self._on_image, _SENSOR)
+        if c.detections_topic:
+            try:
+                from shadowhound_interfaces.msg import DetectionArray
+            except ImportError as exc:
+                raise RobotError("detections_topic needs the shadowhound_interfaces package: "
+                                 f"run scripts/build_ros.sh ({exc})") from exc
+            n.create_subscription(DetectionArray, c.detections_topic, self._on_detections,
+                                  _RELIABLE)
         n.create_timer(_KEEPALIVE_PERIOD, self._keep_alive)
         n.create_timer(5.0, self._warn_without_odometry)
 
@@ -192,6 +207,9 @@ class Go2RosRobot:
             self._tracker.odometry(sent, p.x, p.y, yaw)
             self._odom_at = now
             after = self._tracker.latency
+            if msg.header.frame_id and msg.child_frame_id:
+                self._frames = Frames(msg.header.frame_id.lstrip("/"),
+                                      msg.child_frame_id.lstrip("/"))
         if abs(after - before) >= 0.01:
             self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
@@ -223,6 +241,28 @@ class Go2RosRobot:
         except ValueError as exc:
             self.node.get_logger().warning(f"dropped a camera frame: {exc}",
                                            throttle_duration_sec=5.0)
+
+    def _on_detections(self, msg: object) -> None:
+        state = self.last_state()
+        with self._lock:
+            frames = self._frames
+        clock = self.node.get_clock().now().nanoseconds * 1e-9
+
+        def age(stamp: object) -> float:
+            sec, nsec = getattr(stamp, "sec", 0), getattr(stamp, "nanosec", 0)
+            return clock - (sec + nsec * 1e-9) if (sec or nsec) else 0.0
+
+        seen, problems = sightings_from_msg(msg, Pose2D(state.x, state.y, state.yaw), frames,
+                                            self.now(), age)
+        self._sightings.add(seen)
+        for problem in problems:
+            self.node.get_logger().warning(f"dropped a detection: {problem}",
+                                           throttle_duration_sec=5.0)
+
+    def known_objects(self) -> tuple[KnownObject, ...]:
+        """What the detections topic has reported, one sighting per name (the latest), in the
+        odometry frame."""
+        return self._sightings.objects()
 
     def _keep_alive(self) -> None:
         with self._lock:

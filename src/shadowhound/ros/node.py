@@ -7,7 +7,8 @@ Interfaces (names relative to the node's namespace unless absolute):
   other callback can delay an e-stop (estop_listener.py);
 - publishes `mission_status` (std_msgs/String), `/shadowhound/diagnostics`
   (diagnostic_msgs/DiagnosticArray, 1 Hz), `/shadowhound/robot_status` (std_msgs/String JSON,
-  5 Hz);
+  5 Hz), and for RViz `planned_path` (nav_msgs/Path) and `known_objects`
+  (visualization_msgs/MarkerArray), see rviz.py;
 - serves the `execute_mission` action (shadowhound_interfaces/ExecuteMission) and the `chat`
   service (shadowhound_interfaces/Chat) when the interface package is installed.
 
@@ -53,6 +54,7 @@ from .convert import (
 from .estop_listener import EstopListener
 from .params import NODE_NAME, PARAMETERS, ParameterError, describe_parameters, parse_parameters
 from .process import run_node
+from .rviz import RvizPublisher
 
 try:  # built by scripts/build_ros.sh (ros2/shadowhound_interfaces)
     from shadowhound_interfaces.action import ExecuteMission
@@ -158,6 +160,7 @@ class MissionNode(Node):
             raise ParameterError(f"cannot create the node's topics: {exc}") from exc
         self.create_timer(1.0, self._publish_diagnostics)
         self.create_timer(1.0 / ROBOT_STATUS_HZ, self._publish_robot_status)
+        self._rviz = RvizPublisher(self, self.agent)  # planned_path, known_objects (rviz.py)
         self._goals: dict[bytes, MissionJob] = {}
         if ExecuteMission is not None and Chat is not None:
             self._action = ActionServer(self, ExecuteMission, ACTION_NAME, self._execute_goal,
@@ -218,6 +221,7 @@ class MissionNode(Node):
         self.agent.cleanup()
         self._camera.close()
         self._estop.close()
+        self._rviz.close()
 
     def destroy_node(self) -> None:
         self._estop.close()

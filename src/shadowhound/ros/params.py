@@ -46,6 +46,8 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
                            "each start from rest"),
     "battery_topic": ("", "go2: sensor_msgs/BatteryState in ('' = none: the battery level is "
                           "reported unknown; go2_ros2_sdk publishes none)"),
+    "detections_topic": ("", "go2: shadowhound_interfaces/DetectionArray in, from any detector "
+                             "('' = none); each detection becomes a known object"),
     "go2_firmware_tricks": (False, "go2: allow the tricks that need firmware support and the "
                                    "'ai' motion mode (flips, handstand, 1301-1305)"),
 }
@@ -57,7 +59,7 @@ GO2_MOTION = {"position_tolerance": 0.02, "yaw_tolerance": math.radians(0.5),
               "control_rate_hz": 10.0}
 
 CAMERA_TYPES = ("auto", "raw", "compressed")
-_OPTIONAL_TOPICS = ("cmd_vel_topic", "battery_topic")  # '' = discovered / none
+_OPTIONAL_TOPICS = ("cmd_vel_topic", "battery_topic", "detections_topic")  # '' = discovered / none
 ROBOTS = ("sim", "go2")
 _TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 
@@ -89,6 +91,7 @@ class NodeSettings:
     odom_timeout: float = 0.5
     odom_latency: float = -1.0
     battery_topic: str = ""
+    detections_topic: str = ""
     go2_firmware_tricks: bool = False
 
     @property
@@ -115,6 +118,7 @@ class NodeSettings:
                 "state_topic": self.go2_states_topic, "odom_timeout": self.odom_timeout,
                 "odom_latency": None if self.odom_latency < 0 else self.odom_latency,
                 "battery_topic": self.battery_topic,
+                "detections_topic": self.detections_topic,
                 "firmware_tricks": self.go2_firmware_tricks}
 
 
@@ -149,7 +153,7 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
     unknown_topics = [n for n in ("camera_topic", "mission_topic", "status_topic",
                                   "robot_status_topic", "diagnostics_topic", "cmd_vel_topic",
                                   "webrtc_topic", "odom_topic", "go2_states_topic",
-                                  "battery_topic")
+                                  "battery_topic", "detections_topic")
                       if n in out and not _TOPIC.match(out[n])
                       and (out[n] or n not in _OPTIONAL_TOPICS)]
     problems += [f"{n} {out[n]!r} is not a valid ROS topic name (letters, digits, '_' and "

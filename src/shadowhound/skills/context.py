@@ -12,7 +12,7 @@ from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
 from ..robot.base import Robot
 from ..state import CameraFrame, Pose2D, Posture
-from ..world import Belief
+from ..world import Belief, KnownObject, merge_sightings
 
 
 class SkillError(Exception):
@@ -70,6 +70,16 @@ def robot_belief(robot: Robot) -> Belief | None:
     """The map a robot offers (`belief()`: the simulator's scene), or None when it has none."""
     source = getattr(robot, "belief", None)
     return source() if callable(source) else None
+
+
+def robot_objects(robot: Robot, belief: Belief | None = None) -> tuple[KnownObject, ...]:
+    """Every object the robot knows: its map's and its detections' (`known_objects()`, e.g.
+    Go2RosRobot's detections topic), the latest sighting per name. `belief`: one already
+    fetched from this robot."""
+    belief = belief if belief is not None else robot_belief(robot)
+    source = getattr(robot, "known_objects", None)
+    return merge_sightings(belief.objects if belief is not None else (),
+                           source() if callable(source) else ())
 
 
 class SkillContext:

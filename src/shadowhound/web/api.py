@@ -12,10 +12,11 @@ from dataclasses import dataclass
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, HTTPException, Query, Request
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
 
 from .. import __version__
 from ..agent import RobotAgent
+from ..skills.context import robot_belief, robot_objects
 from .desk import MissionDesk, WebMission
 from .estop import stopped_already
 from .feed import EventFeed
@@ -30,6 +31,7 @@ from .models import (
     Problem,
     RejectRequest,
 )
+from .worldmap import GridImages, grid_layout, grid_version, object_dicts
 
 
 @dataclass
@@ -221,12 +223,38 @@ async def skills(request: Request) -> dict[str, Any]:
     return {"skills": ctx(request).agent.get_available_skills()}
 
 
+_GRID_IMAGES = GridImages()
+
+
 @router.get("/map", tags=["status"])
 async def world_map(request: Request) -> dict[str, Any]:
-    """What the dashboard's map draws besides the robot: places, route and geofence."""
+    """What the dashboard's map draws besides the robot: places, route, geofence, the known
+    objects and the occupancy grid's layout and version (its image: /api/map/grid.png)."""
     settings = ctx(request).agent.settings
-    return {"places": {k: list(v) for k, v in settings.places.items()},
+    robot = ctx(request).agent.robot
+    belief = robot_belief(robot)
+    grid = None if belief is None else grid_layout(belief.grid, grid_version(belief.grid))
+    return {"grid": grid, "objects": object_dicts(robot_objects(robot, belief)),
+            "places": {k: list(v) for k, v in settings.places.items()},
             "patrol_route": [list(p) for p in settings.patrol_route],
             "geofence_radius": settings.safety.geofence_radius,
             "geofence_polygon": [list(p) for p in settings.safety.geofence_polygon or []],
             "robot": ctx(request).agent.get_robot_status()}
+
+
+@router.get("/map/grid.png", tags=["status"], response_class=Response,
+            responses={200: {"content": {"image/png": {}}}, 404: {"model": Problem}})
+async def grid_image(request: Request) -> Response:
+    """The occupancy grid as a grayscale PNG (free white, occupied black, unknown grey), its
+    top row the largest y; place it with /api/map's `grid` layout. Cached by version."""
+    belief = robot_belief(ctx(request).agent.robot)
+    if belief is None:
+        raise HTTPException(404, "this robot has no map (the simulator with collisions off, or "
+                                 "a robot without a map source)")
+    version = grid_version(belief.grid)
+    etag = f'"{version}"'
+    headers = {"ETag": etag, "Cache-Control": "no-cache"}
+    if request.headers.get("if-none-match") == etag:
+        return Response(status_code=304, headers=headers)
+    return Response(_GRID_IMAGES.png(belief.grid, version), media_type="image/png",
+                    headers=headers)

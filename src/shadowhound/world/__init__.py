@@ -16,7 +16,7 @@ from .grid import (
 )
 from .inflation import DEFAULT_ROBOT_RADIUS, InflatedGrid, inflate
 from .legs import LegCheck, blocker_near, check_leg
-from .objects import Belief, KnownObject
+from .objects import Belief, KnownObject, merge_sightings, object_key
 from .planner import Path, PlanError, line_is_clear, plan_path
 from .route import plan_route
 from .scan_update import apply_scan
@@ -45,6 +45,8 @@ __all__ = [
     "check_leg",
     "inflate",
     "line_is_clear",
+    "merge_sightings",
+    "object_key",
     "plan_path",
     "plan_route",
     "standoff_point",

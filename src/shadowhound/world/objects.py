@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from .grid import OccupancyGrid
@@ -56,9 +57,8 @@ class Belief:
         self._inflated = None
 
     def find(self, name: str) -> KnownObject | None:
-        key = " ".join(name.strip().lower().split())
-        key = key[4:] if key.startswith("the ") else key
-        return next((o for o in self.objects if o.name.strip().lower() == key), None)
+        key = object_key(name)
+        return next((o for o in self.objects if object_key(o.name) == key), None)
 
     def name_at(self, x: float, y: float) -> str:
         """What the obstacle at (x, y) is, as a sentence says it."""
@@ -72,3 +72,22 @@ class Belief:
             if min(x - x_min, x_max - x, y - y_min, y_max - y) <= tolerance:
                 return "the wall"
         return "an obstacle"
+
+
+def object_key(name: str) -> str:
+    """How names compare: case, spacing and a leading "the" do not matter."""
+    key = " ".join(name.strip().lower().split())
+    return key[4:] if key.startswith("the ") else key
+
+
+def merge_sightings(known: Iterable[KnownObject], seen: Iterable[KnownObject]
+                    ) -> tuple[KnownObject, ...]:
+    """`known` updated with new sightings (from any source: simulator, detector): a sighting
+    replaces the known object of the same name unless that one was seen later; new names are
+    appended in the order seen. One object per name: the latest sighting is where it is."""
+    merged = {object_key(o.name): o for o in known}
+    for o in seen:
+        key = object_key(o.name)
+        if key not in merged or merged[key].stamp <= o.stamp:
+            merged[key] = o
+    return tuple(merged.values())

@@ -14,7 +14,10 @@ const view = {
   shown: null, // web mission id the step list was last drawn for
   pose: { x: 0, y: 0, yaw: 0 },
   trail: [{ x: 0, y: 0 }],
-  predicted: [],
+  predicted: [], // the planned path of the current mission, or of the last dry run
+  grid: null, // the occupancy grid's layout (/api/map), drawn once its image has loaded
+  gridImage: null,
+  objects: [], // known objects: name, x, y, radius, confidence
   world: { places: {}, patrol_route: [], geofence_radius: 10, geofence_polygon: [] },
   approval: null,
   socketFailures: 0,
@@ -239,6 +242,10 @@ function onEvent(message) {
       break;
     case "plan_ready":
       if (message.mission_id === view.current) renderSteps($("#steps"), message.plan.steps);
+      // The mission about to run: its planned path, and its walked path from here.
+      view.predicted = (message.path || []).map((p) => ({ x: p.x, y: p.y }));
+      view.trail = [{ x: view.pose.x, y: view.pose.y }];
+      drawMap();
       break;
     case "step_started":
     case "step_finished":
@@ -247,6 +254,7 @@ function onEvent(message) {
     case "mission_finished":
       if (message.mission_id === view.current) showResult(message.result);
       refreshHistory();
+      refreshWorld(); // a mission may have changed the map or seen objects
       break;
     case "mission_record":
       if (message.mission_id === view.current) showResult(message);
@@ -305,11 +313,53 @@ function drawMap() {
 // -- panels fetched once or now and then --------------------------------------------------
 
 async function loadWorld() {
+  if (!(await refreshWorld())) return;
+  view.trail = [{ x: view.pose.x, y: view.pose.y }];
+  drawMap();
+}
+
+// Places, objects and the grid's layout; the grid image only when its version changed.
+async function refreshWorld() {
+  if (document.hidden && view.grid) return false;
   const reply = await api("GET", "/api/map");
-  if (!reply.ok) return;
+  if (!reply.ok) return false;
   view.world = reply.data;
-  view.trail = [{ x: reply.data.robot.x, y: reply.data.robot.y }];
+  view.objects = reply.data.objects || [];
+  renderObjects();
+  const grid = reply.data.grid || null;
+  if (!grid) {
+    view.grid = null;
+    view.gridImage = null;
+  } else if (!view.grid || view.grid.version !== grid.version || !view.gridImage) {
+    const image = await loadGridImage(grid.url);
+    if (image) {
+      view.grid = grid;
+      view.gridImage = image;
+    }
+  }
   movePose(reply.data.robot);
+  return true;
+}
+
+async function loadGridImage(url) {
+  const headers = view.token ? { Authorization: "Bearer " + view.token } : {};
+  try {
+    const response = await fetch(url, { headers });
+    if (!response.ok) return null;
+    return await createImageBitmap(await response.blob());
+  } catch (error) {
+    return null;
+  }
+}
+
+function renderObjects() {
+  $("#map-objects").replaceChildren(...view.objects.map((o) => {
+    const item = document.createElement("li");
+    item.dataset.name = o.name;
+    item.textContent = o.name + " · " + o.x.toFixed(1) + ", " + o.y.toFixed(1) + " m" +
+      (o.confidence < 1 ? " · " + Math.round(o.confidence * 100) + " %" : "");
+    return item;
+  }));
 }
 
 async function loadSkills() {
@@ -400,6 +450,7 @@ function start() {
   refreshHistory();
   loadDiagnostics();
   setInterval(loadDiagnostics, 3000);
+  setInterval(refreshWorld, 3000);
   connect();
   startCamera();
 }

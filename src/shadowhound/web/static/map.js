@@ -1,23 +1,42 @@
-// The dashboard's map: a top-down view of the odom frame (x to the right, y up) with the grid,
-// geofence, named places, the path walked, a dry run's predicted path and the robot.
-// `view` holds pose, trail, predicted, world and estop (see app.js).
+// The dashboard's map: a top-down view of the odom frame (x to the right, y up) with the
+// occupancy grid, geofence, named places, known objects, the planned path of the mission (or a
+// dry run's), the path walked and the robot. `view` holds pose, trail, predicted, world, grid,
+// gridImage, objects and estop (see app.js). The transform used is left on the canvas as
+// data-cx, data-cy and data-scale (pixels per metre), so a test can find what it drew.
+const SHOW_WHOLE_GRID = 30; // metres: a grid up to this size is kept in view entirely
+
 export function drawMap(canvas, view) {
   const ctx = canvas.getContext("2d");
   const width = canvas.width;
   const height = canvas.height;
-  const points = [...view.trail, ...view.predicted, view.pose];
+  const points = [...view.trail, ...view.predicted, view.pose, ...view.objects];
+  const grid = view.gridImage ? view.grid : null;
+  if (grid) {
+    const corners = gridCorners(grid);
+    const xs = corners.map((p) => p.x);
+    const ys = corners.map((p) => p.y);
+    if (Math.max(...xs) - Math.min(...xs) <= SHOW_WHOLE_GRID &&
+        Math.max(...ys) - Math.min(...ys) <= SHOW_WHOLE_GRID) points.push(...corners);
+  }
   let span = 2.5; // metres from the centre shown at least
   const cx = (Math.max(...points.map((p) => p.x)) + Math.min(...points.map((p) => p.x))) / 2;
   const cy = (Math.max(...points.map((p) => p.y)) + Math.min(...points.map((p) => p.y))) / 2;
-  for (const p of points) span = Math.max(span, Math.abs(p.x - cx) + 1, Math.abs(p.y - cy) + 1);
+  for (const p of points) {
+    span = Math.max(span, Math.abs(p.x - cx) + 0.5, Math.abs(p.y - cy) + 0.5);
+  }
   const scale = Math.min(width, height) / (2 * span);
   // x to the right, y up (the odom frame seen from above)
   const sx = (x) => width / 2 + (x - cx) * scale;
   const sy = (y) => height / 2 - (y - cy) * scale;
+  canvas.dataset.cx = cx.toFixed(4);
+  canvas.dataset.cy = cy.toFixed(4);
+  canvas.dataset.scale = scale.toFixed(4);
 
   ctx.fillStyle = "#fbfbf8";
   ctx.fillRect(0, 0, width, height);
-  ctx.strokeStyle = "#e3e3dc";
+  if (grid) drawGrid(ctx, view.gridImage, grid, sx, sy, scale);
+  canvas.dataset.grid = grid ? grid.version : "";
+  ctx.strokeStyle = grid ? "rgba(120, 120, 110, 0.25)" : "#e3e3dc";
   ctx.lineWidth = 1;
   const step = span > 8 ? 2 : 1;
   for (let g = Math.floor(cx - 2 * span); g <= cx + 2 * span; g += step) {
@@ -38,7 +57,8 @@ export function drawMap(canvas, view) {
     ctx.fillRect(sx(x) - 3, sy(y) - 3, 6, 6);
     ctx.fillText(name, sx(x) + 5, sy(y) - 5);
   }
-  polyline(ctx, view.predicted, sx, sy, "#7a9cc6", [4, 4]);
+  drawObjects(ctx, view.objects, sx, sy, scale);
+  polyline(ctx, view.predicted, sx, sy, "#3f6fb5", [6, 4]);
   polyline(ctx, view.trail, sx, sy, "#2f7d32", []);
   const { x, y, yaw } = view.pose;
   ctx.save();
@@ -54,6 +74,43 @@ export function drawMap(canvas, view) {
   ctx.restore();
 }
 
+// The grid image's top row is the grid's last row: in the grid's own frame (origin at cell
+// (0, 0)'s outer corner, rotated by origin.yaw) it spans x 0..width*res, y 0..height*res.
+function drawGrid(ctx, image, grid, sx, sy, scale) {
+  const metres = grid.resolution * scale;
+  ctx.save();
+  ctx.imageSmoothingEnabled = false;
+  ctx.translate(sx(grid.origin.x), sy(grid.origin.y));
+  ctx.rotate(-grid.origin.yaw);
+  ctx.drawImage(image, 0, -grid.height * metres, grid.width * metres, grid.height * metres);
+  ctx.restore();
+}
+
+function gridCorners(grid) {
+  const { x, y, yaw } = grid.origin;
+  const w = grid.width * grid.resolution;
+  const h = grid.height * grid.resolution;
+  const c = Math.cos(yaw);
+  const s = Math.sin(yaw);
+  return [[0, 0], [w, 0], [0, h], [w, h]].map(([u, v]) => ({ x: x + c * u - s * v,
+    y: y + s * u + c * v }));
+}
+
+function drawObjects(ctx, objects, sx, sy, scale) {
+  ctx.font = "12px system-ui, sans-serif";
+  for (const o of objects) {
+    ctx.fillStyle = "rgba(230, 126, 34, " + (0.35 + 0.5 * o.confidence).toFixed(2) + ")";
+    ctx.strokeStyle = "#a84300";
+    ctx.lineWidth = 1.5;
+    ctx.beginPath();
+    ctx.arc(sx(o.x), sy(o.y), Math.max(4, o.radius * scale), 0, 2 * Math.PI);
+    ctx.fill();
+    ctx.stroke();
+    ctx.fillStyle = "#7a3200";
+    ctx.fillText(o.name, sx(o.x) + Math.max(5, o.radius * scale) + 2, sy(o.y) + 4);
+  }
+}
+
 function line(ctx, x1, y1, x2, y2) {
   ctx.beginPath();
   ctx.moveTo(x1, y1);
@@ -64,7 +121,7 @@ function line(ctx, x1, y1, x2, y2) {
 function polyline(ctx, points, sx, sy, colour, dash) {
   if (points.length < 2) return;
   ctx.strokeStyle = colour;
-  ctx.lineWidth = 2;
+  ctx.lineWidth = 2.5;
   ctx.setLineDash(dash);
   ctx.beginPath();
   points.forEach((p, i) => (i ? ctx.lineTo(sx(p.x), sy(p.y)) : ctx.moveTo(sx(p.x), sy(p.y))));

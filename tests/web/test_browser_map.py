@@ -1,0 +1,156 @@
+"""The dashboard's map in a real browser (headless Chromium via Playwright, as test_browser.py):
+the occupancy grid, the known objects, a dry run's planned path and a mission's walked path are
+drawn where they are. The canvas is read back from a screenshot: the page leaves its transform
+(centre and pixels per metre) on the canvas, so the test knows where each thing must be."""
+
+from __future__ import annotations
+
+import io
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from shadowhound.web import WebServer
+from tests.web.conftest import make_agent, wait_for
+from tests.web.test_browser import ARGS, ARTIFACTS, CHROMIUM, _playwright
+
+DESKTOP = {"width": 1100, "height": 900}
+OBJECT = (195, 107, 29)  # the object fill (230, 126, 34, 85 %) over an occupied (black) cell
+PLANNED = (63, 111, 181)
+WALKED = (47, 125, 50)
+
+
+class Canvas:
+    """A screenshot of the map canvas and the page's own metres -> pixels transform."""
+
+    def __init__(self, page: Any) -> None:
+        from PIL import Image
+
+        self.image = Image.open(io.BytesIO(page.locator("#map").screenshot())).convert("RGB")
+        attr = page.get_attribute
+        self.cx, self.cy = float(attr("#map", "data-cx")), float(attr("#map", "data-cy"))
+        self.scale = float(attr("#map", "data-scale"))
+        width = int(attr("#map", "width"))
+        self.ratio = self.image.width / width
+        self.half = (width / 2, int(attr("#map", "height")) / 2)
+
+    def at(self, x: float, y: float) -> tuple[int, int, int]:
+        px = (self.half[0] + (x - self.cx) * self.scale) * self.ratio
+        py = (self.half[1] - (y - self.cy) * self.scale) * self.ratio
+        value: tuple[int, int, int] = self.image.getpixel((round(px), round(py)))
+        return value
+
+    def around(self, x: float, y: float, pixels: int = 3) -> list[tuple[int, int, int]]:
+        """The pixels within a few of (x, y): a 10 cm wall is 3 px wide, antialiased."""
+        px = (self.half[0] + (x - self.cx) * self.scale) * self.ratio
+        py = (self.half[1] - (y - self.cy) * self.scale) * self.ratio
+        return [self.image.getpixel((round(px) + i, round(py) + j))
+                for i in range(-pixels, pixels + 1) for j in range(-pixels, pixels + 1)]
+
+    def along(self, points: list[tuple[float, float]], colour: tuple[int, int, int]) -> float:
+        """The share of points sampled every 2 cm along the polyline drawn in `colour`."""
+        hits = total = 0
+        for (x0, y0), (x1, y1) in zip(points, points[1:], strict=False):
+            n = max(1, int(math.dist((x0, y0), (x1, y1)) / 0.02))
+            for i in range(n):
+                x, y = x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * i / n
+                total += 1
+                hits += near(self.at(x, y), colour)
+        return hits / max(1, total)
+
+
+def near(rgb: tuple[int, int, int], colour: tuple[int, int, int], tolerance: int = 30) -> bool:
+    return all(abs(a - b) <= tolerance for a, b in zip(rgb, colour, strict=True))
+
+
+def test_the_map_draws_grid_objects_planned_and_walked_paths(
+        serve: Callable[..., WebServer], tmp_path: Path) -> None:
+    sync_playwright = _playwright()
+    agent = make_agent(time_scale=0.25)  # real clock, four times as fast as life
+    server = serve(agent)
+    ARTIFACTS.mkdir(exist_ok=True)
+    planned = [(p.x, p.y) for p in agent.dry_run("go to x=4, y=0").predicted_path]
+    assert max(abs(y) for _, y in planned) > 0.3  # around the red ball at (3, 0)
+    errors: list[str] = []
+    with sync_playwright() as p:
+        browser = p.chromium.launch_persistent_context(
+            str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS,
+            viewport=DESKTOP)
+        try:
+            page = browser.new_page()
+            page.on("pageerror", lambda exc: errors.append(str(exc)))
+            page.set_default_timeout(20_000)
+            grids: list[str] = []
+            page.on("request", lambda r: grids.append(r.url) if "grid.png" in r.url else None)
+            page.goto(server.url + "/", wait_until="domcontentloaded")
+            page.wait_for_selector('#conn[data-state="live"]')
+            page.wait_for_selector('#map[data-grid]:not([data-grid=""])')
+            page.wait_for_selector('#map-objects li[data-name="red ball"]')
+            assert "3.0, 0.0 m" in page.text_content('#map-objects li[data-name="red ball"]')
+
+            # 1. The grid and the objects, where they are.
+            canvas = Canvas(page)
+            assert near(canvas.at(0.5, 1.5), (254, 254, 254), 12)  # free floor
+            assert any(near(rgb, (0, 0, 0), 40) for rgb in canvas.around(-6.05, 0.5))  # wall
+            assert not any(near(rgb, (0, 0, 0), 40) for rgb in canvas.around(-5.5, 0.5))
+            for x, y in ((3.0, 0.0), (2.5, 2.0), (-3.0, -1.0)):  # ball, box, dock
+                assert near(canvas.at(x, y), OBJECT), (x, y, canvas.at(x, y))
+
+            # 2. A dry run's planned path, around the ball.
+            page.fill("#command", "go to x=4, y=0")
+            page.click("#dry-run")
+            page.wait_for_selector('#result[data-kind="ok"]')
+            canvas = Canvas(page)
+            assert canvas.along(planned, PLANNED) > 0.3  # dashed: 6 px on, 4 px off
+            assert canvas.along(planned, WALKED) == 0
+            page.screenshot(path=str(ARTIFACTS / "dashboard-map-planned.png"), full_page=True)
+
+            # 3. The mission: the walked path follows the planned one, around the ball.
+            page.click("#run")
+            page.wait_for_selector('#result[data-kind="ok"]')
+            wait_for(lambda: float(page.get_attribute("#map", "data-x") or 0) > 3.9, 10,
+                     "the robot to arrive on the map")
+            canvas = Canvas(page)
+            assert canvas.along(planned, WALKED) > 0.6
+            page.screenshot(path=str(ARTIFACTS / "dashboard-map-walked.png"), full_page=True)
+
+            # 4. A fresh page, a mission back (no dry run first): its planned path is drawn
+            #    from its plan_ready event; stopped early, most of it is still ahead, dashed.
+            back = [(p.x, p.y) for p in agent.dry_run("go to x=0, y=0").predicted_path]
+            page.reload(wait_until="domcontentloaded")
+            page.wait_for_selector('#conn[data-state="live"]')
+            page.wait_for_selector('#map[data-grid]:not([data-grid=""])')
+            page.fill("#command", "go to x=0, y=0")
+            page.click("#run")
+            page.wait_for_selector('#steps li[data-status="running"]')
+            page.click("#estop")
+            page.wait_for_selector('#result[data-kind="error"]')
+            assert agent.get_robot_state().x > 1.0  # stopped before the ball: most is ahead
+            canvas = Canvas(page)
+            assert canvas.along(back, PLANNED) > 0.15
+        finally:
+            browser.close()
+    assert not errors, errors
+    assert len(set(grids)) == 1, grids  # the grid never changed: its image was fetched once
+
+
+def test_the_grid_is_drawn_behind_a_token_too(
+        serve: Callable[..., WebServer], tmp_path: Path) -> None:
+    from tests.web.conftest import TOKEN
+
+    sync_playwright = _playwright()
+    agent = make_agent()
+    server = serve(agent, token=TOKEN)
+    with sync_playwright() as p:
+        browser = p.chromium.launch_persistent_context(
+            str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS,
+            viewport=DESKTOP)
+        try:
+            page = browser.new_page()
+            page.set_default_timeout(20_000)
+            page.goto(server.url + "/#token=" + TOKEN, wait_until="domcontentloaded")
+            page.wait_for_selector('#map[data-grid]:not([data-grid=""])')
+            assert near(Canvas(page).at(0.5, 1.5), (254, 254, 254), 12)
+        finally:
+            browser.close()
