@@ -10,7 +10,7 @@ import time
 from typing import Any
 
 from ..config import ShadowHoundConfig
-from ._base import EXIT_FAILED, EXIT_OK, EXIT_USAGE
+from ..exit_codes import EXIT_FAILED, EXIT_OK, EXIT_USAGE
 
 # -- skills ----------------------------------------------------------------------------------
 

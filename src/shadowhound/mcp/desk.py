@@ -16,6 +16,7 @@ from typing import Any
 
 from ..agent import RobotAgent
 from ..camera import encode_jpeg
+from ..errors import ToolInputError
 from ..events import MissionEvent
 from ..plan import SkillCall
 from ..skills import SkillValidationError
@@ -27,10 +28,6 @@ IMAGE_QUALITY = 75
 
 OnEvent = Callable[[MissionEvent], None]
 OnDone = Callable[[MissionJob], None]
-
-
-class ToolInputError(ValueError):
-    """Arguments a tool cannot take. The message says what was wrong and what is allowed."""
 
 
 @dataclass(frozen=True)

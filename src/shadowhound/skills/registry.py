@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import ValidationError
 
+from ..errors import SkillValidationError
 from ..plan import SkillCall
 from ..units import UnitError
 from .arguments import SkillArgs
@@ -22,14 +23,6 @@ from .arguments import SkillArgs
 if TYPE_CHECKING:
     from ..state import Pose2D
     from .context import PlanEnv, SkillContext
-
-
-class SkillValidationError(ValueError):
-    """A proposed skill call is not valid. `problems` are single sentences for people."""
-
-    def __init__(self, problems: list[str]) -> None:
-        super().__init__("; ".join(problems))
-        self.problems = problems
 
 
 Runner = Callable[["SkillContext", Any], str]
