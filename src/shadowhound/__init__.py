@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from .agent import MissionExecutor, MissionExecutorConfig, RobotAgent, RobotAgentConfig
 from .config import ConfigError, ShadowHoundConfig, load_config
+from .errors import ShadowHoundError
 from .events import MissionEvent
 from .plan import Plan, PlanningError, SkillCall, Usage
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing
@@ -41,6 +42,7 @@ __all__ = [
     "RobotError",
     "RobotState",
     "ShadowHoundConfig",
+    "ShadowHoundError",
     "SimRobot",
     "Skill",
     "SkillCall",

@@ -15,12 +15,14 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from . import events as ev
+from .admission import ESTOP_LATCHED, mission_text_problem
 from .approval import ApprovalDesk, ApprovalRequest
 from .budget import MissionBudget
 from .camera import to_camera_frame
 from .checking import CheckedPlan, check_plan, new_mission_id, plain_args
 from .config import ConfigError, ShadowHoundConfig
 from .conversation import answer_offline
+from .memory.places import known_places
 from .memory.service import AgentMemory
 from .plan import Plan, PlanningError, SkillCall, Usage
 from .planning import FixedPlanner, Planner, PlanningContext, make_planner
@@ -174,9 +176,8 @@ class RobotAgent:
         self.initialize()
         mission_id = new_mission_id(mission_id)
         started = time.perf_counter()
-        if not isinstance(text, str) or not text.strip():
-            return self._refuse(mission_id, str(text)[:200], started,
-                                "the mission is empty; say what the robot should do", False)
+        if problem := mission_text_problem(text, self.settings.agent.max_mission_chars):
+            return self._refuse(mission_id, str(text)[:200], started, problem, False)
         if self._mission_lock.acquire(blocking=False):  # no mission runs: an earlier cancel or
             self._cancel.clear()  # e-stop must not abandon this plan (a later one still does)
             self._mission_lock.release()
@@ -219,16 +220,11 @@ class RobotAgent:
     def _run_mission(self, mission_id: str, text: str, started: float,
                      planner: Planner) -> MissionResult:
         if self._estop_latched:
-            return self._refuse(mission_id, text, started,
-                                "the e-stop is latched; release it before running missions")
+            return self._refuse(mission_id, text, started, ESTOP_LATCHED)
         limit = self.settings.agent.max_mission_chars
-        if not text.strip():
-            return self._refuse(mission_id, text, started, "the mission is empty; say what the "
-                                "robot should do, e.g. 'walk forward 1 meter'")
-        if len(text) > limit:
-            return self._refuse(mission_id, text[:200] + "...", started,
-                                f"the mission is {len(text)} characters long; the limit is "
-                                f"{limit} (agent.max_mission_chars)")
+        if problem := mission_text_problem(text, limit):
+            shown = text if len(text) <= limit else text[:200] + "..."
+            return self._refuse(mission_id, shown, started, problem)
         try:
             start_state = self.robot.get_state()
         except RobotError as exc:  # e.g. no odometry from a real robot: do not plan blind
@@ -627,8 +623,8 @@ class RobotAgent:
 
     def _known_places(self) -> dict[str, tuple[float, float]]:
         """The profile's places, then taught ones (which win)."""
-        taught = {n: (x, y) for n, (x, y, _yaw) in self._memory.places.all().items()}
-        return {**self.settings.places, **taught}
+        known = known_places(self.settings.places, self._memory.places)
+        return {name: place.position for name, place in known.items()}
 
     def _plan_env(self) -> PlanEnv:
         """The mission's environment, with a fresh budget: made once per mission."""

@@ -17,14 +17,11 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .errors import ConfigError
 from .geofence import MAX_VERTICES, polygon_problem
 
 ENV_PREFIX = "SHADOWHOUND_"
 _PACKAGE_DIR = Path(__file__).resolve().parent
-
-
-class ConfigError(Exception):
-    """A profile, file or value is wrong. The message says which and what is allowed."""
 
 
 def _finite_pair(value: Any) -> tuple[float, float]:

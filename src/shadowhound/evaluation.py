@@ -23,6 +23,7 @@ import yaml
 
 from .agent import RobotAgent, RobotAgentConfig
 from .config import ConfigError, MemoryConfig, ShadowHoundConfig
+from .errors import CaseFileError
 from .plan import Usage
 from .robot.scene import World
 from .robot.sensors import penetration
@@ -32,10 +33,6 @@ POSITION_TOLERANCE = 0.05  # metres
 YAW_TOLERANCE_DEG = 3.0
 _EXPECT_KEYS = {"success", "x", "y", "yaw_deg", "posture", "moved", "near"}
 _POSTURES = {"standing", "sitting", "lying"}
-
-
-class CaseFileError(ValueError):
-    """The case file is not in the mission-case format. The message says where and why."""
 
 
 @dataclass(frozen=True)

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from .errors import PlanningError as PlanningError
+
 
 @dataclass(frozen=True)
 class SkillCall:
@@ -71,21 +73,3 @@ class Plan:
             "steps": [s.to_dict() for s in self.steps],
             "notes": list(self.notes),
         }
-
-
-class PlanningError(Exception):
-    """The planner could not turn the request into a plan. The message is for people."""
-
-    def __init__(
-        self,
-        message: str,
-        *,
-        understood: list[str] | None = None,
-        not_understood: list[str] | None = None,
-        usage: Usage | None = None,
-    ) -> None:
-        super().__init__(message)
-        self.message = message
-        self.understood = understood or []
-        self.not_understood = not_understood or []
-        self.usage = usage or Usage()

@@ -25,6 +25,8 @@ import re
 from dataclasses import dataclass
 from fractions import Fraction
 
+from .errors import UnitError
+
 __all__ = [
     "ANGLE",
     "ANGULAR_SPEED",
@@ -38,10 +40,6 @@ __all__ = [
     "read",
     "unit_names",
 ]
-
-
-class UnitError(ValueError):
-    """A value could not be read as a quantity of the kind asked for; the message says why."""
 
 
 @dataclass(frozen=True)

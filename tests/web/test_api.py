@@ -6,6 +6,7 @@ import base64
 import subprocess
 import sys
 
+import pytest
 from fastapi.testclient import TestClient
 
 from shadowhound import RobotAgent
@@ -174,6 +175,15 @@ def test_chat_status_diagnostics_skills_map(client: TestClient) -> None:
     assert {"nav.move", "nav.rotate", "body.stand"} <= skills
     world = client.get("/api/map").json()
     assert "kitchen" in world["places"] and world["geofence_radius"] > 0
+
+
+def test_map_shows_taught_places_with_the_profiles(client: TestClient, agent: RobotAgent) -> None:
+    kitchen = agent.settings.places["kitchen"]
+    taught = agent.execute_mission("walk forward 1 meter, remember this spot as the porch")
+    assert taught.success, taught.response
+    places = client.get("/api/map").json()["places"]
+    assert places["kitchen"] == list(kitchen)  # the profile's
+    assert places["porch"] == pytest.approx([1.0, 0.0], abs=0.05)  # taught where it stood
 
 
 def test_camera_latest_is_jpeg_and_the_original_json_form_still_works(

@@ -1,7 +1,7 @@
 """`shadowhound`: the command line. Commands live in `missions` (run, chat, eval) and `tools`.
 
-Exit codes: 0 success, 1 mission (or evaluation) failure, 2 usage or configuration error,
-130 interrupted (the robot is stopped first).
+Exit codes (shadowhound.exit_codes): 0 success, 1 mission (or evaluation) failure, 2 usage or
+configuration error, 130 interrupted (the robot is stopped first).
 """
 
 from __future__ import annotations
@@ -13,9 +13,10 @@ from collections.abc import Sequence
 from typing import Any, NoReturn
 
 from .. import __version__
-from ..config import ConfigError, ShadowHoundConfig, available_profiles, load_config
-from ..memory.history import MemoryStoreError
-from ._base import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, report_error
+from ..config import ShadowHoundConfig, available_profiles, load_config
+from ..errors import BackendUnavailable, ConfigError, MemoryStoreError, UsageError
+from ..exit_codes import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from ._base import report_error
 from .missions import cmd_chat, cmd_eval, cmd_run
 from .tools import (
     cmd_config,
@@ -31,14 +32,6 @@ from .tools import (
 )
 
 __all__ = ["EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_USAGE", "build_parser", "main"]
-
-
-class UsageError(Exception):
-    """A command line argparse cannot parse; `usage` is the failing (sub)command's usage."""
-
-    def __init__(self, message: str, usage: str) -> None:
-        super().__init__(message)
-        self.usage = usage
 
 
 class _Parser(argparse.ArgumentParser):
@@ -249,5 +242,4 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _kind(exc: ConfigError) -> str:
-    return "backend_unavailable" if type(exc).__name__ == "BackendUnavailable" else \
-        "configuration"
+    return "backend_unavailable" if isinstance(exc, BackendUnavailable) else "configuration"

@@ -1,5 +1,5 @@
-"""What every command shares: exit codes, how a command reports an error (also as the one JSON
-object `run --json` promises), and building an agent from settings."""
+"""What every command shares: how a command reports an error (also as the one JSON object
+`run --json` promises), and building an agent from settings. Exit codes: shadowhound.exit_codes."""
 
 from __future__ import annotations
 
@@ -8,8 +8,6 @@ import sys
 from typing import Any
 
 from ..config import ShadowHoundConfig
-
-EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 # Error kinds (`error_kind` of a JSON answer) and how they are named on stderr.
 ERROR_LABELS = {

@@ -13,15 +13,8 @@ from typing import Any, TextIO
 
 from .. import events as ev
 from ..config import ShadowHoundConfig
-from ._base import (
-    EXIT_FAILED,
-    EXIT_INTERRUPTED,
-    EXIT_OK,
-    EXIT_USAGE,
-    make_agent,
-    print_json,
-    report_error,
-)
+from ..exit_codes import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from ._base import make_agent, print_json, report_error
 
 # -- run -----------------------------------------------------------------------------------
 

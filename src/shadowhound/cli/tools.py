@@ -10,7 +10,7 @@ import time
 from typing import Any
 
 from ..config import ShadowHoundConfig
-from ._base import EXIT_FAILED, EXIT_OK, EXIT_USAGE
+from ..exit_codes import EXIT_FAILED, EXIT_OK, EXIT_USAGE
 
 # -- skills ----------------------------------------------------------------------------------
 
@@ -143,6 +143,8 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
 
 def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    from ..memory.places import known_places
+
     memory = _memory(settings)
     try:
         if args.forget:
@@ -151,11 +153,9 @@ def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
                 return EXIT_FAILED
             print(f"forgot {args.forget!r}")
             return EXIT_OK
-        taught = memory.places.all()
-        listing = {**{n: {"x": x, "y": y, "source": "profile"}
-                      for n, (x, y) in settings.places.items()},
-                   **{n: {"x": x, "y": y, "yaw": yaw, "source": "taught"}
-                      for n, (x, y, yaw) in taught.items()}}
+        listing = {n: {"x": p.x, "y": p.y, **({} if p.yaw is None else {"yaw": p.yaw}),
+                       "source": p.source}
+                   for n, p in known_places(settings.places, memory.places).items()}
         if args.json:
             json.dump(listing, sys.stdout, indent=2)
             sys.stdout.write("\n")

@@ -24,7 +24,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..config import ConfigError, LLMConfig
+from ..config import LLMConfig
+from ..errors import BackendCancelled, BackendError, BackendUnavailable
 from ..plan import Usage
 
 log = logging.getLogger(__name__)
@@ -33,22 +34,6 @@ _CANCEL_POLL = 0.02  # seconds between looks at the cancel event while a request
 _FIRST_BACKOFF, _MAX_BACKOFF = 0.5, 8.0  # seconds, as the openai client's own retries
 _MAX_RETRY_AFTER = 60.0  # a server asking for a longer wait is not retried
 _ABANDONED = object()  # what an attempt returns when the caller stopped waiting
-
-
-class BackendError(Exception):
-    """A request to the language model failed. The message is for people."""
-
-    def __init__(self, message: str, status: int | None = None) -> None:
-        super().__init__(message)
-        self.status = status
-
-
-class BackendCancelled(BackendError):
-    """The mission was cancelled while waiting on the model; the request was abandoned."""
-
-
-class BackendUnavailable(ConfigError):
-    """The start-up check failed: the server does not answer or does not have the model."""
 
 
 @dataclass

@@ -15,6 +15,8 @@ import os
 import sys
 from typing import TYPE_CHECKING, Any
 
+from ..exit_codes import EXIT_OK, EXIT_USAGE
+
 if TYPE_CHECKING:
     from ..config import ShadowHoundConfig
     from .desk import McpDesk
@@ -22,7 +24,6 @@ if TYPE_CHECKING:
 
 __all__ = ["McpDesk", "McpRobotServer", "main"]
 
-EXIT_OK, EXIT_USAGE = 0, 2
 _LAZY = {"McpRobotServer": "server", "McpDesk": "desk"}
 
 

@@ -14,9 +14,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from ..admission import ESTOP_LATCHED, mission_text_problem
 from ..agent import RobotAgent
 from ..camera import encode_jpeg
+from ..errors import ToolInputError
 from ..events import MissionEvent
+from ..memory.places import known_places
 from ..plan import SkillCall
 from ..skills import SkillValidationError
 from ..worker import ESTOP_DROP_REASON, MissionJob, MissionWorker
@@ -27,10 +30,6 @@ IMAGE_QUALITY = 75
 
 OnEvent = Callable[[MissionEvent], None]
 OnDone = Callable[[MissionJob], None]
-
-
-class ToolInputError(ValueError):
-    """Arguments a tool cannot take. The message says what was wrong and what is allowed."""
 
 
 @dataclass(frozen=True)
@@ -95,8 +94,7 @@ class McpDesk:
 
     def _start(self, job: MissionJob) -> MissionJob:
         if self.agent.estop_latched and not job.dry_run:
-            raise ToolInputError("the e-stop is latched; call release_estop before running "
-                                 "missions")
+            raise ToolInputError(f"{ESTOP_LATCHED} (the release_estop tool)")
         if self.worker.start_now(job) is not None:  # its only refusal: not idle
             raise ToolInputError(BUSY)
         return job
@@ -114,16 +112,10 @@ class McpDesk:
         return self.agent.dry_run(self._mission_text(text)).to_dict()
 
     def _mission_text(self, text: Any) -> str:
-        limit = self.agent.settings.agent.max_mission_chars
-        if not isinstance(text, str):
-            raise ToolInputError(f"text must be a string, got {type(text).__name__}")
-        if not text.strip():
-            raise ToolInputError("text is empty; say what the robot should do, e.g. 'walk "
-                                 "forward 1 meter'")
-        if len(text) > limit:
-            raise ToolInputError(f"text is {len(text)} characters long; the limit is {limit} "
-                                 "(agent.max_mission_chars)")
-        return text
+        problem = mission_text_problem(text, self.agent.settings.agent.max_mission_chars, "text")
+        if problem:
+            raise ToolInputError(problem)
+        return str(text)
 
     # -- stopping --------------------------------------------------------------------------
 
@@ -187,10 +179,9 @@ class McpDesk:
 
     def places(self) -> dict[str, dict[str, float]]:
         """Places from the profile, then taught ones (which win)."""
-        out = {n: {"x": x, "y": y} for n, (x, y) in self.agent.settings.places.items()}
-        for name, (x, y, yaw) in self.agent.memory.places.all().items():
-            out[name] = {"x": x, "y": y, "yaw": yaw}
-        return out
+        known = known_places(self.agent.settings.places, self.agent.memory.places)
+        return {n: {"x": p.x, "y": p.y, **({} if p.yaw is None else {"yaw": p.yaw})}
+                for n, p in known.items()}
 
     def close(self) -> None:
         """Stop any mission and, if the worker is the desk's own, end it."""

@@ -4,7 +4,8 @@ memory (Chroma with offline MiniLM embeddings, the `memory` extra, imported lazi
 from __future__ import annotations
 
 from .history import MemoryStoreError, MissionHistory
-from .places import PlaceBook
+from .places import KnownPlace, PlaceBook, known_places
 from .recall import RecallStoreError
 
-__all__ = ["MemoryStoreError", "MissionHistory", "PlaceBook", "RecallStoreError"]
+__all__ = ["KnownPlace", "MemoryStoreError", "MissionHistory", "PlaceBook", "RecallStoreError",
+           "known_places"]

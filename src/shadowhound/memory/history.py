@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from ..errors import MemoryStoreError
 from .lease import Lease, live_owners
 
 log = logging.getLogger(__name__)
@@ -50,10 +51,6 @@ CREATE TABLE IF NOT EXISTS places (
 
 INTERRUPTED = "interrupted: the process running it ended before it finished"
 NEVER_STARTED = "not run: the process that accepted it ended before its turn"
-
-
-class MemoryStoreError(Exception):
-    """The history database cannot be used. The message names the file and what to do."""
 
 
 class MissionHistory:

@@ -2,12 +2,16 @@
 
 Places from the profile are fixed; taught places live here, in the history database when
 memory is enabled (so they survive restarts), else for the life of the process.
+`known_places` is the one merge of the two that every reader uses (the agent's plans, the
+places.list skill, the CLI, the MCP server and the web map).
 """
 
 from __future__ import annotations
 
 import threading
 from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Literal
 
 from .history import MissionHistory
 
@@ -51,3 +55,29 @@ class PlaceBook:
     def all(self) -> Mapping[str, tuple[float, float, float]]:
         with self._lock:
             return dict(self._places)
+
+
+@dataclass(frozen=True)
+class KnownPlace:
+    """A named place in the odom frame: from the profile, or taught (with the heading then)."""
+
+    x: float
+    y: float
+    source: Literal["profile", "taught"]
+    yaw: float | None = None  # radians; taught places only
+
+    @property
+    def position(self) -> tuple[float, float]:
+        return (self.x, self.y)
+
+
+def known_places(profile: Mapping[str, tuple[float, float]],
+                 book: PlaceBook) -> dict[str, KnownPlace]:
+    """Every place the robot knows: the profile's, then taught ones. A taught place with a
+    profile place's name wins (it is listed with the taught ones)."""
+    taught = book.all()
+    known = {name: KnownPlace(x, y, "profile") for name, (x, y) in profile.items()
+             if name not in taught}
+    known.update({name: KnownPlace(x, y, "taught", yaw)
+                  for name, (x, y, yaw) in taught.items()})
+    return known

@@ -20,13 +20,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from .history import MemoryStoreError
+from ..errors import RecallStoreError
 
 KINDS = ("mission", "fact", "observation")
-
-
-class RecallStoreError(MemoryStoreError):
-    """The retrieval store cannot be used. The message names the path and what to do."""
 
 
 def _store_error(path: Path, exc: Exception) -> RecallStoreError:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from functools import cache
 
+from shadowhound.errors import NotUnderstood as NotUnderstood
 from shadowhound.plan import PlanningError, SkillCall
 from shadowhound.skills import SkillRegistry, default_registry
 
@@ -16,14 +17,6 @@ CAPABILITIES = (
     "named place, patrol, walk a square, wait, do tricks (hello, dance, stretch, ...), describe "
     "what I see, report status, and stop."
 )
-
-
-class NotUnderstood(Exception):
-    """A clause of a known kind that cannot be planned; the reason is shown to the user."""
-
-    def __init__(self, reason: str = "") -> None:
-        super().__init__(reason)
-        self.reason = reason
 
 
 def describe(step: SkillCall) -> str:

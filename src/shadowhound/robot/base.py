@@ -9,11 +9,8 @@ from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
 
+from ..errors import RobotError as RobotError
 from ..state import CameraFrame, Posture, RobotState, Scan
-
-
-class RobotError(Exception):
-    """The robot refused or failed a command. The message is for people."""
 
 
 @runtime_checkable

@@ -70,7 +70,6 @@ APPROVE_SERVICE = "approve"
 APPROVAL_TOPIC = "approval_request"
 ROBOT_STATUS_HZ = 5.0
 DIAGNOSTICS_NAME = "shadowhound: mission agent"
-EXIT_OK, EXIT_USAGE = 0, 2
 
 _COMMANDS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _CAMERA = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,

@@ -12,7 +12,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from ..config import ConfigError, ShadowHoundConfig, load_config
+from ..config import ShadowHoundConfig, load_config
+from ..errors import ParameterError
 
 NODE_NAME = "shadowhound_mission_agent"
 
@@ -62,10 +63,6 @@ CAMERA_TYPES = ("auto", "raw", "compressed")
 _OPTIONAL_TOPICS = ("cmd_vel_topic", "battery_topic", "detections_topic")  # '' = discovered / none
 ROBOTS = ("sim", "go2")
 _TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
-
-
-class ParameterError(ConfigError):
-    """One or more ROS parameters are invalid. The message lists each and what is allowed."""
 
 
 @dataclass(frozen=True)

@@ -18,9 +18,8 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
 
-from ..config import ConfigError
-
-EXIT_OK, EXIT_USAGE = 0, 2
+from ..errors import ConfigError
+from ..exit_codes import EXIT_OK, EXIT_USAGE
 
 
 def run_node(prog: str, node_name: str, argv: Sequence[str] | None, usage: str,

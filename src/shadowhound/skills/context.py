@@ -10,25 +10,10 @@ from typing import Any
 
 from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
+from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout
 from ..robot.base import Robot
 from ..state import CameraFrame, Pose2D, Posture
 from ..world import Belief, KnownObject, merge_sightings
-
-
-class SkillError(Exception):
-    """A skill could not do what it was asked. The message is for people."""
-
-
-class SkillTimeout(SkillError):
-    """A skill ran past its time-out on the robot's clock."""
-
-
-class MissionCancelled(Exception):
-    """The mission was cancelled or the e-stop was pressed while a skill ran."""
-
-
-class PlanProblem(ValueError):
-    """A step is valid in form but cannot be done here (unknown place, limit exceeded)."""
 
 
 @dataclass

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from ..memory.places import normalize_place
+from ..memory.places import known_places, normalize_place
 from ..memory.recall import RecallStoreError
 from ..state import Pose2D
 from .arguments import NoArgs, SkillArgs
@@ -68,10 +68,9 @@ def _predict_forget(pose: Pose2D, a: PlaceArgs, env: PlanEnv) -> list[Pose2D]:
 
 
 def _list(ctx: SkillContext, _a: NoArgs) -> str:
-    taught = _memory(ctx).places.all()
-    parts = [f"{n} ({x:.2f}, {y:.2f})" for n, (x, y) in ctx.config.places.items()
-             if n not in taught]
-    parts += [f"{n} ({x:.2f}, {y:.2f}, taught)" for n, (x, y, _yaw) in taught.items()]
+    known = known_places(ctx.config.places, _memory(ctx).places)
+    parts = [f"{n} ({p.x:.2f}, {p.y:.2f}{', taught' if p.source == 'taught' else ''})"
+             for n, p in known.items()]
     return "Known places: " + ", ".join([*parts, "start (where a mission begins)",
                                          "home (0, 0)"]) + "."
 

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import ValidationError
 
+from ..errors import SkillValidationError
 from ..plan import SkillCall
 from ..state import Posture
 from ..units import UnitError
@@ -31,14 +32,6 @@ from .arguments import SkillArgs
 if TYPE_CHECKING:
     from ..state import Pose2D
     from .context import PlanEnv, SkillContext
-
-
-class SkillValidationError(ValueError):
-    """A proposed skill call is not valid. `problems` are single sentences for people."""
-
-    def __init__(self, problems: list[str]) -> None:
-        super().__init__("; ".join(problems))
-        self.problems = problems
 
 
 Runner = Callable[["SkillContext", Any], str]

@@ -15,6 +15,8 @@ import os
 import sys
 from typing import TYPE_CHECKING, Any
 
+from ..exit_codes import EXIT_USAGE
+
 if TYPE_CHECKING:
     from ..config import ShadowHoundConfig
     from .app import create_app
@@ -23,7 +25,6 @@ if TYPE_CHECKING:
 __all__ = ["WebServer", "create_app", "serve", "serve_main"]
 
 _LAZY = {"create_app": "app", "serve": "server", "WebServer": "server"}
-EXIT_USAGE = 2
 
 
 def __getattr__(name: str) -> Any:

@@ -15,7 +15,9 @@ from fastapi import APIRouter, Body, HTTPException, Query, Request
 from fastapi.responses import JSONResponse, Response
 
 from .. import __version__
+from ..admission import ESTOP_LATCHED, mission_text_problem
 from ..agent import RobotAgent
+from ..memory.places import known_places
 from ..skills.context import robot_belief, robot_objects
 from .desk import MissionDesk, WebMission
 from .estop import stopped_already
@@ -76,17 +78,14 @@ async def submit_mission(request: Request, body: MissionRequest
                          ) -> MissionAccepted | JSONResponse:
     """Queue a mission (or a dry run). 202 with its id; follow it on /ws/status or /api/events."""
     web = ctx(request)
-    limit = web.agent.settings.agent.max_mission_chars
-    if not body.command.strip():
-        raise HTTPException(422, "the command is empty; say what the robot should do, e.g. "
-                                 "'walk forward 1 meter'")
-    if len(body.command) > limit:
-        raise HTTPException(422, f"the command is {len(body.command)} characters long; the "
-                                 f"limit is {limit} (agent.max_mission_chars)")
+    problem = mission_text_problem(body.command, web.agent.settings.agent.max_mission_chars,
+                                   "the command")
+    if problem:
+        raise HTTPException(422, problem)
     ahead = web.desk.queued() + (1 if web.desk.worker.busy else 0)
     record, refused = web.desk.submit(body.command, body.dry_run)
     if record is None:
-        status = 409 if "e-stop" in (refused or "") else 429
+        status = 409 if refused == ESTOP_LATCHED else 429
         return JSONResponse({"detail": refused, "success": False, "message": f"Refused: "
                              f"{refused}.", "command": body.command}, status_code=status)
     what = "dry run" if body.dry_run else "mission"
@@ -230,12 +229,13 @@ _GRID_IMAGES = GridImages()
 async def world_map(request: Request) -> dict[str, Any]:
     """What the dashboard's map draws besides the robot: places, route, geofence, the known
     objects and the occupancy grid's layout and version (its image: /api/map/grid.png)."""
-    settings = ctx(request).agent.settings
-    robot = ctx(request).agent.robot
+    agent = ctx(request).agent
+    settings, robot = agent.settings, agent.robot
+    places = known_places(settings.places, agent.memory.places)  # taught ones too
     belief = robot_belief(robot)
     grid = None if belief is None else grid_layout(belief.grid, grid_version(belief.grid))
     return {"grid": grid, "objects": object_dicts(robot_objects(robot, belief)),
-            "places": {k: list(v) for k, v in settings.places.items()},
+            "places": {name: list(place.position) for name, place in places.items()},
             "patrol_route": [list(p) for p in settings.patrol_route],
             "geofence_radius": settings.safety.geofence_radius,
             "geofence_polygon": [list(p) for p in settings.safety.geofence_polygon or []],

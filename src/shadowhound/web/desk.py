@@ -13,6 +13,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..admission import ESTOP_LATCHED
 from ..agent import RobotAgent
 from ..events import MissionEvent
 from ..worker import ESTOP_DROP_REASON, MissionJob, MissionWorker
@@ -85,7 +86,7 @@ class MissionDesk:
     def submit(self, command: str, dry_run: bool = False) -> tuple[WebMission | None, str | None]:
         """Queue a mission. Returns (record, None), or (None, why it was refused)."""
         if self.agent.estop_latched and not dry_run:
-            return None, "the e-stop is latched; release it before running missions"
+            return None, ESTOP_LATCHED
         record = WebMission(MissionJob(command, source="web", dry_run=dry_run))
         with self._lock:
             self._records[record.id] = record

@@ -16,15 +16,12 @@ from typing import Any
 
 from ..agent import RobotAgent
 from ..camera import encode_jpeg
+from ..errors import FrameUnavailable
 from ..state import CameraFrame
 
 log = logging.getLogger(__name__)
 
 BOUNDARY = "shadowhound-frame"
-
-
-class FrameUnavailable(Exception):
-    """No frame yet, or one that cannot be shown. The message says which."""
 
 
 @dataclass(frozen=True)

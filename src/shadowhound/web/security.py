@@ -27,6 +27,8 @@ from collections.abc import Awaitable, Callable, Iterable, MutableMapping
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
+from ..errors import ServeError
+
 Scope = MutableMapping[str, Any]
 Message = MutableMapping[str, Any]
 Receive = Callable[[], Awaitable[Message]]
@@ -44,10 +46,6 @@ _HEADERS = [(b"x-content-type-options", b"nosniff"), (b"x-frame-options", b"DENY
 MIN_TOKEN_CHARS = 16
 _TOKEN_HINT = ("for example: export SHADOWHOUND_TOKEN=$(python3 -c "
                "'import secrets; print(secrets.token_urlsafe(24))')")
-
-
-class ServeError(Exception):
-    """The server cannot start as asked. The message says why and what to do."""
 
 
 def check_binding(host: str, token: str | None, what: str = "the dashboard") -> None:

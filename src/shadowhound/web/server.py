@@ -16,6 +16,7 @@ from fastapi import FastAPI
 
 from ..agent import RobotAgent
 from ..config import ConfigError, ShadowHoundConfig
+from ..exit_codes import EXIT_OK, EXIT_USAGE
 from .app import create_app
 from .security import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, ServeError, bind, check_binding
 
@@ -124,7 +125,7 @@ def serve(settings: ShadowHoundConfig, host: str = "127.0.0.1", port: int = 8080
         sock = bind(host, port)
     except (ServeError, ConfigError) as exc:
         print(f"shadowhound serve: {exc}", file=out)
-        return 2
+        return EXIT_USAGE
     app = create_app(agent, token=token,
                      allowed_hosts=hosts_for(host) if allowed_hosts is None else allowed_hosts)
     shown = f"[{host}]" if ":" in host else host
@@ -146,7 +147,7 @@ def serve(settings: ShadowHoundConfig, host: str = "127.0.0.1", port: int = 8080
             signal.signal(signal.SIGTERM, previous)
         agent.cleanup()
         sock.close()
-    return 0
+    return EXIT_OK
 
 
 def _raise_interrupt(_signum: int, _frame: Any) -> None:

@@ -17,6 +17,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..errors import GridError
 from ..state import Pose2D
 
 UNKNOWN = -1
@@ -27,10 +28,6 @@ DEFAULT_RESOLUTION = 0.05  # metres per cell
 MAX_CELLS = 25_000_000  # 250 m x 250 m at 5 cm: beyond this a map is a mistake, not a house
 
 _UNKNOWN_BYTE = 255
-
-
-class GridError(ValueError):
-    """A map or a grid query was malformed. The message says what is allowed."""
 
 
 @dataclass(frozen=True)

@@ -17,15 +17,12 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
+from ..errors import PlanError
 from .grid import OCCUPIED_THRESHOLD, Cell
 from .inflation import InflatedGrid
 
 _SQRT2 = math.sqrt(2.0)
 _ESCAPE_LIMIT = 1.0  # metres the start may lie inside a clearance zone and still be left
-
-
-class PlanError(Exception):
-    """No safe path: the message says why (goal blocked, off the map, no way through)."""
 
 
 @dataclass(frozen=True)
