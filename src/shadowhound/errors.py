@@ -21,6 +21,7 @@ what was wrong and what is allowed or what to do.
     |   +-- PlanProblem              ... a step cannot be done here: a limit, the geofence, an
     |   |                                unknown place (the governor's refusals; ValueError)
     |   +-- MissionCancelled         ... cancel or e-stop stopped the running skill
+    +-- DetectionError               ros: a detection message that cannot be used (ValueError)
     +-- PlanError                    world: no safe path to the goal
     +-- GridError                    world: a map or grid query is malformed (ValueError)
     +-- UnitError                    a value is not a quantity of the kind asked (ValueError)
@@ -51,6 +52,7 @@ __all__ = [
     "BackendUnavailable",
     "CaseFileError",
     "ConfigError",
+    "DetectionError",
     "FrameUnavailable",
     "GridError",
     "MemoryStoreError",
@@ -188,6 +190,10 @@ class MissionCancelled(SafetyError):
 
 class PlanError(ShadowHoundError):
     """No safe path: the message says why (goal blocked, off the map, no way through)."""
+
+
+class DetectionError(ShadowHoundError, ValueError):
+    """One detection could not be used; the message says what was wrong and what is allowed."""
 
 
 class GridError(ShadowHoundError, ValueError):

@@ -18,16 +18,13 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
+from ..errors import DetectionError
 from ..state import Pose2D
 from ..world.objects import KnownObject, merge_sightings
 
 DEFAULT_RADIUS = 0.25  # metres, a detection that gives no footprint
 MAX_LABEL = 100  # characters; a label is a name people say, not a paragraph
 MAX_OBJECTS = 500  # distinct names kept; beyond this the oldest sighting is forgotten
-
-
-class DetectionError(ValueError):
-    """One detection could not be used; the message says what was wrong and what is allowed."""
 
 
 @dataclass(frozen=True)
