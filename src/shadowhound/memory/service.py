@@ -21,6 +21,7 @@ from ..events import MISSION_FINISHED, MISSION_STARTED, STEP_FINISHED, MissionEv
 from .history import MemoryStoreError, MissionHistory
 from .places import PlaceBook
 from .recall import RecallStoreError
+from .sightings import SightingBook
 
 log = logging.getLogger(__name__)
 _WORD = re.compile(r"[a-z0-9]+")
@@ -39,6 +40,7 @@ class AgentMemory:
         self.settings = settings
         self.history = history
         self.places = PlaceBook(history)
+        self.sightings = SightingBook(history)
         self.recall = recall
         # Why retrieval memory is off although enable_rag asks for it (None: it is not).
         self.recall_problem = recall_problem

@@ -8,7 +8,7 @@ from pydantic import ConfigDict, Field, model_validator
 
 from ..state import Pose2D, normalize_angle
 from ..world import PlanError, apply_scan, plan_route
-from . import motion
+from . import motion, objects
 from .arguments import (
     Angle,
     Count,
@@ -65,7 +65,8 @@ class GotoArgs(SkillArgs):
         None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom"
     )
     place: str | None = Field(
-        None, min_length=1, max_length=100, description="a named place, 'start' or 'home'"
+        None, min_length=1, max_length=100,
+        description="a place ('start', 'home') or an object",
     )
     heading_degrees: OptionalAngle = Field(
         None, ge=-360, le=360, description="final heading in degrees (odom); default: keep"
@@ -204,16 +205,50 @@ def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, f
 
 def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     ctx.ensure_standing()
+    linear, angular = _linear(ctx, a.speed), _angular(ctx, None)
+    target = objects.resolve(ctx.env, a.place) if a.place is not None else None
+    if target is not None and target.point is None:
+        return _approach(ctx, a, target, linear, angular)
     x, y = _goto_target(a, ctx.env)
-    walk(ctx, (x, y), _linear(ctx, a.speed), _angular(ctx, None))
-    if a.heading_degrees is not None:
-        yaw = ctx.robot.get_state().yaw
-        turn = normalize_angle(math.radians(a.heading_degrees) - yaw)
-        motion.rotate(ctx, turn, _angular(ctx, None))
+    walk(ctx, (x, y), linear, angular)
+    _final_heading(ctx, a)
     st = ctx.robot.get_state()
     names = {None: "the point", "start": "where the mission started", "home": "home"}
     where = names.get(a.place, f"the {a.place}")
     return f"reached {where} at x={st.x:.2f} m, y={st.y:.2f} m"
+
+
+def _final_heading(ctx: SkillContext, a: GotoArgs) -> None:
+    if a.heading_degrees is not None:
+        yaw = ctx.robot.get_state().yaw
+        turn = normalize_angle(math.radians(a.heading_degrees) - yaw)
+        motion.rotate(ctx, turn, _angular(ctx, None))
+
+
+def _approach(ctx: SkillContext, a: GotoArgs, target: objects.Target, linear: float,
+              angular: float) -> str:
+    """Walk to an object's standoff and face it; search for it first when not seen yet."""
+    found = target.known
+    if found is None:
+        found = objects.search(ctx, target.name, linear, angular)
+    pose = ctx.robot.get_state().pose
+    try:
+        spot = objects.standoff(ctx.env, pose, found)
+    except PlanProblem as exc:
+        raise SkillError(str(exc)) from exc
+    if target.known is None:  # a path the plan check never saw: the governor checks it now
+        _check_new_path(ctx, pose, route(ctx.env, pose, (spot.x, spot.y)))
+    walk(ctx, (spot.x, spot.y), linear, angular)
+    if a.heading_degrees is None:
+        objects.face(ctx, found, angular)
+    _final_heading(ctx, a)
+    st = ctx.robot.get_state()
+    gap = math.hypot(found.x - st.x, found.y - st.y) - found.radius
+    return (f"reached {found.the_name} (seen at {found.x:.2f}, {found.y:.2f}): standing "
+            f"{gap:.2f} m from it at x={st.x:.2f} m, y={st.y:.2f} m, facing it"
+            if a.heading_degrees is None else
+            f"reached {found.the_name}: standing {gap:.2f} m from it at x={st.x:.2f} m, "
+            f"y={st.y:.2f} m")
 
 
 def _arrive(pose: Pose2D, x: float, y: float, env: PlanEnv) -> Pose2D:
@@ -237,7 +272,16 @@ def _predict_walk_points(pose: Pose2D, points: list[tuple[float, float]], env: P
 
 
 def _predict_goto(pose: Pose2D, a: GotoArgs, env: PlanEnv) -> list[Pose2D]:
-    poses = _predict_walk(pose, _goto_target(a, env), env)
+    target = objects.resolve(env, a.place) if a.place is not None else None
+    if target is not None and target.search:
+        return []  # where it will be found is not known: the search checks each leg it walks
+    if target is not None and target.known is not None:
+        spot = objects.standoff(env, pose, target.known)
+        poses = _predict_walk(pose, (spot.x, spot.y), env)
+        end = poses[-1]
+        poses[-1] = Pose2D(end.x, end.y, spot.yaw)
+    else:
+        poses = _predict_walk(pose, _goto_target(a, env), env)
     if a.heading_degrees is not None:
         end = poses[-1]
         poses[-1] = Pose2D(end.x, end.y, normalize_angle(math.radians(a.heading_degrees)))
@@ -250,9 +294,11 @@ def _goto_timeout(a: GotoArgs, env: PlanEnv) -> float:
     detours = 1 if env.belief is None else 2
     reach = 2 * env.config.safety.geofence_radius * detours
     m = env.config.motion
+    # A name may be an object to look for first: the search has its own time on top.
+    searching = env.config.search.max_seconds if a.place and env.belief is not None else 0.0
     return motion.straight_timeout(reach, _linear(env, a.speed), m.linear_accel) + detours * 2 * (
         motion.rotate_timeout(2 * math.pi, _angular(env, None), m.angular_accel)
-    )
+    ) + searching
 
 
 # -- nav.patrol ------------------------------------------------------------------------------
@@ -328,8 +374,9 @@ SKILLS = (
     ),
     Skill(
         "nav.goto",
-        "Walk to a point (x, y in metres, odom frame) or to a named place "
-        "('start' = where this mission began, 'home' = the origin), around known obstacles.",
+        "Walk around obstacles to a point (x, y metres, odom), a place ('start': mission "
+        "start, 'home': origin) or an object (stops 0.6 m away facing it; searched for if "
+        "unseen).",
         GotoArgs,
         _run_goto,
         timeout=_goto_timeout,
