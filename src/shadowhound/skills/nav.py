@@ -108,12 +108,14 @@ def _offset(pose: Pose2D, forward: float, left: float) -> Pose2D:
 def _run_move(ctx: SkillContext, a: MoveArgs) -> str:
     ctx.ensure_standing()
     covered = motion.drive_local(ctx, a.distance, 0.0, _linear(ctx, a.speed))
+    objects.sight_in_view(ctx)
     return f"moved {covered:.2f} m {'forward' if a.distance >= 0 else 'backward'}"
 
 
 def _run_strafe(ctx: SkillContext, a: StrafeArgs) -> str:
     ctx.ensure_standing()
     covered = motion.drive_local(ctx, 0.0, a.distance, _linear(ctx, a.speed))
+    objects.sight_in_view(ctx)
     return f"stepped {covered:.2f} m to the {'left' if a.distance >= 0 else 'right'}"
 
 
@@ -128,6 +130,7 @@ def _straight_timeout(a: MoveArgs | StrafeArgs, env: PlanEnv) -> float:
 def _run_rotate(ctx: SkillContext, a: RotateArgs) -> str:
     ctx.ensure_standing()
     turned = motion.rotate(ctx, math.radians(a.degrees), _angular(ctx, a.speed))
+    objects.sight_in_view(ctx)
     side = "left (counter-clockwise)" if a.degrees >= 0 else "right (clockwise)"
     return f"turned {abs(math.degrees(turned)):.1f} degrees {side}"
 
@@ -212,6 +215,7 @@ def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     x, y = _goto_target(a, ctx.env)
     walk(ctx, (x, y), linear, angular)
     _final_heading(ctx, a)
+    objects.sight_in_view(ctx)
     st = ctx.robot.get_state()
     names = {None: "the point", "start": "where the mission started", "home": "home"}
     where = names.get(a.place, f"the {a.place}")
@@ -242,6 +246,7 @@ def _approach(ctx: SkillContext, a: GotoArgs, target: objects.Target, linear: fl
     if a.heading_degrees is None:
         objects.face(ctx, found, angular)
     _final_heading(ctx, a)
+    objects.sight_in_view(ctx)
     st = ctx.robot.get_state()
     gap = math.hypot(found.x - st.x, found.y - st.y) - found.radius
     return (f"reached {found.the_name} (seen at {found.x:.2f}, {found.y:.2f}): standing "
@@ -273,7 +278,7 @@ def _predict_walk_points(pose: Pose2D, points: list[tuple[float, float]], env: P
 
 def _predict_goto(pose: Pose2D, a: GotoArgs, env: PlanEnv) -> list[Pose2D]:
     target = objects.resolve(env, a.place) if a.place is not None else None
-    if target is not None and target.search:
+    if target is not None and (target.search or target.name in env.searched):
         return []  # where it will be found is not known: the search checks each leg it walks
     if target is not None and target.known is not None:
         spot = objects.standoff(env, pose, target.known)
@@ -316,6 +321,7 @@ def _run_patrol(ctx: SkillContext, a: PatrolArgs) -> str:
     for _ in range(a.laps):
         for point in points:
             walked += walk(ctx, point, _linear(ctx, None), _angular(ctx, None))
+            objects.sight_in_view(ctx)
     laps = "lap" if a.laps == 1 else "laps"
     return f"patrolled {a.laps} {laps} of {len(points)} waypoints ({walked:.1f} m) and returned"
 

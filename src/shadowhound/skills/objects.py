@@ -178,6 +178,7 @@ def search(ctx: SkillContext, name: str, linear: float, angular: float) -> Known
     says where the robot looked when the budget or the reachable space runs out."""
     from ..safety import Governor  # here: the governor's module imports the skills
 
+    ctx.env.searched.add(name)
     belief = ctx.env.belief
     assert belief is not None
     cfg, safety, m = ctx.config.search, ctx.config.safety, ctx.config.motion

@@ -83,8 +83,9 @@ class Belief:
             raise ValueError(f"sighting of {name!r}: stamp must be finite, got {stamp}")
         label = " ".join(name.strip().lower().split())
         label = label[4:] if label.startswith("the ") else label
+        seen = KnownObject(label, x, y, 0.0, confidence, stamp)  # validates name and position
         size = _extent_on_map(self.grid, x, y) if radius is None else radius
-        seen = KnownObject(label, x, y, size, confidence, stamp)  # validates name and position
+        seen = replace(seen, radius=size)  # validates the radius
         with self._lock:
             old = next((o for o in self.objects if o.name == label), None)
             if old is not None and not old.remembered and old.stamp > stamp:
@@ -149,4 +150,6 @@ def _extent_on_map(grid: OccupancyGrid, x: float, y: float) -> float:
         while d < _MAX_SIZE and occupied(x + (d + step) * c, y + (d + step) * s):
             d += step
         reach = max(reach, d)
-    return min(_MAX_SIZE, reach)
+    # A cell counts as occupied when the object touches any of it: the blob reaches up to a
+    # cell past the surface, so half a cell comes off the estimate.
+    return min(_MAX_SIZE, max(grid.resolution / 2, reach - grid.resolution / 2))
