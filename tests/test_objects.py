@@ -299,3 +299,15 @@ def test_known_objects_from_memory_are_marked_remembered_and_replaced_by_a_fresh
     assert belief.objects[0].remembered
     assert belief.sight("red ball", 3.05, 0.0, stamp=1.0).x == 3.05  # another run's clock
 
+
+
+def test_an_object_found_by_a_search_is_approached_only_on_a_path_the_governor_passes():
+    # The dock is behind the robot and outside the geofence: the search sees it, the approach
+    # to its standoff is refused, and the robot never leaves the fence.
+    world = World(objects=(WorldObject("charging dock", -3.6, 0.0, 0.3),), bounds=(-5, 5, -5, 5))
+    agent, robot = make(world=world, safety=SafetyConfig(geofence_radius=2.5))
+    result = agent.execute_mission("go to the charging dock")
+    assert not result.success
+    assert "the path to the charging dock is refused" in result.response
+    assert "geofence of 2.5 m" in result.response
+    assert all(math.hypot(x, y) <= 2.5 for _t, x, y in robot.true_path)

@@ -197,13 +197,14 @@ def walk(ctx: SkillContext, goal: tuple[float, float], linear: float, angular: f
     raise AssertionError("unreachable")  # the loop returns or raises
 
 
-def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, float]]) -> None:
+def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, float]],
+                    lead: str = "re-planned, but the new path is refused") -> None:
     from ..safety import Governor  # here: the governor's module imports the skills
 
     poses = _predict_walk_points(pose, points, ctx.env)
     problems = Governor(ctx.config.safety).path_problems(pose, poses, ctx.env, "the new path")
     if problems:
-        raise SkillError("re-planned, but the new path is refused: " + "; ".join(problems))
+        raise SkillError(f"{lead}: " + "; ".join(problems))
 
 
 def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
@@ -240,8 +241,10 @@ def _approach(ctx: SkillContext, a: GotoArgs, target: objects.Target, linear: fl
         spot = objects.standoff(ctx.env, pose, found)
     except PlanProblem as exc:
         raise SkillError(str(exc)) from exc
-    if target.known is None:  # a path the plan check never saw: the governor checks it now
-        _check_new_path(ctx, pose, route(ctx.env, pose, (spot.x, spot.y)))
+    # After a search (in this step or an earlier one of the mission) the plan check saw no
+    # path: the governor checks the approach now, as it does every re-planned path.
+    _check_new_path(ctx, pose, route(ctx.env, pose, (spot.x, spot.y)),
+                    f"the path to {found.the_name} is refused")
     walk(ctx, (spot.x, spot.y), linear, angular)
     if a.heading_degrees is None:
         objects.face(ctx, found, angular)
