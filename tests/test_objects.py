@@ -311,3 +311,14 @@ def test_an_object_found_by_a_search_is_approached_only_on_a_path_the_governor_p
     assert "the path to the charging dock is refused" in result.response
     assert "geofence of 2.5 m" in result.response
     assert all(math.hypot(x, y) <= 2.5 for _t, x, y in robot.true_path)
+
+
+def test_a_name_that_fits_two_objects_seen_is_refused_asking_which():
+    world = World(objects=(WorldObject("red ball", 2.0, 0.5, 0.2),
+                           WorldObject("blue ball", 2.0, -0.5, 0.2)), bounds=(-4, 4, -4, 4))
+    agent, robot = make(world=world)
+    result = agent.execute_mission("go to the ball")
+    assert not result.success and not robot.received_motion
+    assert "'ball' could be the" in result.response and "say which" in result.response
+    assert agent.execute_mission("go to the blue ball").success
+    stands_before(robot, "blue ball")

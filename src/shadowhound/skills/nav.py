@@ -250,6 +250,10 @@ def _approach(ctx: SkillContext, a: GotoArgs, target: objects.Target, linear: fl
         objects.face(ctx, found, angular)
     _final_heading(ctx, a)
     objects.sight_in_view(ctx)
+    now = objects.find(ctx.env.belief, found.name)
+    if now is not None and now.remembered:  # it was not seen again on the way or on arrival
+        ctx.notes.append(f"{found.the_name} was remembered from an earlier mission and is not "
+                         "in view now")
     st = ctx.robot.get_state()
     gap = math.hypot(found.x - st.x, found.y - st.y) - found.radius
     return (f"reached {found.the_name} (seen at {found.x:.2f}, {found.y:.2f}): standing "

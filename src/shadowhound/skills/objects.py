@@ -51,6 +51,10 @@ def resolve(env: PlanEnv, name: str) -> Target:
         known = find(belief, name)
         if known is not None:
             return Target(name, known=known)
+        several = _ending_with(belief, name)
+        if len(several) > 1:
+            raise PlanProblem(f"{name!r} could be " + " or ".join(o.the_name for o in several)
+                              + ": say which") from exc
         near = _misspelt(name, [*env.places, *(o.name for o in _objects(belief))])
         if near is not None:
             return resolve(env, near)
@@ -70,6 +74,11 @@ def find(belief: Belief | None, name: str) -> KnownObject | None:
         near = _misspelt(name, [o.name for o in belief.objects])
         known = belief.find(near) if near is not None else None
     return known
+
+
+def _ending_with(belief: Belief | None, name: str) -> list[KnownObject]:
+    key = " ".join(name.strip().lower().split()).removeprefix("the ")
+    return [o for o in _objects(belief) if o.name.endswith(" " + key)]
 
 
 def _objects(belief: Belief | None) -> tuple[KnownObject, ...]:
