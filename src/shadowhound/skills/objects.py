@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 from .. import geofence
 from ..config import SafetyConfig
+from ..robot.base import Robot
 from ..state import Pose2D, normalize_angle
 from ..world import Belief, Coverage, KnownObject, PlanError, Viewpoint, standoff_point
 from . import motion
@@ -125,12 +126,10 @@ def sight_in_view(ctx: SkillContext) -> list[KnownObject]:
     return record_view(ctx.robot, ctx.env.belief, ctx.memory)
 
 
-def record_view(robot: object, belief: Belief | None, memory: object = None
+def record_view(robot: Robot, belief: Belief | None, memory: object = None
                 ) -> list[KnownObject]:
     """`sight_in_view` for callers without a SkillContext (the agent, before planning)."""
-    from ..robot.base import Robot
-
-    if belief is None or not isinstance(robot, Robot):
+    if belief is None:
         return []
     frame = robot.get_camera_frame()
     if frame is None or not frame.sightings:
@@ -149,7 +148,7 @@ def record_view(robot: object, belief: Belief | None, memory: object = None
     return seen
 
 
-def see_at_start(robot: object, belief: Belief | None, memory: object = None) -> None:
+def see_at_start(robot: Robot, belief: Belief | None, memory: object = None) -> None:
     """Before a mission is planned: what memory holds of earlier sightings, then what is in
     view now, enter the belief."""
     if belief is None:
