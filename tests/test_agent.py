@@ -69,8 +69,7 @@ def test_unsubscribe(agent):
 
 
 @pytest.mark.parametrize("text", ["", "   ", "blorp the zanzibar", "x" * 5000, None, 42,
-                                  "walk forward 500 meters", "go to the garage",
-                                  "do a backflip"])
+                                  "walk forward 500 meters", "do a backflip"])
 def test_bad_missions_fail_clearly_and_never_move(agent, robot, text):
     result = agent.execute_mission(text)
     assert not result.success

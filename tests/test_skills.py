@@ -241,6 +241,17 @@ def test_status_reports_pose_and_battery(registry, robot):
     assert "Standing at x=0.00 m" in out and "battery 100.0%" in out
 
 
-def test_unknown_place_is_a_plan_problem(registry, robot):
+def test_unknown_place_is_a_plan_problem_without_a_map(registry):
+    from shadowhound.config import SimConfig
+    from shadowhound.robot.sim import SimRobot
+
+    robot = SimRobot(SimConfig(collisions=False), time_scale=0.0)  # no map: nothing to search
     with pytest.raises(ValueError, match="unknown place 'garage'; known places: kitchen"):
+        run(registry, robot, "nav.goto", place="garage")
+    assert not robot.received_motion
+
+
+def test_with_a_map_an_unknown_name_is_searched_for_and_the_failure_says_where(registry, robot):
+    with pytest.raises(SkillError, match=r"did not find the garage: looked around from "
+                       r"\(0\.0, 0\.0\), \("):
         run(registry, robot, "nav.goto", place="garage")

@@ -47,6 +47,7 @@ from .skills import (
     default_registry,
 )
 from .skills.context import robot_belief
+from .skills.objects import see_at_start
 from .state import CameraFrame, RobotState
 
 log = logging.getLogger(__name__)
@@ -629,8 +630,10 @@ class RobotAgent:
     def _plan_env(self) -> PlanEnv:
         """The mission's environment, with a fresh budget: made once per mission."""
         state = self.robot.get_state()
+        belief = robot_belief(self.robot)
+        see_at_start(self.robot, belief, self._memory)  # objects in view count as known
         return PlanEnv(self.settings, state.pose, self._known_places(),
-                       MissionBudget.start(state, self.robot.now), robot_belief(self.robot))
+                       MissionBudget.start(state, self.robot.now), belief)
 
     def _planning_context(self, text: str = "", planner: Any = None) -> PlanningContext | None:
         """What the planner may read; None for planners that read nothing (the offline rules),
@@ -638,9 +641,11 @@ class RobotAgent:
         if planner is not None and not getattr(planner, "needs_context", True):
             return None
         rag = self.settings.memory.enable_rag and self.settings.backend != "offline"
+        belief = robot_belief(self.robot)
+        seen = {o.name: (o.x, o.y) for o in belief.objects} if belief is not None else {}
         return PlanningContext(self.registry, self.robot.get_state(), self._known_places(),
                                self.recent_summaries(), self._cancel,
-                               self._memory.search(text) if rag and text else [])
+                               self._memory.search(text) if rag and text else [], seen)
 
     @property
     def memory(self) -> AgentMemory:

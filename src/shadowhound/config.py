@@ -121,6 +121,17 @@ class MotionConfig(_Section):
     auto_stand: bool = Field(True, description="stand up before moving when sitting or lying")
 
 
+class SearchConfig(_Section):
+    """Going to objects: how close to stand, and the budget for looking for one not seen yet."""
+
+    standoff: float = Field(0.6, gt=0, le=5, description="metres from the object's surface")
+    max_seconds: float = Field(120.0, gt=0, le=3600,
+                               description="robot-clock seconds a search may take")
+    max_distance: float = Field(20.0, gt=0, le=1000, description="metres a search may walk")
+    view_range: float = Field(4.0, gt=0, le=20,
+                              description="metres within which a look counts a spot as seen")
+
+
 class SimConfig(_Section):
     """The simulated Go2."""
 
@@ -215,6 +226,7 @@ class ShadowHoundConfig(_Section):
     robot: Literal["sim", "go2"] = "sim"
     safety: SafetyConfig = Field(default_factory=SafetyConfig)
     motion: MotionConfig = Field(default_factory=MotionConfig)
+    search: SearchConfig = Field(default_factory=SearchConfig)
     sim: SimConfig = Field(default_factory=SimConfig)
     llm: LLMConfig = Field(default_factory=LLMConfig)
     agent: AgentConfig = Field(default_factory=AgentConfig)

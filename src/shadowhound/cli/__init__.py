@@ -120,7 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
     doctor.add_argument("--seconds", type=float, default=3.0,
                         help="how long to watch the topics (default 3)")
 
-    history = sub.add_parser("history", help="list past missions, or show one (memory.enabled)")
+    history = sub.add_parser("history", help="list past missions and the objects seen, or "
+                             "show one mission (memory.enabled)")
     _common(history, suppress=True)
     history.add_argument("mission_id", nargs="?", help="show this mission in full")
     history.add_argument("--limit", type=int, default=20, help="how many to list (default 20)")

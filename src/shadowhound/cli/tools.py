@@ -137,6 +137,14 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         for row in rows:
             when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(row["started_at"]))
             print(f"{row['id']}  {when}  {row['status']:<11} {row['mission'][:60]!r}")
+        seen = memory.sightings.all()
+        if seen:
+            print("objects seen (latest sighting, odom frame):")
+        for r in seen:
+            when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(r.seen_at))
+            o = r.known
+            print(f"  {o.name:<20} x={o.x:7.2f} y={o.y:7.2f}  {when}  "
+                  f"confidence {o.confidence:.2f}")
         return EXIT_OK
     finally:
         memory.close()

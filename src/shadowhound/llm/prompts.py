@@ -20,7 +20,8 @@ _INTRO = (
 )
 _RULES = (
     "Rules: use only the skills listed; one step per action, in the order asked; write a step "
-    "twice for 'twice'; give numbers as numbers; to come back, use nav.goto with place 'start'. "
+    "twice for 'twice'; give numbers as numbers; to come back, use nav.goto with place 'start'; "
+    "to go to, find or look for a thing, use nav.goto with its name as place (seen or not). "
     "If the request cannot be done with these skills, return no steps and explain in 'answer'."
 )
 _PLAN_REPLY = (
@@ -97,6 +98,14 @@ def places_line(places: dict[str, tuple[float, float]]) -> str:
     return f"Places: {named + ', ' if named else ''}start (where this mission began), home (0, 0)."
 
 
+def objects_line(objects: dict[str, tuple[float, float]]) -> str:
+    """The objects the robot has seen, where (a thing not listed can still be looked for)."""
+    if not objects:
+        return "Objects seen: none yet."
+    return "Objects seen: " + ", ".join(f"{n} ({x:.1f}, {y:.1f})"
+                                        for n, (x, y) in objects.items()) + "."
+
+
 def history_lines(history: list[str], limit: int) -> str:
     if not history or limit <= 0:
         return ""
@@ -136,13 +145,16 @@ def system_prompt(
     history: list[str] | None = None,
     history_size: int = 0,
     memories: list[str] | None = None,
+    objects: dict[str, tuple[float, float]] | None = None,
 ) -> str:
     """The system message. `style` is plan (skills listed, JSON reply), tools or react.
 
-    The stable prefix comes first; what changes from mission to mission (places, recent
-    missions, memories, the robot's state) comes last, so only that tail is evaluated anew.
+    The stable prefix comes first; what changes from mission to mission (places, objects
+    seen, recent missions, memories, the robot's state) comes last, so only that tail is
+    evaluated anew.
     """
     parts = [stable_prefix(registry, style=style),
-             places_line(places or {}), history_lines(history or [], history_size),
-             memory_lines(memories or []), state_line(state)]
+             places_line(places or {}), objects_line(objects or {}),
+             history_lines(history or [], history_size), memory_lines(memories or []),
+             state_line(state)]
     return "\n".join(p for p in parts if p)

@@ -46,6 +46,15 @@ CREATE TABLE IF NOT EXISTS places (
     yaw REAL NOT NULL,
     created_at REAL NOT NULL
 );
+CREATE TABLE IF NOT EXISTS sightings (
+    name TEXT PRIMARY KEY,
+    x REAL NOT NULL,
+    y REAL NOT NULL,
+    radius REAL NOT NULL,
+    confidence REAL NOT NULL,
+    stamp REAL NOT NULL,
+    seen_at REAL NOT NULL
+);
 """
 
 
@@ -247,6 +256,20 @@ class MissionHistory:
     def load_places(self) -> dict[str, tuple[float, float, float]]:
         rows = self._query("SELECT name, x, y, yaw FROM places ORDER BY name", ())
         return {name: (x, y, yaw) for name, x, y, yaw in rows}
+
+    # -- sightings (same file): the latest of each object seen --------------------------------
+
+    def save_sighting(self, name: str, x: float, y: float, radius: float, confidence: float,
+                      stamp: float) -> None:
+        self._write("INSERT OR REPLACE INTO sightings (name, x, y, radius, confidence, stamp, "
+                    "seen_at) VALUES (?, ?, ?, ?, ?, ?, ?)",
+                    (name, x, y, radius, confidence, stamp, time.time()))
+
+    def load_sightings(self) -> list[tuple[str, float, float, float, float, float, float]]:
+        """(name, x, y, radius, confidence, robot stamp, wall-clock seen_at), by name."""
+        return [tuple(r) for r in self._query(
+            "SELECT name, x, y, radius, confidence, stamp, seen_at FROM sightings "
+            "ORDER BY name", ())]
 
 
 def _explain(path: Path, exc: sqlite3.DatabaseError) -> str:

@@ -23,6 +23,7 @@ from ..skills import SkillRegistry, default_registry
 from .history import MemoryStoreError, MissionHistory
 from .places import PlaceBook
 from .recall import RecallStoreError
+from .sightings import SightingBook
 
 log = logging.getLogger(__name__)
 _WORD = re.compile(r"[a-z0-9]+")
@@ -44,6 +45,7 @@ class AgentMemory:
         self.skills = skills if skills is not None else default_registry()
         self.history = history
         self.places = PlaceBook(history)
+        self.sightings = SightingBook(history)
         self.recall = recall
         # Why retrieval memory is off although enable_rag asks for it (None: it is not).
         self.recall_problem = recall_problem

@@ -16,7 +16,8 @@ if TYPE_CHECKING:
 
 @dataclass
 class PlanningContext:
-    """What a planner may know: the skills, the robot now, places, and recent missions."""
+    """What a planner may know: the skills, the robot now, places, objects seen, and recent
+    missions."""
 
     registry: SkillRegistry
     state: RobotState | None = None
@@ -24,6 +25,7 @@ class PlanningContext:
     history: list[str] = field(default_factory=list)
     cancelled: threading.Event | None = None
     memories: list[str] = field(default_factory=list)  # relevant memories, bounded
+    objects: dict[str, tuple[float, float]] = field(default_factory=dict)  # seen, odom frame
 
 
 @runtime_checkable

@@ -65,6 +65,13 @@ GOTO = re.compile(
     r"(?:\s+(?:over|on|up|down|straight|directly|right|all\s+the\s+way))*"
     r"(?:\s+(?P<prep>to|towards|toward|into|in\s+to|up\s+to|over\s+to))?(?:\s+(?P<target>.+))?$"
 )
+# Requests to go to a thing found by name: "find the blue box", "bring me to the fridge".
+FIND = re.compile(
+    r"^(?:(?:go\s+(?:and\s+)?|please\s+)?(?:find|locate|seek|search\s+for|look\s+for"
+    r"|hunt\s+for|track\s+down)"
+    r"|(?:bring|take|lead|guide|escort|show)\s+(?:me|us)\s+(?:the\s+way\s+)?"
+    r"(?:to|towards|toward|over\s+to|up\s+to))\s+(?P<target>.+)$"
+)
 HOME = re.compile(r"^(?:the\s+|your\s+)?(?:home(?:\s+base)?|origin)$")
 START = re.compile(
     r"^(?:the\s+|your\s+)?(?:start|starting\s+(?:point|position|location|spot|place|pose|line)"

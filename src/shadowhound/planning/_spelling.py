@@ -49,7 +49,7 @@ def known_words() -> frozenset[str]:
     v = _vocabulary
     tables = _table_words(
         v.DIRECTIONS, v.ADVERBS, v.FILLERS, v.VERBS, v.TRICK_NAMES, v.TRICK_NAMES.values(),
-        v.SHAPE_WORDS, v.WAIT_WORDS, _numbers.UNITS, _numbers.SPEED_UNITS,
+        v.SHAPE_WORDS, v.WAIT_WORDS, v.THING_WORDS, _numbers.UNITS, _numbers.SPEED_UNITS,
         _numbers.NUMWORD.split("|"),
     )
     return frozenset(patterns | tables)

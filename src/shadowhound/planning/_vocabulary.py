@@ -132,3 +132,15 @@ SHAPE_WORDS = frozenset(
 
 # words a wait may hold besides its duration
 WAIT_WORDS = frozenset(words("here there where you are still quietly put moment while"))
+
+# words that often name things a robot is sent to ("the blue box", "the charging dock"): known
+# to the spelling reader, so a typo elsewhere in "fnid the blue box" is not read into them
+THING_WORDS = frozenset(
+    words(
+        "red green blue yellow white black orange purple pink brown grey gray silver big small"
+        " large little ball box dock charger charging station person man woman child kid people"
+        " fridge refrigerator chair table desk couch bed door window plant tree lamp shelf"
+        " cabinet counter sink oven stove bin trash can bottle cup mug bag backpack shoe toy"
+        " bowl cone robot dog cat tv television computer laptop phone keys book wall corner"
+    )
+)

@@ -159,6 +159,7 @@ class LLMPlanner:
         return prompts.system_prompt(
             ctx.registry, style=style, state=ctx.state, places=ctx.places, history=ctx.history,
             history_size=self.settings.agent.conversation_history_size, memories=ctx.memories,
+            objects=ctx.objects,
         )
 
     # -- react mode ----------------------------------------------------------------------------

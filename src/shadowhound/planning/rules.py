@@ -178,7 +178,8 @@ class RulePlanner:
         if condition:
             raise NotUnderstood(f"I do not plan around conditions ('{condition[0]}'); say what "
                                 "to do, or ask a language-model planner")
-        for handler in (self._wait, self._posture, self._trick, self._goto, self._patrol):
+        for handler in (self._wait, self._posture, self._trick, self._find, self._goto,
+                        self._patrol):
             steps = handler(text, label, notes)
             if steps is not None:
                 return steps, ""
@@ -291,15 +292,23 @@ class RulePlanner:
             return goto(x=float(x.value), y=float(y.value))
         if phrases.POSITION_ONLY.match(target):
             raise NotUnderstood("a position needs two numbers, e.g. 'go to position 2, 1'")
-        words = canon(phrases.ARTICLES.sub(" ", target)).split()
-        while words and words[-1] in vocab.ADVERBS:
-            notes.append(f"'{words.pop()}' ignored in '{label}': go-to uses its own speed")
-        place = " ".join(words)
-        if not phrases.PLACE.match(place) or len(words) > 5 or place in phrases.NOT_PLACES:
+        place = _thing(target, label, notes)
+        return None if place is None else goto(place=place)
+
+    def _find(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
+        """"find the blue box", "bring me to the fridge": go to a thing by name (nav.goto
+        resolves it: a place, an object seen, else one to search for)."""
+        m = phrases.FIND.match(text)
+        if m is None:
             return None
-        if any(q.group(2) for q in nums.QTY.finditer(place)):
-            return None  # "go to the left 2 meters" is a move
-        return goto(place=place)
+        if phrases.HOME.match(m["target"]):
+            return [SkillCall("nav.goto", {"place": "home"}, label)]
+        if phrases.START.match(m["target"]) and m["target"] not in ("me", "us", "here"):
+            return [SkillCall("nav.goto", {"place": "start"}, label)]
+        place = _thing(m["target"], label, notes)
+        if place is None:
+            raise NotUnderstood("say which thing to find, e.g. 'find the red ball'")
+        return [SkillCall("nav.goto", {"place": place}, label)]
 
     def _patrol(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
         if not phrases.PATROL.search(text):
@@ -458,6 +467,20 @@ def _implied_verb(text: str, last_verb: str) -> str:
     if nums.DISTANCE in units and (rotating or not last_verb):
         return "move"
     return last_verb if tokens[0].kind == "dir" or last_verb else ""
+
+
+def _thing(target: str, label: str, notes: list[str]) -> str | None:
+    """The name of a place or thing in a go-to or find ("the red ball" -> "red ball"), or None
+    when the words cannot name one (a direction, a distance, more than five words)."""
+    words = canon(phrases.ARTICLES.sub(" ", target)).split()
+    while words and words[-1] in vocab.ADVERBS:
+        notes.append(f"'{words.pop()}' ignored in '{label}': go-to uses its own speed")
+    place = " ".join(words)
+    if not phrases.PLACE.match(place) or len(words) > 5 or place in phrases.NOT_PLACES:
+        return None
+    if any(q.group(2) for q in nums.QTY.finditer(place)):
+        return None  # "go to the left 2 meters" is a move
+    return place
 
 
 def _check_size(steps: list[SkillCall], size: int) -> None:

@@ -360,16 +360,18 @@ class SimRobot:
         return sensors.cast_scan(self.world, state.pose, stamp=state.stamp)
 
     def belief(self) -> Belief | None:
-        """What the robot is told of its world: the scene's map and objects, a fresh copy (a
-        mission may update it from scans). None with collisions off: then the scene is not
-        physical, and nothing in it is in the way."""
+        """The robot's world model: the scene's map (labelled with the scene's object names,
+        to say what is in the way) and the objects it has seen (`Belief.sight`, none at
+        first). One object for the robot's life, so scan updates and sightings of one mission
+        are known to the next. None with collisions off: then the scene is not physical, and
+        nothing in it is in the way."""
         if not self.config.collisions:
             return None
         if self._belief is None:
-            self._belief = sensors.scene_belief(self.map_world, self.config.body_radius)
-        b = self._belief
-        grid = b.grid.copy()
-        return Belief(grid, b.objects, b.robot_radius, b.room, replace(b.inflated, grid=grid))
+            told = sensors.scene_belief(self.map_world, self.config.body_radius)
+            self._belief = Belief(told.grid, (), told.robot_radius, told.room,
+                                  labels=told.objects)
+        return self._belief
 
     def close(self) -> None:
         self.stop()

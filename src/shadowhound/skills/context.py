@@ -33,6 +33,8 @@ class PlanEnv:
     places: dict[str, tuple[float, float]] = field(default_factory=dict)
     budget: MissionBudget | None = None
     belief: Belief | None = None
+    # Names nav.goto looked for during this mission: their approach was not predictable.
+    searched: set[str] = field(default_factory=set)
 
     def __post_init__(self) -> None:
         self.places = {**self.config.places, **self.places}

@@ -9,7 +9,7 @@ from pydantic import ConfigDict, Field, model_validator
 from ..state import Pose2D, normalize_angle
 from ..units import format_number as _n
 from ..world import PlanError, apply_scan, plan_route
-from . import motion
+from . import motion, objects
 from .arguments import (
     Angle,
     Count,
@@ -66,7 +66,8 @@ class GotoArgs(SkillArgs):
         None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom"
     )
     place: str | None = Field(
-        None, min_length=1, max_length=100, description="a named place, 'start' or 'home'"
+        None, min_length=1, max_length=100,
+        description="a place ('start', 'home') or an object",
     )
     heading_degrees: OptionalAngle = Field(
         None, ge=-360, le=360, description="final heading in degrees (odom); default: keep"
@@ -108,12 +109,14 @@ def _offset(pose: Pose2D, forward: float, left: float) -> Pose2D:
 def _run_move(ctx: SkillContext, a: MoveArgs) -> str:
     ctx.ensure_standing()
     covered = motion.drive_local(ctx, a.distance, 0.0, _linear(ctx, a.speed))
+    objects.sight_in_view(ctx)
     return f"moved {covered:.2f} m {'forward' if a.distance >= 0 else 'backward'}"
 
 
 def _run_strafe(ctx: SkillContext, a: StrafeArgs) -> str:
     ctx.ensure_standing()
     covered = motion.drive_local(ctx, 0.0, a.distance, _linear(ctx, a.speed))
+    objects.sight_in_view(ctx)
     return f"stepped {covered:.2f} m to the {'left' if a.distance >= 0 else 'right'}"
 
 
@@ -128,6 +131,7 @@ def _straight_timeout(a: MoveArgs | StrafeArgs, env: PlanEnv) -> float:
 def _run_rotate(ctx: SkillContext, a: RotateArgs) -> str:
     ctx.ensure_standing()
     turned = motion.rotate(ctx, math.radians(a.degrees), _angular(ctx, a.speed))
+    objects.sight_in_view(ctx)
     side = "left (counter-clockwise)" if a.degrees >= 0 else "right (clockwise)"
     return f"turned {abs(math.degrees(turned)):.1f} degrees {side}"
 
@@ -194,27 +198,70 @@ def walk(ctx: SkillContext, goal: tuple[float, float], linear: float, angular: f
     raise AssertionError("unreachable")  # the loop returns or raises
 
 
-def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, float]]) -> None:
+def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, float]],
+                    lead: str = "re-planned, but the new path is refused") -> None:
     from ..safety import Governor  # here: the governor's module imports the skills
 
     poses = _predict_walk_points(pose, points, ctx.env)
     problems = Governor(ctx.config.safety).path_problems(pose, poses, ctx.env, "the new path")
     if problems:
-        raise SkillError("re-planned, but the new path is refused: " + "; ".join(problems))
+        raise SkillError(f"{lead}: " + "; ".join(problems))
 
 
 def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     ctx.ensure_standing()
+    linear, angular = _linear(ctx, a.speed), _angular(ctx, None)
+    target = objects.resolve(ctx.env, a.place) if a.place is not None else None
+    if target is not None and target.point is None:
+        return _approach(ctx, a, target, linear, angular)
     x, y = _goto_target(a, ctx.env)
-    walk(ctx, (x, y), _linear(ctx, a.speed), _angular(ctx, None))
-    if a.heading_degrees is not None:
-        yaw = ctx.robot.get_state().yaw
-        turn = normalize_angle(math.radians(a.heading_degrees) - yaw)
-        motion.rotate(ctx, turn, _angular(ctx, None))
+    walk(ctx, (x, y), linear, angular)
+    _final_heading(ctx, a)
+    objects.sight_in_view(ctx)
     st = ctx.robot.get_state()
     names = {None: "the point", "start": "where the mission started", "home": "home"}
     where = names.get(a.place, f"the {a.place}")
     return f"reached {where} at x={st.x:.2f} m, y={st.y:.2f} m"
+
+
+def _final_heading(ctx: SkillContext, a: GotoArgs) -> None:
+    if a.heading_degrees is not None:
+        yaw = ctx.robot.get_state().yaw
+        turn = normalize_angle(math.radians(a.heading_degrees) - yaw)
+        motion.rotate(ctx, turn, _angular(ctx, None))
+
+
+def _approach(ctx: SkillContext, a: GotoArgs, target: objects.Target, linear: float,
+              angular: float) -> str:
+    """Walk to an object's standoff and face it; search for it first when not seen yet."""
+    found = target.known
+    if found is None:
+        found = objects.search(ctx, target.name, linear, angular)
+    pose = ctx.robot.get_state().pose
+    try:
+        spot = objects.standoff(ctx.env, pose, found)
+    except PlanProblem as exc:
+        raise SkillError(str(exc)) from exc
+    # After a search (in this step or an earlier one of the mission) the plan check saw no
+    # path: the governor checks the approach now, as it does every re-planned path.
+    _check_new_path(ctx, pose, route(ctx.env, pose, (spot.x, spot.y)),
+                    f"the path to {found.the_name} is refused")
+    walk(ctx, (spot.x, spot.y), linear, angular)
+    if a.heading_degrees is None:
+        objects.face(ctx, found, angular)
+    _final_heading(ctx, a)
+    objects.sight_in_view(ctx)
+    now = objects.find(ctx.env.belief, found.name)
+    if now is not None and now.remembered:  # it was not seen again on the way or on arrival
+        ctx.notes.append(f"{found.the_name} was remembered from an earlier mission and is not "
+                         "in view now")
+    st = ctx.robot.get_state()
+    gap = math.hypot(found.x - st.x, found.y - st.y) - found.radius
+    return (f"reached {found.the_name} (seen at {found.x:.2f}, {found.y:.2f}): standing "
+            f"{gap:.2f} m from it at x={st.x:.2f} m, y={st.y:.2f} m, facing it"
+            if a.heading_degrees is None else
+            f"reached {found.the_name}: standing {gap:.2f} m from it at x={st.x:.2f} m, "
+            f"y={st.y:.2f} m")
 
 
 def _arrive(pose: Pose2D, x: float, y: float, env: PlanEnv) -> Pose2D:
@@ -238,7 +285,16 @@ def _predict_walk_points(pose: Pose2D, points: list[tuple[float, float]], env: P
 
 
 def _predict_goto(pose: Pose2D, a: GotoArgs, env: PlanEnv) -> list[Pose2D]:
-    poses = _predict_walk(pose, _goto_target(a, env), env)
+    target = objects.resolve(env, a.place) if a.place is not None else None
+    if target is not None and (target.search or target.name in env.searched):
+        return []  # where it will be found is not known: the search checks each leg it walks
+    if target is not None and target.known is not None:
+        spot = objects.standoff(env, pose, target.known)
+        poses = _predict_walk(pose, (spot.x, spot.y), env)
+        end = poses[-1]
+        poses[-1] = Pose2D(end.x, end.y, spot.yaw)
+    else:
+        poses = _predict_walk(pose, _goto_target(a, env), env)
     if a.heading_degrees is not None:
         end = poses[-1]
         poses[-1] = Pose2D(end.x, end.y, normalize_angle(math.radians(a.heading_degrees)))
@@ -251,9 +307,11 @@ def _goto_timeout(a: GotoArgs, env: PlanEnv) -> float:
     detours = 1 if env.belief is None else 2
     reach = 2 * env.config.safety.geofence_radius * detours
     m = env.config.motion
+    # A name may be an object to look for first: the search has its own time on top.
+    searching = env.config.search.max_seconds if a.place and env.belief is not None else 0.0
     return motion.straight_timeout(reach, _linear(env, a.speed), m.linear_accel) + detours * 2 * (
         motion.rotate_timeout(2 * math.pi, _angular(env, None), m.angular_accel)
-    )
+    ) + searching
 
 
 # -- nav.patrol ------------------------------------------------------------------------------
@@ -271,6 +329,7 @@ def _run_patrol(ctx: SkillContext, a: PatrolArgs) -> str:
     for _ in range(a.laps):
         for point in points:
             walked += walk(ctx, point, _linear(ctx, None), _angular(ctx, None))
+            objects.sight_in_view(ctx)
     laps = "lap" if a.laps == 1 else "laps"
     return f"patrolled {a.laps} {laps} of {len(points)} waypoints ({walked:.1f} m) and returned"
 
@@ -344,8 +403,9 @@ SKILLS = (
     ),
     Skill(
         "nav.goto",
-        "Walk to a point (x, y in metres, odom frame) or to a named place "
-        "('start' = where this mission began, 'home' = the origin), around known obstacles.",
+        "Walk around obstacles to a point (x, y metres, odom), a place ('start': mission "
+        "start, 'home': origin) or an object (stops 0.6 m away facing it; searched for if "
+        "unseen).",
         GotoArgs,
         _run_goto,
         timeout=_goto_timeout,

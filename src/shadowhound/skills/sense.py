@@ -13,6 +13,7 @@ from ..units import format_number
 from . import motion
 from .arguments import Duration, NoArgs, SkillArgs
 from .context import SkillContext
+from .objects import sight_in_view
 from .registry import Skill
 
 
@@ -51,6 +52,7 @@ def describe_frame(
 
 
 def _run_describe(ctx: SkillContext, a: DescribeArgs) -> str:
+    sight_in_view(ctx)
     return describe_frame(ctx.camera_frame(), a.question, ctx.vision)
 
 
@@ -60,6 +62,7 @@ def _run_look_around(ctx: SkillContext, a: DescribeArgs) -> str:
     for quarter, side in enumerate(("ahead", "to my left", "behind me", "to my right")):
         if quarter:
             motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed)
+        sight_in_view(ctx)  # what it sees is remembered (the world model, memory)
         views.append(f"{side}: {describe_frame(ctx.camera_frame(), a.question, ctx.vision)}")
     motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed)
     return " | ".join(views)

@@ -20,6 +20,7 @@ from .objects import Belief, KnownObject, merge_sightings, object_key
 from .planner import Path, PlanError, line_is_clear, plan_path
 from .route import plan_route
 from .scan_update import apply_scan
+from .search import Coverage, Viewpoint
 from .standoff import DEFAULT_STANDOFF, Standoff, standoff_point
 
 __all__ = [
@@ -32,6 +33,7 @@ __all__ = [
     "UNKNOWN",
     "Belief",
     "Cell",
+    "Coverage",
     "GridError",
     "InflatedGrid",
     "KnownObject",
@@ -40,6 +42,7 @@ __all__ = [
     "Path",
     "PlanError",
     "Standoff",
+    "Viewpoint",
     "apply_scan",
     "blocker_near",
     "check_leg",
