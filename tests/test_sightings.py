@@ -102,6 +102,10 @@ def test_a_robot_reports_its_map_objects_and_its_detections_merged() -> None:
     config = ShadowHoundConfig()
     robot = Detecting(config.sim, time_scale=0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=config))
+    belief = robot.belief()
+    assert belief is not None and belief.objects == ()  # nothing seen yet
+    belief.sight("blue box", 2.5, -1.0, stamp=1.0)
+    belief.sight("red ball", 3.0, 0.0, stamp=2.0)  # older than the detection's
     objects = {o.name: o for o in robot_objects(agent.robot)}
     assert (objects["red ball"].x, objects["cup"].x, objects["blue box"].x) == (3.5, 1.0, 2.5)
 
