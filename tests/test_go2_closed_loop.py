@@ -77,6 +77,30 @@ class LateRobot:
     def get_camera_frame(self) -> CameraFrame | None:
         return None
 
+    def get_scan(self) -> None:
+        return None
+
+    def belief(self) -> None:
+        return None
+
+    def last_state(self) -> RobotState:
+        return self.get_state()
+
+    @property
+    def time_scale(self) -> float:  # its clock is the simulator's
+        return self.sim.time_scale
+
+    @property
+    def realtime(self) -> bool:
+        return self.sim.realtime
+
+    def emergency_stop(self) -> None:
+        self.sim.emergency_stop()
+        self.tracker.command(self.sim.now(), 0.0, 0.0, 0.0)
+
+    def release_estop(self) -> None:
+        self.sim.release_estop()
+
     def close(self) -> None:
         self.sim.close()
 
