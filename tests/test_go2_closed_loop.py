@@ -145,3 +145,10 @@ def test_a_wrong_delay_is_corrected_at_rest_not_reported_as_done() -> None:
     assert result.success, result.response
     truth = robot.sim.get_state()
     assert math.hypot(truth.x - 1.0, truth.y) < 0.05, (truth.x, truth.y)
+
+
+def test_the_late_odometry_robot_is_a_whole_robot() -> None:
+    """Test robots implement the declared protocol too (the agent never probes for members)."""
+    from shadowhound.robot.base import Robot
+
+    assert isinstance(LateRobot(20.0, 0.2), Robot)

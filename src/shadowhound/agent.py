@@ -23,9 +23,10 @@ from .camera import to_camera_frame
 from .checking import new_mission_id
 from .config import ConfigError, ShadowHoundConfig
 from .conversation import Chat, ChatContext, ModelChat, answer_offline
+from .crew import Crew, StopSignal, Vision
 from .diagnostics import Diagnostics, MissionTracker
 from .memory.service import AgentMemory
-from .mission import Crew, MissionRun, StopSignal, Vision
+from .mission import MissionRun
 from .plan import Plan, PlanningError, SkillCall
 from .planning import FixedPlanner, Planner, make_planner
 from .result import MissionResult

@@ -8,96 +8,35 @@ predicted path) before anything moves. The run touches the robot only through th
 protocol and the governor's step checks.
 
 What runs share across missions (the robot, the governor, the event bus, the progress tracker,
-the e-stop and cancel signal) is the agent's `Crew`.
+the e-stop and cancel signal) is the agent's `Crew` (crew.py). The module is a little over 400
+lines because the six stages of one mission read best together, in order.
 """
 
 from __future__ import annotations
 
 import logging
-import threading
 import time
-from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 from . import events as ev
-from .approval import ApprovalDesk, ApprovalRequest
+from .approval import ApprovalRequest
 from .budget import MissionBudget
 from .checking import CheckedPlan, check_plan
-from .config import ShadowHoundConfig
-from .diagnostics import MissionTracker
-from .memory.service import AgentMemory
+from .crew import Crew
 from .plan import Plan, PlanningError, SkillCall, Usage
 from .planning import Planner, PlanningContext, ReplanningPlanner, StepwisePlanner
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing, compose_response
-from .robot.base import Robot, RobotError
-from .safety import Governor, Watchdog
+from .robot.base import RobotError
 from .skills import (
     MissionCancelled,
     PlanEnv,
     SkillContext,
     SkillError,
-    SkillRegistry,
     ValidatedCall,
 )
-from .state import CameraFrame, RobotState
+from .state import RobotState
 
 log = logging.getLogger(__name__)
-
-
-class StopSignal:
-    """Why a mission must stop: a cancel, the latched e-stop, or the agent's own cause (the
-    watchdog). `cancelled` is the event every wait in a mission watches."""
-
-    def __init__(self) -> None:
-        self.cancelled = threading.Event()
-        self.estop_latched = False
-        self.cause: str | None = None  # set when the agent itself stops a mission
-
-    def reason(self) -> str:
-        if self.estop_latched:
-            return "e-stop pressed"
-        return self.cause or "mission cancelled"
-
-
-Vision = Callable[[CameraFrame, str], str]
-
-
-@dataclass
-class Crew:
-    """What every mission of one agent shares. Built once by the agent."""
-
-    settings: ShadowHoundConfig
-    registry: SkillRegistry
-    governor: Governor
-    robot: Robot
-    memory: AgentMemory
-    events: ev.EventBus
-    tracker: MissionTracker
-    stop: StopSignal
-    approvals: ApprovalDesk
-    history: deque[MissionResult]
-    planner_kind: str  # the planning configured (what MissionResult.planner records)
-    camera: Callable[[], CameraFrame | None]
-    vision: Vision | None
-    arm_watchdog: Callable[[], Watchdog | None]
-    places: Callable[[], dict[str, tuple[float, float]]]  # the profile's, then taught ones
-    summaries: Callable[[], list[str]]  # recent missions, one line each, oldest first
-
-    def planning_context(self, text: str, planner: Planner | None,
-                         state: RobotState) -> PlanningContext | None:
-        """What the planner (or a model's chat, for None) may read; None for planners that read
-        nothing (the offline rules), so no history query or memory search is spent on them."""
-        if planner is not None and not planner.needs_context:
-            return None
-        rag = self.settings.memory.enable_rag and self.settings.backend != "offline"
-        return PlanningContext(self.registry, state, self.places(), self.summaries(),
-                               self.stop.cancelled,
-                               self.memory.search(text) if rag and text else [])
-
-    def note_error(self, text: str) -> None:
-        self.tracker.note_error(text)
 
 
 class MissionRun:
