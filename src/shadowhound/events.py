@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
 if TYPE_CHECKING:
     from .approval import ApprovalRequest
@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     from .result import MissionResult, StepResult
 
 log = logging.getLogger(__name__)
+_Step = TypeVar("_Step", bound="_StepEvent")
 
 MISSION_STARTED = "mission_started"
 PLAN_READY = "plan_ready"
@@ -87,7 +88,7 @@ class _StepEvent(MissionEvent):
     step: StepResult
 
     @classmethod
-    def of(cls, mission_id: str, step: StepResult) -> Any:
+    def of(cls: type[_Step], mission_id: str, step: StepResult) -> _Step:
         return cls(mission_id, replace(step))  # the step as it is now
 
     def payload(self) -> dict[str, Any]:
