@@ -83,7 +83,8 @@ def _mission(settings: ShadowHoundConfig, text: str,
                                         settings=settings))
     agent.initialize()
     if spy is not None:
-        backend = agent.planner.backend  # type: ignore[attr-defined]
+        backend = agent.backend
+        assert backend is not None
         complete = backend.complete
 
         def recording(messages: list[dict[str, Any]], **options: Any) -> Any:

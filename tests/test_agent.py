@@ -150,7 +150,8 @@ def test_one_mission_at_a_time():
 
 def test_planner_failure_and_usage_are_reported(robot):
     class Broken:
-        name = "broken"
+        name = kind = "broken"
+        needs_context = True
 
         def plan(self, text, context=None):
             raise PlanningError("model said nonsense", usage=Usage(100, 20, 1))
@@ -163,7 +164,8 @@ def test_planner_failure_and_usage_are_reported(robot):
 
 def test_garbage_plans_from_a_planner_never_move(robot):
     class Garbage:
-        name = "garbage"
+        name = kind = "garbage"
+        needs_context = True
 
         def plan(self, text, context=None):
             return Plan([SkillCall("nav.move", {"distance": "1e9"}),

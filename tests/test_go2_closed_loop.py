@@ -80,6 +80,30 @@ class LateRobot:
     def get_camera_frame(self) -> CameraFrame | None:
         return None
 
+    def get_scan(self) -> None:
+        return None
+
+    def belief(self) -> None:
+        return None
+
+    def last_state(self) -> RobotState:
+        return self.get_state()
+
+    @property
+    def time_scale(self) -> float:  # its clock is the simulator's
+        return self.sim.time_scale
+
+    @property
+    def realtime(self) -> bool:
+        return self.sim.realtime
+
+    def emergency_stop(self) -> None:
+        self.sim.emergency_stop()
+        self.tracker.command(self.sim.now(), 0.0, 0.0, 0.0)
+
+    def release_estop(self) -> None:
+        self.sim.release_estop()
+
     def close(self) -> None:
         self.sim.close()
 
@@ -124,6 +148,13 @@ def test_a_wrong_delay_is_corrected_at_rest_not_reported_as_done() -> None:
     assert result.success, result.response
     truth = robot.sim.get_state()
     assert math.hypot(truth.x - 1.0, truth.y) < 0.05, (truth.x, truth.y)
+
+
+def test_the_late_odometry_robot_is_a_whole_robot() -> None:
+    """Test robots implement the declared protocol too (the agent never probes for members)."""
+    from shadowhound.robot.base import Robot
+
+    assert isinstance(LateRobot(20.0, 0.2), Robot)
 
 
 class JitteryRobot(LateRobot):

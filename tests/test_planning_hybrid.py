@@ -16,7 +16,7 @@ from shadowhound.planning import make_planner
 from shadowhound.planning.hybrid import HybridPlanner
 from shadowhound.planning.llm import LLMPlanner
 from shadowhound.planning.rules import RulePlanner
-from tests.llm_server import ScriptedLLM, json_plan, status
+from tests.llm_server import ScriptedLLM, json_plan, status, text
 
 
 @pytest.fixture
@@ -123,3 +123,36 @@ def test_cli_run_reports_the_planner(srv):
     assert (out["planner"], out["planned_by"], out["usage"]["round_trips"]) == (
         "hybrid", "offline", 0)
     assert srv.requests == []  # no completion asked: the start-up check lists models only
+
+
+def test_planners_declare_what_the_agent_may_use_of_them(srv):
+    """The agent chooses by declared protocol (never by probing): plan mode re-plans, react
+    mode steps, the offline rules do neither."""
+    from shadowhound.planning import Planner, ReplanningPlanner, StepwisePlanner
+
+    def planner(**llm):
+        return make_planner(load_config("vllm", {"llm": {"base_url": srv.url, "model": "m",
+                                                         **llm}}, environ={}))
+
+    rules = make_planner(load_config("offline", environ={}))
+    assert isinstance(rules, Planner) and not rules.needs_context
+    assert not isinstance(rules, ReplanningPlanner) and not isinstance(rules, StepwisePlanner)
+    for plan_mode in (planner(), planner(hybrid=False)):
+        assert isinstance(plan_mode, ReplanningPlanner)
+        assert not isinstance(plan_mode, StepwisePlanner)
+    assert isinstance(planner(mode="react"), StepwisePlanner)
+
+
+def test_one_backend_serves_the_planner_chat_and_vision_in_hybrid_mode(srv):
+    """Vision through the hybrid planner once failed (its describe_image took no cancel
+    event, so perception.describe crashed): now the agent's one backend answers it."""
+    agent = agent_for(srv, vision=True)
+    assert agent.backend is not None and agent.planner.model.backend is agent.backend
+    srv.script(text("A red ball."), text("I am here."))
+    result = agent.execute_mission("describe what you see")
+    assert result.success, result.response
+    assert result.plan.planned_by == "offline" and "A red ball." in result.response
+    image = srv.requests[0]["messages"][0]["content"][1]
+    assert image["image_url"]["url"].startswith("data:image/jpeg;base64,")
+    assert agent.chat("where are you?") == "I am here."
+    assert len(srv.requests) == 2

@@ -286,3 +286,18 @@ def test_without_collisions_the_body_passes_through_as_before():
     robot.send_velocity(1.0, 0.0, 0.0)
     robot.sleep(5.0)
     assert robot.get_state().x > 3.5 and robot.get_state().blocked_by == ""
+
+
+@pytest.mark.parametrize("scale", [0.0, 1.0])
+def test_the_simulator_implements_the_whole_robot_protocol(scale):
+    """The agent uses a robot only through the declared protocol: the simulator offers all of
+    it, and its clock is real time exactly when it has a time scale."""
+    from shadowhound.robot.base import Robot
+
+    robot = SimRobot(time_scale=scale)
+    assert isinstance(robot, Robot)
+    assert robot.realtime is (scale > 0) and robot.time_scale == scale
+    robot.emergency_stop()
+    assert robot.last_state().estopped
+    robot.release_estop()
+    assert not robot.get_state().estopped and robot.belief() is not None

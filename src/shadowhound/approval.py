@@ -41,6 +41,7 @@ class ApprovalDesk:
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self._pending: ApprovalRequest | None = None
+        self.enabled = False  # an interface that can ask a person is attached
 
     def open(self, request: ApprovalRequest) -> None:
         """Make `request` the pending one, before anyone is told about it."""

@@ -1,8 +1,8 @@
 """Checking a plan before anything moves: every step validated, then the governor's verdict.
 
 Pure: it reads the registry, the governor and the settings, and touches no robot. Every batch
-of steps of a mission passes here (the first plan, a re-plan, each react step) with the
-mission's `PlanEnv`, whose budget makes the governor count what the mission already used.
+of steps of a mission passes here (the first plan, a re-plan, each react step, a dry run) with
+the mission's `PlanEnv`, whose budget makes the governor count what the mission already used.
 """
 
 from __future__ import annotations
@@ -28,13 +28,14 @@ class CheckedPlan:
     problems: list[str]  # validation errors and refusals: any one refuses the plan
     approvals: list[str]  # why a person must approve before it runs
     path: list[Pose2D]  # predicted poses, the start first
+    invalid: list[list[str]]  # per proposed step, why it is not a valid call (empty: valid)
 
 
 def check_plan(plan: Plan, registry: SkillRegistry, governor: Governor,
                settings: ShadowHoundConfig, env: PlanEnv, start: RobotState,
                first: int = 1) -> CheckedPlan:
     """Validate every step and run the governor over the whole plan from `start`."""
-    calls, problems = _validate(plan, registry, settings)
+    calls, problems, invalid = _validate(plan, registry, settings)
     steps = [StepResult(i, c.skill, plain_args(c.args), c.label)
              for i, c in enumerate(plan.steps, first)]
     verdict = governor.check_plan(calls, start, env)
@@ -54,14 +55,15 @@ def check_plan(plan: Plan, registry: SkillRegistry, governor: Governor,
     else:
         for s, c in zip(steps, valid, strict=True):
             s.args = c.args_dict()
-    return CheckedPlan(steps, valid, problems, approvals, verdict.path)
+    return CheckedPlan(steps, valid, problems, approvals, verdict.path, invalid)
 
 
 def _validate(plan: Plan, registry: SkillRegistry, settings: ShadowHoundConfig
-              ) -> tuple[list[ValidatedCall | None], list[str]]:
+              ) -> tuple[list[ValidatedCall | None], list[str], list[list[str]]]:
     """Validate every step; invalid ones become None so the rest can still be checked."""
     problems: list[str] = []
     calls: list[ValidatedCall | None] = []
+    invalid: list[list[str]] = []
     if not plan.steps:
         problems.append("the plan has no steps")
     if len(plan.steps) > settings.agent.max_steps:
@@ -70,10 +72,12 @@ def _validate(plan: Plan, registry: SkillRegistry, settings: ShadowHoundConfig
     for index, call in enumerate(plan.steps, start=1):
         try:
             calls.append(registry.validate(call))
+            invalid.append([])
         except SkillValidationError as exc:
             calls.append(None)
+            invalid.append(list(exc.problems))
             problems.extend(f"step {index}: {p}" for p in exc.problems)
-    return calls, problems
+    return calls, problems, invalid
 
 
 def plain_args(args: Any) -> dict[str, Any]:

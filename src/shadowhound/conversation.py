@@ -1,16 +1,44 @@
-"""Offline answers to questions about the robot and its missions. Never moves the robot."""
+"""Answers to questions about the robot and its missions. Never moves the robot.
+
+The agent hands a chat a `ChatContext` (what it may read, nothing it could move the robot
+with); the offline answers and the model's answers have one signature, `Chat`.
+"""
 
 from __future__ import annotations
 
 import math
 import re
-from typing import TYPE_CHECKING
+import threading
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
-from .plan import PlanningError
 from .skills.sense import describe_frame
 
 if TYPE_CHECKING:
-    from .agent import RobotAgent
+    from .diagnostics import Progress
+    from .llm.backend import LLMBackend
+    from .planning import PlanningContext
+    from .state import CameraFrame, RobotState
+
+
+@dataclass(frozen=True)
+class ChatContext:
+    """What a chat may read. The callables are read only when a question needs them."""
+
+    state: Callable[[], RobotState]  # raises RobotError when the robot cannot say
+    progress: Callable[[], Progress]
+    estop: bool
+    skills: list[str]
+    recent_missions: Callable[[int], list[dict[str, Any]]]  # newest first
+    recall: Callable[[str], list[str]]  # memories about a question
+    frame: Callable[[], CameraFrame | None]
+    is_command: Callable[[str], bool]  # would the planner plan this as a mission?
+    planning: Callable[[str], PlanningContext | None]  # what a model may know, for a question
+
+
+Chat = Callable[[str, ChatContext], str]
 
 _TOPICS: list[tuple[str, re.Pattern[str]]] = [
     ("recall", re.compile(r"\b(did you see|have you seen|saw|remember|earlier|this morning|"
@@ -25,30 +53,30 @@ _TOPICS: list[tuple[str, re.Pattern[str]]] = [
 ]
 
 
-def answer_offline(text: str, agent: RobotAgent) -> str:
-    """Pick the topics a question is about and answer each from the agent's own records."""
+def answer_offline(text: str, chat: ChatContext) -> str:
+    """Pick the topics a question is about and answer each from what the chat context offers."""
     question = text.strip().lower()
     topics = [name for name, pattern in _TOPICS if pattern.search(question)]
     if "recall" in topics:  # a question about the past is not about the camera now
         topics = [t for t in topics if t not in ("see", "where")]
-    if not topics or topics == ["status"] and _is_command(text, agent):
-        if _is_command(text, agent):
+    if not topics or topics == ["status"] and chat.is_command(text):
+        if chat.is_command(text):
             return ("That sounds like a mission. I only move when a mission is run: use "
                     f"`shadowhound run \"{text.strip()}\"`, or type `/run {text.strip()}` in the "
                     "chat.")
         return ("I can answer questions about where I am, my battery, what I see, what I did "
                 "and what I can do. For anything else a language-model backend is needed.")
-    st = agent.get_robot_state()
+    st = chat.state()
     answers = []
     for topic in dict.fromkeys(topics):
         if topic == "greet":
             answers.append("Hello! I am ShadowHound.")
         elif topic == "recall":
-            found = agent.memory.search(text)
+            found = chat.recall(text)
             answers.append("I remember: " + " | ".join(found) if found else
                            "I remember nothing about that.")
         elif topic == "see":
-            answers.append(describe_frame(agent.latest_frame(), text))
+            answers.append(describe_frame(chat.frame(), text))
         elif topic == "battery":
             answers.append(f"My battery is at {st.battery:.1f}%." if st.battery is not None
                            else "I cannot tell my battery level: this robot reports none.")
@@ -56,28 +84,58 @@ def answer_offline(text: str, agent: RobotAgent) -> str:
             answers.append(f"I am at x={st.x:.2f} m, y={st.y:.2f} m, facing "
                            f"{math.degrees(st.yaw):.0f} degrees (odom frame).")
         elif topic == "history":
-            answers.append(_history(agent))
+            answers.append(_history(chat))
         elif topic == "skills":
-            names = ", ".join(s["name"] for s in agent.get_available_skills())
+            names = ", ".join(chat.skills)
             answers.append(f"My skills are: {names}.")
         elif topic == "status":
-            diag = agent.get_diagnostics()
-            answers.append(f"I am {st.posture.value}, status {diag['status']}, battery "
-                           f"{st.battery_text}" + (", e-stop latched." if diag["estop"] else "."))
+            status = chat.progress().status.value
+            answers.append(f"I am {st.posture.value}, status {status}, battery "
+                           f"{st.battery_text}" + (", e-stop latched." if chat.estop else "."))
     return " ".join(answers)
 
 
-def _is_command(text: str, agent: RobotAgent) -> bool:
-    try:
-        agent.planner.plan(text)
-    except PlanningError:
-        return False
-    return True
-
-
-def _history(agent: RobotAgent) -> str:
-    recent = agent.recent_missions(3)  # from the history database when memory is enabled
+def _history(chat: ChatContext) -> str:
+    recent = chat.recent_missions(3)  # from the history database when memory is enabled
     if not recent:
         return "I have not run any mission yet."
     lines = [f"{r['mission']!r}: {r['status']} ({r['response']})" for r in reversed(recent)]
     return f"My last {len(lines)} mission(s), oldest first: " + " | ".join(lines)
+
+
+class ModelChat:
+    """Answers in words from a language model (no tools: it cannot move). Keeps the last
+    turns of the conversation so a follow-up question is understood."""
+
+    def __init__(self, backend: LLMBackend, history_size: int) -> None:
+        self.backend = backend
+        self.history_size = history_size
+        self._turns: deque[dict[str, str]] = deque(maxlen=2 * history_size)
+        self._lock = threading.Lock()
+
+    def __call__(self, text: str, chat: ChatContext) -> str:
+        from .llm import prompts
+        from .llm.backend import BackendError
+
+        ctx = chat.planning(text)
+        lines = [
+            "You are ShadowHound, a Unitree Go2 quadruped robot, answering your operator "
+            "briefly. You cannot move in this conversation; missions are run separately."]
+        if ctx is not None:
+            lines += [prompts.state_line(ctx.state), prompts.places_line(ctx.places),
+                      prompts.history_lines(ctx.history, self.history_size),
+                      prompts.memory_lines(ctx.memories)]
+        system = "\n".join(p for p in lines if p)
+        with self._lock:
+            turns = list(self._turns)
+        try:
+            completion = self.backend.complete(
+                [{"role": "system", "content": system}, *turns,
+                 {"role": "user", "content": text}])
+        except BackendError as exc:
+            return f"I cannot answer right now: {exc}"
+        answer = str(completion.message.get("content") or "").strip() or "(no answer)"
+        with self._lock:
+            self._turns.extend([{"role": "user", "content": text},
+                                {"role": "assistant", "content": answer}])
+        return answer

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .agent import RobotAgent
-from .events import MISSION_STARTED, MissionEvent
+from .events import MissionEvent, MissionStarted
 from .plan import SkillCall
 from .result import MissionResult
 
@@ -168,7 +168,7 @@ class MissionWorker:
         job = self._current
         if job is None or threading.current_thread() is not self._thread:
             return
-        if event.kind == MISSION_STARTED:
+        if isinstance(event, MissionStarted):
             job.started = True
             if job.cancelled.is_set():
                 self._agent.cancel()  # a cancel that came before the agent cleared its flag

@@ -263,3 +263,12 @@ def test_the_driver_rejects_bad_parameters_with_exit_code_2() -> None:
     assert "odom_rate_hz must be in 1..200, got 0" in done.stderr
     assert "camera_width must be an integer, got str 'wide'" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_the_go2_implements_the_whole_robot_protocol(robot: Go2RosRobot) -> None:
+    """A real robot's clock is the wall clock (the watchdog guards it); it has no map yet."""
+    from shadowhound.robot.base import Robot
+
+    assert isinstance(robot, Robot)
+    assert robot.realtime and robot.time_scale == 1.0 and robot.belief() is None
+    assert robot.last_state().stamp >= 0.0

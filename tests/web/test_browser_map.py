@@ -72,6 +72,11 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
     ARTIFACTS.mkdir(exist_ok=True)
     planned = [(p.x, p.y) for p in agent.dry_run("go to x=4, y=0").predicted_path]
     assert max(abs(y) for _, y in planned) > 0.3  # around the red ball at (3, 0)
+    # Planning looked: the ball and the box are in view. The dock behind the robot is known
+    # as a detector would report it (one call for every source of sightings).
+    belief = agent.robot.belief()
+    assert belief is not None and {o.name for o in belief.objects} >= {"red ball", "blue box"}
+    belief.sight("charging dock", -3.0, -1.0, stamp=agent.robot.now())
     errors: list[str] = []
     with sync_playwright() as p:
         browser = p.chromium.launch_persistent_context(

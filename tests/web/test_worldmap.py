@@ -13,7 +13,7 @@ from shadowhound import events as ev
 from shadowhound.state import Pose2D
 from shadowhound.web.worldmap import grid_png, grid_version
 from shadowhound.world import FREE, OCCUPIED, UNKNOWN, OccupancyGrid
-from tests.web.conftest import make_agent
+from tests.web.conftest import finished, make_agent
 
 if TYPE_CHECKING:
     from fastapi.testclient import TestClient
@@ -39,6 +39,11 @@ def pixel_at(image: Any, layout: dict[str, Any], x: float, y: float) -> int:
 
 def test_map_gives_the_grid_layout_and_objects_and_the_png_shows_them(
         client: TestClient) -> None:
+    assert client.get("/api/map").json()["objects"] == []  # nothing seen yet
+    # Planning a mission looks around first: what is in view becomes known.
+    reply = client.post("/api/mission", json={"command": "stand up", "dry_run": True})
+    assert reply.status_code == 202, reply.text
+    assert finished(client, reply.json()["mission_id"])["success"]
     world = client.get("/api/map").json()
     grid = world["grid"]
     assert grid["resolution"] == 0.05 and grid["width"] > 200 and grid["height"] > 200

@@ -12,8 +12,10 @@ import threading
 from typing import Any, TextIO
 
 from .. import events as ev
+from ..approval import ApprovalRequest
 from ..config import ShadowHoundConfig
 from ..exit_codes import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from ..result import StepStatus
 from ._base import make_agent, print_json, report_error
 
 # -- run -----------------------------------------------------------------------------------
@@ -21,20 +23,20 @@ from ._base import make_agent, print_json, report_error
 
 def _progress(stream: TextIO) -> ev.Listener:
     def show(event: ev.MissionEvent) -> None:
-        if event.kind == ev.MISSION_STARTED:
-            print(f"mission: {event.data['mission']!r}", file=stream)
-        elif event.kind == ev.PLAN_READY:
-            steps = event.data["plan"]["steps"]
-            print(f"plan: {len(steps)} step(s)", file=stream)
-        elif event.kind == ev.STEP_STARTED:
-            step = event.data["step"]
-            args = ", ".join(f"{k}={v}" for k, v in step["args"].items())
-            print(f"  [{step['index']}] {step['skill']}({args}) ...", file=stream, flush=True)
-        elif event.kind == ev.STEP_FINISHED:
-            step = event.data["step"]
-            mark = "ok" if step["status"] == "succeeded" else step["status"].upper()
-            detail = step["output"] if step["status"] == "succeeded" else step["error"]
-            print(f"  [{step['index']}] {mark}: {detail} ({step['robot_duration']:.1f} s robot "
+        if isinstance(event, ev.MissionStarted):
+            print(f"mission: {event.mission!r}", file=stream)
+        elif isinstance(event, ev.PlanReady):
+            print(f"plan: {len(event.plan.steps)} step(s)", file=stream)
+        elif isinstance(event, ev.StepStarted):
+            step = event.step
+            args = ", ".join(f"{k}={v}" for k, v in step.args.items())
+            print(f"  [{step.index}] {step.skill}({args}) ...", file=stream, flush=True)
+        elif isinstance(event, ev.StepFinished):
+            step = event.step
+            ok = step.status is StepStatus.SUCCEEDED
+            mark = "ok" if ok else step.status.value.upper()
+            detail = step.output if ok else step.error
+            print(f"  [{step.index}] {mark}: {detail} ({step.robot_duration:.1f} s robot "
                   "time)", file=stream, flush=True)
         stream.flush()
 
@@ -44,23 +46,23 @@ def _progress(stream: TextIO) -> ev.Listener:
 def _approver(agent: Any, ask: bool) -> ev.Listener:
     """Answer approval requests: with --yes at once, else by asking on the terminal."""
 
-    def decide(request: dict[str, Any]) -> None:
+    def decide(request: ApprovalRequest) -> None:
         if not ask:
-            agent.approve(request["request_id"])
+            agent.approve(request.request_id)
             return
-        print("approval needed: " + "; ".join(request["reasons"]), file=sys.stderr)
-        print(f"approve within {request['timeout']:g} s? [y/N] ", end="", file=sys.stderr,
+        print("approval needed: " + "; ".join(request.reasons), file=sys.stderr)
+        print(f"approve within {request.timeout:g} s? [y/N] ", end="", file=sys.stderr,
               flush=True)
         answer = sys.stdin.readline().strip().lower()
         if answer in ("y", "yes"):
-            agent.approve(request["request_id"])
+            agent.approve(request.request_id)
         else:
-            agent.reject(request["request_id"], "declined at the terminal")
+            agent.reject(request.request_id, "declined at the terminal")
 
     def on_event(event: ev.MissionEvent) -> None:
-        if event.kind == ev.APPROVAL_REQUIRED:
+        if isinstance(event, ev.ApprovalRequired):
             # Ask on another thread: the mission thread waits with its time-out meanwhile.
-            threading.Thread(target=decide, args=(event.data["request"],), daemon=True).start()
+            threading.Thread(target=decide, args=(event.request,), daemon=True).start()
 
     return on_event
 

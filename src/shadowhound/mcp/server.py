@@ -24,6 +24,7 @@ from mcp.shared.exceptions import MCPError
 from .. import __version__
 from .. import events as ev
 from ..agent import RobotAgent
+from ..result import StepStatus
 from ..worker import MissionJob
 from .catalogue import ToolSpec, all_tools
 from .desk import McpDesk, ToolInputError
@@ -161,8 +162,8 @@ class McpRobotServer:
         assert job is not None
         try:
             while (event := await watch.events.get()) is not None:
-                if event.kind == ev.APPROVAL_REQUIRED:
-                    asked = await self._ask_approval(ctx, event.data["request"], watch)
+                if isinstance(event, ev.ApprovalRequired):
+                    asked = await self._ask_approval(ctx, event.request.to_dict(), watch)
                     if asked is not None:  # the client asks the person and calls again
                         return asked
                 else:
@@ -176,20 +177,21 @@ class McpRobotServer:
 
     async def _report(self, ctx: ServerRequestContext[Any], event: ev.MissionEvent,
                       watch: _Watch) -> None:
-        data, total = event.data, watch.total or None
-        if event.kind == ev.PLAN_READY:
-            watch.total = len(data["plan"]["steps"])
+        total = watch.total or None
+        if isinstance(event, ev.PlanReady):
+            watch.total = len(event.plan.steps)
             await ctx.session.report_progress(0, watch.total, f"plan: {watch.total} step(s)")
-        elif event.kind == ev.STEP_STARTED:
-            step = data["step"]
-            args = ", ".join(f"{k}={v}" for k, v in step["args"].items())
-            await ctx.session.report_progress(step["index"] - 1, total,
-                                              f"[{step['index']}] {step['skill']}({args})")
-        elif event.kind == ev.STEP_FINISHED:
-            step = data["step"]
-            done = step["output"] if step["status"] == "succeeded" else step["error"]
-            await ctx.session.report_progress(step["index"], total,
-                                              f"[{step['index']}] {step['status']}: {done}")
+        elif isinstance(event, ev.StepStarted):
+            step = event.step
+            args = ", ".join(f"{k}={v}" for k, v in step.args.items())
+            await ctx.session.report_progress(step.index - 1, total,
+                                              f"[{step.index}] {step.skill}({args})")
+        elif isinstance(event, ev.StepFinished):
+            step = event.step
+            ok = step.status is StepStatus.SUCCEEDED
+            await ctx.session.report_progress(step.index, total,
+                                              f"[{step.index}] {step.status.value}: "
+                                              f"{step.output if ok else step.error}")
 
     async def _ask_approval(self, ctx: ServerRequestContext[Any], request: dict[str, Any],
                             watch: _Watch) -> types.InputRequiredResult | None:

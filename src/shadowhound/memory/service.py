@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Any
 
 from ..config import ConfigError, ShadowHoundConfig
-from ..events import MISSION_FINISHED, MISSION_STARTED, STEP_FINISHED, MissionEvent
+from ..events import MissionEvent, MissionFinished, MissionStarted, StepFinished
+from ..result import StepStatus
 from ..skills import SkillRegistry, default_registry
 from .history import MemoryStoreError, MissionHistory
 from .places import PlaceBook
@@ -128,24 +129,22 @@ class AgentMemory:
     # -- recording (agent events) ------------------------------------------------------------
 
     def on_event(self, event: MissionEvent) -> None:
-        if event.kind == MISSION_STARTED and self.history is not None:
-            self.history.mission_started(event.mission_id, event.data["mission"], event.time)
-        elif event.kind == STEP_FINISHED and self.recall is not None:
-            step = event.data["step"]
-            skill = self.skills.find(step["skill"])
-            if skill is not None and skill.remembered_as and step["status"] == "succeeded":
-                self._remember_safely(step["output"], skill.remembered_as,
-                                      mission=event.mission_id)
-        elif event.kind == MISSION_FINISHED:
-            result = event.data["result"]
-            if self.history is not None:
-                self.history.mission_finished(result, event.time)
-            if self.recall is not None and result.get("plan"):
-                robot = result.get("robot") or {}
-                summary = (f"Mission '{result['mission']}' {result['status']}: "
-                           f"{result['response']}")
-                self._remember_safely(summary, "mission", x=robot.get("x", 0.0),
-                                      y=robot.get("y", 0.0), mission=result["mission_id"])
+        if isinstance(event, MissionStarted) and self.history is not None:
+            self.history.mission_started(event.mission_id, event.mission, event.time)
+        elif isinstance(event, StepFinished) and self.recall is not None:
+            step = event.step
+            skill = self.skills.find(step.skill)
+            if skill is not None and skill.remembered_as and step.status is StepStatus.SUCCEEDED:
+                self._remember_safely(step.output, skill.remembered_as, mission=event.mission_id)
+        elif isinstance(event, MissionFinished):
+            result = event.result
+            if self.history is not None:  # the database keeps the JSON record
+                self.history.mission_finished(event.data["result"], event.time)
+            if self.recall is not None and result.plan is not None:
+                robot = result.robot
+                summary = f"Mission '{result.mission}' {result.status.value}: {result.response}"
+                x, y = (round(robot.x, 4), round(robot.y, 4)) if robot else (0.0, 0.0)
+                self._remember_safely(summary, "mission", x=x, y=y, mission=result.mission_id)
 
     def _remember_safely(self, text: str, kind: str, **meta: Any) -> None:
         recall = self.recall

@@ -1,15 +1,22 @@
-"""Planners turn text into a `Plan`. They never touch the robot."""
+"""Planners turn text into a `Plan`. They never touch the robot.
+
+Three declared protocols say what the agent may use of a planner: every `Planner` plans a
+whole mission; a `ReplanningPlanner` can also plan the rest of one after a step failed; a
+`StepwisePlanner` (react mode) proposes one skill call at a time and sees each result.
+"""
 
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from ..config import ShadowHoundConfig
-from ..plan import Plan
+from ..plan import Plan, SkillCall, Usage
 
 if TYPE_CHECKING:
+    from ..llm.backend import LLMBackend
     from ..skills import SkillRegistry
     from ..state import RobotState
 
@@ -32,14 +39,39 @@ class PlanningContext:
 class Planner(Protocol):
     """Turns a request into a Plan, or raises PlanningError saying what it did not understand.
 
-    A planner may set `needs_context = False` when it ignores the PlanningContext; it then gets
-    None and the agent spends nothing on building one. `kind` (offline | llm | hybrid |
-    explicit) is what `MissionResult.planner` records; a planner without one records "".
+    `needs_context` False says the planner ignores the PlanningContext; it then gets None and
+    the agent spends nothing on building one. `kind` (offline | llm | hybrid | explicit) is
+    what `MissionResult.planner` records.
     """
 
     name: str
+    kind: str
+    needs_context: bool
 
     def plan(self, text: str, context: Any = None) -> Plan: ...
+
+
+@runtime_checkable
+class ReplanningPlanner(Planner, Protocol):
+    """A planner that can plan the rest of a mission after a step failed."""
+
+    def replan(self, text: str, context: Any, done: list[str], failure: str) -> Plan:
+        """The remaining steps from where the robot is now; `done` are the finished steps'
+        outputs, `failure` what went wrong."""
+        ...
+
+
+StepRunner = Callable[[SkillCall], str]  # runs one proposed call; returns the observation
+
+
+@runtime_checkable
+class StepwisePlanner(Planner, Protocol):
+    """A planner that proposes one skill call at a time (react mode): `run_step` checks and
+    runs each and returns what happened."""
+
+    def react(self, text: str, context: Any, run_step: StepRunner) -> tuple[str, Usage, bool]:
+        """Returns (the answer for the user, usage, finished normally)."""
+        ...
 
 
 class FixedPlanner:
@@ -56,25 +88,29 @@ class FixedPlanner:
         return self._plan
 
 
-def make_planner(settings: ShadowHoundConfig) -> Planner:
+def make_planner(settings: ShadowHoundConfig, backend: LLMBackend | None = None) -> Planner:
     """The planner for `settings`: the offline rules, or a language model behind them.
 
     With a model configured, plan mode is hybrid unless `llm.hybrid` is off: the offline rules
     plan what they understand whole, at no model call, and the model plans the rest. React
-    mode is the model's loop from the first step.
+    mode is the model's loop from the first step. `backend` is the one client of the model
+    (the agent builds it once and shares it with chat, vision and memory).
     """
     from .rules import RulePlanner
 
     if settings.backend == "offline":
         return RulePlanner()
-    from .llm import LLMPlanner
+    from .llm import LLMPlanner, ReactPlanner
 
-    model = LLMPlanner(settings)
-    if settings.llm.hybrid and settings.llm.mode == "plan":
+    if settings.llm.mode == "react":
+        return ReactPlanner(settings, backend)
+    model = LLMPlanner(settings, backend)
+    if settings.llm.hybrid:
         from .hybrid import HybridPlanner
 
         return HybridPlanner(RulePlanner(), model)
     return model
 
 
-__all__ = ["FixedPlanner", "Planner", "PlanningContext", "make_planner"]
+__all__ = ["FixedPlanner", "Planner", "PlanningContext", "ReplanningPlanner", "StepRunner",
+           "StepwisePlanner", "make_planner"]

@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import json
 import logging
-import threading
-from collections.abc import Callable
 from typing import Any
 
 from ..config import ShadowHoundConfig
@@ -24,29 +22,23 @@ from ..llm.backend import BackendError, LLMBackend
 from ..llm.parse import ParsedReply, parse_reply
 from ..plan import Plan, PlanningError, SkillCall, Usage
 from ..skills import SkillValidationError
-from ..state import CameraFrame
-from . import PlanningContext
+from . import PlanningContext, StepRunner
 
 log = logging.getLogger(__name__)
-
-StepRunner = Callable[[SkillCall], str]
-
 
 class LLMPlanner:
     """A planner that asks a language model. Build it with the settings of one backend."""
 
     kind = "llm"
+    needs_context = True
 
-    def __init__(self, settings: ShadowHoundConfig) -> None:
+    def __init__(self, settings: ShadowHoundConfig, backend: LLMBackend | None = None) -> None:
         self.settings = settings
         self.llm = settings.llm
-        self.backend = LLMBackend(settings.backend, settings.llm)
+        # The model's client: given by the agent (one for planning, chat, vision, memory).
+        self.backend = backend or LLMBackend(settings.backend, settings.llm)
         self.name = f"{settings.backend}:{settings.llm.model}"
-        self.mode = settings.llm.mode
         self._schema_ok = True  # cleared when the server rejects response_format
-
-    def check(self) -> list[str]:
-        return self.backend.check()
 
     # -- plan mode -----------------------------------------------------------------------------
 
@@ -162,7 +154,37 @@ class LLMPlanner:
             objects=ctx.objects,
         )
 
-    # -- react mode ----------------------------------------------------------------------------
+
+def _context(context: Any) -> PlanningContext:
+    if isinstance(context, PlanningContext):
+        return context
+    from ..skills import default_registry
+
+    return PlanningContext(registry=default_registry())
+
+
+def _repair_request(problems: list[str], style: str) -> str:
+    how = "Call the tools again" if style in ("tools", "react") else "Reply with the JSON plan"
+    return ("Your plan cannot be used: " + "; ".join(problems) +
+            f". {how}, corrected, and nothing else.")
+
+
+def _assistant_turn(message: dict[str, Any], reply: ParsedReply) -> dict[str, Any]:
+    if reply.used_tools:
+        return {"role": "assistant", "content": message.get("content") or "",
+                "tool_calls": message["tool_calls"]}
+    return {"role": "assistant", "content": json.dumps(
+        {"steps": [{"skill": c.skill, "args": c.args} for c in reply.calls]})}
+
+
+def _observation(call: SkillCall, call_id: str | None, observation: str) -> dict[str, Any]:
+    if call_id is not None:
+        return {"role": "tool", "tool_call_id": call_id, "content": observation}
+    return {"role": "user", "content": f"Result of {call.skill}: {observation}"}
+
+
+class ReactPlanner(LLMPlanner):
+    """react mode: the model calls one skill at a time and sees what it did."""
 
     def react(self, text: str, context: Any, run_step: StepRunner) -> tuple[str, Usage, bool]:
         """Run the tool loop. Returns (answer for the user, usage, finished normally)."""
@@ -201,68 +223,3 @@ class LLMPlanner:
                 observation = run_step(call)
                 executed += 1
                 messages.append(_observation(call, call_id, observation))
-
-    # -- chat and vision ---------------------------------------------------------------------
-
-    def chat(self, text: str, context: Any, history: list[dict[str, str]]) -> str:
-        """Answer in words from the robot's state and missions. No tools: it cannot move."""
-        ctx = _context(context)
-        system = "\n".join(p for p in (
-            "You are ShadowHound, a Unitree Go2 quadruped robot, answering your operator "
-            "briefly. You cannot move in this conversation; missions are run separately.",
-            prompts.state_line(ctx.state), prompts.places_line(ctx.places),
-            prompts.history_lines(ctx.history, self.settings.agent.conversation_history_size),
-            prompts.memory_lines(ctx.memories),
-        ) if p)
-        try:
-            completion = self.backend.complete(
-                [{"role": "system", "content": system}, *history,
-                 {"role": "user", "content": text}])
-        except BackendError as exc:
-            return f"I cannot answer right now: {exc}"
-        return str(completion.message.get("content") or "").strip() or "(no answer)"
-
-    def describe_image(self, frame: CameraFrame, question: str,
-                       cancelled: threading.Event | None = None) -> str:
-        """Ask the (vision-capable) model about a downscaled JPEG of the frame.
-
-        Setting `cancelled` abandons the request at once (the caller checks the event)."""
-        from ..llm.vision import jpeg_data_url
-
-        try:
-            url = jpeg_data_url(frame, self.llm.vision_max_side)
-            completion = self.backend.complete([{"role": "user", "content": [
-                {"type": "text", "text": question},
-                {"type": "image_url", "image_url": {"url": url}},
-            ]}], cancelled=cancelled)
-        except (BackendError, ValueError) as exc:
-            return f"I could not look at the image: {exc}"
-        return str(completion.message.get("content") or "").strip() or "(no answer)"
-
-
-def _context(context: Any) -> PlanningContext:
-    if isinstance(context, PlanningContext):
-        return context
-    from ..skills import default_registry
-
-    return PlanningContext(registry=default_registry())
-
-
-def _repair_request(problems: list[str], style: str) -> str:
-    how = "Call the tools again" if style in ("tools", "react") else "Reply with the JSON plan"
-    return ("Your plan cannot be used: " + "; ".join(problems) +
-            f". {how}, corrected, and nothing else.")
-
-
-def _assistant_turn(message: dict[str, Any], reply: ParsedReply) -> dict[str, Any]:
-    if reply.used_tools:
-        return {"role": "assistant", "content": message.get("content") or "",
-                "tool_calls": message["tool_calls"]}
-    return {"role": "assistant", "content": json.dumps(
-        {"steps": [{"skill": c.skill, "args": c.args} for c in reply.calls]})}
-
-
-def _observation(call: SkillCall, call_id: str | None, observation: str) -> dict[str, Any]:
-    if call_id is not None:
-        return {"role": "tool", "tool_call_id": call_id, "content": observation}
-    return {"role": "user", "content": f"Result of {call.skill}: {observation}"}

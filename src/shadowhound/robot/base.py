@@ -2,15 +2,19 @@
 
 Skills drive robots only through this protocol. Motion is commanded as body-frame velocity
 and closed on the measured pose (`get_state`), so the same skill code runs on the simulator
-and on a Go2 through ROS 2.
+and on a Go2 through ROS 2. Everything the agent, the skills and the interfaces use of a robot
+is declared here, so nobody probes a robot for what it can do.
 """
 
 from __future__ import annotations
 
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from ..errors import RobotError as RobotError
 from ..state import CameraFrame, Posture, RobotState, Scan
+
+if TYPE_CHECKING:
+    from ..world import Belief
 
 
 @runtime_checkable
@@ -19,8 +23,24 @@ class Robot(Protocol):
 
     name: str
 
+    @property
+    def time_scale(self) -> float:
+        """Real seconds per robot second: 1 for a real robot, 0 for a simulator that runs as
+        fast as it can (its clock only moves when the control loop sleeps)."""
+        ...
+
+    @property
+    def realtime(self) -> bool:
+        """True when the robot's clock runs by itself (a hung skill then needs a watchdog)."""
+        ...
+
     def get_state(self) -> RobotState:
-        """The latest state (pose from odometry, posture, battery)."""
+        """The latest state (pose from odometry, posture, battery). Raises RobotError when the
+        robot cannot say (e.g. no odometry yet)."""
+        ...
+
+    def last_state(self) -> RobotState:
+        """The last known state without raising (`connected` False when it is stale)."""
         ...
 
     def send_velocity(self, vx: float, vy: float, wz: float) -> None:
@@ -29,6 +49,14 @@ class Robot(Protocol):
 
     def stop(self) -> None:
         """Zero velocity now. Safe to call from any thread, at any time."""
+        ...
+
+    def emergency_stop(self) -> None:
+        """Stop now and refuse motion and postures until `release_estop`. Thread-safe."""
+        ...
+
+    def release_estop(self) -> None:
+        """Accept commands again after `emergency_stop`."""
         ...
 
     def set_posture(self, posture: Posture) -> None:
@@ -53,6 +81,10 @@ class Robot(Protocol):
 
     def get_scan(self) -> Scan | None:
         """The latest planar range scan, or None for a robot without a range sensor."""
+        ...
+
+    def belief(self) -> Belief | None:
+        """The map and known objects the robot is told of (a fresh copy), or None."""
         ...
 
     def close(self) -> None:

@@ -47,6 +47,7 @@ from ..camera import to_camera_frame
 from ..ros.convert import raw_image_frame
 from ..ros.detections import Frames, SightingBoard, sightings_from_msg
 from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, normalize_angle
+from ..world import Belief
 from ..world.objects import KnownObject
 from . import go2_api
 from .base import RobotError
@@ -430,6 +431,9 @@ class Go2RosRobot:
         self._postures.pause(info.duration, f"{trick} (api id {info.api_id})")
         self._postures.reach(Posture.STANDING, trick)
 
+    time_scale = 1.0  # a real robot's clock is the wall clock
+    realtime = True
+
     def now(self) -> float:
         return time.monotonic()
 
@@ -443,6 +447,10 @@ class Go2RosRobot:
 
     def get_scan(self) -> Scan | None:
         """None: the driver's `scan` topic is not subscribed yet (issue 15, phase 2)."""
+        return None
+
+    def belief(self) -> Belief | None:
+        """None: no map is read from ROS yet, so nothing is known to be in the way."""
         return None
 
     def close(self) -> None:

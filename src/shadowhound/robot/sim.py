@@ -120,6 +120,11 @@ class SimRobot:
     def time_scale(self) -> float:
         return self.config.time_scale
 
+    @property
+    def realtime(self) -> bool:
+        """At time scale 0 the clock moves only when the controller sleeps."""
+        return self.config.time_scale > 0
+
     def now(self) -> float:
         """Simulated seconds. Reading the clock marks a controller at work (only controllers
         read it), so its work until its next sleep takes no simulated time."""
@@ -258,6 +263,10 @@ class SimRobot:
         with self._lock:
             self._catch_up()
             return replace(self._state, stamp=self._sim_time)
+
+    def last_state(self) -> RobotState:
+        """The simulator always knows its state."""
+        return self.get_state()
 
     def send_velocity(self, vx: float, vy: float, wz: float) -> None:
         values = (float(vx), float(vy), float(wz))

@@ -25,7 +25,7 @@ import json
 import sys
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import ParameterDescriptor
@@ -56,6 +56,9 @@ from .params import NODE_NAME, PARAMETERS, ParameterError, describe_parameters, 
 from .process import run_node
 from .rviz import RvizPublisher
 
+if TYPE_CHECKING:
+    from ..robot.go2_ros import Go2RosRobot
+
 try:  # built by scripts/build_ros.sh (ros2/shadowhound_interfaces)
     from shadowhound_interfaces.action import ExecuteMission
     from shadowhound_interfaces.srv import Approve, Chat
@@ -74,7 +77,7 @@ DIAGNOSTICS_NAME = "shadowhound: mission agent"
 _COMMANDS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _CAMERA = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                      reliability=ReliabilityPolicy.BEST_EFFORT)
-_FEEDBACK_EVENTS = (ev.PLAN_READY, ev.STEP_STARTED, ev.STEP_FINISHED)
+_FEEDBACK_EVENTS = (ev.PlanReady, ev.StepStarted, ev.StepFinished)
 
 
 class MissionNode(Node):
@@ -89,6 +92,7 @@ class MissionNode(Node):
                  **node_kwargs: Any) -> None:
         super().__init__(node_name, **node_kwargs)
         self.settings = parse_parameters(self._declare_parameters())
+        self._go2: Go2RosRobot | None = None  # the Go2 this node built (its topics are logged)
         if agent is None:
             settings = self.settings.agent_settings()
             robot = self._make_go2_robot() if self.settings.robot == "go2" else None
@@ -121,7 +125,7 @@ class MissionNode(Node):
             values[name] = self.declare_parameter(name, default, descriptor).value
         return values
 
-    def _make_go2_robot(self) -> Any:
+    def _make_go2_robot(self) -> Go2RosRobot:
         """A Go2RosRobot on this node's context. Its camera is off: the node's own camera
         subscription (`camera_topic`) gives the agent its frames."""
         try:
@@ -131,10 +135,11 @@ class MissionNode(Node):
                                  f"go2_ros2_sdk workspace or run scripts/build_ros.sh ({exc})"
                                  ) from exc
         try:
-            return Go2RosRobot(Go2RosConfig(**self.settings.go2_options(), camera_topic=""),
-                               context=self.context)
+            self._go2 = Go2RosRobot(Go2RosConfig(**self.settings.go2_options(),
+                                                 camera_topic=""), context=self.context)
         except RobotError as exc:
             raise ParameterError(f"robot go2: {exc}") from exc
+        return self._go2
 
     def _build_interfaces(self) -> None:
         s = self.settings
@@ -178,8 +183,8 @@ class MissionNode(Node):
                  f"(profile {self.agent.settings.profile}), robot {self.agent.robot.name}, "
                  f"missions on {self.resolve_topic_name(s.mission_topic)}, camera "
                  f"{s.camera_topic} ({'compressed' if s.camera_compressed else 'raw'})")
-        topic = getattr(self.agent.robot, "topic", None)
-        if s.robot == "go2" and topic is not None:
+        if self._go2 is not None:
+            topic = self._go2.topic
             velocity = topic(s.cmd_vel_topic) if s.cmd_vel_topic else \
                 f"{topic('cmd_vel')} or {topic('cmd_vel_out')} (whichever is subscribed)"
             battery = topic(s.battery_topic) if s.battery_topic else \
@@ -320,15 +325,14 @@ class MissionNode(Node):
             executor.wake()
 
     def _send_feedback(self, goal_handle: Any, event: ev.MissionEvent) -> None:
-        if event.kind not in _FEEDBACK_EVENTS:
+        if not isinstance(event, _FEEDBACK_EVENTS):
             return
-        diagnostics = self._diagnostics()
-        step = event.data.get("step") or {}
-        count = (len(event.data["plan"]["steps"]) if event.kind == ev.PLAN_READY
-                 else int(diagnostics.get("steps") or 0))
+        progress = self.agent.diagnostics().progress
+        step = event.step if isinstance(event, ev.StepStarted | ev.StepFinished) else None
+        count = len(event.plan.steps) if isinstance(event, ev.PlanReady) else progress.steps
         goal_handle.publish_feedback(ExecuteMission.Feedback(
-            current_skill=str(step.get("skill") or ""), step_index=int(step.get("index") or 0),
-            step_count=count, progress=float(diagnostics.get("progress") or 0.0)))
+            current_skill=step.skill if step else "", step_index=step.index if step else 0,
+            step_count=count, progress=progress.progress))
 
     # -- chat ------------------------------------------------------------------------------
 
@@ -349,8 +353,8 @@ class MissionNode(Node):
     # -- approvals ---------------------------------------------------------------------------
 
     def _announce_approval(self, event: ev.MissionEvent) -> None:
-        if event.kind == ev.APPROVAL_REQUIRED:
-            self._approval_pub.publish(String(data=json.dumps(event.data["request"])))
+        if isinstance(event, ev.ApprovalRequired):
+            self._approval_pub.publish(String(data=json.dumps(event.request.to_dict())))
 
     def _on_approve(self, request: Any, response: Any) -> Any:
         wanted = request.request_id.strip() or None
@@ -402,7 +406,7 @@ class MissionNode(Node):
 
     def diagnostics_message(self) -> DiagnosticArray:
         """The agent's diagnostics as one DiagnosticStatus (what is published at 1 Hz)."""
-        diagnostics = self._diagnostics()
+        diagnostics = self.agent.diagnostics().to_dict()  # the one conversion, then key-values
         extra = {"node": self.get_fully_qualified_name(), "robot": self.agent.robot.name,
                  "camera_frames": self._frames["received"],
                  "camera_dropped": self._frames["dropped"],
@@ -427,18 +431,8 @@ class MissionNode(Node):
             state = self._last_robot_state()
         self._robot_pub.publish(String(data=robot_status_json(state)))
 
-    def _diagnostics(self) -> dict[str, Any]:
-        """The agent's diagnostics; when the robot cannot say where it is (RobotError, e.g.
-        lost odometry) a WARN report with the reason, so the node keeps reporting."""
-        try:
-            return self.agent.get_diagnostics()
-        except RobotError as exc:
-            return {"status": "failed", "errors": [str(exc)], "estop": self.agent.estop_latched,
-                    "backend": self.agent.settings.backend, "robot": self._last_robot_state()}
-
     def _last_robot_state(self) -> dict[str, Any]:
-        last = getattr(self.agent.robot, "last_state", None)
-        return last().to_dict() if last is not None else {"connected": False}
+        return self.agent.robot.last_state().to_dict()
 
 
 MissionAgentNode = MissionNode

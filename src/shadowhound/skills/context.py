@@ -54,9 +54,8 @@ class PlanEnv:
 
 
 def robot_belief(robot: Robot) -> Belief | None:
-    """The map a robot offers (`belief()`: the simulator's scene), or None when it has none."""
-    source = getattr(robot, "belief", None)
-    return source() if callable(source) else None
+    """The map a robot offers (`Robot.belief`: the simulator's scene), or None when it has none."""
+    return robot.belief()
 
 
 def robot_objects(robot: Robot, belief: Belief | None = None) -> tuple[KnownObject, ...]:

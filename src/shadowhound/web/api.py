@@ -191,14 +191,15 @@ async def status(request: Request) -> dict[str, Any]:
 
 
 def current_status(web: WebContext) -> dict[str, Any]:
-    d = web.agent.get_diagnostics()
-    running = web.desk.running()
+    d = web.agent.diagnostics()
+    p, running = d.progress, web.desk.running()
     return {
-        "status": d["status"], "mission_id": d["mission_id"], "mission": d["mission"],
-        "current_skill": d["current_skill"], "step": d["step"], "steps": d["steps"],
-        "progress": d["progress"], "estop": d["estop"], "busy": web.desk.worker.busy,
+        "status": p.status.value, "mission_id": p.mission_id, "mission": p.mission,
+        "current_skill": p.skill, "step": p.step, "steps": p.steps,
+        "progress": round(p.progress, 3), "estop": d.estop, "busy": web.desk.worker.busy,
         "running": running.id if running else None, "queued": web.desk.queued(),
-        "pending_approval": d["pending_approval"], "robot": d["robot"], "time": time.time(),
+        "pending_approval": d.pending_approval.to_dict() if d.pending_approval else None,
+        "robot": d.robot_dict(), "time": time.time(),
     }
 
 
@@ -206,7 +207,7 @@ def current_status(web: WebContext) -> dict[str, Any]:
 async def diagnostics(request: Request) -> dict[str, Any]:
     """The agent's diagnostics, the original dashboard's keys, and the web server's own."""
     web = ctx(request)
-    d = web.agent.get_diagnostics()
+    d = web.agent.diagnostics().to_dict()
     settings = web.agent.settings
     d.update(agent_backend=settings.backend, agent_model=settings.llm.model or "offline",
              robot_mode=d["robot"].get("posture"), last_update=time.time(),

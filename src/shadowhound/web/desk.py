@@ -170,7 +170,7 @@ class MissionDesk:
     def _on_event(self, event: MissionEvent) -> None:
         """Runs on the emitting thread (the worker's, or the one that pressed the e-stop)."""
         self.feed.publish(event.kind, {**event.data, "mission_id": event.mission_id or None,
-                                       "event_time": event.time})
+                                       "event_time": event.time})  # the JSON edge
 
     def _trim(self) -> None:
         """Forget the oldest finished records beyond `keep` (persistent history comes later)."""

@@ -1,0 +1,415 @@
+"""One mission, from text to `MissionResult`: read, plan, check, approve, execute, report.
+
+`MissionRun` is made by the agent for each mission (and each dry run) and reads top to bottom:
+`execute` (plan mode), `react` (the model proposes one call at a time) and `dry_run` all read
+the mission once (its text and the robot's state), and every batch of steps they would run
+passes the one `check` (checking.check_plan: validation, then the governor over the whole
+predicted path) before anything moves. The run touches the robot only through the Robot
+protocol and the governor's step checks.
+
+What runs share across missions (the robot, the governor, the event bus, the progress tracker,
+the e-stop and cancel signal) is the agent's `Crew` (crew.py). The module is a little over 400
+lines because the six stages of one mission read best together, in order.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Any
+
+from . import events as ev
+from .admission import ESTOP_LATCHED, mission_text_problem
+from .approval import ApprovalRequest
+from .budget import MissionBudget
+from .checking import CheckedPlan, check_plan
+from .crew import Crew
+from .plan import Plan, PlanningError, SkillCall, Usage
+from .planning import Planner, PlanningContext, ReplanningPlanner, StepwisePlanner
+from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing, compose_response
+from .robot.base import RobotError
+from .skills import (
+    MissionCancelled,
+    PlanEnv,
+    SkillContext,
+    SkillError,
+    ValidatedCall,
+)
+from .skills.objects import see_at_start
+from .state import RobotState
+
+log = logging.getLogger(__name__)
+
+
+class MissionRun:
+    """One mission. Make one per mission; call `execute` (or `dry_run`) once."""
+
+    def __init__(self, crew: Crew, planner: Planner, mission_id: str, text: Any) -> None:
+        self.crew = crew
+        self.robot = crew.robot
+        self.planner = planner
+        self.id = mission_id
+        self.text = text
+        self.started = time.perf_counter()
+        self.timing = Timing()
+        self.steps: list[StepResult] = []
+        self.start: RobotState | None = None
+        self.env: PlanEnv | None = None
+
+    # -- the mission, stage by stage --------------------------------------------------------
+
+    def execute(self) -> MissionResult:
+        """Run the mission (the caller holds the agent's one-mission lock)."""
+        refusal = self.read(moving=True)
+        if refusal is not None:
+            return self.refuse(refusal)
+        self.begin()
+        if isinstance(self.planner, StepwisePlanner):
+            return self.react(self.planner)
+        plan = self.plan()
+        if isinstance(plan, MissionResult):
+            return plan
+        checked = self.check(plan, self._start(), first=1)
+        problems = checked.problems + checked.approvals if checked.problems else \
+            self.approve(checked.steps, checked)
+        if problems:
+            return self.refused_before_moving(plan, checked.steps, problems)
+        self.emit(ev.PlanReady.of(self.id, plan, ((p.x, p.y) for p in checked.path)))
+        self.steps = checked.steps
+        status, error = self.run_steps(checked.steps, checked.calls)
+        if status is MissionStatus.FAILED and isinstance(self.planner, ReplanningPlanner):
+            status, error = self.replan(self.planner, plan, error)
+        return self.report(status, compose_response(status, self.steps, plan, error,
+                                                    self.crew.registry), plan,
+                           error=error)
+
+    def dry_run(self) -> MissionResult:
+        """Plan and check without moving: the plan, the predicted path, any refusals."""
+        refusal = self.read(moving=False)
+        if refusal is not None:
+            return self.refuse(refusal, record=False)
+        start = self._start()
+        try:
+            plan = self.planner.plan(self.text, self._context())
+        except PlanningError as exc:
+            return self.refuse(exc.message, record=False)
+        self.timing.agent_duration = self.timing.total_duration = self._elapsed()
+        checked = self.check(plan, start, first=1)
+        end, problems = checked.path[-1], checked.problems
+        if problems:
+            response = "Dry run: the plan would be refused: " + "; ".join(problems)
+        else:
+            response = (f"Dry run: {len(checked.steps)} step(s) would run and end near "
+                        f"x={end.x:.2f} m, y={end.y:.2f} m; nothing moved.")
+            if checked.approvals:
+                response += " It needs approval: " + "; ".join(checked.approvals) + "."
+        return MissionResult(self.id, self.text, not problems, response, MissionStatus.IDLE,
+                             checked.steps, self.robot.get_state(), self.timing, plan.usage,
+                             plan, problems, None if not problems else response, True,
+                             checked.path)
+
+    # 1. Read: the text, the e-stop, and the robot's state, once, before planning.
+
+    def read(self, moving: bool) -> str | None:
+        """Why the mission cannot start, or None (then `start` and `env` are set)."""
+        text, limit = self.text, self.crew.settings.agent.max_mission_chars
+        if not isinstance(text, str):
+            self.text = repr(text)[:200]
+        elif len(text) > limit:
+            self.text = text[:200] + "..."
+        if moving and self.crew.stop.estop_latched and isinstance(text, str):
+            return ESTOP_LATCHED
+        if problem := mission_text_problem(text, limit):
+            return problem
+        try:
+            self.start = self.robot.get_state()
+        except RobotError as exc:  # e.g. no odometry from a real robot: do not plan blind
+            return f"the robot cannot report its state: {exc}"
+        belief = self.robot.belief()
+        see_at_start(self.robot, belief, self.crew.memory)  # objects in view count as known
+        self.env = PlanEnv(self.crew.settings, self.start.pose, self.crew.places(),
+                           MissionBudget.start(self.start, self.robot.now), belief)
+        return None
+
+    def begin(self) -> None:
+        self.crew.stop.cancelled.clear()
+        self.crew.stop.cause = None
+        self.crew.tracker.start(self.id, self.text)
+        self.emit(ev.MissionStarted(self.id, self.text))
+
+    # 2. Plan. The planner never touches the robot.
+
+    def plan(self) -> Plan | MissionResult:
+        t = time.perf_counter()
+        try:
+            plan = self.planner.plan(self.text, self._context())
+        except PlanningError as exc:
+            self.timing.agent_duration = time.perf_counter() - t
+            if self.crew.stop.cancelled.is_set():  # the wait on the model was abandoned
+                return self.report(MissionStatus.STOPPED, self.crew.stop.reason(), None,
+                                   usage=exc.usage)
+            return self.report(MissionStatus.FAILED, exc.message, None, usage=exc.usage)
+        self.timing.agent_duration = time.perf_counter() - t
+        if self.crew.stop.cancelled.is_set():
+            return self.report(MissionStatus.STOPPED, self.crew.stop.reason(), plan)
+        return plan
+
+    # 3. Check: every batch of steps (plan, re-plan, react step, dry run) passes here.
+
+    def check(self, plan: Plan, start: RobotState, first: int) -> CheckedPlan:
+        c = self.crew
+        return check_plan(plan, c.registry, c.governor, c.settings, self._env(), start, first)
+
+    # 4. Approve: risky plans wait for a person.
+
+    def approve(self, steps: list[StepResult], checked: CheckedPlan) -> list[str]:
+        """[] when nothing needs approval or a person approved (the mission's budget then
+        holds the calls as approved); otherwise the refusal."""
+        if not checked.approvals:
+            return []
+        reasons = checked.approvals
+        c = self.crew
+        if not c.approvals.enabled:
+            return ["needs approval, and no interface that can ask a person is attached: "
+                    + "; ".join(reasons)]
+        request = ApprovalRequest(self.id, self.text, [s.to_dict() for s in steps], reasons,
+                                  c.settings.safety.approval_timeout)
+        c.approvals.open(request)  # before the event, so an instant answer finds it
+        self.emit(ev.ApprovalRequired(self.id, request))
+        refused = c.approvals.wait(request, c.stop.cancelled)
+        self.emit(ev.ApprovalDecided(self.id, refused is None, refused))
+        budget = self._env().budget
+        if refused is None and budget is not None:
+            budget.grant(checked.calls)
+        if refused is None:
+            return []
+        return [f"not approved ({refused}): " + "; ".join(reasons)]
+
+    def refused_before_moving(self, plan: Plan, steps: list[StepResult],
+                              problems: list[str]) -> MissionResult:
+        for s in steps:
+            s.status = StepStatus.SKIPPED
+        self.steps = steps
+        if self.crew.stop.cancelled.is_set():
+            return self.report(MissionStatus.STOPPED, self.crew.stop.reason(), plan,
+                               refusals=problems)
+        return self.report(MissionStatus.FAILED, "Refused before moving: " + "; ".join(problems),
+                           plan, refusals=problems)
+
+    # 5. Execute: the steps in order; the first failure stops the mission and the robot.
+
+    def run_steps(self, steps: list[StepResult],
+                  calls: list[ValidatedCall]) -> tuple[MissionStatus, str | None]:
+        self.crew.tracker.set_status(MissionStatus.EXECUTING)
+        self.crew.tracker.at_least_steps(steps[-1].index if steps else 0)
+        for position, (step, call) in enumerate(zip(steps, calls, strict=True)):
+            outcome = self.run_step(step, call)
+            if outcome is not MissionStatus.SUCCEEDED:
+                self.robot.stop()
+                for later in steps[position + 1:]:
+                    later.status = StepStatus.SKIPPED
+                return outcome, step.error
+        return MissionStatus.SUCCEEDED, None
+
+    def replan(self, planner: ReplanningPlanner, plan: Plan,
+               error: str | None) -> tuple[MissionStatus, str | None]:
+        """A failed step may be re-planned once, from where the robot is now."""
+        status: MissionStatus = MissionStatus.FAILED
+        if not self.crew.settings.agent.replan_on_failure:
+            return status, error
+        done = [s.output for s in self.steps if s.status is StepStatus.SUCCEEDED]
+        t = time.perf_counter()
+        now = self._state_or_none()
+        again: Plan | None = None
+        try:
+            again = planner.replan(self.text, self._context(now, ""), done, error or "")
+            plan.usage.add(again.usage)
+        except PlanningError as exc:
+            plan.usage.add(exc.usage)
+            error = f"{error}; re-planning failed: {exc.message}"
+        self.timing.agent_duration += time.perf_counter() - t
+        now = self._state_or_none()
+        if again is not None and now is not None and not self.crew.stop.cancelled.is_set():
+            more = self.check(again, now, first=len(self.steps) + 1)
+            problems = more.problems + [f"needs approval: {a}" for a in more.approvals]
+            if problems:
+                error = f"{error}; the new plan was refused: {'; '.join(problems)}"
+            else:
+                plan.notes.append(f"re-planned after: {error}")
+                plan.steps += again.steps
+                self.steps += more.steps
+                self.crew.tracker.set_steps(len(self.steps))
+                status, error = self.run_steps(more.steps, more.calls)
+        if status is MissionStatus.FAILED and self.crew.stop.cancelled.is_set():
+            status, error = MissionStatus.STOPPED, self.crew.stop.reason()
+        return status, error
+
+    def react(self, planner: StepwisePlanner) -> MissionResult:
+        """The model calls one skill at a time; each passes the same check first."""
+        refusals: list[str] = []
+        stop = self.crew.stop
+        self.crew.tracker.set_status(MissionStatus.EXECUTING)
+
+        def run_step(call: SkillCall) -> str:
+            # Each step is a batch of one, checked against what the mission already used.
+            checked = self.check(Plan([call], text=self.text), self.robot.get_state(),
+                                 first=len(self.steps) + 1)
+            step = checked.steps[0]
+            step.skill = str(call.skill)
+            self.steps.append(step)
+            self.crew.tracker.set_steps(len(self.steps))
+            if checked.invalid[0]:
+                step.status, step.error = StepStatus.SKIPPED, "; ".join(checked.invalid[0])
+                return f"invalid call, not run: {step.error}"
+            valid = checked.calls[0]
+            step.skill, step.args = valid.name, valid.args_dict()  # as a person is asked
+            found = checked.problems or self.approve([step], checked)
+            if found:
+                step.status, step.error = StepStatus.SKIPPED, "; ".join(found)
+                refusals.extend(found)
+                return f"refused by the safety limits, not run: {step.error}"
+            outcome = self.run_step(step, valid)
+            if outcome is MissionStatus.STOPPED:
+                raise MissionCancelled(step.error or "mission cancelled")
+            return step.output if outcome is MissionStatus.SUCCEEDED else f"failed: {step.error}"
+
+        t = time.perf_counter()
+        usage = Usage()
+        status = MissionStatus.SUCCEEDED
+        try:
+            answer, usage, finished = planner.react(self.text, self._context(), run_step)
+        except PlanningError as exc:
+            answer, usage, finished = exc.message, exc.usage, False
+            if stop.cancelled.is_set():  # the wait on the model was abandoned: stopped
+                answer, status = stop.reason(), MissionStatus.STOPPED
+        except MissionCancelled:
+            answer, finished, status = stop.reason(), False, MissionStatus.STOPPED
+        except RobotError as exc:
+            answer, finished = f"the robot cannot report its state: {exc}", False
+        self.timing.agent_duration = max(0.0, time.perf_counter() - t
+                                         - self.timing.execution_duration)
+        failed = [s for s in self.steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)]
+        if status is not MissionStatus.STOPPED and (not finished or failed or refusals):
+            status = MissionStatus.FAILED
+        if status is MissionStatus.SUCCEEDED and stop.cancelled.is_set():
+            status, answer = MissionStatus.STOPPED, stop.reason()
+        if refusals and status is MissionStatus.FAILED:
+            answer = f"{answer} Refused: {'; '.join(refusals)}."
+        plan = Plan([SkillCall(s.skill, s.args, s.label) for s in self.steps], text=self.text,
+                    usage=usage, planner=planner.name, planned_by="llm")
+        return self.report(status, answer, plan, refusals=refusals,
+                           error=None if status is MissionStatus.SUCCEEDED else answer)
+
+    def run_step(self, step: StepResult, call: ValidatedCall) -> MissionStatus:
+        """One checked step on the robot: the governor's step check, the skill, its outcome."""
+        robot, c = self.robot, self.crew
+        env = self._env()
+        step.status = StepStatus.RUNNING
+        step.started_at = time.time()
+        c.tracker.step_started(call.name, step.index)
+        self.emit(ev.StepStarted.of(self.id, step))
+        wall, robot_t0 = time.perf_counter(), robot.now()
+        status = MissionStatus.SUCCEEDED
+        watchdog = c.arm_watchdog()
+        ctx = SkillContext(robot, env, c.stop.cancelled, camera=c.camera, vision=c.vision,
+                           memory=c.memory,
+                           on_progress=lambda f: c.tracker.step_progress(step.index, f),
+                           heartbeat=watchdog.beat if watchdog else lambda _moving: None)
+        try:
+            before = robot.get_state()
+            refused = c.governor.check_step(call, before, env)
+            if refused:
+                raise SkillError("refused by the safety governor: " + "; ".join(refused))
+            ctx.start_clock(call.skill.timeout_for(call.args, env))
+            ctx.check()
+            output = call.skill.run(ctx, call.args)
+            off_target = c.governor.check_outcome(call, before, robot.get_state(), env)
+            if off_target:
+                raise SkillError(off_target)
+            step.output = "; ".join([*ctx.notes, output])
+            step.status = StepStatus.SUCCEEDED
+        except MissionCancelled:
+            robot.stop()
+            step.status, step.error = StepStatus.CANCELLED, c.stop.reason()
+            status = MissionStatus.STOPPED
+        except (SkillError, RobotError) as exc:
+            robot.stop()
+            step.status, step.error = StepStatus.FAILED, str(exc)
+            status = MissionStatus.FAILED
+        except Exception as exc:  # a bug in a skill must still leave the robot stopped
+            log.exception("skill %s crashed", call.name)
+            robot.stop()
+            step.status, step.error = StepStatus.FAILED, f"internal error: {exc!r}"
+            status = MissionStatus.FAILED
+        if watchdog:
+            watchdog.disarm()
+        step.duration = time.perf_counter() - wall
+        step.robot_duration = robot.now() - robot_t0
+        self.timing.execution_duration += step.duration
+        self.timing.robot_duration += step.robot_duration
+        if step.status is StepStatus.SUCCEEDED:  # a stopped step keeps the progress it made
+            c.tracker.step_progress(step.index, 1.0)
+        self.emit(ev.StepFinished.of(self.id, step))
+        return status
+
+    # 6. Report: one record for the history, the diagnostics and the listeners.
+
+    def report(self, status: MissionStatus, response: str, plan: Plan | None, *,
+               error: str | None = None, usage: Usage | None = None,
+               refusals: list[str] | None = None) -> MissionResult:
+        c = self.crew
+        if status is not MissionStatus.SUCCEEDED:
+            self.robot.stop()
+            error = error or response
+            c.note_error(error)
+        self.timing.total_duration = self._elapsed()
+        result = MissionResult(
+            self.id, self.text, status is MissionStatus.SUCCEEDED, response, status, self.steps,
+            self._state_or_none(), self.timing, usage or (plan.usage if plan else Usage()),
+            plan, refusals or [], error, planner=c.planner_kind,
+        )
+        c.history.append(result)
+        c.tracker.finished(status)
+        self.emit(ev.MissionFinished(self.id, result))
+        return result
+
+    def refuse(self, reason: str, record: bool = True) -> MissionResult:
+        """Refused before anything started (no mission events)."""
+        result = MissionResult(self.id, str(self.text), False, f"Refused: {reason.rstrip('.')}.",
+                               MissionStatus.FAILED, robot=self._state_or_none(), error=reason,
+                               refusals=[reason])
+        result.timing.total_duration = self._elapsed()
+        if record:
+            self.crew.note_error(reason)
+            self.crew.history.append(result)
+            self.crew.tracker.set_status(MissionStatus.FAILED)
+        return result
+
+    # -- helpers ----------------------------------------------------------------------------
+
+    def emit(self, event: ev.MissionEvent) -> None:
+        self.crew.events.emit(event)
+
+    def _start(self) -> RobotState:
+        assert self.start is not None, "read() first"
+        return self.start
+
+    def _env(self) -> PlanEnv:
+        assert self.env is not None, "read() first"
+        return self.env
+
+    def _context(self, state: RobotState | None = None,
+                 text: str | None = None) -> PlanningContext | None:
+        return self.crew.planning_context(self.text if text is None else text, self.planner,
+                                          state or self._start())
+
+    def _elapsed(self) -> float:
+        return time.perf_counter() - self.started
+
+    def _state_or_none(self) -> RobotState | None:
+        """The robot's state for a record; None when the robot cannot say (never raises)."""
+        try:
+            return self.robot.get_state()
+        except RobotError as exc:
+            log.warning("robot state unavailable: %s", exc)
+            return None
