@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 from ..state import CameraFrame, Posture, RobotState, Scan
+from .navigator import Navigator
 
 
 class RobotError(Exception):
@@ -56,6 +57,10 @@ class Robot(Protocol):
 
     def get_scan(self) -> Scan | None:
         """The latest planar range scan, or None for a robot without a range sensor."""
+        ...
+
+    def navigator(self) -> Navigator | None:
+        """The robot's navigation server (Nav2's NavigateToPose), or None when it has none."""
         ...
 
     def close(self) -> None:

@@ -18,6 +18,14 @@ Written against how the driver really behaves (docs/go2.md):
 - battery: a sensor_msgs/BatteryState topic when one is configured and publishing, else
   unknown (None): the driver publishes no battery level.
 - camera: `camera/image_raw` (sensor_msgs/Image) or a topic ending in `compressed`.
+- map: nav_msgs/OccupancyGrid on `map` (slam_toolbox, map_server; transient local), read into
+  the core's grid with its origin and resolution: `belief()`. Poses are odometry's, so the map
+  is taken to be in the odometry frame; a map in another frame (SLAM's `map`) is used as if the
+  two coincided (true until odometry drifts; there is no TF here), with a warning. No map:
+  `belief()` is None and paths are straight lines.
+- scan: sensor_msgs/LaserScan on `scan`, taken at the pose odometry gave when it arrived.
+- navigation: Nav2's NavigateToPose on `navigate_to_pose` (`navigator()`, go2_nav2.py);
+  `stop` and `emergency_stop` cancel its goals.
 
 The robot has its own rclpy node and executor thread, so it works inside the MissionNode
 process (sharing its context) or in a plain script (it then initialises a private context).
@@ -34,19 +42,23 @@ from dataclasses import dataclass, replace
 import rclpy
 from geometry_msgs.msg import Twist
 from go2_interfaces.msg import Go2State, WebRtcReq
+from nav_msgs.msg import OccupancyGrid as GridMsg
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import BatteryState, CompressedImage, Image
+from sensor_msgs.msg import BatteryState, CompressedImage, Image, LaserScan
 
 from ..camera import to_camera_frame
 from ..ros.convert import raw_image_frame
-from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
+from ..ros.world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
+from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, normalize_angle
+from ..world import DEFAULT_ROBOT_RADIUS, Belief, GridError
 from . import go2_api
 from .base import RobotError
 from .go2_motion import MotionTracker
+from .go2_nav2 import Nav2Navigator
 from .go2_posture import STEPS, PostureWatch
 from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
 
@@ -83,6 +95,11 @@ class Go2RosConfig:
     linear_accel: float = 1.0  # m/s^2 the robot speeds up and brakes at (prediction model)
     angular_accel: float = 3.0  # rad/s^2
     firmware_tricks: bool = False  # flips, handstand, 1301-1305: only if the firmware has them
+    map_topic: str = "map"  # nav_msgs/OccupancyGrid; '' = no map: straight-line paths
+    scan_topic: str = "scan"  # sensor_msgs/LaserScan; '' = none
+    scan_timeout: float = 1.0  # seconds after which a scan is too old to use
+    nav2_action: str = "navigate_to_pose"  # Nav2's NavigateToPose; '' = no Nav2
+    robot_radius: float = DEFAULT_ROBOT_RADIUS  # metres kept from obstacles on the map
     node_name: str = "shadowhound_go2"
 
 
@@ -110,6 +127,9 @@ class Go2RosRobot:
         self._posture = Posture.STANDING  # until go2_states says otherwise
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
+        self._odom_frame = "odom"  # odometry's header.frame_id, once it arrives
+        self._map: Belief | None = None  # the latest map, inflated once per map
+        self._scan: tuple[float, Scan] | None = None  # (receipt, scan)
         self._command = (0.0, 0.0, 0.0)
         self._halted = True  # no velocity commanded since the last stop()
         self._last_sent = 0.0
@@ -132,6 +152,8 @@ class Go2RosRobot:
         self._postures.topic = self.topic(c.state_topic)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
+        self._navigator = Nav2Navigator(self.node, c.nav2_action, self._executor.create_task) \
+            if c.nav2_action else None
         self._thread = threading.Thread(target=self._spin, name="go2-ros", daemon=True)
         self._thread.start()
 
@@ -148,6 +170,10 @@ class Go2RosRobot:
             compressed = c.camera_topic.rstrip("/").endswith("compressed")
             n.create_subscription(CompressedImage if compressed else Image, c.camera_topic,
                                   self._on_compressed if compressed else self._on_image, _SENSOR)
+        if c.map_topic:
+            n.create_subscription(GridMsg, c.map_topic, self._on_map, MAP_QOS)
+        if c.scan_topic:
+            n.create_subscription(LaserScan, c.scan_topic, self._on_scan, _SENSOR)
         n.create_timer(_KEEPALIVE_PERIOD, self._keep_alive)
         n.create_timer(5.0, self._warn_without_odometry)
 
@@ -180,6 +206,7 @@ class Go2RosRobot:
         yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
         now = time.monotonic()
         with self._lock:
+            self._odom_frame = msg.header.frame_id or self._odom_frame
             last = self._tracker.last_sample()
             if last is not None:
                 step = math.hypot(p.x - last.x, p.y - last.y)
@@ -197,6 +224,39 @@ class Go2RosRobot:
         if posture is not None:
             with self._lock:
                 self._posture = posture
+
+    def _on_map(self, msg: GridMsg) -> None:
+        log = self.node.get_logger()
+        try:
+            grid = grid_from_msg(msg)
+        except GridError as exc:
+            log.warning(f"ignored a map on {self.topic(self.config.map_topic)}: {exc}")
+            return
+        with self._lock:
+            odom = self._odom_frame
+        frame = msg.header.frame_id
+        if frame and frame.lstrip("/") != odom.lstrip("/"):
+            log.warning(f"the map is in frame {frame!r}, poses in {odom!r}: without TF they are "
+                        "taken as one frame (right while odometry has not drifted from the "
+                        "map; see docs/go2-nav2.md)", throttle_duration_sec=60.0)
+        belief = Belief(grid, robot_radius=self.config.robot_radius)
+        _ = belief.inflated  # inflated once here, off the mission's thread
+        with self._lock:
+            self._map = belief
+        log.info(f"map {grid.width} x {grid.height} at {grid.resolution:g} m from "
+                 f"{self.topic(self.config.map_topic)}", throttle_duration_sec=30.0)
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        now = time.monotonic()
+        with self._lock:
+            pose = self._tracker.pose(now)
+        try:
+            scan = scan_from_msg(msg, Pose2D(*pose), now)
+        except ValueError as exc:
+            self.node.get_logger().warning(f"dropped a scan: {exc}", throttle_duration_sec=5.0)
+            return
+        with self._lock:
+            self._scan = (now, scan)
 
     def _on_battery(self, msg: BatteryState) -> None:
         percent = float(msg.percentage) * 100.0
@@ -321,6 +381,8 @@ class Go2RosRobot:
         """StopMove now (thread-safe); the keep-alive goes quiet. Under the send lock, so no
         Twist read before the stop can go out after it (the robot would walk on for a second)."""
         now = time.monotonic()
+        if self._navigator is not None:  # else Nav2's controller drives on
+            self._navigator.cancel_all()
         with self._send_lock:
             with self._lock:
                 self._command = (0.0, 0.0, 0.0)
@@ -399,8 +461,30 @@ class Go2RosRobot:
         return self._frame
 
     def get_scan(self) -> Scan | None:
-        """None: the driver's `scan` topic is not subscribed yet (issue 15, phase 2)."""
-        return None
+        """The latest scan from `scan`, or None when none arrived within `scan_timeout`."""
+        with self._lock:
+            latest = self._scan
+        if latest is None or time.monotonic() - latest[0] > self.config.scan_timeout:
+            return None
+        return latest[1]
+
+    def belief(self) -> Belief | None:
+        """The latest map from `map` (a fresh copy: a mission may update it from scans), or
+        None before one arrives (then paths are straight lines)."""
+        with self._lock:
+            b = self._map
+        if b is None:
+            return None
+        grid = b.grid.copy()
+        return Belief(grid, b.objects, b.robot_radius, b.room, replace(b.inflated, grid=grid))
+
+    def navigator(self) -> Nav2Navigator | None:
+        """Nav2's NavigateToPose client (goals in the odometry frame), or None when the
+        `nav2_action` is ''. Whether a server answers is its `ready()`."""
+        if self._navigator is not None:
+            with self._lock:
+                self._navigator.frame = self._odom_frame
+        return self._navigator
 
     def close(self) -> None:
         if self._closed:
@@ -410,6 +494,8 @@ class Go2RosRobot:
         self._closed = True
         self._thread.join(2.0)
         self._executor.shutdown(timeout_sec=1.0)
+        if self._navigator is not None:
+            self._navigator.destroy()
         self.node.destroy_node()
         if self._own_context:
             rclpy.try_shutdown(context=self._context)

@@ -36,6 +36,7 @@ from ..world import Belief
 from . import scene, sensors
 from .base import RobotError
 from .go2_api import TRICKS
+from .navigator import Navigator
 
 _SUBSTEP = 0.01  # seconds of physics per integration step
 _CONTROLLER_GRACE = 0.25  # wall seconds between sleeps that still count as one ticking loop
@@ -370,6 +371,11 @@ class SimRobot:
         b = self._belief
         grid = b.grid.copy()
         return Belief(grid, b.objects, b.robot_radius, b.room, replace(b.inflated, grid=grid))
+
+    def navigator(self) -> Navigator | None:
+        """None: the simulator walks with the project's own planner (`shadowhound sim-driver`
+        serves navigate_to_pose over ROS)."""
+        return None
 
     def close(self) -> None:
         self.stop()

@@ -8,7 +8,7 @@ from pydantic import ConfigDict, Field, model_validator
 
 from ..state import Pose2D, normalize_angle
 from ..world import PlanError, apply_scan, plan_route
-from . import motion
+from . import motion, navigate
 from .arguments import (
     Angle,
     Count,
@@ -205,7 +205,14 @@ def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, f
 def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     ctx.ensure_standing()
     x, y = _goto_target(a, ctx.env)
-    walk(ctx, (x, y), _linear(ctx, a.speed), _angular(ctx, None))
+    navigator = navigate.choose(ctx)
+    if navigator is not None:  # the robot's Nav2: it plans and drives; we watch and finish
+        yaw = _predict_goto(ctx.robot.get_state().pose, a, ctx.env)[-1].yaw
+        navigate.navigate(ctx, navigator, (x, y), yaw, _linear(ctx, a.speed),
+                          _angular(ctx, None))
+        ctx.notes.append(f"through {navigator.name}")
+    else:
+        walk(ctx, (x, y), _linear(ctx, a.speed), _angular(ctx, None))
     if a.heading_degrees is not None:
         yaw = ctx.robot.get_state().yaw
         turn = normalize_angle(math.radians(a.heading_degrees) - yaw)
