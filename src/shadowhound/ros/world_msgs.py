@@ -51,7 +51,7 @@ def grid_from_msg(msg: GridMsg) -> OccupancyGrid:
     raw = data.tobytes() if isinstance(data, array.array) else bytes(v & 0xFF for v in data)
     return OccupancyGrid.from_msg({
         "info": {"width": int(info.width), "height": int(info.height),
-                 "resolution": float(info.resolution),
+                 "resolution": _decimal(info.resolution),
                  "origin": {"position": {"x": o.position.x, "y": o.position.y},
                             "orientation": {"z": math.sin(yaw / 2.0),
                                             "w": math.cos(yaw / 2.0)}}},
@@ -79,6 +79,12 @@ def scan_from_msg(msg: LaserScan, pose: Pose2D, stamp: float) -> Scan:
     """The core's Scan from a LaserScan taken at `pose` (odom frame: the robot's pose when it
     arrived; the sensor is taken to sit at the body's centre, facing forward). Raises
     ValueError when the message is not a usable scan."""
-    return Scan(tuple(float(r) for r in msg.ranges), float(msg.angle_min),
-                float(msg.angle_increment), float(msg.range_min), float(msg.range_max),
-                pose, stamp)
+    return Scan(tuple(float(r) for r in msg.ranges), _decimal(msg.angle_min),
+                _decimal(msg.angle_increment), _decimal(msg.range_min),
+                _decimal(msg.range_max), pose, stamp)
+
+
+def _decimal(value: float) -> float:
+    """A float32 field as the decimal its publisher meant (float32 holds about 7 digits:
+    0.05 arrives as 0.05000000074505806)."""
+    return float(f"{value:.7g}")
