@@ -33,6 +33,10 @@ ARGUMENTS = {
     "odom_latency": "-1.0",
     "battery_topic": "",
     "go2_firmware_tricks": "false",
+    "navigation": "",
+    "map_topic": "map",
+    "scan_topic": "scan",
+    "nav2_action": "navigate_to_pose",
 }
 
 
