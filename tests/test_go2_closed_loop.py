@@ -77,6 +77,9 @@ class LateRobot:
     def get_camera_frame(self) -> CameraFrame | None:
         return None
 
+    def navigator(self) -> None:
+        return None  # no Nav2: nav.goto walks the project's own path
+
     def close(self) -> None:
         self.sim.close()
 

@@ -83,6 +83,10 @@ class SimNavigator:
 
     def close(self) -> None:
         self._closed.set()
+        with self._lock:
+            running = self._active is not None
+        if running:  # let the goal's loop see `_closed` and end the goal
+            time.sleep(2 * PERIOD)
         self._thread.join(2.0)
         self._executor.shutdown(timeout_sec=1.0)
         self.server.destroy()
@@ -132,6 +136,8 @@ class SimNavigator:
             if handle.is_cancel_requested:
                 self.body.stop_move()
                 return self._end(handle, result, "canceled")
+            if self._closed.is_set():  # the driver shuts down: the robot stops
+                return self._end(handle, result, "aborted", 0, "the simulated driver stopped")
             if preempted or not handle.is_active:
                 return self._end(handle, result, "aborted", 0, "preempted by a newer goal",
                                  stop=False)
