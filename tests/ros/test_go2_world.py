@@ -11,6 +11,8 @@ import time
 from collections.abc import Iterator
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from tests.ros.needs import require
 
@@ -138,3 +140,28 @@ def test_stop_cancels_a_running_nav2_goal(driver: SimDriver, robot: Go2RosRobot)
     wait_until(lambda: not driver.truth().moving, 5, "the robot to stop")
     time.sleep(1.0)
     assert not driver.truth().moving  # nothing drives it on
+
+
+@settings(max_examples=6, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(delay=st.floats(0.0, 1.2))
+def test_a_stop_at_any_moment_ends_the_goal_and_nothing_drives_on(
+        driver: SimDriver, robot: Go2RosRobot, delay: float) -> None:
+    """Whenever the stop comes (before Nav2 accepted the goal, while it turns, while it walks),
+    the goal ends cancelled and the robot stays still: a stop no goal outlives."""
+    navigator = robot.navigator()
+    assert navigator is not None and navigator.ready(10.0)
+    wait_until(lambda: not driver.truth().moving, 10, "the robot still before the goal")
+    start = driver.truth()
+    goal = navigator.navigate(start.x + (-1.5 if start.x > 0 else 1.5), start.y, 0.0)
+    time.sleep(delay)
+    robot.stop()
+    report = wait_until(lambda: goal.report().done and goal.report(), 10, "the goal to end")
+    assert report.status is NavStatus.CANCELED, report
+    wait_until(lambda: not driver.truth().moving, 5, "the robot to stop")
+    still = driver.truth()
+    time.sleep(0.5)
+    after = driver.truth()
+    assert math.hypot(after.x - still.x, after.y - still.y) < 1e-3
+    assert driver.robots[0].navigator is not None
+    assert not driver.robots[0].navigator.truth()["active"]
