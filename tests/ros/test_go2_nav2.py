@@ -74,6 +74,20 @@ def test_without_nav2_required_nav2_fails_clearly_and_does_not_move(client: RosC
         stop()
 
 
+def test_nav2_driving_faster_than_the_limit_is_cancelled(client: RosClient) -> None:
+    # Nav2's own controller sets the speed; the walk measures it and stops one above the limit.
+    rig, stop = start_rig(client, ("--nav-speed", "0.9"), "/fast", "/fast", "fast")
+    try:
+        final = rig.agent.run(GOAL, 90.0)
+        assert final.startswith("FAILED: "), final
+        assert "above the 0.5 m/s limit (safety.max_linear_speed): goal cancelled" in final, final
+        end = rig.truth.still()
+        assert navigation(end)["canceled"] == 1 and not navigation(end)["active"]
+        assert math.hypot(end["x"] - 4.0, end["y"]) > 1.0
+    finally:
+        stop()
+
+
 # -- the driver serves navigate_to_pose ----------------------------------------------------
 
 

@@ -7,11 +7,16 @@ step's progress; cancellation, the skill's time-out, a stop or an e-stop cancel 
 robot's `stop` cancels its navigator's goals too, from any thread). Nav2 stops within its own
 goal tolerance (0.25 m by default); the last centimetres and the heading are closed by the
 project's controller, so the step ends where the plan said, within the outcome tolerance.
+
+Nav2 drives at its own controller's speeds, which the governor cannot cap: the walk measures
+the robot's speed over each second of odometry and cancels the goal when it exceeds
+`safety.max_linear_speed` by more than SPEED_SLACK.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 
 from ..robot.navigator import Navigator, NavStatus
 from ..state import normalize_angle
@@ -23,6 +28,8 @@ from .context import SkillContext, SkillError
 AUTO_WAIT = 1.0
 REQUIRED_WAIT = 5.0
 ACCEPT_WAIT = 5.0  # seconds a sent goal may wait to be accepted or rejected
+SPEED_WINDOW = 1.0  # seconds of odometry the measured speed is averaged over
+SPEED_SLACK = 1.25  # measured speed may exceed the limit by this factor (odometry noise)
 
 
 def choose(ctx: SkillContext) -> Navigator | None:
@@ -58,8 +65,10 @@ def navigate(ctx: SkillContext, navigator: Navigator, goal: tuple[float, float],
     sent = ctx.robot.now()
     first: float | None = None
     recoveries = 0
+    poses: deque[tuple[float, float, float]] = deque()
     try:
         while True:
+            _check_speed(ctx, navigator.name, poses)
             report = handle.report()
             fb = report.feedback
             if fb is not None:
@@ -89,6 +98,25 @@ def navigate(ctx: SkillContext, navigator: Navigator, goal: tuple[float, float],
     motion.settle(ctx)
     _finish(ctx, goal, yaw, linear, angular)
     return ctx.robot.get_state().distance_travelled - before
+
+
+def _check_speed(ctx: SkillContext, name: str, poses: deque[tuple[float, float, float]]) -> None:
+    """Raise SkillError when the robot moved faster than the safety limit over the last
+    SPEED_WINDOW seconds."""
+    st = ctx.robot.get_state()
+    now = ctx.robot.now()
+    poses.append((now, st.x, st.y))
+    while len(poses) > 2 and now - poses[1][0] >= SPEED_WINDOW:
+        poses.popleft()
+    t0, x0, y0 = poses[0]
+    if now - t0 < SPEED_WINDOW:
+        return
+    speed = math.hypot(st.x - x0, st.y - y0) / (now - t0)
+    limit = ctx.config.safety.max_linear_speed
+    if speed > limit * SPEED_SLACK:
+        raise SkillError(f"{name} drove at {speed:.2f} m/s, above the {limit:g} m/s limit "
+                         "(safety.max_linear_speed): goal cancelled; lower Nav2's controller "
+                         "speed to the limit")
 
 
 def _finish(ctx: SkillContext, goal: tuple[float, float], yaw: float, linear: float,
