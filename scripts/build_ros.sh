@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Install ROS 2 Jazzy (rclpy and the message packages, from PyPI) into a virtual environment and
-# build + install the project's interface packages into it: ros2/shadowhound_interfaces, and
+# build + install the project's interface packages into it: ros2/shadowhound_interfaces,
+# ros2/nav2_msgs (NavigateToPose only) unless Nav2's own nav2_msgs is importable, and
 # ros2/go2_interfaces (go2_ros2_sdk's WebRtcReq and Go2State) unless a go2_interfaces with those
 # messages, field for field, is already importable from another workspace (a sourced
 # go2_ros2_sdk install; scripts/check_go2_interfaces.py compares them).
@@ -71,6 +72,16 @@ build_pkg() {
 build_pkg shadowhound_interfaces \
   'from shadowhound_interfaces.action import ExecuteMission; from shadowhound_interfaces.srv import Chat
 from shadowhound_interfaces.msg import DetectionArray'
+
+# Nav2's own nav2_msgs wins when it is importable from elsewhere (a sourced Nav2 install): ours
+# is only NavigateToPose, with the fields of Nav2 Jazzy's (tests/ros/test_nav2_msgs.py checks
+# its type hash), for machines without Nav2.
+nav2_origin=$(cd /tmp && "$PY" -c 'import os, nav2_msgs.action
+print(os.path.dirname(os.path.realpath(nav2_msgs.action.__file__)))' 2>/dev/null) || nav2_origin=""
+case "$nav2_origin" in
+  "" | "$(cd "$VENV" && pwd -P)"/*) build_pkg nav2_msgs 'from nav2_msgs.action import NavigateToPose' ;;
+  *) echo "build_ros: using nav2_msgs from $nav2_origin (not building ros2/nav2_msgs)" >&2 ;;
+esac
 
 # go2_ros2_sdk's own go2_interfaces wins when it is importable from elsewhere (the user's
 # sourced workspace): the driver speaks that one. It is compared field by field with ours

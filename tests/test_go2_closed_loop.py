@@ -104,6 +104,12 @@ class LateRobot:
     def release_estop(self) -> None:
         self.sim.release_estop()
 
+    def known_objects(self) -> tuple[()]:
+        return ()
+
+    def navigator(self) -> None:
+        return None  # no Nav2: nav.goto walks the project's own path
+
     def close(self) -> None:
         self.sim.close()
 

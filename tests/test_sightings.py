@@ -22,7 +22,7 @@ from shadowhound.ros.detections import (
 from shadowhound.ros.rviz import LABELS_NS, OBJECTS_NS, object_markers, path_poses
 from shadowhound.skills.context import robot_objects
 from shadowhound.state import Pose2D
-from shadowhound.world import KnownObject, merge_sightings, object_key
+from shadowhound.world import Belief, KnownObject, OccupancyGrid, merge_sightings, object_key
 
 FRAMES = Frames("odom", "base_link")
 
@@ -94,20 +94,18 @@ def test_the_board_forgets_the_longest_unseen_beyond_its_limit() -> None:
     assert [o.name for o in board.objects()] == ["c", "b"]
 
 
-def test_a_robot_reports_its_map_objects_and_its_detections_merged() -> None:
-    class Detecting(SimRobot):
-        def known_objects(self) -> tuple[KnownObject, ...]:
-            return (KnownObject("red ball", 3.5, 0.1, stamp=9.0), KnownObject("cup", 1.0, 1.0))
-
+def test_a_robot_reports_what_it_has_seen_the_latest_sighting_per_name() -> None:
     config = ShadowHoundConfig()
-    robot = Detecting(config.sim, time_scale=0)
+    robot = SimRobot(config.sim, time_scale=0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=config))
     belief = robot.belief()
-    assert belief is not None and belief.objects == ()  # nothing seen yet
-    belief.sight("blue box", 2.5, -1.0, stamp=1.0)
-    belief.sight("red ball", 3.0, 0.0, stamp=2.0)  # older than the detection's
+    assert belief is not None and robot_objects(agent.robot) == ()  # nothing seen yet
+    belief.sight("blue box", 2.5, 2.0, stamp=1.0)
+    belief.sight("red ball", 3.5, 0.1, stamp=9.0)
+    belief.sight("red ball", 3.0, 0.0, stamp=2.0)  # older than the one known: ignored
     objects = {o.name: o for o in robot_objects(agent.robot)}
-    assert (objects["red ball"].x, objects["cup"].x, objects["blue box"].x) == (3.5, 1.0, 2.5)
+    assert (objects["red ball"].x, objects["blue box"].x) == (3.5, 2.5)
+    assert set(objects) == {"red ball", "blue box"}
 
 
 def test_path_poses_face_along_each_leg() -> None:
@@ -126,3 +124,13 @@ def test_each_object_gets_a_cylinder_its_size_and_a_label() -> None:
                                                                   (1, -1.0, 2.0, 0.7)]
     assert [s.text for s in labels] == ["red ball", "box"]
     assert cylinders[0].rgba[3] < cylinders[1].rgba[3]  # less sure: fainter
+
+
+def test_a_new_map_replaces_the_grid_and_keeps_the_objects_known() -> None:
+    first = OccupancyGrid.empty(-1.0, 1.0, -1.0, 1.0, value=0)
+    belief = Belief(first)
+    belief.sight("cup", 0.5, 0.5, stamp=1.0)
+    second = OccupancyGrid.empty(-2.0, 2.0, -2.0, 2.0, value=0)
+    belief.replace_grid(second)
+    assert belief.grid is second and belief.inflated.grid is second
+    assert [o.name for o in belief.objects] == ["cup"]

@@ -224,6 +224,9 @@ class ShadowHoundConfig(_Section):
     profile: str = "offline"
     backend: Literal["offline", "openai", "ollama", "vllm", "llamacpp"] = "offline"
     robot: Literal["sim", "go2"] = "sim"
+    navigation: Literal["auto", "nav2", "direct"] = Field(
+        "auto", description="nav.goto: auto = the robot's Nav2 (navigate_to_pose) when it "
+        "answers, else the project's own planner; nav2 = Nav2 required; direct = never Nav2")
     safety: SafetyConfig = Field(default_factory=SafetyConfig)
     motion: MotionConfig = Field(default_factory=MotionConfig)
     search: SearchConfig = Field(default_factory=SearchConfig)

@@ -17,7 +17,8 @@ def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
         "namespace": "robot0", "cmd_vel_topic": "", "webrtc_topic": "webrtc_req",
         "odom_topic": "/robot0/odom", "state_topic": "go2_states", "odom_timeout": 1.0,
         "odom_latency": None, "battery_topic": "", "detections_topic": "",
-        "firmware_tricks": False}
+        "firmware_tricks": False, "map_topic": "map", "scan_topic": "scan",
+        "nav2_action": "navigate_to_pose"}
 
 
 def test_go2_options_for_latency_battery_and_firmware_tricks_are_checked() -> None:

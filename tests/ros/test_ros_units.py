@@ -53,6 +53,9 @@ def test_integers_are_accepted_for_time_scale() -> None:
     ({"camera_type": "h264"}, "camera_type must be one of auto, raw, compressed"),
     ({"status_topic": ""}, "status_topic '' is not a valid ROS topic name"),
     ({"backend_config": " "}, "backend_config must name a profile or a YAML file"),
+    ({"navigation": "nav3"}, "navigation must be one of auto, nav2, direct (or '' for the "
+                             "profile's), got 'nav3'"),
+    ({"map_topic": "my map"}, "map_topic 'my map' is not a valid ROS topic name"),
 ])
 def test_invalid_parameters_are_explained(values: dict, message: str) -> None:
     with pytest.raises(ParameterError, match="invalid ROS parameters") as info:
@@ -76,6 +79,13 @@ def test_agent_settings_take_the_profile_then_the_parameters() -> None:
     assert config.backend == "offline" and config.sim.time_scale == 0.5 and config.robot == "sim"
     with pytest.raises(Exception, match="unknown config profile 'nope'"):
         parse_parameters({"backend_config": "nope"}).agent_settings()
+
+
+def test_navigation_comes_from_the_profile_unless_the_parameter_sets_it() -> None:
+    assert parse_parameters({}).agent_settings().navigation == "auto"
+    assert parse_parameters({"navigation": "nav2"}).agent_settings().navigation == "nav2"
+    go2 = parse_parameters({"robot": "go2", "map_topic": "", "nav2_action": ""}).go2_options()
+    assert (go2["map_topic"], go2["scan_topic"], go2["nav2_action"]) == ("", "scan", "")
 
 
 # -- conversions ---------------------------------------------------------------------------

@@ -57,8 +57,9 @@ def remove(client: RosClient, *nodes: Any) -> None:
 def go2(client: RosClient) -> Iterator[MissionNode]:
     driver = SimDriver(context=client.context, namespace=GO2, options={"odom_delay": 0.05})
     add(client, *driver.nodes)
-    robot = Go2RosRobot(Go2RosConfig(namespace=GO2[1:], detections_topic="detections"),
-                        context=client.context)
+    # No map (map_topic ''): detections are known objects all the same.
+    robot = Go2RosRobot(Go2RosConfig(namespace=GO2[1:], detections_topic="detections",
+                                     map_topic=""), context=client.context)
     wait_until(lambda: robot.last_state().connected, 30, "odometry from the in-process driver")
     settings = parse_parameters({"robot": "go2"}).agent_settings()  # as `shadowhound node`
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))

@@ -34,6 +34,10 @@ ARGUMENTS = {
     "battery_topic": "",
     "detections_topic": "",
     "go2_firmware_tricks": "false",
+    "navigation": "",
+    "map_topic": "map",
+    "scan_topic": "scan",
+    "nav2_action": "navigate_to_pose",
 }
 
 

@@ -12,9 +12,10 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from ..errors import RobotError as RobotError
 from ..state import CameraFrame, Posture, RobotState, Scan
+from .navigator import Navigator
 
 if TYPE_CHECKING:
-    from ..world import Belief
+    from ..world import Belief, KnownObject
 
 
 @runtime_checkable
@@ -84,7 +85,18 @@ class Robot(Protocol):
         ...
 
     def belief(self) -> Belief | None:
-        """The map and known objects the robot is told of (a fresh copy), or None."""
+        """The robot's world model: its map and the objects it knows (one object for the
+        robot's life, updated in place by scans, map messages and sightings), or None when
+        it has no map."""
+        ...
+
+    def known_objects(self) -> tuple[KnownObject, ...]:
+        """Every object the robot knows, one per name (the latest sighting): its world model's,
+        and those it was told of without a map (a detector on ROS)."""
+        ...
+
+    def navigator(self) -> Navigator | None:
+        """The robot's navigation server (Nav2's NavigateToPose), or None when it has none."""
         ...
 
     def close(self) -> None:

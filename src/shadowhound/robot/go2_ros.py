@@ -18,6 +18,14 @@ Written against how the driver really behaves (docs/go2.md):
 - battery: a sensor_msgs/BatteryState topic when one is configured and publishing, else
   unknown (None): the driver publishes no battery level.
 - camera: `camera/image_raw` (sensor_msgs/Image) or a topic ending in `compressed`.
+- map: nav_msgs/OccupancyGrid on `map` (slam_toolbox, map_server; transient local), read into
+  the core's grid with its origin and resolution: `belief()`. Poses are odometry's, so the map
+  is taken to be in the odometry frame; a map in another frame (SLAM's `map`) is used as if the
+  two coincided (true until odometry drifts; there is no TF here), with a warning. No map:
+  `belief()` is None and paths are straight lines.
+- scan: sensor_msgs/LaserScan on `scan`, taken at the pose odometry gave when it arrived.
+- navigation: Nav2's NavigateToPose on `navigate_to_pose` (`navigator()`, go2_nav2.py);
+  `stop` and `emergency_stop` cancel its goals.
 - detections (optional, `detections_topic`): shadowhound_interfaces/DetectionArray from any
   detector; each detection becomes a sighting (`known_objects()`), see ros/detections.py.
 
@@ -36,22 +44,25 @@ from dataclasses import dataclass, replace
 import rclpy
 from geometry_msgs.msg import Twist
 from go2_interfaces.msg import Go2State, WebRtcReq
+from nav_msgs.msg import OccupancyGrid as GridMsg
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import BatteryState, CompressedImage, Image
+from sensor_msgs.msg import BatteryState, CompressedImage, Image, LaserScan
 
 from ..camera import to_camera_frame
 from ..ros.convert import raw_image_frame
 from ..ros.detections import Frames, SightingBoard, sightings_from_msg
+from ..ros.world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, normalize_angle
-from ..world import Belief
+from ..world import DEFAULT_ROBOT_RADIUS, Belief, GridError, merge_sightings
 from ..world.objects import KnownObject
 from . import go2_api
 from .base import RobotError
 from .go2_motion import MotionTracker, StampClock
+from .go2_nav2 import Nav2Navigator
 from .go2_posture import STEPS, PostureWatch
 from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
 
@@ -89,6 +100,11 @@ class Go2RosConfig:
     linear_accel: float = 1.0  # m/s^2 the robot speeds up and brakes at (prediction model)
     angular_accel: float = 3.0  # rad/s^2
     firmware_tricks: bool = False  # flips, handstand, 1301-1305: only if the firmware has them
+    map_topic: str = "map"  # nav_msgs/OccupancyGrid; '' = no map: straight-line paths
+    scan_topic: str = "scan"  # sensor_msgs/LaserScan; '' = none
+    scan_timeout: float = 1.0  # seconds after which a scan is too old to use
+    nav2_action: str = "navigate_to_pose"  # Nav2's NavigateToPose; '' = no Nav2
+    robot_radius: float = DEFAULT_ROBOT_RADIUS  # metres kept from obstacles on the map
     node_name: str = "shadowhound_go2"
 
 
@@ -119,6 +135,9 @@ class Go2RosRobot:
         self._frame: CameraFrame | None = None
         self._sightings = SightingBoard()
         self._frames = Frames()  # odometry's own frame ids replace these when it arrives
+        self._odom_frame = "odom"  # odometry's header.frame_id, once it arrives
+        self._map: Belief | None = None  # the latest map, inflated once per map
+        self._scan: tuple[float, Scan] | None = None  # (receipt, scan)
         self._command = (0.0, 0.0, 0.0)
         self._halted = True  # no velocity commanded since the last stop()
         self._last_sent = 0.0
@@ -141,6 +160,8 @@ class Go2RosRobot:
         self._postures.topic = self.topic(c.state_topic)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
+        self._navigator = Nav2Navigator(self.node, c.nav2_action, self._executor.create_task) \
+            if c.nav2_action else None
         self._thread = threading.Thread(target=self._spin, name="go2-ros", daemon=True)
         self._thread.start()
 
@@ -165,6 +186,10 @@ class Go2RosRobot:
                                  f"run scripts/build_ros.sh ({exc})") from exc
             n.create_subscription(DetectionArray, c.detections_topic, self._on_detections,
                                   _RELIABLE)
+        if c.map_topic:
+            n.create_subscription(GridMsg, c.map_topic, self._on_map, MAP_QOS)
+        if c.scan_topic:
+            n.create_subscription(LaserScan, c.scan_topic, self._on_scan, _SENSOR)
         n.create_timer(_KEEPALIVE_PERIOD, self._keep_alive)
         n.create_timer(5.0, self._warn_without_odometry)
 
@@ -199,6 +224,7 @@ class Go2RosRobot:
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         with self._lock:
             sent = self._odom_clock.local_time(stamp, now)
+            self._odom_frame = msg.header.frame_id or self._odom_frame
             last = self._tracker.last_sample()
             if last is not None:
                 step = math.hypot(p.x - last.x, p.y - last.y)
@@ -219,6 +245,44 @@ class Go2RosRobot:
         if posture is not None:
             with self._lock:
                 self._posture = posture
+
+    def _on_map(self, msg: GridMsg) -> None:
+        log = self.node.get_logger()
+        try:
+            grid = grid_from_msg(msg)
+        except GridError as exc:
+            log.warning(f"ignored a map on {self.topic(self.config.map_topic)}: {exc}")
+            return
+        with self._lock:
+            odom = self._odom_frame
+        frame = msg.header.frame_id
+        if frame and frame.lstrip("/") != odom.lstrip("/"):
+            log.warning(f"the map is in frame {frame!r}, poses in {odom!r}: without TF they are "
+                        "taken as one frame (right while odometry has not drifted from the "
+                        "map; see docs/go2-nav2.md)", throttle_duration_sec=60.0)
+        with self._lock:
+            belief = self._map
+        if belief is not None:  # the same world model: the objects known stay
+            belief.replace_grid(grid)  # inflated here, off the mission's thread
+        else:
+            belief = Belief(grid, self._sightings.objects(), self.config.robot_radius)
+            _ = belief.inflated  # inflated once here, off the mission's thread
+            with self._lock:
+                self._map = belief
+        log.info(f"map {grid.width} x {grid.height} at {grid.resolution:g} m from "
+                 f"{self.topic(self.config.map_topic)}", throttle_duration_sec=30.0)
+
+    def _on_scan(self, msg: LaserScan) -> None:
+        now = time.monotonic()
+        with self._lock:
+            pose = self._tracker.pose(now)
+        try:
+            scan = scan_from_msg(msg, Pose2D(*pose), now)
+        except ValueError as exc:
+            self.node.get_logger().warning(f"dropped a scan: {exc}", throttle_duration_sec=5.0)
+            return
+        with self._lock:
+            self._scan = (now, scan)
 
     def _on_battery(self, msg: BatteryState) -> None:
         percent = float(msg.percentage) * 100.0
@@ -256,14 +320,25 @@ class Go2RosRobot:
         seen, problems = sightings_from_msg(msg, Pose2D(state.x, state.y, state.yaw), frames,
                                             self.now(), age)
         self._sightings.add(seen)
+        with self._lock:
+            belief = self._map
+        if belief is not None:  # the world model plans with them too
+            for o in seen:
+                try:
+                    belief.sight(o.name, o.x, o.y, o.stamp, o.confidence, o.radius)
+                except ValueError as exc:  # checked already; a belief rule the board lacks
+                    problems.append(str(exc))
         for problem in problems:
             self.node.get_logger().warning(f"dropped a detection: {problem}",
                                            throttle_duration_sec=5.0)
 
     def known_objects(self) -> tuple[KnownObject, ...]:
-        """What the detections topic has reported, one sighting per name (the latest), in the
-        odometry frame."""
-        return self._sightings.objects()
+        """What the detections topic has reported and what the world model holds (sightings
+        the agent made), one per name (the latest), in the odometry frame."""
+        with self._lock:
+            belief = self._map
+        return merge_sightings(belief.objects if belief is not None else (),
+                               self._sightings.objects())
 
     def _keep_alive(self) -> None:
         with self._lock:
@@ -365,6 +440,8 @@ class Go2RosRobot:
         """StopMove now (thread-safe); the keep-alive goes quiet. Under the send lock, so no
         Twist read before the stop can go out after it (the robot would walk on for a second)."""
         now = time.monotonic()
+        if self._navigator is not None:  # else Nav2's controller drives on
+            self._navigator.cancel_all()
         with self._send_lock:
             with self._lock:
                 self._command = (0.0, 0.0, 0.0)
@@ -446,12 +523,27 @@ class Go2RosRobot:
         return self._frame
 
     def get_scan(self) -> Scan | None:
-        """None: the driver's `scan` topic is not subscribed yet (issue 15, phase 2)."""
-        return None
+        """The latest scan from `scan`, or None when none arrived within `scan_timeout`."""
+        with self._lock:
+            latest = self._scan
+        if latest is None or time.monotonic() - latest[0] > self.config.scan_timeout:
+            return None
+        return latest[1]
 
     def belief(self) -> Belief | None:
-        """None: no map is read from ROS yet, so nothing is known to be in the way."""
-        return None
+        """The world model: the latest map from `map` (a mission may update it from scans
+        until the next map arrives) and the objects known (detections, sightings), or None
+        before a map arrives (then paths are straight lines)."""
+        with self._lock:
+            return self._map
+
+    def navigator(self) -> Nav2Navigator | None:
+        """Nav2's NavigateToPose client (goals in the odometry frame), or None when the
+        `nav2_action` is ''. Whether a server answers is its `ready()`."""
+        if self._navigator is not None:
+            with self._lock:
+                self._navigator.frame = self._odom_frame
+        return self._navigator
 
     def close(self) -> None:
         if self._closed:
@@ -461,6 +553,8 @@ class Go2RosRobot:
         self._closed = True
         self._thread.join(2.0)
         self._executor.shutdown(timeout_sec=1.0)
+        if self._navigator is not None:
+            self._navigator.destroy()
         self.node.destroy_node()
         if self._own_context:
             rclpy.try_shutdown(context=self._context)

@@ -32,10 +32,11 @@ from typing import Any
 
 from ..config import SimConfig
 from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
-from ..world import Belief
+from ..world import Belief, KnownObject
 from . import scene, sensors
 from .base import RobotError
 from .go2_api import TRICKS
+from .navigator import Navigator
 
 _SUBSTEP = 0.01  # seconds of physics per integration step
 _CONTROLLER_GRACE = 0.25  # wall seconds between sleeps that still count as one ticking loop
@@ -368,6 +369,11 @@ class SimRobot:
         state = self.get_state()
         return sensors.cast_scan(self.world, state.pose, stamp=state.stamp)
 
+    def known_objects(self) -> tuple[KnownObject, ...]:
+        """What the robot has seen (its belief's objects)."""
+        belief = self.belief()
+        return belief.objects if belief is not None else ()
+
     def belief(self) -> Belief | None:
         """The robot's world model: the scene's map (labelled with the scene's object names,
         to say what is in the way) and the objects it has seen (`Belief.sight`, none at
@@ -381,6 +387,11 @@ class SimRobot:
             self._belief = Belief(told.grid, (), told.robot_radius, told.room,
                                   labels=told.objects)
         return self._belief
+
+    def navigator(self) -> Navigator | None:
+        """None: the simulator walks with the project's own planner (`shadowhound sim-driver`
+        serves navigate_to_pose over ROS)."""
+        return None
 
     def close(self) -> None:
         self.stop()

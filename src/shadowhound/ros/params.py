@@ -10,7 +10,7 @@ import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import Any, get_args
 
 from ..config import ShadowHoundConfig, load_config
 from ..errors import ParameterError
@@ -49,6 +49,13 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
                           "reported unknown; go2_ros2_sdk publishes none)"),
     "detections_topic": ("", "go2: shadowhound_interfaces/DetectionArray in, from any detector "
                              "('' = none); each detection becomes a known object"),
+    "navigation": ("", "nav.goto: auto (Nav2's navigate_to_pose when it answers, else the "
+                       "project's own planner), nav2 (Nav2 required), direct (never Nav2); "
+                       "'' = the profile's (auto unless it says otherwise)"),
+    "map_topic": ("map", "go2: nav_msgs/OccupancyGrid map in (transient local, as map_server "
+                         "and slam_toolbox publish it); '' = no map: paths are straight lines"),
+    "scan_topic": ("scan", "go2: sensor_msgs/LaserScan in ('' = none)"),
+    "nav2_action": ("navigate_to_pose", "go2: Nav2's NavigateToPose action ('' = no Nav2)"),
     "go2_firmware_tricks": (False, "go2: allow the tricks that need firmware support and the "
                                    "'ai' motion mode (flips, handstand, 1301-1305)"),
 }
@@ -60,7 +67,10 @@ GO2_MOTION = {"position_tolerance": 0.02, "yaw_tolerance": math.radians(0.5),
               "control_rate_hz": 10.0}
 
 CAMERA_TYPES = ("auto", "raw", "compressed")
-_OPTIONAL_TOPICS = ("cmd_vel_topic", "battery_topic", "detections_topic")  # '' = discovered / none
+# '' = discovered / none
+_OPTIONAL_TOPICS = ("cmd_vel_topic", "battery_topic", "detections_topic", "map_topic",
+                    "scan_topic", "nav2_action")
+NAVIGATION: tuple[str, ...] = get_args(ShadowHoundConfig.model_fields["navigation"].annotation)
 ROBOTS = ("sim", "go2")
 _TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 
@@ -90,6 +100,10 @@ class NodeSettings:
     battery_topic: str = ""
     detections_topic: str = ""
     go2_firmware_tricks: bool = False
+    navigation: str = ""
+    map_topic: str = "map"
+    scan_topic: str = "scan"
+    nav2_action: str = "navigate_to_pose"
 
     @property
     def camera_compressed(self) -> bool:
@@ -100,8 +114,10 @@ class NodeSettings:
     def agent_settings(self) -> ShadowHoundConfig:
         """The agent's configuration: the profile, then these parameters on top; for go2,
         GO2_MOTION fills the motion settings the profile and environment leave unset."""
-        config = load_config(self.backend_config,
-                             {"robot": self.robot, "sim": {"time_scale": self.time_scale}})
+        overrides: dict[str, Any] = {"robot": self.robot, "sim": {"time_scale": self.time_scale}}
+        if self.navigation:
+            overrides["navigation"] = self.navigation
+        config = load_config(self.backend_config, overrides)
         if self.robot == "go2":
             unset = {k: v for k, v in GO2_MOTION.items()
                      if k not in config.motion.model_fields_set}
@@ -116,7 +132,8 @@ class NodeSettings:
                 "odom_latency": None if self.odom_latency < 0 else self.odom_latency,
                 "battery_topic": self.battery_topic,
                 "detections_topic": self.detections_topic,
-                "firmware_tricks": self.go2_firmware_tricks}
+                "firmware_tricks": self.go2_firmware_tricks, "map_topic": self.map_topic,
+                "scan_topic": self.scan_topic, "nav2_action": self.nav2_action}
 
 
 _WANTED = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
@@ -150,7 +167,8 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
     unknown_topics = [n for n in ("camera_topic", "mission_topic", "status_topic",
                                   "robot_status_topic", "diagnostics_topic", "cmd_vel_topic",
                                   "webrtc_topic", "odom_topic", "go2_states_topic",
-                                  "battery_topic", "detections_topic")
+                                  "battery_topic", "detections_topic", "map_topic",
+                                  "scan_topic", "nav2_action")
                       if n in out and not _TOPIC.match(out[n])
                       and (out[n] or n not in _OPTIONAL_TOPICS)]
     problems += [f"{n} {out[n]!r} is not a valid ROS topic name (letters, digits, '_' and "
@@ -158,6 +176,9 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
     if "camera_type" in out and out["camera_type"] not in CAMERA_TYPES:
         problems.append(f"camera_type must be one of {', '.join(CAMERA_TYPES)}, got "
                         f"{out['camera_type']!r}")
+    if out.get("navigation") and out["navigation"] not in NAVIGATION:
+        problems.append(f"navigation must be one of {', '.join(NAVIGATION)} (or '' for the "
+                        f"profile's), got {out['navigation']!r}")
     if "robot" in out and out["robot"] not in ROBOTS:
         problems.append(f"robot must be sim or go2, got {out['robot']!r}")
     namespace = out.get("robot_namespace", "")

@@ -14,6 +14,11 @@ Per robot (names prefixed `robot{i}/` with `--robots 2` or more, as go2_ros2_sdk
 - `go2_states` out: mode per posture, `progress` only for tricks, velocity (odom frame) and
   body height from the truth; `camera/image_raw` out (best effort);
 - `battery_state` (sensor_msgs/BatteryState) out only with `--battery PERCENT`;
+- `scan` (sensor_msgs/LaserScan: 360 beams, 0.1-8 m, `--scan-rate-hz`, from the simulator's ray
+  casting, frame base_link) out; `map` (nav_msgs/OccupancyGrid: the scene at 5 cm, frame odom,
+  transient local as map_server publishes it) out once;
+- `navigate_to_pose` (nav2_msgs/action/NavigateToPose) served with the project's planner and
+  path follower (ros/sim_nav.py), unless `--no-navigate-to-pose`;
 - `sim_driver/truth` (std_msgs/String JSON) out: the ground truth (true pose, velocity,
   posture, mode, counts of Moves and StopMoves received ...), kept apart from what the driver
   publishes; `sim_driver/requests` out: one JSON record per sport request; `sim_driver/fault`
@@ -65,6 +70,8 @@ class SimDriver(Node):
             self.create_timer(1.0 / s.camera_rate_hz, self._each("publish_camera"))
         if s.battery is not None:
             self.create_timer(1.0, self._each("publish_battery"))
+        if s.scan_rate_hz > 0:
+            self.create_timer(1.0 / s.scan_rate_hz, self._each("publish_scan"))
         for robot in self.robots:
             robot.start()
         first = self.robots[0]
@@ -135,7 +142,9 @@ it with `shadowhound node --ros-args -p robot:=go2` in another terminal.
 
 Topics per robot (robot{{i}}/ prefix with --robots 2+): cmd_vel_out, webrtc_req in; odom (no
 twist, late by --odom-delay), go2_states, camera/image_raw, battery_state (--battery only)
-out; sim_driver/truth (JSON ground truth), sim_driver/requests (JSON per sport request) out;
+out; scan (LaserScan), map (OccupancyGrid, transient local) out; navigate_to_pose (Nav2's
+NavigateToPose action, served with the project's planner; --no-navigate-to-pose: none);
+sim_driver/truth (JSON ground truth), sim_driver/requests (JSON per sport request) out;
 sim_driver/fault in. The relay: cmd_vel, cmd_vel_joy in, cmd_vel_out out.
 
 Every option is also a ROS parameter with the same name in snake case (--ros-args -p

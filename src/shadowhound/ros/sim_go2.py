@@ -19,19 +19,22 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from geometry_msgs.msg import Twist
+from geometry_msgs.msg import Twist, Vector3
 from go2_interfaces.msg import Go2State, WebRtcReq
+from nav_msgs.msg import OccupancyGrid as GridMsg
 from nav_msgs.msg import Odometry
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import BatteryState, Image
+from sensor_msgs.msg import BatteryState, Image, LaserScan
 from std_msgs.msg import String
 
-from ..robot import go2_api, scene
+from ..robot import go2_api, scene, sensors
 from ..robot.go2_api import SportMode
 from ..robot.sim import SimRobot
 from ..robot.sim_sport import SimSportMode, Truth
 from ..state import Posture
+from .sim_nav import SimNavigator
 from .sim_options import DriverSettings
+from .world_msgs import MAP_QOS, grid_to_msg, scan_to_msg
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -103,6 +106,15 @@ class SimGo2:
         self._battery_pub = node.create_publisher(
             BatteryState, self.topic(settings.battery_topic), _RELIABLE) \
             if settings.battery is not None else None
+        self._scan_pub = node.create_publisher(LaserScan, self.topic("scan"), _SENSOR) \
+            if settings.scan_rate_hz > 0 else None
+        if settings.map:  # published once: transient local keeps it for late subscribers
+            self._map_pub = node.create_publisher(GridMsg, self.topic("map"), MAP_QOS)
+            self._map_pub.publish(grid_to_msg(sensors.scene_grid(sim.map_world), "odom",
+                                              node.get_clock().now().to_msg()))
+        self.navigator = SimNavigator(node, self.prefix + "navigate_to_pose", self.body,
+                                      self.drive, settings.nav_speed) \
+            if settings.navigate_to_pose else None
         node.create_subscription(Twist, self.topic("cmd_vel_out"), self._on_twist, _RELIABLE)
         node.create_subscription(WebRtcReq, self.topic("webrtc_req"), self._on_request,
                                  _RELIABLE)
@@ -124,6 +136,8 @@ class SimGo2:
         self._closing.set()
         with self._ready:
             self._ready.notify()
+        if self.navigator is not None:
+            self.navigator.close()
         self.body.close()
         for thread in self._threads:
             thread.join(2.0)
@@ -134,6 +148,11 @@ class SimGo2:
         if not self.faults.drop_commands:
             x, y, z = msg.linear.x, msg.linear.y, msg.angular.z
             self._schedule(lambda: self._apply_twist(x, y, z))
+
+    def drive(self, x: float, y: float, z: float) -> None:
+        """Velocity from the navigate_to_pose server: as a Twist on cmd_vel_out would come."""
+        self._on_twist(Twist(linear=Vector3(x=float(x), y=float(y)),
+                             angular=Vector3(z=float(z))))
 
     def _apply_twist(self, x: float, y: float, z: float) -> None:
         self._counts["twists"] += 1
@@ -266,11 +285,20 @@ class SimGo2:
         stamp = self.node.get_clock().now().nanoseconds / 1e9
         t = self.body.truth()
         return {**t.to_dict(), "stamp": stamp, "robot": self.prefix.rstrip("/") or "",
-                "battery": self.battery_level(t), "faults": vars(self.faults), **self._counts}
+                "battery": self.battery_level(t), "faults": vars(self.faults), **self._counts,
+                "navigation": self.navigator.truth() if self.navigator else None}
 
     def publish_truth(self) -> None:
         if not self._closing.is_set():
             self._truth_pub.publish(String(data=json.dumps(self.truth_dict())))
+
+    def publish_scan(self) -> None:
+        scan = self.sim.get_scan()
+        if self._scan_pub is None or self._closing.is_set() or scan is None:
+            return
+        msg = scan_to_msg(scan, f"{self.prefix}base_link",
+                          self.node.get_clock().now().to_msg(), 1.0 / self.settings.scan_rate_hz)
+        self._scan_pub.publish(msg)
 
     def publish_camera(self) -> None:
         if not self.faults.camera or self._camera_pub is None:

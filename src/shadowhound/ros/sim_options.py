@@ -38,6 +38,10 @@ class DriverSettings:
     camera_rate_hz: float = 5.0
     camera_width: int = 160
     camera_height: int = 120
+    scan_rate_hz: float = 10.0
+    map: bool = True
+    navigate_to_pose: bool = True
+    nav_speed: float = 0.4
 
 
 @dataclass(frozen=True)
@@ -85,6 +89,14 @@ OPTIONS: dict[str, Option] = {
     "camera_rate_hz": Option(float, "camera/image_raw rate (0 = no camera)", 0, 30, "HZ"),
     "camera_width": Option(int, "camera image width in pixels", 16, 640, "PIXELS"),
     "camera_height": Option(int, "camera image height in pixels", 12, 480, "PIXELS"),
+    "scan_rate_hz": Option(float, "scan (sensor_msgs/LaserScan, 360 beams, 0.1-8 m, from the "
+                                  "simulator's ray casting) rate (0 = no scan)", 0, 50, "HZ"),
+    "map": Option(bool, "publish the scene's nav_msgs/OccupancyGrid on map (5 cm cells, frame "
+                        "odom, transient local as map_server does)"),
+    "navigate_to_pose": Option(bool, "serve Nav2's NavigateToPose action on navigate_to_pose "
+                                     "with the project's planner and path follower; "
+                                     "--no-navigate-to-pose: as a Go2 without Nav2"),
+    "nav_speed": Option(float, "m/s the navigate_to_pose server walks at", 0.05, 1.0, "M/S"),
 }
 DEFAULTS = DriverSettings()
 _WANTED = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}

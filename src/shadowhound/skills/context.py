@@ -13,7 +13,7 @@ from ..config import ShadowHoundConfig
 from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout
 from ..robot.base import Robot
 from ..state import CameraFrame, Pose2D, Posture
-from ..world import Belief, KnownObject, merge_sightings
+from ..world import Belief, KnownObject
 
 
 @dataclass
@@ -58,14 +58,10 @@ def robot_belief(robot: Robot) -> Belief | None:
     return robot.belief()
 
 
-def robot_objects(robot: Robot, belief: Belief | None = None) -> tuple[KnownObject, ...]:
-    """Every object the robot knows: its map's and its detections' (`known_objects()`, e.g.
-    Go2RosRobot's detections topic), the latest sighting per name. `belief`: one already
-    fetched from this robot."""
-    belief = belief if belief is not None else robot_belief(robot)
-    source = getattr(robot, "known_objects", None)
-    return merge_sightings(belief.objects if belief is not None else (),
-                           source() if callable(source) else ())
+def robot_objects(robot: Robot) -> tuple[KnownObject, ...]:
+    """Every object the robot knows (`Robot.known_objects`: its world model's and, on ROS, its
+    detections'), the latest sighting per name."""
+    return robot.known_objects()
 
 
 class SkillContext:

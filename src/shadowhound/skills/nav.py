@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from pydantic import ConfigDict, Field, model_validator
 
 from ..state import Pose2D, normalize_angle
 from ..units import format_number as _n
 from ..world import PlanError, apply_scan, plan_route
-from . import motion, objects
+from . import motion, navigate, objects
 from .arguments import (
     Angle,
     Count,
@@ -215,13 +216,26 @@ def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     if target is not None and target.point is None:
         return _approach(ctx, a, target, linear, angular)
     x, y = _goto_target(a, ctx.env)
-    walk(ctx, (x, y), linear, angular)
+    _walk_to(ctx, (x, y), lambda: _predict_goto(ctx.robot.get_state().pose, a, ctx.env)[-1].yaw,
+             linear, angular)
     _final_heading(ctx, a)
     objects.sight_in_view(ctx)
     st = ctx.robot.get_state()
     names = {None: "the point", "start": "where the mission started", "home": "home"}
     where = names.get(a.place, f"the {a.place}")
     return f"reached {where} at x={st.x:.2f} m, y={st.y:.2f} m"
+
+
+def _walk_to(ctx: SkillContext, goal: tuple[float, float], yaw: Callable[[], float],
+             linear: float, angular: float) -> None:
+    """Walk to `goal`: through the robot's Nav2 when `navigation` chooses it (it plans and
+    drives, we watch, cancel and finish facing `yaw()`), else the project's own planned path."""
+    navigator = navigate.choose(ctx)
+    if navigator is None:
+        walk(ctx, goal, linear, angular)
+        return
+    navigate.navigate(ctx, navigator, goal, yaw(), linear, angular)
+    ctx.notes.append(f"through {navigator.name}")
 
 
 def _final_heading(ctx: SkillContext, a: GotoArgs) -> None:
@@ -246,7 +260,8 @@ def _approach(ctx: SkillContext, a: GotoArgs, target: objects.Target, linear: fl
     # path: the governor checks the approach now, as it does every re-planned path.
     _check_new_path(ctx, pose, route(ctx.env, pose, (spot.x, spot.y)),
                     f"the path to {found.the_name} is refused")
-    walk(ctx, (spot.x, spot.y), linear, angular)
+    _walk_to(ctx, (spot.x, spot.y), lambda: math.atan2(found.y - spot.y, found.x - spot.x),
+             linear, angular)
     if a.heading_degrees is None:
         objects.face(ctx, found, angular)
     _final_heading(ctx, a)

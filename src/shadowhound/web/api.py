@@ -235,7 +235,7 @@ async def world_map(request: Request) -> dict[str, Any]:
     places = known_places(settings.places, agent.memory.places)  # taught ones too
     belief = robot_belief(robot)
     grid = None if belief is None else grid_layout(belief.grid, grid_version(belief.grid))
-    return {"grid": grid, "objects": object_dicts(robot_objects(robot, belief)),
+    return {"grid": grid, "objects": object_dicts(robot_objects(robot)),
             "places": {name: list(place.position) for name, place in places.items()},
             "patrol_route": [list(p) for p in settings.patrol_route],
             "geofence_radius": settings.safety.geofence_radius,

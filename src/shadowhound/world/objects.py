@@ -71,6 +71,13 @@ class Belief:
     def changed(self) -> None:
         self._inflated = None
 
+    def replace_grid(self, grid: OccupancyGrid) -> None:
+        """A new map (a map server's or SLAM's next message) for the same world: the objects
+        known stay. Inflated before the swap, so a planner never sees a half-made one."""
+        inflated = inflate(grid, self.robot_radius)
+        with self._lock:
+            self.grid, self._inflated = grid, inflated
+
     def sight(self, name: str, x: float, y: float, stamp: float, confidence: float = 1.0,
               radius: float | None = None) -> KnownObject:
         """Remember that `name` was seen at (x, y) (map/odom frame, metres) at `stamp` (robot
