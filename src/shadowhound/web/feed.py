@@ -10,6 +10,9 @@ up gets every message, in order.
 
 Waking clients happens in slices of `WAKE_SLICE` per event-loop turn, so whatever else the loop
 has to do (an e-stop request, a status poll) waits for at most one slice, not for every client.
+Each loop has one sweep over its clients at a time: what is published during a sweep makes the
+sweep go round once more when it ends (waking only clients with something to read), rather than
+start a second sweep beside it, so bursts of events never add up to more than one slice a turn.
 """
 
 from __future__ import annotations
@@ -61,11 +64,17 @@ class Subscription:
                                     self._feed.encode(message)))
         self.wake()
 
-    def wake(self) -> None:
-        """Runs in the client's loop."""
+    def wake(self) -> bool:
+        """Runs in the client's loop. True when the client was waiting (and now runs)."""
         waiter = self._waiter
         if waiter is not None and not waiter.done():
             waiter.set_result(None)
+            return True
+        return False
+
+    def has_news(self) -> bool:
+        """Something is waiting for this client (a published message or a private one)."""
+        return bool(self._private) or self.cursor <= self._feed.last_seq
 
     async def next(self, timeout: float | None = None) -> list[Packet]:
         """The messages after the last ones returned (at most BATCH); [] after `timeout` seconds
@@ -106,12 +115,17 @@ class Subscription:
 
 
 class _Hub:
-    """The subscribers that live in one event loop, and whether a wake-up is on its way."""
+    """The subscribers that live in one event loop, whether a wake-up is on its way, and the
+    loop's one sweep over them."""
 
     def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
         self.loop = loop
         self.subscribers: list[Subscription] = []
-        self.wake_pending = False
+        self.wake_pending = False  # under the feed's lock
+        # In the loop's thread only: the clients this sweep has yet to wake (None: no sweep),
+        # and whether something was published since the sweep began.
+        self.sweep: deque[Subscription] | None = None
+        self.again = False
 
 
 class EventFeed:
@@ -131,6 +145,11 @@ class EventFeed:
         self._hubs: dict[asyncio.AbstractEventLoop, _Hub] = {}
         self._scrub = scrub or (lambda text: text)
         self.queue_size = queue_size
+
+    @property
+    def last_seq(self) -> int:
+        """The number of the newest message (0 before any)."""
+        return self._seq
 
     @property
     def clients(self) -> int:
@@ -204,14 +223,36 @@ class EventFeed:
         return self._scrub(json.dumps(message, default=str, separators=(",", ":")))
 
     def _wake(self, hub: _Hub) -> None:
-        """In the hub's loop: wake its waiting clients, one slice per loop turn."""
+        """In the hub's loop: something was published; sweep over its waiting clients."""
         with self._lock:
             hub.wake_pending = False
-            subscribers = list(hub.subscribers)
-        self._wake_slice(hub.loop, subscribers)
+        if hub.sweep is not None:  # a sweep is under way: it goes round again when it ends
+            hub.again = True
+            return
+        self._start_sweep(hub)
 
-    def _wake_slice(self, loop: asyncio.AbstractEventLoop, rest: list[Subscription]) -> None:
-        for subscription in rest[:WAKE_SLICE]:
-            subscription.wake()
-        if len(rest) > WAKE_SLICE:
-            loop.call_soon(self._wake_slice, loop, rest[WAKE_SLICE:])
+    def _start_sweep(self, hub: _Hub) -> None:
+        with self._lock:
+            hub.sweep = deque(hub.subscribers)
+        hub.again = False
+        self._wake_slice(hub)
+
+    def _wake_slice(self, hub: _Hub) -> None:
+        """Wake up to WAKE_SLICE waiting clients with something to read; the rest next turn."""
+        sweep = hub.sweep
+        assert sweep is not None
+        woken = 0
+        while sweep and woken < WAKE_SLICE:
+            subscription = sweep.popleft()
+            # A client that is not waiting reads the news itself when it next asks.
+            if subscription.has_news() and subscription.wake():
+                woken += 1
+        # The next slice, or the end of the sweep, is for the next turn: a sweep begun by a
+        # `_wake` later in this turn would wake a second slice in it.
+        hub.loop.call_soon(self._wake_slice if sweep else self._end_sweep, hub)
+
+    def _end_sweep(self, hub: _Hub) -> None:
+        if hub.again:  # published during the sweep: some clients may have missed it
+            self._start_sweep(hub)
+        else:
+            hub.sweep = None
