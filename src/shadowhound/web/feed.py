@@ -13,6 +13,8 @@ has to do (an e-stop request, a status poll) waits for at most one slice, not fo
 Each loop has one sweep over its clients at a time: what is published during a sweep makes the
 sweep go round once more when it ends (waking only clients with something to read), rather than
 start a second sweep beside it, so bursts of events never add up to more than one slice a turn.
+A client reads at most `limit` messages per wake-up and then waits for the next sweep (a client
+still behind asks for one), so a backlog is sent a slice at a time too, not all at once.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from typing import Any
 
 log = logging.getLogger(__name__)
 
-WAKE_SLICE = 16  # clients woken per event-loop turn
+WAKE_SLICE = 8  # clients woken per event-loop turn
 BATCH = 64  # messages handed to one client per read (bounds one client's turn in the loop)
 LAGGED = "lagged"
 
@@ -49,14 +51,16 @@ class Subscription:
     After a `lagged` packet the client is behind for good: send it and end the stream.
     """
 
-    def __init__(self, feed: EventFeed, loop: asyncio.AbstractEventLoop, cursor: int) -> None:
+    def __init__(self, feed: EventFeed, hub: _Hub, cursor: int) -> None:
         self._feed = feed
-        self.loop = loop
+        self._hub = hub
+        self.loop = hub.loop
         self.cursor = cursor  # the sequence number of the next message this client gets
         self.lagged = False
         self.closed = False
         self._private: deque[Packet] = deque(maxlen=16)  # e.g. WebSocket pongs
         self._waiter: asyncio.Future[None] | None = None
+        self._started = False
 
     def deliver(self, message: dict[str, Any]) -> None:
         """Queue a message for this client only (from the client's own loop)."""
@@ -76,12 +80,23 @@ class Subscription:
         """Something is waiting for this client (a published message or a private one)."""
         return bool(self._private) or self.cursor <= self._feed.last_seq
 
-    async def next(self, timeout: float | None = None) -> list[Packet]:
-        """The messages after the last ones returned (at most BATCH); [] after `timeout` seconds
-        without any, or once closed. A last packet of kind `lagged` ends the subscription."""
-        packets = self._take()
-        if packets or self.closed or self.lagged:
-            return packets
+    async def next(self, timeout: float | None = None, limit: int = BATCH) -> list[Packet]:
+        """The messages after the last ones returned (at most `limit`); [] after `timeout`
+        seconds without any, or once closed. A last packet of kind `lagged` ends the
+        subscription.
+
+        The first call returns what is there; every later one waits to be woken (by the loop's
+        sweep, a private message, the timeout or close), so a client never runs more than once
+        per sweep, however far behind it is."""
+        if not self._started:
+            self._started = True
+            packets = self._take(limit)
+            if packets or self.lagged:
+                return packets
+        if self.closed or self.lagged:
+            return []
+        if self.has_news():  # still behind: a sweep comes for it
+            self._feed.sweep_soon(self._hub)
         waiter: asyncio.Future[None] = self.loop.create_future()
         self._waiter = waiter
         timer = None if timeout is None else self.loop.call_later(timeout, self.wake)
@@ -91,14 +106,14 @@ class Subscription:
             self._waiter = None
             if timer is not None:
                 timer.cancel()
-        return self._take()
+        return [] if self.closed else self._take(limit)
 
-    def _take(self) -> list[Packet]:
+    def _take(self, limit: int) -> list[Packet]:
         if self.lagged:
             return []
         packets = list(self._private)
         self._private.clear()
-        found, missed = self._feed.read(self.cursor, BATCH)
+        found, missed = self._feed.read(self.cursor, limit)
         if missed:
             self.lagged = True
             packets.append(self._feed.lag_notice(self.cursor, missed))
@@ -183,8 +198,9 @@ class EventFeed:
         """A new subscription (from the next message on), and the kept messages after
         sequence number `since`."""
         with self._lock:
-            subscription = Subscription(self, loop, self._seq + 1)
-            self._hubs.setdefault(loop, _Hub(loop)).subscribers.append(subscription)
+            hub = self._hubs.setdefault(loop, _Hub(loop))
+            subscription = Subscription(self, hub, self._seq + 1)
+            hub.subscribers.append(subscription)
             missed = [] if since is None else [p for p in self._recent
                                                if p.seq is not None and p.seq > since]
         return subscription, missed
@@ -230,6 +246,13 @@ class EventFeed:
             hub.again = True
             return
         self._start_sweep(hub)
+
+    def sweep_soon(self, hub: _Hub) -> None:
+        """In the hub's loop: a client is still behind; the sweep goes (round again) for it."""
+        hub.again = True
+        if hub.sweep is None:  # none under way: one starts next turn
+            hub.sweep = deque()
+            hub.loop.call_soon(self._end_sweep, hub)
 
     def _start_sweep(self, hub: _Hub) -> None:
         with self._lock:
