@@ -9,7 +9,7 @@ import threading
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shadowhound.web.feed import LAGGED, EventFeed, Packet
+from shadowhound.web.feed import LAGGED, WAKE_SLICE, EventFeed, Packet, Subscription
 
 
 def _seqs(packets: list[Packet]) -> list[int]:
@@ -113,3 +113,54 @@ def test_a_closed_subscription_stops_waiting_and_is_forgotten() -> None:
         return await asyncio.wait_for(waiting, 5)
 
     assert asyncio.run(run()) == [] and feed.clients == 0
+
+
+@settings(max_examples=25, deadline=None)
+@given(clients=st.integers(1, 120),
+       publish_turns=st.lists(st.integers(1, 20), min_size=1, max_size=12),
+       limit=st.integers(1, 5))
+def test_a_loop_turn_runs_at_most_one_slice_of_clients_whatever_is_published(
+        clients: int, publish_turns: list[int], limit: int) -> None:
+    """Events published while the clients are being woken (a mission's events come in bursts)
+    never make one event-loop turn run more than WAKE_SLICE clients, nor hand them more than
+    `limit` messages each: whatever else the loop has to do, an e-stop request above all, waits
+    for one slice at most, however far behind the clients are. Every client still gets every
+    event, in order."""
+    feed = EventFeed(queue_size=1000)
+    events = len(publish_turns)
+
+    async def run() -> tuple[list[set[int]], list[int], list[list[int]]]:
+        loop = asyncio.get_running_loop()
+        subs = [feed.subscribe(loop)[0] for _ in range(clients)]
+        ran: list[set[int]] = [set()]  # per loop turn: the clients that ran in it
+        sent = [0]  # per loop turn: the messages they got
+        done = asyncio.Event()
+
+        def tick() -> None:  # runs once per loop turn, ahead of the clients woken in it
+            ran.append(set())
+            sent.append(0)
+            for _ in range(publish_turns.count(len(ran) - 1)):
+                feed.publish("step", {"turn": len(ran) - 1})
+            if not done.is_set():
+                loop.call_soon(tick)
+
+        async def read(index: int, sub: Subscription) -> list[int]:
+            seen: list[int] = []
+            while len(seen) < events:
+                packets = await sub.next(limit=limit)
+                ran[-1].add(index)
+                sent[-1] += len(packets)
+                seen += _seqs(packets)
+            return seen
+
+        readers = [asyncio.ensure_future(read(i, s)) for i, s in enumerate(subs)]
+        await asyncio.sleep(0)  # every reader waits for its first event
+        loop.call_soon(tick)
+        seen = await asyncio.gather(*readers)
+        done.set()
+        return ran, sent, list(seen)
+
+    ran, sent, seen = asyncio.run(asyncio.wait_for(run(), 30))
+    assert all(s == list(range(1, events + 1)) for s in seen)
+    assert max(len(r) for r in ran) <= WAKE_SLICE, [len(r) for r in ran]
+    assert max(sent) <= WAKE_SLICE * limit, sent

@@ -59,6 +59,20 @@ def test_websocket_reports_a_mission_step_by_step(serve: Serve) -> None:
         ["succeeded", "succeeded"]
 
 
+def test_websocket_events_are_sent_uncompressed_even_to_a_client_offering_deflate(
+        serve: Serve) -> None:
+    """Browsers offer permessage-deflate; accepting it would make the server compress every
+    event once per client (and each client inflate it), the fan-out cost growing with the
+    audience. The server declines it: an event costs every client the same frame."""
+    server = serve(make_agent())
+    with websockets_sync.connect(_ws_url(server), compression="deflate") as ws:
+        offered = ws.request.headers.get("Sec-WebSocket-Extensions", "") if ws.request else ""
+        assert "permessage-deflate" in offered  # the client did offer it
+        assert ws.response is not None
+        assert "Sec-WebSocket-Extensions" not in ws.response.headers
+        assert json.loads(ws.recv(timeout=5))["kind"] == "snapshot"
+
+
 def test_websocket_without_token_is_refused(serve: Serve) -> None:
     server = serve(make_agent(), token=TOKEN)
     with pytest.raises(Exception, match="403|1008|rejected"), \

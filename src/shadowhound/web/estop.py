@@ -3,8 +3,9 @@
 An ASGI layer just inside the gate (token, host, origin still apply). For the e-stop request it
 calls the hard stop as the first thing its task does, with no `await` in between, so nothing the
 event loop has queued after it (event fan-out, status polls, camera streams) runs first; the
-route then only writes the answer. The fan-out wakes clients a slice per loop turn (feed.py),
-so what can be queued ahead of the e-stop is bounded too, whatever the number of clients.
+route then only writes the answer. The fan-out wakes clients a slice per loop turn, each for a
+batch of messages at most (feed.py), so what can be queued ahead of the e-stop is bounded too,
+whatever the number of clients and however far behind they are.
 """
 
 from __future__ import annotations

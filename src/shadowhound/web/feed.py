@@ -10,6 +10,11 @@ up gets every message, in order.
 
 Waking clients happens in slices of `WAKE_SLICE` per event-loop turn, so whatever else the loop
 has to do (an e-stop request, a status poll) waits for at most one slice, not for every client.
+Each loop has one sweep over its clients at a time: what is published during a sweep makes the
+sweep go round once more when it ends (waking only clients with something to read), rather than
+start a second sweep beside it, so bursts of events never add up to more than one slice a turn.
+A client reads at most `limit` messages per wake-up and then waits for the next sweep (a client
+still behind asks for one), so a backlog is sent a slice at a time too, not all at once.
 """
 
 from __future__ import annotations
@@ -26,7 +31,7 @@ from typing import Any
 
 log = logging.getLogger(__name__)
 
-WAKE_SLICE = 16  # clients woken per event-loop turn
+WAKE_SLICE = 8  # clients woken per event-loop turn
 BATCH = 64  # messages handed to one client per read (bounds one client's turn in the loop)
 LAGGED = "lagged"
 
@@ -46,14 +51,16 @@ class Subscription:
     After a `lagged` packet the client is behind for good: send it and end the stream.
     """
 
-    def __init__(self, feed: EventFeed, loop: asyncio.AbstractEventLoop, cursor: int) -> None:
+    def __init__(self, feed: EventFeed, hub: _Hub, cursor: int) -> None:
         self._feed = feed
-        self.loop = loop
+        self._hub = hub
+        self.loop = hub.loop
         self.cursor = cursor  # the sequence number of the next message this client gets
         self.lagged = False
         self.closed = False
         self._private: deque[Packet] = deque(maxlen=16)  # e.g. WebSocket pongs
         self._waiter: asyncio.Future[None] | None = None
+        self._started = False
 
     def deliver(self, message: dict[str, Any]) -> None:
         """Queue a message for this client only (from the client's own loop)."""
@@ -61,18 +68,35 @@ class Subscription:
                                     self._feed.encode(message)))
         self.wake()
 
-    def wake(self) -> None:
-        """Runs in the client's loop."""
+    def wake(self) -> bool:
+        """Runs in the client's loop. True when the client was waiting (and now runs)."""
         waiter = self._waiter
         if waiter is not None and not waiter.done():
             waiter.set_result(None)
+            return True
+        return False
 
-    async def next(self, timeout: float | None = None) -> list[Packet]:
-        """The messages after the last ones returned (at most BATCH); [] after `timeout` seconds
-        without any, or once closed. A last packet of kind `lagged` ends the subscription."""
-        packets = self._take()
-        if packets or self.closed or self.lagged:
-            return packets
+    def has_news(self) -> bool:
+        """Something is waiting for this client (a published message or a private one)."""
+        return bool(self._private) or self.cursor <= self._feed.last_seq
+
+    async def next(self, timeout: float | None = None, limit: int = BATCH) -> list[Packet]:
+        """The messages after the last ones returned (at most `limit`); [] after `timeout`
+        seconds without any, or once closed. A last packet of kind `lagged` ends the
+        subscription.
+
+        The first call returns what is there; every later one waits to be woken (by the loop's
+        sweep, a private message, the timeout or close), so a client never runs more than once
+        per sweep, however far behind it is."""
+        if not self._started:
+            self._started = True
+            packets = self._take(limit)
+            if packets or self.lagged:
+                return packets
+        if self.closed or self.lagged:
+            return []
+        if self.has_news():  # still behind: a sweep comes for it
+            self._feed.sweep_soon(self._hub)
         waiter: asyncio.Future[None] = self.loop.create_future()
         self._waiter = waiter
         timer = None if timeout is None else self.loop.call_later(timeout, self.wake)
@@ -82,14 +106,14 @@ class Subscription:
             self._waiter = None
             if timer is not None:
                 timer.cancel()
-        return self._take()
+        return [] if self.closed else self._take(limit)
 
-    def _take(self) -> list[Packet]:
+    def _take(self, limit: int) -> list[Packet]:
         if self.lagged:
             return []
         packets = list(self._private)
         self._private.clear()
-        found, missed = self._feed.read(self.cursor, BATCH)
+        found, missed = self._feed.read(self.cursor, limit)
         if missed:
             self.lagged = True
             packets.append(self._feed.lag_notice(self.cursor, missed))
@@ -106,12 +130,17 @@ class Subscription:
 
 
 class _Hub:
-    """The subscribers that live in one event loop, and whether a wake-up is on its way."""
+    """The subscribers that live in one event loop, whether a wake-up is on its way, and the
+    loop's one sweep over them."""
 
     def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
         self.loop = loop
         self.subscribers: list[Subscription] = []
-        self.wake_pending = False
+        self.wake_pending = False  # under the feed's lock
+        # In the loop's thread only: the clients this sweep has yet to wake (None: no sweep),
+        # and whether something was published since the sweep began.
+        self.sweep: deque[Subscription] | None = None
+        self.again = False
 
 
 class EventFeed:
@@ -131,6 +160,11 @@ class EventFeed:
         self._hubs: dict[asyncio.AbstractEventLoop, _Hub] = {}
         self._scrub = scrub or (lambda text: text)
         self.queue_size = queue_size
+
+    @property
+    def last_seq(self) -> int:
+        """The number of the newest message (0 before any)."""
+        return self._seq
 
     @property
     def clients(self) -> int:
@@ -164,8 +198,9 @@ class EventFeed:
         """A new subscription (from the next message on), and the kept messages after
         sequence number `since`."""
         with self._lock:
-            subscription = Subscription(self, loop, self._seq + 1)
-            self._hubs.setdefault(loop, _Hub(loop)).subscribers.append(subscription)
+            hub = self._hubs.setdefault(loop, _Hub(loop))
+            subscription = Subscription(self, hub, self._seq + 1)
+            hub.subscribers.append(subscription)
             missed = [] if since is None else [p for p in self._recent
                                                if p.seq is not None and p.seq > since]
         return subscription, missed
@@ -204,14 +239,43 @@ class EventFeed:
         return self._scrub(json.dumps(message, default=str, separators=(",", ":")))
 
     def _wake(self, hub: _Hub) -> None:
-        """In the hub's loop: wake its waiting clients, one slice per loop turn."""
+        """In the hub's loop: something was published; sweep over its waiting clients."""
         with self._lock:
             hub.wake_pending = False
-            subscribers = list(hub.subscribers)
-        self._wake_slice(hub.loop, subscribers)
+        if hub.sweep is not None:  # a sweep is under way: it goes round again when it ends
+            hub.again = True
+            return
+        self._start_sweep(hub)
 
-    def _wake_slice(self, loop: asyncio.AbstractEventLoop, rest: list[Subscription]) -> None:
-        for subscription in rest[:WAKE_SLICE]:
-            subscription.wake()
-        if len(rest) > WAKE_SLICE:
-            loop.call_soon(self._wake_slice, loop, rest[WAKE_SLICE:])
+    def sweep_soon(self, hub: _Hub) -> None:
+        """In the hub's loop: a client is still behind; the sweep goes (round again) for it."""
+        hub.again = True
+        if hub.sweep is None:  # none under way: one starts next turn
+            hub.sweep = deque()
+            hub.loop.call_soon(self._end_sweep, hub)
+
+    def _start_sweep(self, hub: _Hub) -> None:
+        with self._lock:
+            hub.sweep = deque(hub.subscribers)
+        hub.again = False
+        self._wake_slice(hub)
+
+    def _wake_slice(self, hub: _Hub) -> None:
+        """Wake up to WAKE_SLICE waiting clients with something to read; the rest next turn."""
+        sweep = hub.sweep
+        assert sweep is not None
+        woken = 0
+        while sweep and woken < WAKE_SLICE:
+            subscription = sweep.popleft()
+            # A client that is not waiting reads the news itself when it next asks.
+            if subscription.has_news() and subscription.wake():
+                woken += 1
+        # The next slice, or the end of the sweep, is for the next turn: a sweep begun by a
+        # `_wake` later in this turn would wake a second slice in it.
+        hub.loop.call_soon(self._wake_slice if sweep else self._end_sweep, hub)
+
+    def _end_sweep(self, hub: _Hub) -> None:
+        if hub.again:  # published during the sweep: some clients may have missed it
+            self._start_sweep(hub)
+        else:
+            hub.sweep = None

@@ -22,6 +22,10 @@ router = APIRouter()
 _NO_STORE = {"Cache-Control": "no-store"}
 STREAM_SHARE_SECONDS = 1 / 60  # stream clients asking within this share one frame
 LAGGED_CLOSE = 1013  # "try again later": the client fell behind and should reconnect
+# Messages a WebSocket client sends per wake-up: each is a frame and a write of its own (an
+# event stream joins what is waiting into one write), so a backlog goes out a few at a time and
+# one loop turn of the fan-out stays short (feed.py).
+WS_BATCH = 4
 
 
 @router.get("/api/camera/latest", tags=["camera"],
@@ -130,7 +134,7 @@ async def ws_status(websocket: WebSocket) -> None:
     try:
         await websocket.send_text(web.feed.encode(_snapshot(web)))
         while not reader.done() and not subscription.lagged:
-            for packet in await subscription.next(timeout=5.0):
+            for packet in await subscription.next(timeout=5.0, limit=WS_BATCH):
                 await websocket.send_text(packet.text)
         if subscription.lagged:  # told in the last message; the page reconnects
             await websocket.close(code=LAGGED_CLOSE, reason="lagged: reconnect and read "
