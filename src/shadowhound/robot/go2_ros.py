@@ -41,8 +41,7 @@ from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, CompressedImage, Image
 
-from ..camera import to_camera_frame
-from ..ros.convert import raw_image_frame
+from ..camera import raw_image_frame, to_camera_frame
 from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
 from . import go2_api
 from .base import RobotError

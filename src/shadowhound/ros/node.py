@@ -37,7 +37,7 @@ from std_msgs.msg import String
 
 from .. import events as ev
 from ..agent import RobotAgent, RobotAgentConfig
-from ..camera import to_camera_frame
+from ..camera import raw_image_frame, to_camera_frame
 from ..result import MissionResult
 from ..robot.base import RobotError
 from ..worker import MissionJob, MissionWorker
@@ -46,7 +46,6 @@ from .convert import (
     diagnostic_level,
     diagnostic_message,
     diagnostic_values,
-    raw_image_frame,
     robot_status_json,
     shorten,
 )
