@@ -8,15 +8,8 @@ import zlib
 
 import pytest
 
-from shadowhound.robot.scene import (
-    DEFAULT_WORLD,
-    World,
-    WorldObject,
-    camera_frame,
-    encode_png,
-    render,
-    visible_objects,
-)
+from shadowhound.robot.renderer import camera_frame, encode_png, render
+from shadowhound.robot.scene import DEFAULT_WORLD, World, WorldObject, visible_objects
 from shadowhound.state import Pose2D
 
 W, H = 160, 120

@@ -33,7 +33,7 @@ from typing import Any
 from ..config import SimConfig
 from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
 from ..world import Belief
-from . import scene, sensors
+from . import renderer, scene, sensors
 from .base import RobotError
 from .go2_api import TRICKS
 
@@ -347,7 +347,7 @@ class SimRobot:
 
     def get_camera_frame(self) -> CameraFrame | None:
         state = self.get_state()
-        return scene.camera_frame(
+        return renderer.camera_frame(
             self.world,
             state.pose,
             width=self.config.camera_width,

@@ -26,7 +26,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, Image
 from std_msgs.msg import String
 
-from ..robot import go2_api, scene
+from ..robot import go2_api, renderer, scene
 from ..robot.go2_api import SportMode
 from ..robot.sim import SimRobot
 from ..robot.sim_sport import SimSportMode, Truth
@@ -280,6 +280,6 @@ class SimGo2:
                     step=3 * s.camera_width)
         msg.header.stamp = self.node.get_clock().now().to_msg()
         msg.header.frame_id = f"{self.prefix}camera_link"
-        msg.data = scene.render(scene.DEFAULT_WORLD, self.sim.get_state().pose, s.camera_width,
-                                s.camera_height)
+        msg.data = renderer.render(scene.DEFAULT_WORLD, self.sim.get_state().pose,
+                                   s.camera_width, s.camera_height)
         self._camera_pub.publish(msg)
