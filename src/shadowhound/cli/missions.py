@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import logging
 import math
 import queue
 import sys
@@ -13,6 +12,7 @@ from typing import Any, TextIO
 
 from .. import events as ev
 from ..config import ShadowHoundConfig
+from ..worker import MissionJob, MissionWorker
 from ._base import (
     EXIT_FAILED,
     EXIT_INTERRUPTED,
@@ -81,34 +81,28 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     if args.yes or sys.stdin.isatty():
         agent.enable_approvals()
         agent.add_listener(_approver(agent, ask=not args.yes))
-    box: dict[str, Any] = {}
-    done = threading.Event()
-
-    def work() -> None:
-        try:
-            box["result"] = agent.execute_mission(args.mission)
-        except Exception as exc:  # a bug, not a mission failure: say so, never hide it
-            logging.getLogger(__name__).exception("the mission crashed")
-            box["crash"] = exc
-        finally:
-            done.set()
-
-    # The mission runs on a worker so that Ctrl-C here can stop the robot at once. Its end is
-    # an Event, not Thread.join: a join interrupted by Ctrl-C can mark a live thread finished
-    # (CPython 3.11), and the result would be lost. Ctrl-C may land in start() itself.
+    # The mission runs on the mission worker, as it does for every interface, so that Ctrl-C
+    # here can stop the robot at once. Its end is the job's Event, not Thread.join: a join
+    # interrupted by Ctrl-C can mark a live thread finished (CPython 3.11), and the result
+    # would be lost. Ctrl-C may land while the worker starts.
+    job = MissionJob(args.mission, source="cli")
+    worker: MissionWorker | None = None
     interrupted = False
     try:
-        threading.Thread(target=work, name="shadowhound-mission", daemon=True).start()
-        while not done.wait(0.1):
+        worker = MissionWorker(agent, on_start=_nothing, on_finish=_nothing)
+        worker.submit(job)  # the only job of a fresh worker: never refused
+        while not job.done.wait(0.1):
             pass
     except KeyboardInterrupt:
         interrupted = True
         agent.estop()
-        done.wait(5.0)
-    result = box.get("result")
+        job.done.wait(5.0)
+    if worker is not None:
+        worker.stop(timeout=5.0 if job.done.is_set() else 0.0)
+    result = job.result
     agent.cleanup()
-    if "crash" in box:
-        return report_error("internal", f"{box['crash']!r}; the robot was stopped", EXIT_FAILED,
+    if job.dropped is not None:  # the worker caught a crash: a bug, not a mission failure
+        return report_error("internal", f"{job.dropped}; the robot was stopped", EXIT_FAILED,
                             json_out=args.json, mission=args.mission)
     if result is None:
         return report_error("interrupted", "the robot was stopped", EXIT_INTERRUPTED,
@@ -119,10 +113,15 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     else:
         st = result.robot
         print(result.response)
-        print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
-              f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
-              f"battery={st.battery_text}")
+        if st is not None:  # None only when the robot could not be read at all
+            print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
+                  f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
+                  f"battery={st.battery_text}")
     return code
+
+
+def _nothing(job: MissionJob) -> None:
+    """The command line reports a mission itself, after it ends."""
 
 
 def _answer(result: Any, code: int) -> dict[str, Any]:
@@ -163,6 +162,7 @@ _CHAT_HELP = ("Ask a question (where are you? battery? what do you see? what did
 
 def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     agent = make_agent(settings)
+    worker = MissionWorker(agent, on_start=_nothing, on_finish=_nothing)
     interactive = sys.stdin.isatty()
     if interactive:
         print("ShadowHound chat. " + _CHAT_HELP)
@@ -179,7 +179,7 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     def answer() -> None:
         try:
             while (line := lines.get()) is not None:
-                say(_chat_line(agent, line))
+                say(_chat_line(agent, worker, line))
         finally:
             answered.set()
 
@@ -198,7 +198,7 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             if line in ("/quit", "/exit"):
                 break
             if line.split()[0] == "/estop":
-                say(_chat_line(agent, line))
+                say(_chat_line(agent, worker, line))
             else:
                 lines.put(line)
         lines.put(None)
@@ -207,17 +207,24 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     except KeyboardInterrupt:
         agent.estop()
     finally:
+        worker.stop(timeout=0.0)  # the mission (if any) was stopped; do not wait for it
         agent.cleanup()
     return EXIT_OK
 
 
-def _chat_line(agent: Any, line: str) -> str:
+def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
     if line.startswith("/run"):
         mission = line[4:].strip()
         if not mission:
             return "usage: /run MISSION"
-        result = agent.execute_mission(mission)
-        return ("ok: " if result.success else "failed: ") + result.response
+        job = MissionJob(mission, source="cli")
+        refused = worker.submit(job)
+        if refused is not None:
+            return "refused: " + refused
+        job.done.wait()  # answers come in order: the next line waits for this mission
+        if job.result is None:
+            return f"failed: {job.dropped}"
+        return ("ok: " if job.result.success else "failed: ") + job.result.response
     commands = {
         "/status": lambda: json.dumps(agent.get_robot_status()),
         "/skills": lambda: ", ".join(s["name"] for s in agent.get_available_skills()),
