@@ -15,9 +15,8 @@ import pytest
 
 from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import ShadowHoundConfig
-from shadowhound.robot.go2_motion import MotionTracker
+from shadowhound.robot.go2_motion import GO2_MOTION, MotionTracker
 from shadowhound.robot.sim import SimRobot
-from shadowhound.ros.params import GO2_MOTION
 from shadowhound.state import CameraFrame, Posture, RobotState
 
 

@@ -95,8 +95,8 @@ def _robot(settings: ShadowHoundConfig) -> Any:
     from ..config import ConfigError
 
     try:
+        from ..robot.go2_motion import GO2_MOTION
         from ..robot.go2_ros import Go2RosConfig, Go2RosRobot
-        from ..ros.params import GO2_MOTION
     except ImportError as exc:
         raise ConfigError(f"robot go2 needs rclpy and the go2_interfaces package ('ros' extra; "
                           f"source your go2_ros2_sdk workspace or run scripts/build_ros.sh): "
