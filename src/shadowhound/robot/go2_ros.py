@@ -21,6 +21,10 @@ Written against how the driver really behaves (docs/go2.md):
 
 The robot has its own rclpy node and executor thread, so it works inside the MissionNode
 process (sharing its context) or in a plain script (it then initialises a private context).
+
+Long because: it is the one Robot implementation over go2_ros2_sdk, whose protocol methods and
+ROS callbacks share one node, one executor thread and one lock; what needs no ROS already
+lives apart (go2_api: the sport API table, go2_motion: odometry tracking, go2_posture).
 """
 
 from __future__ import annotations

@@ -19,6 +19,11 @@ Clock: with time_scale 0 simulated time advances only when the controller sleeps
 as the CPU allows. With time_scale s > 0 each simulated second takes s real seconds (or longer,
 when the controller or the CPU cannot keep up): while a controller ticks, time passes in its
 sleeps only, paced to the wall clock; while nobody ticks, it follows the wall clock.
+
+Long because: it is the Robot protocol's simulated implementation: the clock, the physics, the
+postures and the record of what really happened change one state under one lock on every
+substep. The world (scene.py), its picture (renderer.py) and the sensors (sensors.py) live
+apart.
 """
 
 from __future__ import annotations
