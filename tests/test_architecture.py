@@ -238,6 +238,20 @@ def test_the_checks_catch_what_they_forbid() -> None:
     assert LEVEL_OF["llm"] < LEVEL_OF["planning"] and LEVEL_OF["world"] < LEVEL_OF["robot"]
 
 
+def test_interfaces_run_missions_only_through_the_worker() -> None:
+    """One mission at a time, for every interface: only worker.py starts a mission that moves
+    the robot (a dry run moves nothing, so an interface may ask for one directly)."""
+    interfaces = [m for m in MODULES if room_of(m) in LEVELS[-2] + LEVELS[-1]]
+    starts = []
+    for module in interfaces:
+        for node in ast.walk(ast.parse(MODULES[module].read_text(encoding="utf-8"))):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                    and node.func.attr in ("execute_mission", "run_plan")):
+                starts.append(f"{module}, line {node.lineno}: {node.func.attr}")
+    assert "shadowhound.cli.missions" in interfaces
+    assert not starts, "missions started outside the worker:\n" + "\n".join(starts)
+
+
 # -- module size -------------------------------------------------------------------------
 
 MAX_LINES = 400

@@ -74,31 +74,14 @@ def _approver(agent: Any, ask: bool) -> ev.Listener:
 
 def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     agent = make_agent(settings)
-    if args.dry_run:
-        return _dry_run(agent, args)
-    if not args.quiet:
-        agent.add_listener(_progress(sys.stderr))
-    if args.yes or sys.stdin.isatty():
-        agent.enable_approvals()
-        agent.add_listener(_approver(agent, ask=not args.yes))
-    # The mission runs on the mission worker, as it does for every interface, so that Ctrl-C
-    # here can stop the robot at once. Its end is the job's Event, not Thread.join: a join
-    # interrupted by Ctrl-C can mark a live thread finished (CPython 3.11), and the result
-    # would be lost. Ctrl-C may land while the worker starts.
-    job = MissionJob(args.mission, source="cli")
-    worker: MissionWorker | None = None
-    interrupted = False
-    try:
-        worker = MissionWorker(agent, on_start=_nothing, on_finish=_nothing)
-        worker.submit(job)  # the only job of a fresh worker: never refused
-        while not job.done.wait(0.1):
-            pass
-    except KeyboardInterrupt:
-        interrupted = True
-        agent.estop()
-        job.done.wait(5.0)
-    if worker is not None:
-        worker.stop(timeout=5.0 if job.done.is_set() else 0.0)
+    if not args.dry_run:
+        if not args.quiet:
+            agent.add_listener(_progress(sys.stderr))
+        if args.yes or sys.stdin.isatty():
+            agent.enable_approvals()
+            agent.add_listener(_approver(agent, ask=not args.yes))
+    job = MissionJob(args.mission, source="cli", dry_run=args.dry_run)
+    interrupted = _run_on_worker(agent, job)
     result = job.result
     agent.cleanup()
     if job.dropped is not None:  # the worker caught a crash: a bug, not a mission failure
@@ -107,6 +90,8 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     if result is None:
         return report_error("interrupted", "the robot was stopped", EXIT_INTERRUPTED,
                             json_out=args.json, mission=args.mission)
+    if args.dry_run:
+        return _show_dry_run(result, args)
     code = EXIT_INTERRUPTED if interrupted else EXIT_OK if result.success else EXIT_FAILED
     if args.json:
         print_json(_answer(result, code))
@@ -120,6 +105,29 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     return code
 
 
+def _run_on_worker(agent: Any, job: MissionJob) -> bool:
+    """Run `job` on a mission worker, as every interface does; True if Ctrl-C stopped it.
+
+    This thread stays free, so that Ctrl-C here can stop the robot at once. The job's end is
+    an Event, not Thread.join: a join interrupted by Ctrl-C can mark a live thread finished
+    (CPython 3.11), and the result would be lost. Ctrl-C may land while the worker starts.
+    """
+    worker: MissionWorker | None = None
+    try:
+        worker = MissionWorker(agent, on_start=_nothing, on_finish=_nothing)
+        worker.submit(job)  # the only job of a fresh worker: never refused
+        while not job.done.wait(0.1):
+            pass
+    except KeyboardInterrupt:
+        agent.estop()
+        job.done.wait(5.0)
+        return True
+    finally:
+        if worker is not None:  # a mission still running after Ctrl-C is not waited for
+            worker.stop(timeout=5.0 if job.done.is_set() else 0.0)
+    return False
+
+
 def _nothing(job: MissionJob) -> None:
     """The command line reports a mission itself, after it ends."""
 
@@ -131,9 +139,7 @@ def _answer(result: Any, code: int) -> dict[str, Any]:
     return answer
 
 
-def _dry_run(agent: Any, args: argparse.Namespace) -> int:
-    result = agent.dry_run(args.mission)
-    agent.cleanup()
+def _show_dry_run(result: Any, args: argparse.Namespace) -> int:
     code = EXIT_OK if result.success else EXIT_FAILED
     if args.json:
         print_json(_answer(result, code))
