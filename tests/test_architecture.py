@@ -49,11 +49,6 @@ KNOWN_CROSSINGS: dict[tuple[str, str], str] = {
     # By design: the ROS node serves the dashboard on its own mission worker (enable_web_ui).
     ("shadowhound.ros.node", "shadowhound.web.app"): "hosts the dashboard",
     ("shadowhound.ros.node", "shadowhound.web.server"): "hosts the dashboard",
-    # Debt: the rules for exposing a server (loopback hosts, token needed off loopback, the
-    # listening socket) are the dashboard's and the MCP server's alike; they belong in a
-    # module of their own below both, not in web/security.py.
-    ("shadowhound.mcp", "shadowhound.web.security"): "shares the serving rules",
-    ("shadowhound.mcp.transport", "shadowhound.web.security"): "shares the serving rules",
     # Debt: nav.goto checks a re-planned path with the governor, which imports the skills
     # (lazily, in the function). The skill context should carry the path check instead.
     ("shadowhound.skills.nav", "shadowhound.safety"): "re-planned path check",

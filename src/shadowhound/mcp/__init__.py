@@ -57,7 +57,7 @@ def main(settings: ShadowHoundConfig, *, http: bool = False, host: str = "127.0.
     token = (token or os.environ.get("SHADOWHOUND_TOKEN") or None) if http else None
     try:
         if http:
-            from ..web.security import check_binding
+            from ..serving import check_binding
 
             check_binding(host, token, what="the MCP server")  # before the robot is touched
         agent = RobotAgent(RobotAgentConfig(robot=_robot(settings), settings=settings))
