@@ -1,4 +1,5 @@
-"""The simulator's synthetic camera: sightings, occlusion, the raycast image and its PNG."""
+"""The simulator's world and its camera (scene.py, renderer.py): sightings, occlusion, the raycast
+image and its PNG."""
 
 from __future__ import annotations
 
