@@ -1,7 +1,8 @@
 import pytest
 
-from shadowhound.camera import image_size, to_camera_frame
-from shadowhound.robot.scene import DEFAULT_WORLD, encode_png, render
+from shadowhound.camera import image_size, raw_image_frame, to_camera_frame
+from shadowhound.robot.renderer import encode_png, render
+from shadowhound.robot.scene import DEFAULT_WORLD
 from shadowhound.state import CameraFrame, Pose2D
 from tests.images import tiny_jpeg
 
@@ -58,3 +59,29 @@ def test_encode_jpeg_converts_and_downscales():
     assert encode_jpeg(same) is same.data  # a JPEG that fits is passed through
     with pytest.raises(ValueError, match="could not be decoded"):
         encode_jpeg(CameraFrame(b"\x89PNG\r\n\x1a\nbroken", 4, 4, "png"))
+
+
+# -- raw sensor_msgs/Image fields (the ROS node and the Go2 robot) --------------------------
+
+
+def test_raw_frame_row_padding_is_removed() -> None:
+    rows = [bytes([r]) * 6 + b"\xee\xee" for r in range(3)]  # 2 px rgb8 + 2 bytes padding
+    frame = raw_image_frame(b"".join(rows), 2, 3, "rgb8", 8)
+    assert (frame.width, frame.height, frame.encoding) == (2, 3, "rgb8")
+    assert frame.data == b"\x00" * 6 + b"\x01" * 6 + b"\x02" * 6
+
+
+def test_raw_frame_without_padding_keeps_its_bytes() -> None:
+    frame = raw_image_frame(bytearray(range(12)), 4, 3, "mono8", 4)
+    assert frame.data == bytes(range(12)) and frame.encoding == "mono8"
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    ((b"\0" * 12, 2, 2, "yuv422", 6), "unsupported image encoding 'yuv422'"),
+    ((b"\0" * 12, 2, 2, "rgb8", 5), "step 5 is smaller than a rgb8 row"),
+    ((b"\0" * 11, 2, 2, "rgb8", 6), "image data has 11 bytes"),
+    ((b"", 0, 0, "mono8", 0), "image size 0x0 is out of range"),
+])
+def test_bad_raw_frames_are_refused(args: tuple, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        raw_image_frame(*args)

@@ -18,9 +18,8 @@ from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import ShadowHoundConfig
-from shadowhound.robot.go2_motion import MotionTracker, StampClock
+from shadowhound.robot.go2_motion import GO2_MOTION, MotionTracker, StampClock
 from shadowhound.robot.sim import SimRobot
-from shadowhound.ros.params import GO2_MOTION
 from shadowhound.state import CameraFrame, Posture, RobotState
 
 

@@ -21,8 +21,8 @@ from shadowhound import (
     default_registry,
 )
 from shadowhound import events as ev
-from shadowhound.llm.parse import parse_reply
 from shadowhound.planning import FixedPlanner
+from shadowhound.planning.parse import parse_reply
 from shadowhound.skills import NoArgs, Skill
 from shadowhound.state import Pose2D
 

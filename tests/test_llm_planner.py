@@ -20,8 +20,8 @@ from hypothesis import strategies as st
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, SkillCall, load_config, units
 from shadowhound.config import ConfigError
 from shadowhound.llm.backend import estimate_tokens
-from shadowhound.llm.parse import parse_reply
-from shadowhound.llm.prompts import system_prompt, tools
+from shadowhound.planning.parse import parse_reply
+from shadowhound.planning.prompts import system_prompt, tools
 from shadowhound.skills import SkillValidationError, default_registry
 from tests.llm_server import (
     ScriptedLLM,

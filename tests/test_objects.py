@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import MemoryConfig, SafetyConfig, SearchConfig, ShadowHoundConfig
-from shadowhound.llm.prompts import system_prompt
+from shadowhound.planning.prompts import system_prompt
 from shadowhound.planning.rules import RulePlanner
 from shadowhound.robot.scene import DEFAULT_WORLD, World, WorldObject
 from shadowhound.robot.sensors import penetration, scene_grid

@@ -1,4 +1,5 @@
-"""The simulator's synthetic camera: sightings, occlusion, the raycast image and its PNG."""
+"""The simulator's world and its camera (scene.py, renderer.py): sightings, occlusion, the raycast
+image and its PNG."""
 
 from __future__ import annotations
 
@@ -8,15 +9,8 @@ import zlib
 
 import pytest
 
-from shadowhound.robot.scene import (
-    DEFAULT_WORLD,
-    World,
-    WorldObject,
-    camera_frame,
-    encode_png,
-    render,
-    visible_objects,
-)
+from shadowhound.robot.renderer import camera_frame, encode_png, render
+from shadowhound.robot.scene import DEFAULT_WORLD, World, WorldObject, visible_objects
 from shadowhound.state import Pose2D
 
 W, H = 160, 120

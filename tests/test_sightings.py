@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
-from shadowhound.ros.detections import (
+from shadowhound.robot.go2_detections import (
     DEFAULT_RADIUS,
     DetectionError,
     Frames,

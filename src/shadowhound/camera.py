@@ -1,14 +1,18 @@
-"""Turning what interfaces receive (bytes, arrays, frames) into a CameraFrame."""
+"""Turning what interfaces and robots receive (bytes, arrays, raw sensor_msgs/Image fields,
+frames) into a CameraFrame."""
 
 from __future__ import annotations
 
 import io
 import struct
+import time
 from typing import Any
 
 from .state import CameraFrame
 
 _MAX_BYTES = 50 * 1024 * 1024
+RAW_ENCODINGS = {"rgb8": 3, "bgr8": 3, "mono8": 1}
+_MAX_RAW_SIDE = 10_000
 
 
 def image_size(data: bytes) -> tuple[str, int, int]:
@@ -68,6 +72,34 @@ def to_camera_frame(frame: Any, source: str = "camera") -> CameraFrame:
         f"unsupported camera frame {type(frame).__name__}: give JPEG/PNG bytes, a CameraFrame, "
         "or a uint8 array of shape HxWx3 or HxW"
     )
+
+
+def raw_image_frame(data: bytes | bytearray | memoryview, width: int, height: int,
+                    encoding: str, step: int, source: str = "camera") -> CameraFrame:
+    """A sensor_msgs/Image (rgb8, bgr8, mono8) as a CameraFrame; row padding is removed.
+
+    Raises ValueError naming what is wrong (encoding, sizes, data length).
+    """
+    channels = RAW_ENCODINGS.get(encoding)
+    if channels is None:
+        raise ValueError(f"unsupported image encoding {encoding!r}; supported: "
+                         f"{', '.join(RAW_ENCODINGS)} (or send sensor_msgs/CompressedImage)")
+    if not (0 < width <= _MAX_RAW_SIDE and 0 < height <= _MAX_RAW_SIDE):
+        raise ValueError(f"image size {width}x{height} is out of range "
+                         f"(1..{_MAX_RAW_SIDE} a side)")
+    row = width * channels
+    if step < row:
+        raise ValueError(f"image step {step} is smaller than a {encoding} row of {width} "
+                         f"pixels ({row} bytes)")
+    if len(data) != step * height:
+        raise ValueError(f"image data has {len(data)} bytes; {height} rows of step {step} "
+                         f"need {step * height}")
+    view = memoryview(data)
+    if step == row:
+        pixels = bytes(view)
+    else:
+        pixels = b"".join(view[r * step: r * step + row] for r in range(height))
+    return CameraFrame(pixels, width, height, encoding, stamp=time.time(), source=source)
 
 
 _PIL_MODES = {"rgb8": "RGB", "bgr8": "RGB", "mono8": "L"}

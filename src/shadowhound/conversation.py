@@ -114,8 +114,8 @@ class ModelChat:
         self._lock = threading.Lock()
 
     def __call__(self, text: str, chat: ChatContext) -> str:
-        from .llm import prompts
         from .llm.backend import BackendError
+        from .planning import prompts
 
         ctx = chat.planning(text)
         lines = [

@@ -36,15 +36,12 @@ what was wrong and what is allowed or what to do.
 Classes that were ValueErrors stay ValueErrors (pydantic validators and callers rely on it).
 Callers catch by class, never by comparing class names. Each class is also importable from the
 module where it is raised (e.g. `shadowhound.config.ConfigError`); it is the same class.
-This module imports nothing of the package, so any module may import it.
+This module imports only `usage` (what a failed plan cost), so any module may import it.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from .plan import Usage
+from .usage import Usage
 
 __all__ = [
     "BackendCancelled",
@@ -132,11 +129,7 @@ class PlanningError(ShadowHoundError):
         self.message = message
         self.understood = understood or []
         self.not_understood = not_understood or []
-        if usage is None:
-            from .plan import Usage  # plan.py imports this module: import on use
-
-            usage = Usage()
-        self.usage = usage
+        self.usage = usage if usage is not None else Usage()
 
 
 class NotUnderstood(ShadowHoundError):

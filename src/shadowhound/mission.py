@@ -8,8 +8,10 @@ predicted path) before anything moves. The run touches the robot only through th
 protocol and the governor's step checks.
 
 What runs share across missions (the robot, the governor, the event bus, the progress tracker,
-the e-stop and cancel signal) is the agent's `Crew` (crew.py). The module is a little over 400
-lines because the six stages of one mission read best together, in order.
+the e-stop and cancel signal) is the agent's `Crew` (crew.py).
+
+Long because: the six stages of one mission (and react mode's step loop) read best together,
+in order; each stage is a short method.
 """
 
 from __future__ import annotations

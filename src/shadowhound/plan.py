@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .errors import PlanningError as PlanningError
+from .usage import Usage as Usage
 
 
 @dataclass(frozen=True)
@@ -20,38 +21,6 @@ class SkillCall:
         # A language model may propose anything; keep the record JSON-safe whatever it is.
         args = dict(self.args) if isinstance(self.args, dict) else {"_invalid": repr(self.args)}
         return {"skill": self.skill, "args": args, "label": self.label}
-
-
-@dataclass
-class Usage:
-    """Language-model cost of a mission. All zero for the offline planner."""
-
-    prompt_tokens: int = 0
-    completion_tokens: int = 0
-    round_trips: int = 0
-    estimated: bool = False  # True when the server reported no usage and tokens were counted
-    invalid_plans: int = 0  # model replies that failed validation (each one goes to repair)
-
-    @property
-    def total_tokens(self) -> int:
-        return self.prompt_tokens + self.completion_tokens
-
-    def add(self, other: Usage) -> None:
-        self.prompt_tokens += other.prompt_tokens
-        self.completion_tokens += other.completion_tokens
-        self.round_trips += other.round_trips
-        self.estimated = self.estimated or other.estimated
-        self.invalid_plans += other.invalid_plans
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "prompt_tokens": self.prompt_tokens,
-            "completion_tokens": self.completion_tokens,
-            "total_tokens": self.total_tokens,
-            "round_trips": self.round_trips,
-            "estimated": self.estimated,
-            "invalid_plans": self.invalid_plans,
-        }
 
 
 @dataclass

@@ -5,13 +5,26 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from .plan import Plan, Usage
 from .state import Pose2D, RobotState
 
-if TYPE_CHECKING:
-    from .skills import SkillRegistry
+
+class SkillFacts(Protocol):
+    """What reports and memory read of a skill (skills.registry.Skill declares it)."""
+
+    @property
+    def reports(self) -> bool: ...
+
+    @property
+    def remembered_as(self) -> str | None: ...
+
+
+class SkillBook(Protocol):
+    """Where skills are looked up by name (skills.registry.SkillRegistry)."""
+
+    def find(self, name: str) -> SkillFacts | None: ...
 
 
 class StepStatus(str, Enum):
@@ -142,7 +155,7 @@ class MissionResult:
 
 
 def compose_response(status: MissionStatus, steps: list[StepResult], plan: Plan,
-                     error: str | None, skills: SkillRegistry) -> str:
+                     error: str | None, skills: SkillBook) -> str:
     """The sentence a person reads: what was done and, for reports, the answers themselves
     (the output of a skill of `skills` that declares `reports`)."""
     done = [s.output for s in steps if s.status is StepStatus.SUCCEEDED and s.output]
@@ -164,6 +177,6 @@ def compose_response(status: MissionStatus, steps: list[StepResult], plan: Plan,
     return text + " The robot is stopped."
 
 
-def _reports(skills: SkillRegistry, name: str) -> bool:
+def _reports(skills: SkillBook, name: str) -> bool:
     skill = skills.find(name)
     return skill is not None and skill.reports

@@ -22,12 +22,11 @@ from dataclasses import dataclass, field
 from . import geofence, units
 from .budget import out_of_time
 from .config import SafetyConfig
-from .skills import SkillRegistry, default_registry
+from .skills import SkillRegistry, default_registry, paths
 from .skills.arguments import argument_kind
 from .skills.context import PlanEnv, PlanProblem
 from .skills.registry import ValidatedCall
 from .state import Pose2D, Posture, RobotState, normalize_angle
-from .world import check_leg
 
 
 @dataclass(frozen=True)
@@ -90,7 +89,7 @@ class Governor:
             except PlanProblem as exc:
                 check.refusals.append(Refusal(index, call.name, str(exc)))
                 continue
-            legs = _legs(pose, poses)
+            legs = paths.legs(pose, poses)
             check.distance += sum(legs)
             reasons += self._mission_distance(walked, check.distance)
             seconds += self._least_seconds(call, sum(legs))
@@ -148,7 +147,7 @@ class Governor:
             return reasons
         if needs_approval and not budget.granted(call):
             reasons.append(f"not approved: {needs_approval}")
-        distance = sum(_legs(state.pose, poses))
+        distance = sum(paths.legs(state.pose, poses))
         reasons += self._mission_distance(budget.travelled(state), distance,
                                           self.limits.outcome_tolerance)
         elapsed = budget.elapsed()
@@ -241,93 +240,14 @@ class Governor:
 
     def path_problems(self, pose: Pose2D, poses: list[Pose2D], env: PlanEnv, what: str
                       ) -> list[str]:
-        """Why the straight legs from `pose` through `poses` may not be walked: the step limit
-        (per straight leg), the geofences and, with a map, anything in the way. Skills that
-        re-plan on the way (nav.goto) check their new path here too."""
-        lim = self.limits
-        reasons: list[str] = []
-        for leg in _legs(pose, poses):
-            if leg > lim.max_step_distance + 1e-9:
-                reasons.append(
-                    f"a straight leg of {leg:.2f} m exceeds the limit of "
-                    f"{lim.max_step_distance:g} m per step (safety.max_step_distance)"
-                )
-                break
-        outside = self._outside_fence(pose, poses)
-        if outside:
-            reasons.append(outside)
-        reasons += _in_the_way(what, pose, poses, env)
-        return reasons
-
-    def _outside_fence(self, pose: Pose2D, poses: list[Pose2D]) -> str:
-        """Why the path from `pose` through `poses` breaks a geofence ("" when it does not).
-        The robot's body is a circle of safety.geofence_margin around its centre."""
-        lim = self.limits
-        margin = lim.geofence_margin
-        fences: list[tuple[geofence.Fence, str, str]] = [(
-            geofence.CircleFence(lim.geofence_radius), f"the geofence of {lim.geofence_radius:g} m",
-            "around the origin (safety.geofence_radius)")]
-        if lim.geofence_polygon:
-            fences.append((geofence.PolygonFence(lim.geofence_polygon), "the geofence polygon",
-                           "(safety.geofence_polygon)"))
-        previous = pose
-        for p in poses:
-            a, b = (previous.x, previous.y), (p.x, p.y)
-            for fence, name, where in fences:
-                breach = geofence.leg_breach(fence, a, b, margin)
-                if breach is not None:
-                    return _fence_message(breach, a, b, (name, where), margin)
-            previous = p
-        return ""
-
-
-def _in_the_way(what: str, pose: Pose2D, poses: list[Pose2D], env: PlanEnv) -> list[str]:
-    """With a map, every straight leg of a moving step must stay in mapped free space, the body
-    clear of everything on it: "nav.move 4 m: the red ball is in the way at 2.4 m"."""
-    if env.belief is None:
-        return []
-    previous = pose
-    for p in poses:
-        leg = check_leg(env.belief, (previous.x, previous.y), (p.x, p.y))
-        if not leg.clear:
-            at = "" if len(poses) == 1 else f" (on its leg from {_xy((previous.x, previous.y))})"
-            return [f"{what}: {leg.message()}{at}"]
-        previous = p
-    return []
-
-
-def _fence_message(breach: geofence.Breach, a: tuple[float, float], b: tuple[float, float],
-                   fence: tuple[str, str], margin: float) -> str:
-    """Say where the path first breaks the fence, and where its centre leaves it."""
-    Kind = geofence.BreachKind
-    name, full = fence[0], " ".join(fence)
-    leg = f"its path from {_xy(a)} to {_xy(b)}"
-    body = f"{margin:g} m kept around its centre for the robot's body (safety.geofence_margin)"
-    if breach.kind is Kind.STARTS_OUTSIDE:
-        return f"it would start at {_xy(a)}, outside {full}"
-    if breach.kind is Kind.LEAVES:
-        return f"{leg} leaves {full} at {_xy(breach.at)}"
-    if breach.kind is Kind.STAYS_NEAR:
-        return (f"{leg} starts {breach.start_clearance:.2f} m from the edge of {full}, within "
-                f"the {body}: from there the robot may only turn in place, or walk back to at "
-                f"least {margin:g} m from the edge, but this leg ends closer")
-    leaves = f"; its centre leaves {name} at {_xy(breach.exit)}" if breach.exit else ""
-    return (f"{leg} takes the robot's body outside {full} when its centre passes "
-            f"{_xy(breach.at)} ({body}){leaves}")
+        """Why the straight legs from `pose` through `poses` may not be walked (skills/paths.py:
+        the step limit per leg, the geofences, and with a map anything in the way)."""
+        return paths.path_problems(self.limits, pose, poses, env, what)
 
 
 def inside_polygon(x: float, y: float, polygon: Sequence[tuple[float, float]]) -> bool:
     """Is (x, y) inside the polygon or on its boundary?"""
     return geofence.PolygonFence(polygon).contains((x, y))
-
-
-def _xy(p: tuple[float, float]) -> str:
-    return f"({p[0]:.2f}, {p[1]:.2f})"
-
-
-def _legs(pose: Pose2D, poses: list[Pose2D]) -> list[float]:
-    points = [pose, *poses]
-    return [math.hypot(b.x - a.x, b.y - a.y) for a, b in zip(points, points[1:], strict=False)]
 
 
 def _matches(name: str, patterns: Sequence[str]) -> bool:

@@ -33,7 +33,7 @@ class MissionJob:
     """A mission to run. `on_event` sees the agent's events while this job runs."""
 
     command: str
-    source: str = "topic"  # topic | action | web | mcp
+    source: str = "topic"  # topic | action | web | mcp | cli
     mission_id: str = field(default_factory=lambda: uuid.uuid4().hex[:12])  # the agent's id too
     dry_run: bool = False
     on_event: Callable[[MissionEvent], None] | None = None

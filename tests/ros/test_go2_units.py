@@ -6,7 +6,8 @@ import math
 
 import pytest
 
-from shadowhound.ros.params import GO2_MOTION, ParameterError, parse_parameters
+from shadowhound.robot.go2_motion import GO2_MOTION
+from shadowhound.ros.params import ParameterError, parse_parameters
 from shadowhound.ros.sim_options import DriverSettings, build_parser, parse_settings
 
 

@@ -91,29 +91,6 @@ def test_navigation_comes_from_the_profile_unless_the_parameter_sets_it() -> Non
 # -- conversions ---------------------------------------------------------------------------
 
 
-def test_raw_frame_row_padding_is_removed() -> None:
-    rows = [bytes([r]) * 6 + b"\xee\xee" for r in range(3)]  # 2 px rgb8 + 2 bytes padding
-    frame = convert.raw_image_frame(b"".join(rows), 2, 3, "rgb8", 8)
-    assert (frame.width, frame.height, frame.encoding) == (2, 3, "rgb8")
-    assert frame.data == b"\x00" * 6 + b"\x01" * 6 + b"\x02" * 6
-
-
-def test_raw_frame_without_padding_keeps_its_bytes() -> None:
-    frame = convert.raw_image_frame(bytearray(range(12)), 4, 3, "mono8", 4)
-    assert frame.data == bytes(range(12)) and frame.encoding == "mono8"
-
-
-@pytest.mark.parametrize(("args", "message"), [
-    ((b"\0" * 12, 2, 2, "yuv422", 6), "unsupported image encoding 'yuv422'"),
-    ((b"\0" * 12, 2, 2, "rgb8", 5), "step 5 is smaller than a rgb8 row"),
-    ((b"\0" * 11, 2, 2, "rgb8", 6), "image data has 11 bytes"),
-    ((b"", 0, 0, "mono8", 0), "image size 0x0 is out of range"),
-])
-def test_bad_raw_frames_are_refused(args: tuple, message: str) -> None:
-    with pytest.raises(ValueError, match=message):
-        convert.raw_image_frame(*args)
-
-
 @pytest.mark.parametrize(("diagnostics", "level"), [
     ({"status": "idle"}, convert.OK), ({"status": "executing"}, convert.OK),
     ({"status": "succeeded"}, convert.OK), ({"status": "failed"}, convert.WARN),

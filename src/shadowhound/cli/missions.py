@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import logging
 import math
 import queue
 import sys
@@ -16,6 +15,7 @@ from ..approval import ApprovalRequest
 from ..config import ShadowHoundConfig
 from ..exit_codes import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 from ..result import StepStatus
+from ..worker import MissionJob, MissionWorker
 from ._base import make_agent, print_json, report_error
 
 # -- run -----------------------------------------------------------------------------------
@@ -69,55 +69,62 @@ def _approver(agent: Any, ask: bool) -> ev.Listener:
 
 def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     agent = make_agent(settings)
-    if args.dry_run:
-        return _dry_run(agent, args)
-    if not args.quiet:
-        agent.add_listener(_progress(sys.stderr))
-    if args.yes or sys.stdin.isatty():
-        agent.enable_approvals()
-        agent.add_listener(_approver(agent, ask=not args.yes))
-    box: dict[str, Any] = {}
-    done = threading.Event()
-
-    def work() -> None:
-        try:
-            box["result"] = agent.execute_mission(args.mission)
-        except Exception as exc:  # a bug, not a mission failure: say so, never hide it
-            logging.getLogger(__name__).exception("the mission crashed")
-            box["crash"] = exc
-        finally:
-            done.set()
-
-    # The mission runs on a worker so that Ctrl-C here can stop the robot at once. Its end is
-    # an Event, not Thread.join: a join interrupted by Ctrl-C can mark a live thread finished
-    # (CPython 3.11), and the result would be lost. Ctrl-C may land in start() itself.
-    interrupted = False
-    try:
-        threading.Thread(target=work, name="shadowhound-mission", daemon=True).start()
-        while not done.wait(0.1):
-            pass
-    except KeyboardInterrupt:
-        interrupted = True
-        agent.estop()
-        done.wait(5.0)
-    result = box.get("result")
+    if not args.dry_run:
+        if not args.quiet:
+            agent.add_listener(_progress(sys.stderr))
+        if args.yes or sys.stdin.isatty():
+            agent.enable_approvals()
+            agent.add_listener(_approver(agent, ask=not args.yes))
+    job = MissionJob(args.mission, source="cli", dry_run=args.dry_run)
+    interrupted = _run_on_worker(agent, job)
+    result = job.result
     agent.cleanup()
-    if "crash" in box:
-        return report_error("internal", f"{box['crash']!r}; the robot was stopped", EXIT_FAILED,
+    if job.dropped is not None:  # the worker caught a crash: a bug, not a mission failure
+        return report_error("internal", f"{job.dropped}; the robot was stopped", EXIT_FAILED,
                             json_out=args.json, mission=args.mission)
     if result is None:
         return report_error("interrupted", "the robot was stopped", EXIT_INTERRUPTED,
                             json_out=args.json, mission=args.mission)
+    if args.dry_run:
+        return _show_dry_run(result, args)
     code = EXIT_INTERRUPTED if interrupted else EXIT_OK if result.success else EXIT_FAILED
     if args.json:
         print_json(_answer(result, code))
     else:
         st = result.robot
         print(result.response)
-        print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
-              f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
-              f"battery={st.battery_text}")
+        if st is not None:  # None only when the robot could not be read at all
+            print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
+                  f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
+                  f"battery={st.battery_text}")
     return code
+
+
+def _run_on_worker(agent: Any, job: MissionJob) -> bool:
+    """Run `job` on a mission worker, as every interface does; True if Ctrl-C stopped it.
+
+    This thread stays free, so that Ctrl-C here can stop the robot at once. The job's end is
+    an Event, not Thread.join: a join interrupted by Ctrl-C can mark a live thread finished
+    (CPython 3.11), and the result would be lost. Ctrl-C may land while the worker starts.
+    """
+    worker: MissionWorker | None = None
+    try:
+        worker = MissionWorker(agent, on_start=_nothing, on_finish=_nothing)
+        worker.submit(job)  # the only job of a fresh worker: never refused
+        while not job.done.wait(0.1):
+            pass
+    except KeyboardInterrupt:
+        agent.estop()
+        job.done.wait(5.0)
+        return True
+    finally:
+        if worker is not None:  # a mission still running after Ctrl-C is not waited for
+            worker.stop(timeout=5.0 if job.done.is_set() else 0.0)
+    return False
+
+
+def _nothing(job: MissionJob) -> None:
+    """The command line reports a mission itself, after it ends."""
 
 
 def _answer(result: Any, code: int) -> dict[str, Any]:
@@ -127,9 +134,7 @@ def _answer(result: Any, code: int) -> dict[str, Any]:
     return answer
 
 
-def _dry_run(agent: Any, args: argparse.Namespace) -> int:
-    result = agent.dry_run(args.mission)
-    agent.cleanup()
+def _show_dry_run(result: Any, args: argparse.Namespace) -> int:
     code = EXIT_OK if result.success else EXIT_FAILED
     if args.json:
         print_json(_answer(result, code))
@@ -158,6 +163,7 @@ _CHAT_HELP = ("Ask a question (where are you? battery? what do you see? what did
 
 def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     agent = make_agent(settings)
+    worker = MissionWorker(agent, on_start=_nothing, on_finish=_nothing)
     interactive = sys.stdin.isatty()
     if interactive:
         print("ShadowHound chat. " + _CHAT_HELP)
@@ -174,7 +180,7 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     def answer() -> None:
         try:
             while (line := lines.get()) is not None:
-                say(_chat_line(agent, line))
+                say(_chat_line(agent, worker, line))
         finally:
             answered.set()
 
@@ -193,7 +199,7 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             if line in ("/quit", "/exit"):
                 break
             if line.split()[0] == "/estop":
-                say(_chat_line(agent, line))
+                say(_chat_line(agent, worker, line))
             else:
                 lines.put(line)
         lines.put(None)
@@ -202,17 +208,24 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     except KeyboardInterrupt:
         agent.estop()
     finally:
+        worker.stop(timeout=0.0)  # the mission (if any) was stopped; do not wait for it
         agent.cleanup()
     return EXIT_OK
 
 
-def _chat_line(agent: Any, line: str) -> str:
+def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
     if line.startswith("/run"):
         mission = line[4:].strip()
         if not mission:
             return "usage: /run MISSION"
-        result = agent.execute_mission(mission)
-        return ("ok: " if result.success else "failed: ") + result.response
+        job = MissionJob(mission, source="cli")
+        refused = worker.submit(job)
+        if refused is not None:
+            return "refused: " + refused
+        job.done.wait()  # answers come in order: the next line waits for this mission
+        if job.result is None:
+            return f"failed: {job.dropped}"
+        return ("ok: " if job.result.success else "failed: ") + job.result.response
     commands = {
         "/status": lambda: json.dumps(agent.get_robot_status()),
         "/skills": lambda: ", ".join(s["name"] for s in agent.get_available_skills()),

@@ -53,6 +53,15 @@ def estimate_tokens(payload: Any) -> int:
     return max(1, math.ceil(len(text) / 4))
 
 
+def request_hints(backend: str) -> dict[str, Any]:
+    """Extra request fields that let the server reuse its prompt cache.
+
+    llama.cpp's server keeps the evaluated prompt and reuses the longest common prefix only
+    when asked (`cache_prompt`; llama-cpp-python reuses it anyway and ignores the field).
+    OpenAI and vLLM cache shared prefixes by themselves.
+    """
+    return {"cache_prompt": True} if backend == "llamacpp" else {}
+
 @dataclass
 class LLMBackend:
     """A chat-completions client for one server and model."""

@@ -58,7 +58,7 @@ def main(settings: ShadowHoundConfig, *, http: bool = False, host: str = "127.0.
     token = (token or os.environ.get("SHADOWHOUND_TOKEN") or None) if http else None
     try:
         if http:
-            from ..web.security import check_binding
+            from ..serving import check_binding
 
             check_binding(host, token, what="the MCP server")  # before the robot is touched
         agent = RobotAgent(RobotAgentConfig(robot=_robot(settings), settings=settings))
@@ -96,8 +96,8 @@ def _robot(settings: ShadowHoundConfig) -> Any:
     from ..config import ConfigError
 
     try:
+        from ..robot.go2_motion import GO2_MOTION
         from ..robot.go2_ros import Go2RosConfig, Go2RosRobot
-        from ..ros.params import GO2_MOTION
     except ImportError as exc:
         raise ConfigError(f"robot go2 needs rclpy and the go2_interfaces package ('ros' extra; "
                           f"source your go2_ros2_sdk workspace or run scripts/build_ros.sh): "

@@ -20,7 +20,7 @@ import uvicorn
 from mcp.server.stdio import stdio_server
 from mcp.server.transport_security import TransportSecuritySettings
 
-from ..web.security import LOOPBACK_HOSTS, ServeError, _hostname, bind, check_binding
+from ..serving import LOOPBACK_HOSTS, ServeError, bind, check_binding, hostname
 from .server import McpRobotServer
 
 Scope = MutableMapping[str, Any]
@@ -74,7 +74,7 @@ class McpGate:
 
     def _check(self, headers: dict[str, str]) -> tuple[int, str] | None:
         raw_host = headers.get("host", "")
-        host = _hostname(raw_host)
+        host = hostname(raw_host)
         if self.token is None and (host is None or host not in self.allowed_hosts):
             return 421, (f"host {raw_host[:100]!r} is not allowed: without a token the MCP "
                          "server answers only on loopback names")

@@ -19,8 +19,7 @@ from typing import Any
 
 from ..config import ConfigError, ShadowHoundConfig
 from ..events import MissionEvent, MissionFinished, MissionStarted, StepFinished
-from ..result import StepStatus
-from ..skills import SkillRegistry, default_registry
+from ..result import SkillBook, StepStatus
 from .history import MemoryStoreError, MissionHistory
 from .places import PlaceBook
 from .recall import RecallStoreError
@@ -36,14 +35,14 @@ _STOPWORDS = frozenset((
 
 
 class AgentMemory:
-    """History, places and (optionally) recall for one agent. `skills` (the agent's registry;
-    default: the built-in skills) say what of their steps retrieval memory keeps."""
+    """History, places and (optionally) recall for one agent. `skills` (the agent's registry)
+    say what of their steps retrieval memory keeps (None: only the missions' summaries)."""
 
     def __init__(self, settings: ShadowHoundConfig, history: MissionHistory | None = None,
                  recall: Any = None, recall_problem: str | None = None, *,
-                 skills: SkillRegistry | None = None) -> None:
+                 skills: SkillBook | None = None) -> None:
         self.settings = settings
-        self.skills = skills if skills is not None else default_registry()
+        self.skills = skills
         self.history = history
         self.places = PlaceBook(history)
         self.sightings = SightingBook(history)
@@ -53,7 +52,7 @@ class AgentMemory:
 
     @classmethod
     def open(cls, settings: ShadowHoundConfig, backend: Any = None, *,
-             skills: SkillRegistry | None = None) -> AgentMemory:
+             skills: SkillBook | None = None) -> AgentMemory:
         """Open what `settings.memory` asks for. Raises ConfigError with what to do."""
         cfg = settings.memory
         if not cfg.enabled and not cfg.enable_rag:
@@ -133,7 +132,7 @@ class AgentMemory:
             self.history.mission_started(event.mission_id, event.mission, event.time)
         elif isinstance(event, StepFinished) and self.recall is not None:
             step = event.step
-            skill = self.skills.find(step.skill)
+            skill = self.skills.find(step.skill) if self.skills is not None else None
             if skill is not None and skill.remembered_as and step.status is StepStatus.SUCCEEDED:
                 self._remember_safely(step.output, skill.remembered_as, mission=event.mission_id)
         elif isinstance(event, MissionFinished):

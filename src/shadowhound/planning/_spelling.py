@@ -23,6 +23,9 @@ from typing import Any
 from shadowhound import units
 from shadowhound.planning import _english, _memory_phrases, _numbers, _phrases, _vocabulary
 
+from ..typos import distance
+from ..typos import limit as _limit
+
 _WORD = re.compile(r"[a-z]+")
 MIN_LENGTH = 3  # shorter words ("ot", "m") have too many neighbours to guess from
 
@@ -53,26 +56,6 @@ def known_words() -> frozenset[str]:
         _numbers.NUMWORD.split("|"),
     )
     return frozenset(patterns | tables)
-
-
-def distance(a: str, b: str, limit: int) -> int:
-    """Edit distance with swaps of neighbours (optimal string alignment); > limit if far."""
-    if abs(len(a) - len(b)) > limit:
-        return limit + 1
-    before: list[int] = []
-    row = list(range(len(b) + 1))
-    for i, ca in enumerate(a, start=1):
-        current = [i] + [0] * len(b)
-        for j, cb in enumerate(b, start=1):
-            current[j] = min(row[j] + 1, current[j - 1] + 1, row[j - 1] + (ca != cb))
-            if i > 1 and j > 1 and ca == b[j - 2] and a[i - 2] == cb:
-                current[j] = min(current[j], before[j - 2] + 1)
-        before, row = row, current
-    return row[-1]
-
-
-def _limit(word: str) -> int:
-    return 1 if len(word) <= 6 else 2
 
 
 def _meaning(word: str) -> str:

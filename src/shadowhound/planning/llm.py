@@ -17,12 +17,11 @@ import logging
 from typing import Any
 
 from ..config import ShadowHoundConfig
-from ..llm import prompts, schema
-from ..llm.backend import BackendError, LLMBackend
-from ..llm.parse import ParsedReply, parse_reply
+from ..llm.backend import BackendError, LLMBackend, request_hints
 from ..plan import Plan, PlanningError, SkillCall, Usage
 from ..skills import SkillValidationError
-from . import PlanningContext, StepRunner
+from . import PlanningContext, StepRunner, prompts, schema
+from .parse import ParsedReply, parse_reply
 
 log = logging.getLogger(__name__)
 
@@ -118,7 +117,7 @@ class LLMPlanner:
                   **options: Any) -> Any:
         if ctx.cancelled is not None and ctx.cancelled.is_set():
             raise PlanningError("mission cancelled before the model was asked", usage=usage)
-        hints = schema.request_hints(self.settings.backend)
+        hints = request_hints(self.settings.backend)
         try:  # a cancel ends the wait at once (BackendCancelled) and nothing more is sent
             completion = self.backend.complete(messages, cancelled=ctx.cancelled, **options,
                                                extra_body=hints or None)

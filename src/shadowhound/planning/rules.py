@@ -7,6 +7,10 @@ refuses on safety grounds; limits and risky tricks are the safety layer's busine
 This module decides what each kind of request means. Reading the English is done by `_english`
 (clauses, clean-up, tokens), `_phrases` (patterns per kind of clause), `_vocabulary` (word
 tables) and `_numbers` (units, number words); `_errors` words the replies when a plan fails.
+
+Long because: it is the one place that says what each kind of request means (a method per
+kind, sharing the clause loop's notes and last verb); the reading of English lives in the
+modules above.
 """
 
 from __future__ import annotations

@@ -31,6 +31,12 @@ from dataclasses import dataclass
 
 from ..state import normalize_angle
 
+# Motion control for real odometry, used with robot go2 for every field the profile (or the
+# environment) does not set: the simulator's defaults (2 mm, 0.001 degrees, 20 Hz) are exact
+# only for the exact simulator; odometry over DDS arrives late and noisy.
+GO2_MOTION = {"position_tolerance": 0.02, "yaw_tolerance": math.radians(0.5),
+              "control_rate_hz": 10.0}
+
 _DT = 0.01  # seconds per model integration step
 _TRACE_SECONDS = 6.0  # model history kept: more than a fit window plus the largest latency
 _MAX_LATENCY = 2.0

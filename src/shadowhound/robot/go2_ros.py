@@ -27,10 +27,14 @@ Written against how the driver really behaves (docs/go2.md):
 - navigation: Nav2's NavigateToPose on `navigate_to_pose` (`navigator()`, go2_nav2.py);
   `stop` and `emergency_stop` cancel its goals.
 - detections (optional, `detections_topic`): shadowhound_interfaces/DetectionArray from any
-  detector; each detection becomes a sighting (`known_objects()`), see ros/detections.py.
+  detector; each detection becomes a sighting (`known_objects()`), see go2_detections.py.
 
 The robot has its own rclpy node and executor thread, so it works inside the MissionNode
 process (sharing its context) or in a plain script (it then initialises a private context).
+
+Long because: it is the one Robot implementation over go2_ros2_sdk, whose protocol methods and
+ROS callbacks share one node, one executor thread and one lock; what needs no ROS already
+lives apart (go2_api: the sport API table, go2_motion: odometry tracking, go2_posture).
 """
 
 from __future__ import annotations
@@ -52,19 +56,18 @@ from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, CompressedImage, Image, LaserScan
 
-from ..camera import to_camera_frame
-from ..ros.convert import raw_image_frame
-from ..ros.detections import Frames, SightingBoard, sightings_from_msg
-from ..ros.world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
+from ..camera import raw_image_frame, to_camera_frame
 from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, normalize_angle
 from ..world import DEFAULT_ROBOT_RADIUS, Belief, GridError, merge_sightings
 from ..world.objects import KnownObject
 from . import go2_api
 from .base import RobotError
+from .go2_detections import Frames, SightingBoard, sightings_from_msg
 from .go2_motion import MotionTracker, StampClock
 from .go2_nav2 import Nav2Navigator
 from .go2_posture import STEPS, PostureWatch
 from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
+from .go2_world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _SENSOR = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,

@@ -1,29 +1,24 @@
-"""A tiny synthetic world for the simulated Go2: what the camera sees and what is in view.
+"""The simulated Go2's world (its ground truth): a walled room with objects, and what is in view.
 
 Objects are vertical cylinders in a rectangular walled room (odom frame: x forward, y left, yaw
-counter-clockwise). `render` is a per-column raycaster in the style of Wolfenstein 3D, written
-with the standard library only so the core package stays light; `visible_objects` uses the same
-rays, so the ground-truth sightings agree with the picture.
+counter-clockwise). `ray_circle` and `ray_box` are the ray casts everything here shares:
+`visible_objects` (ground-truth sightings), the scan (`sensors.py`) and the picture
+(`renderer.py`), so the sightings, the scan and the image agree. Standard library only.
 """
 
 from __future__ import annotations
 
 import math
-import struct
-import time
-import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any
 
-from shadowhound.state import CameraFrame, Pose2D, Sighting, normalize_angle
+from ..state import Pose2D, Sighting, normalize_angle
 
 Color = tuple[int, int, int]
 
 CAMERA_HEIGHT = 0.3  # metres above the floor: roughly the Go2's head camera while standing
-DISTANCE_FALLOFF = 0.12  # brightness = 1 / (1 + falloff * metres): a cheap depth cue
-_EPS = 1e-9
+RAY_EPS = 1e-9  # below this, a distance along a ray (or a direction component) counts as zero
 
 
 @dataclass(frozen=True)
@@ -233,7 +228,7 @@ DEFAULT_WORLD = World(
 )
 
 
-def _ray_circle(ox: float, oy: float, dx: float, dy: float, obj: WorldObject) -> float | None:
+def ray_circle(ox: float, oy: float, dx: float, dy: float, obj: WorldObject) -> float | None:
     """Distance along a unit ray to the front surface of `obj`, or None if the ray misses it."""
     lx = obj.x - ox
     ly = obj.y - oy
@@ -244,10 +239,10 @@ def _ray_circle(ox: float, oy: float, dx: float, dy: float, obj: WorldObject) ->
         return None
     t = tca - math.sqrt(r2 - d2)
     # A camera inside an object sees nothing of it; a surface behind the camera is not a hit.
-    return t if t > _EPS else None
+    return t if t > RAY_EPS else None
 
 
-def _ray_box(
+def ray_box(
     ox: float, oy: float, dx: float, dy: float, bounds: tuple[float, float, float, float]
 ) -> tuple[float, bool]:
     """Distance along a unit ray to the room's walls, and whether the hit wall is an x-wall.
@@ -256,14 +251,14 @@ def _ray_box(
     Returns infinity when the ray never meets a wall.
     """
     x_min, x_max, y_min, y_max = bounds
-    if abs(dx) > _EPS:
+    if abs(dx) > RAY_EPS:
         tx1, tx2 = (x_min - ox) / dx, (x_max - ox) / dx
         tx_near, tx_far = (tx1, tx2) if tx1 < tx2 else (tx2, tx1)
     elif x_min <= ox <= x_max:
         tx_near, tx_far = -math.inf, math.inf
     else:
         return math.inf, False
-    if abs(dy) > _EPS:
+    if abs(dy) > RAY_EPS:
         ty1, ty2 = (y_min - oy) / dy, (y_max - oy) / dy
         ty_near, ty_far = (ty1, ty2) if ty1 < ty2 else (ty2, ty1)
     elif y_min <= oy <= y_max:
@@ -272,9 +267,9 @@ def _ray_box(
         return math.inf, False
     t_near = max(tx_near, ty_near)
     t_far = min(tx_far, ty_far)
-    if t_near > t_far or t_far <= _EPS:
+    if t_near > t_far or t_far <= RAY_EPS:
         return math.inf, False
-    if t_near > _EPS:
+    if t_near > RAY_EPS:
         return t_near, tx_near >= ty_near
     return t_far, tx_far <= ty_far
 
@@ -321,16 +316,16 @@ def _unoccluded(
             continue
         angle = pose.yaw + offset
         dx, dy = math.cos(angle), math.sin(angle)
-        t_target = _ray_circle(pose.x, pose.y, dx, dy, target)
+        t_target = ray_circle(pose.x, pose.y, dx, dy, target)
         if t_target is None:
             continue
-        t_wall, _ = _ray_box(pose.x, pose.y, dx, dy, world.bounds)
+        t_wall, _ = ray_box(pose.x, pose.y, dx, dy, world.bounds)
         if t_wall < t_target:
             continue
         for other in world.objects:
             if other is target:
                 continue
-            t = _ray_circle(pose.x, pose.y, dx, dy, other)
+            t = ray_circle(pose.x, pose.y, dx, dy, other)
             # The nearer object's top edge is at least as high on screen: the target is covered.
             if (
                 t is not None
@@ -343,182 +338,14 @@ def _unoccluded(
     return False
 
 
-def _shade(color: Color, factor: float) -> bytes:
-    r, g, b = color
-    return bytes((min(255, int(r * factor)), min(255, int(g * factor)), min(255, int(b * factor))))
-
-
-@lru_cache(maxsize=16)
-def _column_rays(width: int, fov_deg: float) -> tuple[float, tuple[tuple[float, float], ...]]:
-    """Focal length in pixels and, per column, (angle offset from the view axis, its cosine)."""
-    focal = (width / 2.0) / math.tan(math.radians(fov_deg) / 2.0)
-    centre = width / 2.0
-    rays = []
-    for i in range(width):
-        offset = math.atan((centre - (i + 0.5)) / focal)
-        rays.append((offset, math.cos(offset)))
-    return focal, tuple(rays)
-
-
-@lru_cache(maxsize=16)
-def _background(
-    height: int, focal: float, wall_height: float, floor: Color, ceiling: Color
-) -> bytes:
-    """One image column of ceiling above the horizon and floor below, darkening toward it.
-
-    With a level pinhole camera every pixel in an image row sees the floor (or ceiling) at the
-    same perpendicular distance, so the shading is per row and one column serves them all.
-    """
-    horizon = height / 2.0
-    parts = []
-    for row in range(height):
-        v = row + 0.5 - horizon
-        if v > 0:
-            depth = focal * CAMERA_HEIGHT / v
-            parts.append(_shade(floor, 1.0 / (1.0 + DISTANCE_FALLOFF * depth)))
-        else:
-            depth = focal * (wall_height - CAMERA_HEIGHT) / max(-v, 0.5)
-            parts.append(_shade(ceiling, 1.0 / (1.0 + DISTANCE_FALLOFF * depth)))
-    return b"".join(parts)
-
-
-def render(
-    world: World, pose: Pose2D, width: int = 160, height: int = 120, fov_deg: float = 90.0
-) -> bytes:
-    """A first-person RGB8 image (row-major, 3 bytes per pixel) from a camera at `pose`.
-
-    Each column casts one ray; the walls and every cylinder it meets are drawn far to near as
-    vertical spans projected by a level pinhole camera CAMERA_HEIGHT above the floor, so a short
-    object in front of a tall one hides only its lower part.
-    """
-    if width <= 0 or height <= 0:
-        raise ValueError(f"image size must be positive, got {width}x{height}")
-    if not 0.0 < fov_deg < 180.0:
-        raise ValueError(f"fov_deg must be in (0, 180), got {fov_deg}")
-    focal, rays = _column_rays(width, float(fov_deg))
-    horizon = height / 2.0
-    background = _background(
-        height, focal, world.wall_height, world.floor_color, world.ceiling_color
-    )
-    wall_rise = world.wall_height - CAMERA_HEIGHT
-    ox, oy, yaw = pose.x, pose.y, pose.yaw
-    bounds = world.bounds
-    # Per-object terms that do not depend on the ray, hoisted out of the column loop.
-    objs = [
-        (
-            o,
-            o.x - ox,
-            o.y - oy,
-            (o.x - ox) ** 2 + (o.y - oy) ** 2 - o.radius**2,
-            o.height - CAMERA_HEIGHT,
-        )
-        for o in world.objects
-    ]
-    stride = width * 3
-    image = bytearray(stride * height)
-    for i, (offset, cos_offset) in enumerate(rays):
-        angle = yaw + offset
-        dx = math.cos(angle)
-        dy = math.sin(angle)
-        column = bytearray(background)
-        # Wolfenstein-style side shading: x-walls and y-walls differ, so corners read clearly.
-        t_wall, x_side = _ray_box(ox, oy, dx, dy, bounds)
-        hits: list[tuple[float, bytes, float]] = []
-        if t_wall < math.inf:
-            light = (1.0 if x_side else 0.8) / (1.0 + DISTANCE_FALLOFF * t_wall)
-            hits.append((t_wall, _shade(world.wall_color, light), wall_rise))
-        for obj, lx, ly, c, rise in objs:
-            tca = lx * dx + ly * dy
-            if tca <= 0.0:
-                continue
-            disc = tca * tca - c  # r^2 - (squared distance from the centre to the ray)
-            if disc < 0.0:
-                continue
-            t = tca - math.sqrt(disc)
-            if t <= _EPS or t >= t_wall:
-                continue
-            # Lambert-like term from the surface normal so cylinders look round, not flat.
-            facing = (tca - t) / obj.radius
-            light = (0.55 + 0.45 * facing) / (1.0 + DISTANCE_FALLOFF * t)
-            hits.append((t, _shade(obj.color, light), rise))
-        hits.sort(key=lambda h: -h[0])
-        for t, pixel, rise in hits:
-            depth = max(t * cos_offset, 1e-3)  # perpendicular depth: no fisheye bulge
-            top = max(0, int(horizon - focal * rise / depth + 0.5))
-            bottom = min(height, int(horizon + focal * CAMERA_HEIGHT / depth + 0.5))
-            if bottom > top:
-                column[top * 3 : bottom * 3] = pixel * (bottom - top)
-        # Scatter the column into the row-major image one channel at a time: three extended
-        # slice assignments in C instead of `height` Python-level pixel copies.
-        base = i * 3
-        image[base::stride] = column[0::3]
-        image[base + 1 :: stride] = column[1::3]
-        image[base + 2 :: stride] = column[2::3]
-    return bytes(image)
-
-
-def encode_png(rgb: bytes, width: int, height: int) -> bytes:
-    """Encode RGB8 pixels (row-major) as an 8-bit truecolour PNG."""
-    if width <= 0 or height <= 0:
-        raise ValueError(f"image size must be positive, got {width}x{height}")
-    if len(rgb) != width * height * 3:
-        raise ValueError(
-            f"rgb has {len(rgb)} bytes, expected {width * height * 3} for {width}x{height} RGB8"
-        )
-    stride = width * 3
-    # Filter type 0 (None) on every scanline: simple, and zlib copes well with flat colour spans.
-    raw = b"".join(b"\x00" + rgb[r * stride : (r + 1) * stride] for r in range(height))
-
-    def chunk(kind: bytes, payload: bytes) -> bytes:
-        return (
-            struct.pack(">I", len(payload))
-            + kind
-            + payload
-            + struct.pack(">I", zlib.crc32(kind + payload) & 0xFFFFFFFF)
-        )
-
-    header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
-    return (
-        b"\x89PNG\r\n\x1a\n"
-        + chunk(b"IHDR", header)
-        + chunk(b"IDAT", zlib.compress(raw, 6))
-        + chunk(b"IEND", b"")
-    )
-
-
-def camera_frame(
-    world: World,
-    pose: Pose2D,
-    width: int = 160,
-    height: int = 120,
-    fov_deg: float = 90.0,
-    stamp: float | None = None,
-    max_range: float = 10.0,
-) -> CameraFrame:
-    """A simulated camera frame: the rendered PNG plus ground-truth sightings.
-
-    `stamp` defaults to the current wall-clock time, matching CameraFrame's own default.
-    """
-    rgb = render(world, pose, width, height, fov_deg)
-    return CameraFrame(
-        data=encode_png(rgb, width, height),
-        width=width,
-        height=height,
-        encoding="png",
-        stamp=time.time() if stamp is None else stamp,
-        source="simulator",
-        sightings=visible_objects(world, pose, fov_deg, max_range),
-    )
-
-
 __all__ = [
     "CAMERA_HEIGHT",
     "DEFAULT_WORLD",
+    "RAY_EPS",
     "Color",
     "World",
     "WorldObject",
-    "camera_frame",
-    "encode_png",
-    "render",
+    "ray_box",
+    "ray_circle",
     "visible_objects",
 ]

@@ -1,7 +1,8 @@
 """The simulator's ground truth as the robot senses it: range scans, contact, and the map.
 
-Uses the same ray casting as the camera (scene.py), so the scan, the picture and the sightings
-agree. Only the simulator imports this module: the rest of the system sees Scans and grids.
+Uses the scene's ray casts (scene.py), as the camera does, so the scan, the picture and the
+sightings agree. Only the simulator imports this module: the rest of the system sees Scans and
+grids.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import math
 from ..state import Pose2D, Scan
 from ..world.grid import DEFAULT_RESOLUTION, OCCUPIED, OccupancyGrid
 from ..world.objects import Belief, KnownObject
-from .scene import World, _ray_box, _ray_circle
+from .scene import World, ray_box, ray_circle
 
 SCAN_BEAMS = 360
 SCAN_RANGE_MIN = 0.1
@@ -28,9 +29,9 @@ def cast_scan(world: World, pose: Pose2D, stamp: float = 0.0, beams: int = SCAN_
     for i in range(beams):
         a = pose.yaw - math.pi + i * increment
         dx, dy = math.cos(a), math.sin(a)
-        t, _ = _ray_box(pose.x, pose.y, dx, dy, world.bounds)
+        t, _ = ray_box(pose.x, pose.y, dx, dy, world.bounds)
         for obj in world.objects:
-            hit = _ray_circle(pose.x, pose.y, dx, dy, obj)
+            hit = ray_circle(pose.x, pose.y, dx, dy, obj)
             if hit is not None and hit < t:
                 t = hit
         ranges.append(t if t < range_max else math.inf)

@@ -19,6 +19,11 @@ Clock: with time_scale 0 simulated time advances only when the controller sleeps
 as the CPU allows. With time_scale s > 0 each simulated second takes s real seconds (or longer,
 when the controller or the CPU cannot keep up): while a controller ticks, time passes in its
 sleeps only, paced to the wall clock; while nobody ticks, it follows the wall clock.
+
+Long because: it is the Robot protocol's simulated implementation: the clock, the physics, the
+postures and the record of what really happened change one state under one lock on every
+substep. The world (scene.py), its picture (renderer.py) and the sensors (sensors.py) live
+apart.
 """
 
 from __future__ import annotations
@@ -33,7 +38,7 @@ from typing import Any
 from ..config import SimConfig
 from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
 from ..world import Belief, KnownObject
-from . import scene, sensors
+from . import renderer, scene, sensors
 from .base import RobotError
 from .go2_api import TRICKS
 from .navigator import Navigator
@@ -357,7 +362,7 @@ class SimRobot:
 
     def get_camera_frame(self) -> CameraFrame | None:
         state = self.get_state()
-        return scene.camera_frame(
+        return renderer.camera_frame(
             self.world,
             state.pose,
             width=self.config.camera_width,

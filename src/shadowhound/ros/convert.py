@@ -1,51 +1,19 @@
-"""Converting between ROS message fields and the agent's types. Pure Python (no rclpy).
+"""Converting between the agent's diagnostics and ROS message fields. Pure Python (no rclpy).
 
-The node unpacks messages into plain values and calls these, so the rules (which encodings,
-how row padding is removed, which diagnostic level a status gets) are testable anywhere.
+The node unpacks messages into plain values and calls these, so the rules (which diagnostic
+level a status gets, what a status line says) are testable anywhere. Raw images become
+CameraFrames in `shadowhound.camera` (`raw_image_frame`), which the Go2 robot also uses.
 """
 
 from __future__ import annotations
 
 import json
-import time
 from typing import Any
-
-from ..state import CameraFrame
-
-RAW_ENCODINGS = {"rgb8": 3, "bgr8": 3, "mono8": 1}
-_MAX_SIDE = 10_000
 
 # diagnostic_msgs/DiagnosticStatus levels
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
 _LEVEL_OF_STATUS = {"idle": OK, "planning": OK, "executing": OK, "succeeded": OK,
                     "failed": WARN, "stopped": WARN}
-
-
-def raw_image_frame(data: bytes | bytearray | memoryview, width: int, height: int,
-                    encoding: str, step: int, source: str = "camera") -> CameraFrame:
-    """A sensor_msgs/Image (rgb8, bgr8, mono8) as a CameraFrame; row padding is removed.
-
-    Raises ValueError naming what is wrong (encoding, sizes, data length).
-    """
-    channels = RAW_ENCODINGS.get(encoding)
-    if channels is None:
-        raise ValueError(f"unsupported image encoding {encoding!r}; supported: "
-                         f"{', '.join(RAW_ENCODINGS)} (or send sensor_msgs/CompressedImage)")
-    if not (0 < width <= _MAX_SIDE and 0 < height <= _MAX_SIDE):
-        raise ValueError(f"image size {width}x{height} is out of range (1..{_MAX_SIDE} a side)")
-    row = width * channels
-    if step < row:
-        raise ValueError(f"image step {step} is smaller than a {encoding} row of {width} "
-                         f"pixels ({row} bytes)")
-    if len(data) != step * height:
-        raise ValueError(f"image data has {len(data)} bytes; {height} rows of step {step} "
-                         f"need {step * height}")
-    view = memoryview(data)
-    if step == row:
-        pixels = bytes(view)
-    else:
-        pixels = b"".join(view[r * step: r * step + row] for r in range(height))
-    return CameraFrame(pixels, width, height, encoding, stamp=time.time(), source=source)
 
 
 def diagnostic_level(diagnostics: dict[str, Any]) -> int:

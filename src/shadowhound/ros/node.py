@@ -17,6 +17,10 @@ converted on a third (camera_intake.py); every ROS callback is short, so one
 SingleThreadedExecutor serves them all (the action's execute
 callback and the chat service are coroutines that await the other threads). Topic missions
 queue, action goals are rejected while a mission runs or waits.
+
+Long because: one node's whole ROS surface (topics, action, service, parameters, status and
+diagnostics publishing) reads as one plain node class, as nav2_simple_commander's does; the
+pure helpers live in their own modules (params, convert, rviz, estop_listener, camera_intake).
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ from std_msgs.msg import String
 
 from .. import events as ev
 from ..agent import RobotAgent, RobotAgentConfig
-from ..camera import to_camera_frame
+from ..camera import raw_image_frame, to_camera_frame
 from ..result import MissionResult
 from ..robot.base import RobotError
 from ..worker import MissionJob, MissionWorker
@@ -47,7 +51,6 @@ from .convert import (
     diagnostic_level,
     diagnostic_message,
     diagnostic_values,
-    raw_image_frame,
     robot_status_json,
     shorten,
 )

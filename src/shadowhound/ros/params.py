@@ -14,6 +14,7 @@ from typing import Any, get_args
 
 from ..config import ShadowHoundConfig, load_config
 from ..errors import ParameterError
+from ..robot.go2_motion import GO2_MOTION
 
 NODE_NAME = "shadowhound_mission_agent"
 
@@ -59,12 +60,6 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     "go2_firmware_tricks": (False, "go2: allow the tricks that need firmware support and the "
                                    "'ai' motion mode (flips, handstand, 1301-1305)"),
 }
-
-# Motion control for real odometry, used with robot go2 for every field the profile (or the
-# environment) does not set: the simulator's defaults (2 mm, 0.001 degrees, 20 Hz) are exact
-# only for the exact simulator; odometry over DDS arrives late and noisy.
-GO2_MOTION = {"position_tolerance": 0.02, "yaw_tolerance": math.radians(0.5),
-              "control_rate_hz": 10.0}
 
 CAMERA_TYPES = ("auto", "raw", "compressed")
 # '' = discovered / none

@@ -27,14 +27,14 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, Image, LaserScan
 from std_msgs.msg import String
 
-from ..robot import go2_api, scene, sensors
+from ..robot import go2_api, renderer, scene, sensors
 from ..robot.go2_api import SportMode
+from ..robot.go2_world_msgs import MAP_QOS, grid_to_msg, scan_to_msg
 from ..robot.sim import SimRobot
 from ..robot.sim_sport import SimSportMode, Truth
 from ..state import Posture
 from .sim_nav import SimNavigator
 from .sim_options import DriverSettings
-from .world_msgs import MAP_QOS, grid_to_msg, scan_to_msg
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -308,6 +308,6 @@ class SimGo2:
                     step=3 * s.camera_width)
         msg.header.stamp = self.node.get_clock().now().to_msg()
         msg.header.frame_id = f"{self.prefix}camera_link"
-        msg.data = scene.render(scene.DEFAULT_WORLD, self.sim.get_state().pose, s.camera_width,
-                                s.camera_height)
+        msg.data = renderer.render(scene.DEFAULT_WORLD, self.sim.get_state().pose,
+                                   s.camera_width, s.camera_height)
         self._camera_pub.publish(msg)

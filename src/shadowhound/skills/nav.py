@@ -1,4 +1,9 @@
-"""Navigation skills: nav.move, nav.strafe, nav.rotate, nav.goto, nav.patrol, nav.stop."""
+"""Navigation skills: nav.move, nav.strafe, nav.rotate, nav.goto, nav.patrol, nav.stop.
+
+Long because: the six skills share their argument readers, speed caps and path predictors, and
+each skill's arguments, `predict`, `run` and `timeout` sit together; the motion loops
+(motion.py), path rules (paths.py), Nav2 use (navigate.py) and objects (objects.py) are apart.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +15,7 @@ from pydantic import ConfigDict, Field, model_validator
 from ..state import Pose2D, normalize_angle
 from ..units import format_number as _n
 from ..world import PlanError, apply_scan, plan_route
-from . import motion, navigate, objects
+from . import motion, navigate, objects, paths
 from .arguments import (
     Angle,
     Count,
@@ -201,10 +206,8 @@ def walk(ctx: SkillContext, goal: tuple[float, float], linear: float, angular: f
 
 def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, float]],
                     lead: str = "re-planned, but the new path is refused") -> None:
-    from ..safety import Governor  # here: the governor's module imports the skills
-
     poses = _predict_walk_points(pose, points, ctx.env)
-    problems = Governor(ctx.config.safety).path_problems(pose, poses, ctx.env, "the new path")
+    problems = paths.path_problems(ctx.config.safety, pose, poses, ctx.env, "the new path")
     if problems:
         raise SkillError(f"{lead}: " + "; ".join(problems))
 

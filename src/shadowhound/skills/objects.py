@@ -12,18 +12,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
-from .. import geofence
+from .. import geofence, typos
 from ..config import SafetyConfig
 from ..robot.base import Robot
 from ..state import Pose2D, normalize_angle
 from ..world import Belief, Coverage, KnownObject, PlanError, Viewpoint, standoff_point
-from . import motion
+from . import motion, paths
 from .context import PlanEnv, PlanProblem, SkillContext, SkillError, SkillTimeout
-
-if TYPE_CHECKING:
-    from ..safety import Governor
 
 _QUARTER = math.pi / 2
 
@@ -89,15 +85,13 @@ def _objects(belief: Belief | None) -> tuple[KnownObject, ...]:
 def _misspelt(name: str, names: list[str]) -> str | None:
     """The one name of `names` that `name` is a misspelling of, word by word (each word within
     the spelling reader's distance, first letters equal); None if none or several."""
-    from ..planning._spelling import _limit, distance  # the planner's own typo rule
-
     key = " ".join(name.strip().lower().split()).removeprefix("the ").split()
     found = set()
     for candidate in names:
         words = candidate.lower().split()
         if len(words) != len(key) or words == key:
             continue
-        if all(a[0] == b[0] and distance(a, b, _limit(b)) <= _limit(b)
+        if all(a[0] == b[0] and typos.distance(a, b, typos.limit(b)) <= typos.limit(b)
                for a, b in zip(key, words, strict=True)):
             found.add(candidate)
     return found.pop() if len(found) == 1 else None
@@ -184,8 +178,6 @@ def _fits(ctx: SkillContext, deadline: float, seconds: float) -> bool:
 def search(ctx: SkillContext, name: str, linear: float, angular: float) -> KnownObject:
     """Look for `name` within the search budget; return it once seen. Raises SkillError that
     says where the robot looked when the budget or the reachable space runs out."""
-    from ..safety import Governor  # here: the governor's module imports the skills
-
     ctx.env.searched.add(name)
     belief = ctx.env.belief
     assert belief is not None
@@ -197,7 +189,6 @@ def search(ctx: SkillContext, name: str, linear: float, angular: float) -> Known
     left_for_mission = safety.max_mission_distance - (budget.travelled(start) if budget else 0.0)
     max_walk = max(0.0, min(cfg.max_distance, left_for_mission))
     coverage = Coverage(belief, cfg.view_range)
-    governor = Governor(safety)
     turn = 3 * motion.rotate_timeout(_QUARTER, angular, m.angular_accel)
     walked = 0.0
     why = "the search's time ran out (search.max_seconds)"
@@ -217,7 +208,7 @@ def search(ctx: SkillContext, name: str, linear: float, angular: float) -> Known
                                  f"{walked:.1f} m of search")
                 return found
             pose = robot.get_state().pose
-            view = _next_view(coverage, governor, ctx, pose, max_walk - walked,
+            view = _next_view(coverage, ctx, pose, max_walk - walked,
                               deadline - robot.now() - turn, linear, angular)
             if view is None:
                 why = ("no unexplored free space is left within reach inside the geofence "
@@ -250,7 +241,7 @@ def inside_fences(limits: SafetyConfig, p: tuple[float, float]) -> bool:
     return all(f.clearance(p) >= limits.geofence_margin for f in fences)
 
 
-def _next_view(coverage: Coverage, governor: Governor, ctx: SkillContext, pose: Pose2D,
+def _next_view(coverage: Coverage, ctx: SkillContext, pose: Pose2D,
                max_walk: float, seconds: float, linear: float, angular: float
                ) -> Viewpoint | None:
     """The next viewpoint whose path fits the time left and passes the governor's rules."""
@@ -272,7 +263,7 @@ def _next_view(coverage: Coverage, governor: Governor, ctx: SkillContext, pose: 
             coverage.seen.update(coverage.visible_from(view.point))  # out of time's reach
             continue
         poses = _corner_poses(pose, list(view.path.waypoints[1:]))
-        if governor.path_problems(pose, poses, ctx.env, "the search path"):
+        if paths.path_problems(ctx.config.safety, pose, poses, ctx.env, "the search path"):
             continue
         return view
     return None

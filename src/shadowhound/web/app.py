@@ -22,6 +22,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from .. import __version__
 from ..agent import RobotAgent
+from ..serving import LOOPBACK_HOSTS
 from ..worker import MissionWorker
 from . import api, live
 from .desk import MissionDesk
@@ -30,7 +31,7 @@ from .feed import EventFeed
 from .frames import FrameCache
 from .models import MAX_BODY
 from .openapi import document_answers
-from .security import LOOPBACK_HOSTS, Gate, scrubber, secret_values
+from .security import Gate, scrubber, secret_values
 
 log = logging.getLogger(__name__)
 

@@ -13,21 +13,21 @@
 - Bodies over `max_body` bytes get 413 before any route sees them.
 - Secrets (the token, the model's API key) are masked in every JSON answer, whatever put them
   there (an error message quoting a URL, say).
+
+Where a server may listen, with what token, and its socket: `shadowhound.serving`, the same
+for the dashboard and the MCP server.
 """
 
 from __future__ import annotations
 
 import hmac
-import ipaddress
 import json
 import os
-import re
-import socket
 from collections.abc import Awaitable, Callable, Iterable, MutableMapping
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
-from ..errors import ServeError
+from ..serving import hostname
 
 Scope = MutableMapping[str, Any]
 Message = MutableMapping[str, Any]
@@ -35,49 +35,11 @@ Receive = Callable[[], Awaitable[Message]]
 Send = Callable[[Message], Awaitable[None]]
 ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
 
-LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 WS_PROTOCOL = "shadowhound"
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 OPEN_PATHS = {"/api/health"}
 _HEADERS = [(b"x-content-type-options", b"nosniff"), (b"x-frame-options", b"DENY"),
             (b"referrer-policy", b"no-referrer")]
-
-
-MIN_TOKEN_CHARS = 16
-_TOKEN_HINT = ("for example: export SHADOWHOUND_TOKEN=$(python3 -c "
-               "'import secrets; print(secrets.token_urlsafe(24))')")
-
-
-def check_binding(host: str, token: str | None, what: str = "the dashboard") -> None:
-    """Refuse to listen beyond loopback without a strong enough token. Raises ServeError."""
-    if not is_loopback(host) and not token:
-        raise ServeError(f"refusing to listen on {host}: only a literal loopback address "
-                         "(127.x.x.x, ::1) or localhost counts as loopback (names are not "
-                         f"resolved), and beyond loopback {what} needs a token; set "
-                         "SHADOWHOUND_TOKEN or pass --token, " + _TOKEN_HINT)
-    if token is not None and len(token) < MIN_TOKEN_CHARS:
-        raise ServeError(f"the token is {len(token)} characters long; use at least "
-                         f"{MIN_TOKEN_CHARS}, " + _TOKEN_HINT)
-    if token is not None and not all(c.isalnum() or c in "-._~" for c in token):
-        raise ServeError("the token may contain only letters, digits and - . _ ~ (it travels "
-                         "in headers, URLs and WebSocket subprotocols), " + _TOKEN_HINT)
-
-
-def is_loopback(host: str) -> bool:
-    """True for a literal loopback address (127.0.0.0/8, ::1) or the name `localhost`.
-
-    Any other name counts as remote without resolving it: `127.attacker.example` is a name
-    like any other, and what a name resolves to can change after the check.
-    """
-    name = host.strip().lower()
-    if name.startswith("[") and name.endswith("]"):
-        name = name[1:-1]
-    if name == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(name).is_loopback
-    except ValueError:
-        return False
 
 
 def secret_values(token: str | None, api_key_env: str | None = None) -> list[str]:
@@ -163,7 +125,7 @@ class Gate:
         return guarded
 
     def _check(self, scope: Scope, headers: dict[str, str]) -> tuple[int, str] | None:
-        host = _hostname(headers.get("host", ""))
+        host = hostname(headers.get("host", ""))
         if self.allowed_hosts is not None and self.token is None \
                 and (host is None or host not in self.allowed_hosts):
             shown = host if host is not None else headers.get("host", "")[:100]
@@ -225,18 +187,6 @@ class Gate:
         await _send_json(send, status, detail, extra)
 
 
-# RFC 9110 Host: uri-host [ ":" port ]; an IP literal in brackets, else a registered name.
-_HOST = re.compile(r"(?:\[(?P<v6>[0-9a-f:.]+)\]|(?P<name>[a-z0-9._~-]+))(?::(?P<port>[0-9]{0,5}))?")
-
-
-def _hostname(host: str) -> str | None:
-    """The host name of a Host header value, lower case; None when the value is not one."""
-    match = _HOST.fullmatch(host.strip().lower())
-    if match is None or (match["port"] and int(match["port"]) > 65535):
-        return None
-    return match["v6"] or match["name"]
-
-
 def _replay(messages: list[Message], receive: Receive) -> Receive:
     pending = list(messages)
 
@@ -253,20 +203,3 @@ async def _send_json(send: Send, status: int, detail: str,
                 "headers": [(b"content-type", b"application/json"),
                             (b"content-length", str(len(body)).encode()), *(headers or [])]})
     await send({"type": "http.response.body", "body": body})
-
-def bind(host: str, port: int) -> socket.socket:
-    """A listening socket (port 0 picks a free one). Raises ServeError when it cannot."""
-    family = socket.AF_INET6 if ":" in host else socket.AF_INET
-    # IPPROTO_TCP explicitly: asyncio sets TCP_NODELAY only on connections whose socket says
-    # TCP, and without it a streamed answer waits ~40 ms for the client's delayed ACK (Nagle).
-    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
-    try:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        sock.bind((host, port))
-        sock.listen(128)
-    except (OSError, OverflowError) as exc:  # OverflowError: a port outside 0-65535
-        sock.close()
-        why = getattr(exc, "strerror", None) or str(exc)
-        raise ServeError(f"cannot listen on {host}:{port}: {why}") from exc
-    sock.set_inheritable(True)
-    return sock

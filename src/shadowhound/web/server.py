@@ -17,8 +17,8 @@ from fastapi import FastAPI
 from ..agent import RobotAgent
 from ..config import ConfigError, ShadowHoundConfig
 from ..exit_codes import EXIT_OK, EXIT_USAGE
+from ..serving import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, ServeError, bind, check_binding
 from .app import create_app
-from .security import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, ServeError, bind, check_binding
 
 __all__ = ["MIN_TOKEN_CHARS", "ServeError", "WebServer", "bind", "check_binding", "hosts_for",
            "serve"]

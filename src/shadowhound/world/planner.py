@@ -8,6 +8,10 @@ segment touches, both cells at a corner). Shortcuts only ever make the path shor
 never longer than the optimal 8-connected path (itself up to about 8 % longer than the best
 any-angle path), and every point of it lies in unblocked cells: by the inflation rule the body
 keeps its radius from every occupied cell.
+
+Long because: it is one search. A*, its jump-point expansion (`_JumpGrid`), the escape from a
+start inside a clearance zone and the line-of-sight shortcuts all walk the same inflated grid
+in the same cell indexing, and the optimality argument above holds only for them together.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Reading plans out of what models really send.
+"""The model planner's reading of replies: plans out of what models really send.
 
 Tool calls, a JSON plan in the content, JSON in ``` fences, <tool_call> tags, a bare list of
 steps, arguments as JSON strings: all become SkillCalls, and anything unusable becomes a problem

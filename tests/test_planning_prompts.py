@@ -9,7 +9,7 @@ import os
 import pytest
 
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, load_config
-from shadowhound.llm import prompts
+from shadowhound.planning import prompts
 from shadowhound.skills import default_registry
 from tests.llm_server import ScriptedLLM, json_plan, text, tool_calls
 

@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, SkillCall, load_config
-from shadowhound.llm import schema
+from shadowhound.planning import schema
 from shadowhound.skills import SkillValidationError, default_registry
 from tests.llm_server import ScriptedLLM, json_plan, tool_calls
 

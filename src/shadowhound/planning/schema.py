@@ -179,13 +179,3 @@ def _strict_parameters(skill: Skill) -> dict[str, Any]:
 def strict_tools(registry: SkillRegistry) -> list[dict[str, Any]]:
     """The skills as OpenAI function tools with `strict: true` argument schemas."""
     return [function_tool(s, _strict_parameters(s), strict=True) for s in registry]
-
-
-def request_hints(backend: str) -> dict[str, Any]:
-    """Extra request fields that let the server reuse its prompt cache.
-
-    llama.cpp's server keeps the evaluated prompt and reuses the longest common prefix only
-    when asked (`cache_prompt`; llama-cpp-python reuses it anyway and ignores the field).
-    OpenAI and vLLM cache shared prefixes by themselves.
-    """
-    return {"cache_prompt": True} if backend == "llamacpp" else {}

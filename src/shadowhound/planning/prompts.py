@@ -1,7 +1,8 @@
-"""Prompts and schemas generated from the skill registry: compact, so small models plan well.
+"""The model planner's prompts, generated from the skill registry: compact, so small models
+plan well.
 
 Plan mode sends one system prompt listing every skill on one line each, and asks for a JSON
-plan (constrained by `llm.schema`'s plan schema where the server enforces one). Tool mode and
+plan (constrained by `schema`'s plan schema where the server enforces one). Tool mode and
 react mode send the skills as function tools with schemas stripped to what a model needs.
 """
 
