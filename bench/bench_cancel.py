@@ -38,8 +38,11 @@ PLAN = [{"skill": "body.stand", "args": {}}, {"skill": "nav.move", "args": {"dis
 
 
 def _settings(url: str, **llm: Any) -> ShadowHoundConfig:
-    return load_config("llamacpp", {"llm": {"base_url": url, "model": "m", **llm},
-                                     "memory": {"enabled": False}}, environ={})
+    return load_config(
+        "llamacpp",
+        {"llm": {"base_url": url, "model": "m", **llm}, "memory": {"enabled": False}},
+        environ={},
+    )
 
 
 def bench_press(press: str, trials: int) -> dict[str, Any]:
@@ -53,8 +56,9 @@ def bench_press(press: str, trials: int) -> dict[str, Any]:
             srv.script(hang(), hang(), hang())
             pressed: list[float] = []
 
-            def press_in_flight(agent: RobotAgent = agent, srv: ScriptedLLM = srv,
-                                pressed: list[float] = pressed) -> None:
+            def press_in_flight(
+                agent: RobotAgent = agent, srv: ScriptedLLM = srv, pressed: list[float] = pressed
+            ) -> None:
                 while not srv.requests:
                     time.sleep(0.001)
                 time.sleep(0.05)
@@ -73,16 +77,25 @@ def bench_press(press: str, trials: int) -> dict[str, Any]:
             moved += bool(robot.received_motion)
             agent.release_estop()
             agent.cleanup()
-    return {"median_ms": statistics.median(seconds) * 1e3, "max_ms": max(seconds) * 1e3,
-            "requests": max(requests), "stopped": stopped, "moved": moved, "trials": trials}
+    return {
+        "median_ms": statistics.median(seconds) * 1e3,
+        "max_ms": max(seconds) * 1e3,
+        "requests": max(requests),
+        "stopped": stopped,
+        "moved": moved,
+        "trials": trials,
+    }
 
 
 def bench_overhead(calls: int = 200, warmup: int = 20) -> dict[str, float]:
     """Both kinds of request alternate, call by call, so load on the machine hits both alike."""
     registry = default_registry()
-    contexts = {name: PlanningContext(registry, RobotState(), dict(ShadowHoundConfig().places),
-                                      cancelled=event)
-                for name, event in (("inline", None), ("cancellable", threading.Event()))}
+    contexts = {
+        name: PlanningContext(
+            registry, RobotState(), dict(ShadowHoundConfig().places), cancelled=event
+        )
+        for name, event in (("inline", None), ("cancellable", threading.Event()))
+    }
     times: dict[str, list[float]] = {name: [] for name in contexts}
     with ScriptedLLM(models=("m",)) as srv:
         planner = LLMPlanner(_settings(srv.url, check_on_start=False))
@@ -125,7 +138,8 @@ def main() -> None:
             f"| {name} during planning: press to `execute_mission` returning "
             f"({row['trials']} presses) | median {row['median_ms']:.0f} ms, max "
             f"{row['max_ms']:.0f} ms; stopped {row['stopped']}/{row['trials']}, robot moved "
-            f"{row['moved']}, requests the server saw: {row['requests']} |")
+            f"{row['moved']}, requests the server saw: {row['requests']} |"
+        )
     lines += [
         f"| `LLMPlanner.plan()` per round trip, zero-latency server, 200 calls of each, "
         f"alternating: without / with the cancel event (own thread) | "

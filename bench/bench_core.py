@@ -21,8 +21,10 @@ from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, SkillCall, defau
 from shadowhound.planning.rules import RulePlanner
 from shadowhound.skills import NoArgs, Skill
 
-FIVE_STEPS = ("stand up, walk forward 2 meters, turn left 90 degrees, "
-              "then walk forward one and a half meters and sit down")
+FIVE_STEPS = (
+    "stand up, walk forward 2 meters, turn left 90 degrees, "
+    "then walk forward one and a half meters and sit down"
+)
 
 
 def bench_planning() -> dict[str, float]:
@@ -56,8 +58,10 @@ def bench_dispatch(steps: int = 1000) -> dict[str, float]:
     for _ in range(5):
         result = agent.run_plan(stand)
         stand_totals.append(result.timing.total_duration / len(stand))
-    return {"noop_median_ms": statistics.median(totals) * 1e3,
-            "stand_median_ms": statistics.median(stand_totals) * 1e3}
+    return {
+        "noop_median_ms": statistics.median(totals) * 1e3,
+        "stand_median_ms": statistics.median(stand_totals) * 1e3,
+    }
 
 
 def bench_cli(runs: int = 7) -> dict[str, float]:
@@ -65,8 +69,12 @@ def bench_cli(runs: int = 7) -> dict[str, float]:
     times = []
     for _ in range(runs):
         t0 = time.perf_counter()
-        proc = subprocess.run([exe, "run", "--json", "--quiet", "rotate 90 degrees"],
-                              capture_output=True, text=True, check=True)
+        proc = subprocess.run(
+            [exe, "run", "--json", "--quiet", "rotate 90 degrees"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         times.append(time.perf_counter() - t0)
         assert '"yaw":1.5708' in proc.stdout, proc.stdout
     return {"median_s": statistics.median(times), "max_s": max(times)}
@@ -77,8 +85,10 @@ def main() -> None:
     parser.add_argument("--write", action="store_true", help="update bench/RESULTS.md")
     args = parser.parse_args()
     planning, dispatch, cli = bench_planning(), bench_dispatch(), bench_cli()
-    machine = f"{platform.python_implementation()} {platform.python_version()}, " \
-              f"{platform.machine()}, 2 cores"
+    machine = (
+        f"{platform.python_implementation()} {platform.python_version()}, "
+        f"{platform.machine()}, 2 cores"
+    )
     lines = [
         "<!-- core:start -->",
         "## Core (issue 2)",
@@ -94,11 +104,11 @@ def main() -> None:
         f"{dispatch['noop_median_ms']:.3f} ms |",
         f"| same, `body.stand` on a standing SimRobot (time scale 0) | - | "
         f"{dispatch['stand_median_ms']:.3f} ms |",
-        f"| `shadowhound run --json \"rotate 90 degrees\"`, process start to output "
+        f'| `shadowhound run --json "rotate 90 degrees"`, process start to output '
         f"(median of 7) | < 1 s | {cli['median_s'] * 1e3:.0f} ms (max "
         f"{cli['max_s'] * 1e3:.0f} ms) |",
         "",
-        f"Five-step sentence: \"{FIVE_STEPS}\".",
+        f'Five-step sentence: "{FIVE_STEPS}".',
         "<!-- core:end -->",
     ]
     section = "\n".join(lines)

@@ -87,13 +87,29 @@ class Rig:
         self.procs = []
         for name, command in (
             ("driver", ["sim-driver", "--camera-rate-hz", "0", *driver_options]),
-            ("node", ["node", "--ros-args", "-p", "robot:=go2", "-p", "enable_web_ui:=true",
-                      "-p", f"web_interface_port:={self.port}"]),
+            (
+                "node",
+                [
+                    "node",
+                    "--ros-args",
+                    "-p",
+                    "robot:=go2",
+                    "-p",
+                    "enable_web_ui:=true",
+                    "-p",
+                    f"web_interface_port:={self.port}",
+                ],
+            ),
         ):
             with (logs / f"bench_go2_{name}_{os.getpid()}.log").open("w") as out:
-                self.procs.append(subprocess.Popen([sys.executable, "-m", "shadowhound",
-                                                    *command], stdout=out,
-                                                   stderr=subprocess.STDOUT, cwd=ROOT))
+                self.procs.append(
+                    subprocess.Popen(
+                        [sys.executable, "-m", "shadowhound", *command],
+                        stdout=out,
+                        stderr=subprocess.STDOUT,
+                        cwd=ROOT,
+                    )
+                )
         self.context = Context()
         rclpy.init(context=self.context)
         self.node = Node("bench_go2_client", context=self.context)
@@ -102,14 +118,21 @@ class Rig:
         self.status: list[str] = []
         self.robot: list[dict[str, Any]] = []
         n = self.node
-        n.create_subscription(String, "/sim_driver/truth",
-                              lambda m: self.truth.append(json.loads(m.data)), RELIABLE)
-        n.create_subscription(String, "/sim_driver/requests",
-                              lambda m: self.requests.append(json.loads(m.data)), RELIABLE)
-        n.create_subscription(String, "/mission_status", lambda m: self.status.append(m.data),
-                              RELIABLE)
-        n.create_subscription(String, "/shadowhound/robot_status",
-                              lambda m: self.robot.append(json.loads(m.data)), 10)
+        n.create_subscription(
+            String, "/sim_driver/truth", lambda m: self.truth.append(json.loads(m.data)), RELIABLE
+        )
+        n.create_subscription(
+            String,
+            "/sim_driver/requests",
+            lambda m: self.requests.append(json.loads(m.data)),
+            RELIABLE,
+        )
+        n.create_subscription(
+            String, "/mission_status", lambda m: self.status.append(m.data), RELIABLE
+        )
+        n.create_subscription(
+            String, "/shadowhound/robot_status", lambda m: self.robot.append(json.loads(m.data)), 10
+        )
         self.missions = n.create_publisher(String, "/mission_command", RELIABLE)
         self.estop = n.create_publisher(Empty, ESTOP_TOPIC, RELIABLE)
         self.release = n.create_publisher(Empty, ESTOP_RELEASE_TOPIC, RELIABLE)
@@ -118,8 +141,16 @@ class Rig:
         self.executor.add_node(n)
         self.thread = threading.Thread(target=self.executor.spin, daemon=True)
         self.thread.start()
-        wait(lambda: self.missions.get_subscription_count() and self.robot
-             and self.robot[-1]["connected"] and self.truth, 60, "the node and the driver")
+        wait(
+            lambda: (
+                self.missions.get_subscription_count()
+                and self.robot
+                and self.robot[-1]["connected"]
+                and self.truth
+            ),
+            60,
+            "the node and the driver",
+        )
 
     def close(self) -> None:
         for proc, sig in zip(self.procs, (signal.SIGTERM, signal.SIGINT), strict=True):
@@ -133,27 +164,45 @@ class Rig:
     def run(self, text: str, timeout: float = 90.0) -> str:
         mark = len(self.status)
         self.missions.publish(String(data=text))
-        return str(wait(lambda: next((s for s in self.status[mark:]
-                                      if s.startswith(("COMPLETED", "FAILED"))), None),
-                        timeout, f"{text!r} to end"))
+        return str(
+            wait(
+                lambda: next(
+                    (s for s in self.status[mark:] if s.startswith(("COMPLETED", "FAILED"))), None
+                ),
+                timeout,
+                f"{text!r} to end",
+            )
+        )
 
     def still(self) -> dict[str, Any]:
-        wait(lambda: not self.truth[-1]["moving"] and not self.truth[-1]["changing"], 30,
-             "the robot still")
+        wait(
+            lambda: not self.truth[-1]["moving"] and not self.truth[-1]["changing"],
+            30,
+            "the robot still",
+        )
         time.sleep(0.5)
         return self.truth[-1]
 
     def lie_down(self) -> None:
-        self.webrtc.publish(WebRtcReq(id=0, topic="rt/api/sport/request", api_id=1005,
-                                      parameter="", priority=0))
-        wait(lambda: self.truth[-1]["posture"] == "lying" and not self.truth[-1]["changing"],
-             30, "the robot lying")
+        self.webrtc.publish(
+            WebRtcReq(id=0, topic="rt/api/sport/request", api_id=1005, parameter="", priority=0)
+        )
+        wait(
+            lambda: self.truth[-1]["posture"] == "lying" and not self.truth[-1]["changing"],
+            30,
+            "the robot lying",
+        )
 
 
 def pose_errors(delay: float, runs: int) -> dict[str, list[float]]:
     rig = Rig("--odom-delay", str(delay))
-    out: dict[str, list[float]] = {"metres": [], "degrees": [], "reported_m": [],
-                                   "reported_deg": [], "seconds": []}
+    out: dict[str, list[float]] = {
+        "metres": [],
+        "degrees": [],
+        "reported_m": [],
+        "reported_deg": [],
+        "seconds": [],
+    }
     try:
         for _ in range(runs):
             rig.lie_down()
@@ -171,10 +220,10 @@ def pose_errors(delay: float, runs: int) -> dict[str, list[float]]:
             out["degrees"].append(abs(turned - 90.0))
             mark = len(rig.robot)
             reported = wait(lambda m=mark: rig.robot[m:] and rig.robot[-1], 5, "robot status")
-            out["reported_m"].append(math.hypot(reported["x"] - end["x"],
-                                                reported["y"] - end["y"]))
-            out["reported_deg"].append(abs(math.degrees(math.remainder(
-                reported["yaw"] - end["yaw"], math.tau))))
+            out["reported_m"].append(math.hypot(reported["x"] - end["x"], reported["y"] - end["y"]))
+            out["reported_deg"].append(
+                abs(math.degrees(math.remainder(reported["yaw"] - end["yaw"], math.tau)))
+            )
     finally:
         rig.close()
     return out
@@ -199,12 +248,20 @@ def estop_latencies(runs: int) -> dict[str, list[float]]:
                 time.sleep(random.uniform(0.0, 0.1))  # the e-stop lands anywhere in the stride
                 sent = time.monotonic()
                 presses[path]()
-                stop = wait(lambda m=mark: next((r for r in rig.requests[m:]
-                                                 if r["api_id"] == 1003), None), 5, "StopMove")
+                stop = wait(
+                    lambda m=mark: next((r for r in rig.requests[m:] if r["api_id"] == 1003), None),
+                    5,
+                    "StopMove",
+                )
                 out[path].append(stop["mono"] - sent)
                 rig.still()
-                wait(lambda s=status: any(x.startswith(("FAILED", "COMPLETED"))
-                                          for x in rig.status[s:]), 30, "the mission to end")
+                wait(
+                    lambda s=status: any(
+                        x.startswith(("FAILED", "COMPLETED")) for x in rig.status[s:]
+                    ),
+                    30,
+                    "the mission to end",
+                )
                 rig.release.publish(Empty())
                 web.post("/api/estop/release").raise_for_status()
                 wait(lambda: rig.robot and not rig.robot[-1]["estopped"], 10, "the release")
@@ -216,8 +273,7 @@ def estop_latencies(runs: int) -> dict[str, list[float]]:
 def percentiles(values: list[float]) -> dict[str, float]:
     ordered = sorted(values)
     p99 = ordered[min(len(ordered) - 1, round(0.99 * (len(ordered) - 1)))]
-    return {"p50": statistics.median(ordered), "p99": p99, "max": ordered[-1],
-            "n": len(ordered)}
+    return {"p50": statistics.median(ordered), "p99": p99, "max": ordered[-1], "n": len(ordered)}
 
 
 def main() -> int:
@@ -232,47 +288,54 @@ def main() -> int:
         rows.append(
             f"| {delay:g} s | {max(e['metres']) * 100:.1f} cm | {max(e['degrees']):.2f} deg | "
             f"{max(e['reported_m']) * 100:.1f} cm | {max(e['reported_deg']):.2f} deg | "
-            f"{statistics.median(e['seconds']):.1f} s | {len(e['metres'])} |")
+            f"{statistics.median(e['seconds']):.1f} s | {len(e['metres'])} |"
+        )
         print(rows[-1], flush=True)
     latencies = estop_latencies(args.estops)
     estops = []
-    for path, label in (("ros", "`/shadowhound/estop` published"),
-                        ("web", "`POST /api/estop` sent")):
+    for path, label in (
+        ("ros", "`/shadowhound/estop` published"),
+        ("web", "`POST /api/estop` sent"),
+    ):
         p = percentiles(latencies[path])
-        estops.append(f"| {label} to StopMove received by the driver, robot walking | "
-                      f"p99 < 20 ms | {p['p50'] * 1000:.1f} ms | {p['p99'] * 1000:.1f} ms | "
-                      f"{p['max'] * 1000:.1f} ms | {p['n']} |")
+        estops.append(
+            f"| {label} to StopMove received by the driver, robot walking | "
+            f"p99 < 20 ms | {p['p50'] * 1000:.1f} ms | {p['p99'] * 1000:.1f} ms | "
+            f"{p['max'] * 1000:.1f} ms | {p['n']} |"
+        )
         print(estops[-1], flush=True)
-    section = "\n".join([
-        "<!-- go2:start -->",
-        "## Go2 through go2_ros2_sdk's topics (issues 5 and 13, `bench/bench_go2.py`)",
-        "",
-        f"Measured {date.today().isoformat()} with `python bench/bench_go2.py --write` "
-        f"(CPython {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores; "
-        "ROS 2 Jazzy rclpy from PyPI, Fast DDS on shared memory / loopback).",
-        "",
-        "\"stand up, walk forward 1 meter and turn left 90 degrees\" from a robot lying down, "
-        "judged by the simulated driver's ground truth (odometry 20 Hz; the worst of the runs; "
-        "targets 5 cm and 3 degrees):",
-        "",
-        "| odometry delay | end pose error (truth) | heading error (truth) | reported vs truth "
-        "| reported heading vs truth | mission time (median) | runs |",
-        "|---|---|---|---|---|---|---|",
-        *rows,
-        "",
-        "| what | target | p50 | p99 | max | runs |",
-        "|---|---|---|---|---|---|",
-        *estops,
-        "",
-        "How: `shadowhound sim-driver` and `shadowhound node --ros-args -p robot:=go2` run as "
-        "their own processes; the benchmark reads the driver's ground truth and its record of "
-        "each sport request, stamped with CLOCK_MONOTONIC when the driver's callback receives "
-        "it, and takes the same clock when it publishes the e-stop (or sends the POST), 0-100 "
-        "ms after the truth shows the robot walking. The path crosses DDS twice (e-stop in, "
-        "StopMove out on `webrtc_req`); the real driver then queues StopMove for its 10 Hz "
-        "WebRTC loop (up to 100 ms more before the robot has it).",
-        "<!-- go2:end -->",
-    ])
+    section = "\n".join(
+        [
+            "<!-- go2:start -->",
+            "## Go2 through go2_ros2_sdk's topics (issues 5 and 13, `bench/bench_go2.py`)",
+            "",
+            f"Measured {date.today().isoformat()} with `python bench/bench_go2.py --write` "
+            f"(CPython {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores; "
+            "ROS 2 Jazzy rclpy from PyPI, Fast DDS on shared memory / loopback).",
+            "",
+            '"stand up, walk forward 1 meter and turn left 90 degrees" from a robot lying down, '
+            "judged by the simulated driver's ground truth (odometry 20 Hz; the worst of the runs; "
+            "targets 5 cm and 3 degrees):",
+            "",
+            "| odometry delay | end pose error (truth) | heading error (truth) | reported vs truth "
+            "| reported heading vs truth | mission time (median) | runs |",
+            "|---|---|---|---|---|---|---|",
+            *rows,
+            "",
+            "| what | target | p50 | p99 | max | runs |",
+            "|---|---|---|---|---|---|",
+            *estops,
+            "",
+            "How: `shadowhound sim-driver` and `shadowhound node --ros-args -p robot:=go2` run as "
+            "their own processes; the benchmark reads the driver's ground truth and its record of "
+            "each sport request, stamped with CLOCK_MONOTONIC when the driver's callback receives "
+            "it, and takes the same clock when it publishes the e-stop (or sends the POST), 0-100 "
+            "ms after the truth shows the robot walking. The path crosses DDS twice (e-stop in, "
+            "StopMove out on `webrtc_req`); the real driver then queues StopMove for its 10 Hz "
+            "WebRTC loop (up to 100 ms more before the robot has it).",
+            "<!-- go2:end -->",
+        ]
+    )
     print(section)
     if args.write:
         write_section("go2", section)

@@ -52,8 +52,10 @@ from tests.test_llm_llamacpp import (  # noqa: E402
 CASES = ROOT / "tests" / "data" / "missions_public.yaml"
 TARGET = "stand up and walk forward 1 meter"
 SECOND = "turn left 90 degrees and sit down"  # a different mission, for the prompt cache
-FULL = ("stand up, walk forward 2 meters, turn left 90 degrees, "
-        "then walk forward one and a half meters and sit down")
+FULL = (
+    "stand up, walk forward 2 meters, turn left 90 degrees, "
+    "then walk forward one and a half meters and sit down"
+)
 FULL_PLAN = [
     {"skill": "body.stand", "args": {}},
     {"skill": "nav.move", "args": {"distance": 2.0}},
@@ -61,26 +63,35 @@ FULL_PLAN = [
     {"skill": "nav.move", "args": {"distance": 1.5}},
     {"skill": "body.sit", "args": {}},
 ]
-TARGET_PLAN = [{"skill": "body.stand", "args": {}},
-               {"skill": "nav.move", "args": {"distance": 1.0}}]
+TARGET_PLAN = [
+    {"skill": "body.stand", "args": {}},
+    {"skill": "nav.move", "args": {"distance": 1.0}},
+]
 
 
 def _settings(url: str, model: str, **llm: Any) -> ShadowHoundConfig:
     # No memory: every mission starts fresh (no "recent missions" in the prompt), and the
     # benchmark never touches the user's history in ~/.shadowhound. Hybrid off unless asked:
     # these figures are the model's.
-    return load_config("llamacpp", {"llm": {"base_url": url, "model": model, "hybrid": False,
-                                            **llm},
-                                     "memory": {"enabled": False}})
+    return load_config(
+        "llamacpp",
+        {
+            "llm": {"base_url": url, "model": model, "hybrid": False, **llm},
+            "memory": {"enabled": False},
+        },
+    )
 
 
-def _mission(settings: ShadowHoundConfig, text: str,
-             spy: list[tuple[list[dict[str, Any]], dict[str, Any]]] | None = None
-             ) -> tuple[MissionResult, float]:
+def _mission(
+    settings: ShadowHoundConfig,
+    text: str,
+    spy: list[tuple[list[dict[str, Any]], dict[str, Any]]] | None = None,
+) -> tuple[MissionResult, float]:
     """One mission on a fresh agent and simulated robot (time scale 0); optionally records
     every request the planner sends."""
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=0.0),
-                                        settings=settings))
+    agent = RobotAgent(
+        RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=0.0), settings=settings)
+    )
     agent.initialize()
     if spy is not None:
         backend = agent.backend
@@ -120,8 +131,7 @@ def _first_prompt_eval(log_text: str) -> dict[str, float]:
     if evaluated is None:
         return {}
     reused = int(hit.group(1)) if hit and hit.start() < evaluated.start() else 0
-    return {"ms": float(evaluated.group(1)), "evaluated": int(evaluated.group(2)),
-            "reused": reused}
+    return {"ms": float(evaluated.group(1)), "evaluated": int(evaluated.group(2)), "reused": reused}
 
 
 def bench_real(limit: int | None) -> dict[str, Any]:
@@ -131,8 +141,11 @@ def bench_real(limit: int | None) -> dict[str, Any]:
     model = find_model()
     assert model is not None
     cases = load_cases(CASES)[:limit]
-    with tempfile.NamedTemporaryFile(prefix="llama-server-", suffix=".log") as log, \
-            LlamaServer(model, log, verbose=True) as srv:
+    with (
+        tempfile.NamedTemporaryFile(prefix="llama-server-", suffix=".log") as log,
+        LlamaServer(model, log, verbose=True) as srv,
+    ):
+
         def logged_since(offset: int) -> str:
             srv.log_tail(1)  # flushes
             with open(log.name, "rb") as f:
@@ -145,14 +158,21 @@ def bench_real(limit: int | None) -> dict[str, Any]:
         for text in (TARGET, SECOND):
             offset = Path(log.name).stat().st_size
             result, seconds = _mission(settings, text)
-            cache.append({"mission": text, "usage": result.usage, "seconds": seconds,
-                          **_first_prompt_eval(logged_since(offset))})
+            cache.append(
+                {
+                    "mission": text,
+                    "usage": result.usage,
+                    "seconds": seconds,
+                    **_first_prompt_eval(logged_since(offset)),
+                }
+            )
         client = OpenAI(base_url=srv.url, api_key="not-needed", max_retries=0, timeout=300)
 
         def prompt_tokens(messages: list[dict[str, Any]]) -> int:
             """The real tokenizer's count for the planner's request, asked without options."""
-            reply = client.chat.completions.create(model=MODEL_ALIAS, messages=messages,
-                                                   max_tokens=1, temperature=0.0)
+            reply = client.chat.completions.create(
+                model=MODEL_ALIAS, messages=messages, max_tokens=1, temperature=0.0
+            )
             assert reply.usage is not None
             return int(reply.usage.prompt_tokens)
 
@@ -163,21 +183,33 @@ def bench_real(limit: int | None) -> dict[str, Any]:
 
         cards, outcomes = [], {}
         for label, llm in PLANNERS:
-            planner_settings = (load_config("offline", {"memory": {"enabled": False}})
-                                if llm is None else
-                                _settings(srv.url, MODEL_ALIAS, max_tokens=256, timeout=300,
-                                          **llm))
+            planner_settings = (
+                load_config("offline", {"memory": {"enabled": False}})
+                if llm is None
+                else _settings(srv.url, MODEL_ALIAS, max_tokens=256, timeout=300, **llm)
+            )
             started = time.perf_counter()
-            done = run_cases(cases, planner_settings, on_case=lambda o, label=label: print(
-                f"  [{label}] {o.case.mission!r}: passed={o.passed} {o.usage.to_dict()}",
-                file=sys.stderr))
+            done = run_cases(
+                cases,
+                planner_settings,
+                on_case=lambda o, label=label: print(
+                    f"  [{label}] {o.case.mission!r}: passed={o.passed} {o.usage.to_dict()}",
+                    file=sys.stderr,
+                ),
+            )
             print(f"{label}: {time.perf_counter() - started:.0f} s", file=sys.stderr)
             outcomes[label] = done
             cards.append(scorecard(label, done))
         server_log = srv.log_tail(10**9)
-    return {"cache": cache, "target": target, "target_first": target_first,
-            "target_requests": target_requests, "cards": cards, "outcomes": outcomes,
-            "http_500": server_log.count("500 Internal Server Error")}
+    return {
+        "cache": cache,
+        "target": target,
+        "target_first": target_first,
+        "target_requests": target_requests,
+        "cards": cards,
+        "outcomes": outcomes,
+        "http_500": server_log.count("500 Internal Server Error"),
+    }
 
 
 def bench_estimate() -> dict[str, Any]:
@@ -196,8 +228,12 @@ def bench_round_trips() -> dict[str, Any]:
         srv.script(json_plan(FULL_PLAN))
         result, _seconds = _mission(_settings(srv.url, "m"), FULL)
         requests = len(srv.requests)
-    return {"usage": result.usage, "success": result.success, "requests": requests,
-            "steps": len(result.steps)}
+    return {
+        "usage": result.usage,
+        "success": result.success,
+        "requests": requests,
+        "steps": len(result.steps),
+    }
 
 
 # --------------------------------------------------------------------------- (iii) overhead
@@ -211,8 +247,7 @@ def bench_overhead(calls: int = 200, warmup: int = 20) -> dict[str, float]:
     exchange with the in-process scripted server (a thread of this process).
     """
     registry = default_registry()
-    context = PlanningContext(registry, RobotState(),
-                              dict(ShadowHoundConfig().places))
+    context = PlanningContext(registry, RobotState(), dict(ShadowHoundConfig().places))
 
     def answer(request: dict[str, Any]) -> Reply:
         assert request["messages"][-1]["content"] == TARGET
@@ -229,9 +264,12 @@ def bench_overhead(calls: int = 200, warmup: int = 20) -> dict[str, float]:
             assert len(plan.steps) == 2 and plan.usage.round_trips == 1, plan
             if i >= warmup:
                 times.append(elapsed)
-    return {"median_ms": statistics.median(times) * 1e3,
-            "p95_ms": statistics.quantiles(times, n=20)[18] * 1e3,
-            "min_ms": min(times) * 1e3, "calls": calls}
+    return {
+        "median_ms": statistics.median(times) * 1e3,
+        "p95_ms": statistics.quantiles(times, n=20)[18] * 1e3,
+        "min_ms": min(times) * 1e3,
+        "calls": calls,
+    }
 
 
 # --------------------------------------------------------------------------- report
@@ -259,8 +297,10 @@ def main() -> None:
     estimate = bench_estimate()
     real = bench_real(args.cases)
 
-    machine = f"{platform.python_implementation()} {platform.python_version()}, " \
-              f"{platform.machine()}, 2 cores"
+    machine = (
+        f"{platform.python_implementation()} {platform.python_version()}, "
+        f"{platform.machine()}, 2 cores"
+    )
     import llama_cpp
 
     t = real["target"]
@@ -271,8 +311,9 @@ def main() -> None:
     outcomes = real["outcomes"]
     offline_label, hybrid_label, plain_label, strict_label = (p for p, _ in PLANNERS)
     # Cases the offline planner passes by planning them (not by refusing, as some cases expect).
-    offline_passed = [i for i, o in enumerate(outcomes[offline_label])
-                      if o.passed and o.planned_by == "offline"]
+    offline_passed = [
+        i for i, o in enumerate(outcomes[offline_label]) if o.passed and o.planned_by == "offline"
+    ]
     refused = [o for o in outcomes[offline_label] if o.planned_by != "offline"]
     hybrid_calls_there = sum(outcomes[hybrid_label][i].usage.round_trips for i in offline_passed)
     saved = cards[strict_label].model_calls - cards[hybrid_label].model_calls
@@ -288,15 +329,15 @@ def main() -> None:
         "",
         "| what | target | measured |",
         "|---|---|---|",
-        f"| \"{TARGET}\", plan mode (model only), real tokenizer: prompt tokens of the first "
+        f'| "{TARGET}", plan mode (model only), real tokenizer: prompt tokens of the first '
         f"request | < 1000 | {real['target_first']} |",
         f"| same, whole mission as the agent ran it: prompt / completion tokens, round trips "
         f"(planner requests) | - | {t.usage.prompt_tokens} / {t.usage.completion_tokens}, "
         f"{t.usage.round_trips} ({real['target_requests']}); success {_yes(t.success)} |",
-        f"| prompt cache, one server: first mission \"{first['mission']}\": prompt tokens "
+        f'| prompt cache, one server: first mission "{first["mission"]}": prompt tokens '
         f"evaluated (reused from cache), prompt processing | - | {first.get('evaluated')} "
         f"({first.get('reused')}), {first.get('ms', 0):.0f} ms |",
-        f"| second, different mission \"{second['mission']}\": prompt tokens evaluated "
+        f'| second, different mission "{second["mission"]}": prompt tokens evaluated '
         f"(reused), prompt processing; share of the first | < 25% of the tokens | "
         f"{second.get('evaluated')} ({second.get('reused')}), {second.get('ms', 0):.0f} ms; "
         f"{100 * share:.1f}% of the tokens, {100 * time_share:.0f}% of the time |",
@@ -343,13 +384,19 @@ def main() -> None:
             f"| {o.case.mission or '(empty)'} | {_yes(o.passed)} | {_yes(h.passed)} "
             f"({h.usage.round_trips}) | {_yes(p.passed)} ({p.usage.round_trips}, "
             f"{p.usage.invalid_plans}) | {_yes(st.passed)} ({st.usage.round_trips}, "
-            f"{st.usage.invalid_plans}) |")
-    lines += ["", "SmolLM2-135M plans badly: the model rows are about cost and protocol, not "
-              "plan quality. A case passes when the robot ends where the case says; a refused "
-              "or failed plan passes only cases that expect nothing to happen."]
+            f"{st.usage.invalid_plans}) |"
+        )
+    lines += [
+        "",
+        "SmolLM2-135M plans badly: the model rows are about cost and protocol, not "
+        "plan quality. A case passes when the robot ends where the case says; a refused "
+        "or failed plan passes only cases that expect nothing to happen.",
+    ]
     if real["http_500"]:
-        lines.append(f"The server answered HTTP 500 {real['http_500']} times (the openai "
-                     "client retries a 500 once).")
+        lines.append(
+            f"The server answered HTTP 500 {real['http_500']} times (the openai "
+            "client retries a 500 once)."
+        )
     lines.append("<!-- llm:end -->")
     section = "\n".join(lines)
     print(section)

@@ -78,8 +78,9 @@ async def timed(call: Callable[[], Awaitable[Any]], runs: int) -> list[float]:
 
 def direct(runs: int) -> dict[str, list[float]]:
     settings = ShadowHoundConfig(memory={"enabled": False})
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=0.0),
-                                        settings=settings))
+    agent = RobotAgent(
+        RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=0.0), settings=settings)
+    )
     agent.initialize()
     desk = McpDesk(agent)
     state, rotate = [], []
@@ -117,10 +118,13 @@ def raw_http(url: str, runs: int) -> list[float]:
 
     def post(body: dict[str, Any], session: str = "") -> bytes:
         data = json.dumps(body).encode()
-        head = (f"POST /mcp HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
-                "Content-Type: application/json\r\nAccept: application/json, text/event-stream"
-                f"\r\nContent-Length: {len(data)}\r\nConnection: close\r\n"
-                + (f"Mcp-Session-Id: {session}\r\n" if session else "") + "\r\n")
+        head = (
+            f"POST /mcp HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n"
+            "Content-Type: application/json\r\nAccept: application/json, text/event-stream"
+            f"\r\nContent-Length: {len(data)}\r\nConnection: close\r\n"
+            + (f"Mcp-Session-Id: {session}\r\n" if session else "")
+            + "\r\n"
+        )
         with socket.create_connection(("127.0.0.1", port)) as sock:
             sock.sendall(head.encode() + data)
             answer = b""
@@ -128,9 +132,18 @@ def raw_http(url: str, runs: int) -> list[float]:
                 answer += chunk
         return answer
 
-    init = post({"jsonrpc": "2.0", "id": 1, "method": "initialize", "params": {
-        "protocolVersion": "2025-11-25", "capabilities": {},
-        "clientInfo": {"name": "bench", "version": "0"}}})
+    init = post(
+        {
+            "jsonrpc": "2.0",
+            "id": 1,
+            "method": "initialize",
+            "params": {
+                "protocolVersion": "2025-11-25",
+                "capabilities": {},
+                "clientInfo": {"name": "bench", "version": "0"},
+            },
+        }
+    )
     found = re.search(rb"mcp-session-id: (\S+)", init, re.I)
     assert found is not None, init
     session = found.group(1).decode()
@@ -138,8 +151,15 @@ def raw_http(url: str, runs: int) -> list[float]:
     out = []
     for i in range(runs):
         t = time.perf_counter()
-        answer = post({"jsonrpc": "2.0", "id": 2 + i, "method": "tools/call",
-                       "params": {"name": "get_state", "arguments": {}}}, session)
+        answer = post(
+            {
+                "jsonrpc": "2.0",
+                "id": 2 + i,
+                "method": "tools/call",
+                "params": {"name": "get_state", "arguments": {}},
+            },
+            session,
+        )
         out.append(time.perf_counter() - t)
         assert b'"connected' in answer, answer
     return out
@@ -153,13 +173,15 @@ async def estop_runs(client: Any, runs: int) -> list[float]:
     for i in range(runs):
         progress: list[str] = []
 
-        async def on_progress(_d: float, _t: float | None, message: str | None,
-                              seen: list[str] = progress) -> None:
+        async def on_progress(
+            _d: float, _t: float | None, message: str | None, seen: list[str] = progress
+        ) -> None:
             seen.append(message or "")
 
         text = "walk forward 2 meters" if i % 2 == 0 else "walk backward 2 meters"
-        mission = asyncio.create_task(client.call_tool("run_mission", {"text": text},
-                                                       progress_callback=on_progress))
+        mission = asyncio.create_task(
+            client.call_tool("run_mission", {"text": text}, progress_callback=on_progress)
+        )
         while not any("nav.move(" in m for m in progress):
             await asyncio.sleep(0.005)
         await asyncio.sleep(random.uniform(0.0, 0.3))
@@ -178,16 +200,29 @@ async def estop_runs(client: Any, runs: int) -> list[float]:
 
 def planner_first_request(mode: str) -> int:
     """Characters of the planner's first request (messages + tools) for one mission."""
-    reply = json_plan([{"skill": "nav.move", "args": {"distance": 1}}]) if mode == "plan" \
+    reply = (
+        json_plan([{"skill": "nav.move", "args": {"distance": 1}}])
+        if mode == "plan"
         else tool_calls(("nav_move", {"distance": 1}))
+    )
     with ScriptedLLM() as srv:
         srv.script(reply, json_plan([]) if mode == "plan" else tool_calls())
-        settings = load_config("llamacpp", {"llm": {"base_url": srv.url, "model": "m",
-                                                     "mode": mode, "check_on_start": False,
-                                                     "hybrid": False},  # the model plans
-                                            "memory": {"enabled": False}})
-        agent = RobotAgent(RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=0.0),
-                                            settings=settings))
+        settings = load_config(
+            "llamacpp",
+            {
+                "llm": {
+                    "base_url": srv.url,
+                    "model": "m",
+                    "mode": mode,
+                    "check_on_start": False,
+                    "hybrid": False,
+                },  # the model plans
+                "memory": {"enabled": False},
+            },
+        )
+        agent = RobotAgent(
+            RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=0.0), settings=settings)
+        )
         agent.initialize()
         agent.execute_mission("walk forward 1 meter")
         agent.cleanup()
@@ -206,10 +241,15 @@ def ros_mcp_server_size(server_py: Path) -> tuple[int, int]:
 
     from mcp.server.mcpserver import MCPServer
 
-    stubs = {"mcp.server.fastmcp": {"FastMCP": MCPServer}, "utils": {},
-             "utils.websocket_manager": {"WebSocketManager": lambda *a, **k: None,
-                                         "parse_json": lambda text: text},
-             "utils.network_utils": {"ping_ip_and_port": lambda *a, **k: None}}
+    stubs = {
+        "mcp.server.fastmcp": {"FastMCP": MCPServer},
+        "utils": {},
+        "utils.websocket_manager": {
+            "WebSocketManager": lambda *a, **k: None,
+            "parse_json": lambda text: text,
+        },
+        "utils.network_utils": {"ping_ip_and_port": lambda *a, **k: None},
+    }
     saved = {name: sys.modules.get(name) for name in stubs}
     try:
         for name, attrs in stubs.items():
@@ -233,8 +273,12 @@ def ros_mcp_server_size(server_py: Path) -> tuple[int, int]:
 
 async def listed_size(client: Any) -> int:
     tools = (await client.list_tools()).tools
-    return len(json.dumps([t.model_dump(by_alias=True, exclude_none=True, mode="json")
-                           for t in tools], separators=(",", ":")))
+    return len(
+        json.dumps(
+            [t.model_dump(by_alias=True, exclude_none=True, mode="json") for t in tools],
+            separators=(",", ":"),
+        )
+    )
 
 
 # -- main ------------------------------------------------------------------------------------
@@ -273,13 +317,17 @@ def load_average() -> str:
 def render(m: dict[str, Any], load: str) -> str:
     def row(name: str, transport: str) -> str:
         mcp, base = summary(m[transport][name]), summary(m["direct"][name])
-        return (f"| `{name}` over {transport} | {mcp['median']:.2f} ms | {mcp['p99']:.2f} ms | "
-                f"{base['median']:.3f} ms | {mcp['median'] - base['median']:.2f} ms |")
+        return (
+            f"| `{name}` over {transport} | {mcp['median']:.2f} ms | {mcp['p99']:.2f} ms | "
+            f"{base['median']:.3f} ms | {mcp['median'] - base['median']:.2f} ms |"
+        )
 
     def stop(transport: str) -> str:
         s = summary(m[f"estop_{transport}"])
-        return (f"| e-stop over {transport}: call to robot stopped, p99 | {s['p99']:.2f} ms | "
-                f"median {s['median']:.2f} ms, max {s['max']:.2f} ms, {s['n']} runs |")
+        return (
+            f"| e-stop over {transport}: call to robot stopped, p99 | {s['p99']:.2f} ms | "
+            f"median {s['median']:.2f} ms, max {s['max']:.2f} ms, {s['n']} runs |"
+        )
 
     tools = all_tools(RobotAgent(ShadowHoundConfig()).registry, 2000)
     lines = [
@@ -294,8 +342,10 @@ def render(m: dict[str, Any], load: str) -> str:
         "",
         "| call | MCP median | MCP p99 | direct Python median | overhead (median) |",
         "|---|---|---|---|---|",
-        row("get_state", "stdio"), row("get_state", "http"),
-        row("nav_rotate", "stdio"), row("nav_rotate", "http"),
+        row("get_state", "stdio"),
+        row("get_state", "http"),
+        row("nav_rotate", "stdio"),
+        row("nav_rotate", "http"),
         f"| `get_state` over http, minimal client (see below) | "
         f"{summary(m['raw_http'])['median']:.2f} ms | {summary(m['raw_http'])['p99']:.2f} ms | "
         f"{summary(m['direct']['get_state'])['median']:.3f} ms | "
@@ -304,7 +354,8 @@ def render(m: dict[str, Any], load: str) -> str:
         "",
         "| measure | result | notes |",
         "|---|---|---|",
-        stop("stdio"), stop("http"),
+        stop("stdio"),
+        stop("http"),
         "",
         "| what a model reads | characters (compact JSON) | about tokens (chars / 4) |",
         "|---|---|---|",
@@ -314,8 +365,14 @@ def render(m: dict[str, Any], load: str) -> str:
         f"{m['plan'] // 4} |",
         f"| LLM planner's first request, react mode (messages + tools) | {m['react']} | "
         f"{m['react'] // 4} |",
-        *([f"| ros-mcp-server {m['ros_mcp'][2]} tools/list ({m['ros_mcp'][0]} tools) | "
-           f"{m['ros_mcp'][1]} | {m['ros_mcp'][1] // 4} |"] if m.get("ros_mcp") else []),
+        *(
+            [
+                f"| ros-mcp-server {m['ros_mcp'][2]} tools/list ({m['ros_mcp'][0]} tools) | "
+                f"{m['ros_mcp'][1]} | {m['ros_mcp'][1] // 4} |"
+            ]
+            if m.get("ros_mcp")
+            else []
+        ),
         "",
         "Methods. Round trip: a warmed-up client calls the tool in a loop; `direct` is the same "
         "work in one process (`McpDesk.state()`; `McpDesk.start_skill` then waiting for the "
@@ -335,11 +392,14 @@ def render(m: dict[str, Any], load: str) -> str:
         "planner for 'walk forward 1 meter' (its system prompt, skill catalogue, state and "
         "places; plus the function tools in react mode), recorded by a scripted "
         "OpenAI-compatible server on loopback. "
-        + ("ros-mcp-server's list (generic ROS tools, the same for any robot; a client must "
-           "then also read topic and message descriptions before it can move a Go2) is "
-           "listed from its server.py with MCP 2's MCPServer standing in for v1's FastMCP "
-           "(`--ros-mcp-server PATH`)." if m.get("ros_mcp") else
-           "ros-mcp-server's list was not measured (pass `--ros-mcp-server PATH/server.py`)."),
+        + (
+            "ros-mcp-server's list (generic ROS tools, the same for any robot; a client must "
+            "then also read topic and message descriptions before it can move a Go2) is "
+            "listed from its server.py with MCP 2's MCPServer standing in for v1's FastMCP "
+            "(`--ros-mcp-server PATH`)."
+            if m.get("ros_mcp")
+            else "ros-mcp-server's list was not measured (pass `--ros-mcp-server PATH/server.py`)."
+        ),
         "<!-- mcp:end -->",
     ]
     return "\n".join(lines) + "\n"
@@ -355,10 +415,17 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="update bench/RESULTS.md")
     parser.add_argument("--quick", action="store_true", help="fewer runs")
-    parser.add_argument("--ros-mcp-server", type=Path, metavar="SERVER_PY",
-                        help="also measure ros-mcp-server's tool list from its server.py")
-    parser.add_argument("--ros-mcp-server-version", default="v0.2.0",
-                        help="the version of that server.py, for the table")
+    parser.add_argument(
+        "--ros-mcp-server",
+        type=Path,
+        metavar="SERVER_PY",
+        help="also measure ros-mcp-server's tool list from its server.py",
+    )
+    parser.add_argument(
+        "--ros-mcp-server-version",
+        default="v0.2.0",
+        help="the version of that server.py, for the table",
+    )
     args = parser.parse_args()
     runs, stops = (30, 10) if args.quick else (300, 40)
     with tempfile.TemporaryDirectory() as data:
@@ -367,8 +434,7 @@ def main() -> int:
         m = asyncio.run(measure(runs, stops))
         m["plan"], m["react"] = planner_first_request("plan"), planner_first_request("react")
         if args.ros_mcp_server:
-            m["ros_mcp"] = (*ros_mcp_server_size(args.ros_mcp_server),
-                            args.ros_mcp_server_version)
+            m["ros_mcp"] = (*ros_mcp_server_size(args.ros_mcp_server), args.ros_mcp_server_version)
     section = render(m, load)
     print(section)
     if args.write:

@@ -24,8 +24,24 @@ from shadowhound.memory import MissionHistory
 from shadowhound.memory.embedding import MiniLMEmbedder
 from shadowhound.memory.recall import RecallMemory
 
-THINGS = ["fridge", "charging dock", "red ball", "blue box", "sofa", "door", "plant", "chair",
-          "person", "table", "window", "stairs", "cat", "shoe", "backpack", "lamp"]
+THINGS = [
+    "fridge",
+    "charging dock",
+    "red ball",
+    "blue box",
+    "sofa",
+    "door",
+    "plant",
+    "chair",
+    "person",
+    "table",
+    "window",
+    "stairs",
+    "cat",
+    "shoe",
+    "backpack",
+    "lamp",
+]
 ROOMS = ["kitchen", "hallway", "living room", "garage", "office", "bedroom", "garden", "lab"]
 TIMES = ["this morning", "at noon", "in the afternoon", "last night", "yesterday", "today"]
 
@@ -36,10 +52,12 @@ def synthetic_memories(n: int) -> list[tuple[str, str, dict[str, object]]]:
     for i in range(n):
         thing, room, when = rng.choice(THINGS), rng.choice(ROOMS), rng.choice(TIMES)
         kind = ("fact", "observation", "mission")[i % 3]
-        text = {"fact": f"the {thing} is usually in the {room}",
-                "observation": f"I saw a {thing} in the {room} {when}, about "
-                               f"{rng.uniform(0.5, 5):.1f} m ahead",
-                "mission": f"Mission 'go to the {room}' succeeded {when}: reached the {room}"}[kind]
+        text = {
+            "fact": f"the {thing} is usually in the {room}",
+            "observation": f"I saw a {thing} in the {room} {when}, about "
+            f"{rng.uniform(0.5, 5):.1f} m ahead",
+            "mission": f"Mission 'go to the {room}' succeeded {when}: reached the {room}",
+        }[kind]
         out.append((text, kind, {"n": i}))
     return out
 
@@ -66,7 +84,7 @@ def bench_recall(n: int, queries: int = 200) -> dict[str, float]:
         items = synthetic_memories(n)
         t0 = time.perf_counter()
         for start in range(0, n, 256):
-            memory.add_many(items[start:start + 256])
+            memory.add_many(items[start : start + 256])
         insert_s = time.perf_counter() - t0
         rng = random.Random(3)
         latencies = []
@@ -82,8 +100,12 @@ def bench_recall(n: int, queries: int = 200) -> dict[str, float]:
             embed_only.append((time.perf_counter() - t0) * 1e3)
         assert memory.count() == n
         latencies.sort()
-        return {"p50": statistics.median(latencies), "p95": latencies[int(0.95 * len(latencies))],
-                "embed_p50": statistics.median(embed_only), "insert_s": insert_s}
+        return {
+            "p50": statistics.median(latencies),
+            "p95": latencies[int(0.95 * len(latencies))],
+            "embed_p50": statistics.median(embed_only),
+            "insert_s": insert_s,
+        }
 
 
 def main() -> None:

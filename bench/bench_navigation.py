@@ -47,28 +47,33 @@ def main() -> None:
             length = f"{a['path_length']:.2f} m / {optimal:.2f} m"
         else:
             ratio, length = "-", "refused: " + outcome.response.split(": ", 2)[-1][:60]
-        rows.append(f"| {case.mission} | {kind} | {'pass' if outcome.passed else 'FAIL'} | "
-                    f"{length} | "
-                    f"{ratio} | {a['seconds']:.1f} s | {a['replans']} | {wall * 1000:.0f} ms |")
-    section = "\n".join([
-        "<!-- navigation:start -->",
-        "## Navigation cases (issue 15, phase 2a and objects)",
-        "",
-        f"`tests/data/missions_navigation.yaml` with the offline planner: {passed}/{len(CASES)} "
-        "passed. Walked = the simulator's true path; optimal = the shortest 8-connected path on "
-        "the true scene's grid inflated by the body (0.35 m). Wall time includes planning "
-        "(each nav.goto plans when checked, re-checked and run, and renders a camera frame "
-        "after each move for sightings) on a shared machine (load average "
-        f"{os.getloadavg()[0]:.0f} on {os.cpu_count()} cores). "
-        "Object cases: the optimal path ends at the standoff the robot chose; a searched-for "
-        "object's walk includes the search.",
-        "",
-        "| mission | kind | result | walked / optimal | ratio | robot time | re-plans | wall "
-        "time |",
-        "|---|---|---|---|---|---|---|---|",
-        *rows,
-        "<!-- navigation:end -->",
-    ])
+        rows.append(
+            f"| {case.mission} | {kind} | {'pass' if outcome.passed else 'FAIL'} | "
+            f"{length} | "
+            f"{ratio} | {a['seconds']:.1f} s | {a['replans']} | {wall * 1000:.0f} ms |"
+        )
+    section = "\n".join(
+        [
+            "<!-- navigation:start -->",
+            "## Navigation cases (issue 15, phase 2a and objects)",
+            "",
+            f"`tests/data/missions_navigation.yaml` with the offline planner: "
+            f"{passed}/{len(CASES)} passed. Walked = the simulator's true path; optimal = the "
+            "shortest 8-connected path on the true scene's grid inflated by the body (0.35 m). "
+            "Wall time includes planning (each nav.goto plans when checked, re-checked and run, "
+            "and renders a camera frame "
+            "after each move for sightings) on a shared machine (load average "
+            f"{os.getloadavg()[0]:.0f} on {os.cpu_count()} cores). "
+            "Object cases: the optimal path ends at the standoff the robot chose; a searched-for "
+            "object's walk includes the search.",
+            "",
+            "| mission | kind | result | walked / optimal | ratio | robot time | re-plans | wall "
+            "time |",
+            "|---|---|---|---|---|---|---|---|",
+            *rows,
+            "<!-- navigation:end -->",
+        ]
+    )
     write_section("navigation", section)
     print(section)
 

@@ -104,8 +104,11 @@ class InProcess:
         self.client = Node("bench_client", namespace=ns)
         self.status: list[tuple[float, str]] = []
         self.client.create_subscription(
-            String, "mission_status",
-            lambda m: self.status.append((time.perf_counter(), m.data)), RELIABLE)
+            String,
+            "mission_status",
+            lambda m: self.status.append((time.perf_counter(), m.data)),
+            RELIABLE,
+        )
         self.missions = self.client.create_publisher(String, "mission_command", RELIABLE)
         self.estop = self.client.create_publisher(Empty, ESTOP_TOPIC, RELIABLE)
         self._executors = [SingleThreadedExecutor(), SingleThreadedExecutor()]
@@ -115,8 +118,11 @@ class InProcess:
         self._threads = [threading.Thread(target=e.spin, daemon=True) for e in self._executors]
         for thread in self._threads:
             thread.start()
-        wait(lambda: self.missions.get_subscription_count() and
-             self.estop.get_subscription_count(), 30, "discovery")
+        wait(
+            lambda: self.missions.get_subscription_count() and self.estop.get_subscription_count(),
+            30,
+            "discovery",
+        )
 
     def finished(self, mark: int) -> bool:
         return any(s.startswith(("COMPLETED", "FAILED")) for _t, s in self.status[mark:])
@@ -134,8 +140,7 @@ class InProcess:
 def percentiles(values: list[float]) -> dict[str, float]:
     ordered = sorted(values)
     p99 = ordered[min(len(ordered) - 1, round(0.99 * (len(ordered) - 1)))]
-    return {"p50": statistics.median(ordered), "p99": p99, "max": ordered[-1],
-            "n": len(ordered)}
+    return {"p50": statistics.median(ordered), "p99": p99, "max": ordered[-1], "n": len(ordered)}
 
 
 def bench_estop(runs: int, camera_fps: float = 0.0) -> dict[str, float]:
@@ -147,8 +152,7 @@ def bench_estop(runs: int, camera_fps: float = 0.0) -> dict[str, float]:
     latencies = []
     stop = threading.Event()
     if camera_fps:
-        camera = rig.client.create_publisher(CompressedImage, f"{ns}/camera/compressed",
-                                             RELIABLE)
+        camera = rig.client.create_publisher(CompressedImage, f"{ns}/camera/compressed", RELIABLE)
         frame = CompressedImage(format="jpeg", data=jpeg_640x480()[0])
 
         def feed() -> None:
@@ -160,8 +164,13 @@ def bench_estop(runs: int, camera_fps: float = 0.0) -> dict[str, float]:
 
         wait(camera.get_subscription_count, 30, "the camera subscription")
         threading.Thread(target=feed, daemon=True).start()
-        wait(lambda: rig.agent.latest_frame() is not None and
-             rig.agent.latest_frame().encoding == "jpeg", 30, "camera frames at the agent")
+        wait(
+            lambda: (
+                rig.agent.latest_frame() is not None and rig.agent.latest_frame().encoding == "jpeg"
+            ),
+            30,
+            "camera frames at the agent",
+        )
     try:
         for _ in range(runs):
             rig.agent.release_estop()
@@ -195,8 +204,9 @@ def bench_mission_start(runs: int) -> dict[str, dict[str, float]]:
             rig.missions.publish(String(data="turn left 90 degrees"))
             first.append(wait(lambda: robot.first_command, 5, "the first command") - t0)
             wait(lambda m=mark: rig.finished(m), 10, "the mission to end")
-            executing.append(next(t for t, s in rig.status[mark:]
-                                  if s.startswith("EXECUTING")) - t0)
+            executing.append(
+                next(t for t, s in rig.status[mark:] if s.startswith("EXECUTING")) - t0
+            )
     finally:
         rig.close()
     return {"first": percentiles(first), "executing": percentiles(executing)}
@@ -212,13 +222,15 @@ def jpeg_640x480() -> tuple[bytes, str]:
         from tests.images import tiny_jpeg
 
         head = tiny_jpeg(640, 480)
-        return head[:-2] + bytes(random.getrandbits(8) for _ in range(45_000)) + head[-2:], \
-            "synthetic (header + 45 kB filler)"
+        return head[:-2] + bytes(random.getrandbits(8) for _ in range(45_000)) + head[
+            -2:
+        ], "synthetic (header + 45 kB filler)"
     img = PILImage.effect_noise((640, 480), 24).convert("RGB")
     draw = ImageDraw.Draw(img)
     for i in range(12):
-        draw.rectangle((i * 50, 200 + (i % 3) * 40, i * 50 + 40, 420), fill=(30 * i % 255,
-                                                                              120, 200 - 10 * i))
+        draw.rectangle(
+            (i * 50, 200 + (i % 3) * 40, i * 50 + 40, 420), fill=(30 * i % 255, 120, 200 - 10 * i)
+        )
     out = io.BytesIO()
     img.save(out, "JPEG", quality=80)
     return out.getvalue(), "Pillow, quality 80"
@@ -233,22 +245,45 @@ def bench_camera(seconds: float, raw: bool) -> dict[str, Any]:
     """CPU of the node process: idle, then while receiving 30 frames/s of 640x480."""
     topic = "/bench_cam/image_raw" if raw else "/bench_cam/compressed"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "shadowhound", "node", "--ros-args", "-r", "__ns:=/bench_cam",
-         "-p", f"camera_topic:={topic}", "-p", "diagnostics_topic:=/bench_cam/diagnostics",
-         "-p", "robot_status_topic:=/bench_cam/robot_status"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=ROOT)
+        [
+            sys.executable,
+            "-m",
+            "shadowhound",
+            "node",
+            "--ros-args",
+            "-r",
+            "__ns:=/bench_cam",
+            "-p",
+            f"camera_topic:={topic}",
+            "-p",
+            "diagnostics_topic:=/bench_cam/diagnostics",
+            "-p",
+            "robot_status_topic:=/bench_cam/robot_status",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        cwd=ROOT,
+    )
     client = Node("bench_camera_client")
     executor = SingleThreadedExecutor()
     executor.add_node(client)
     spinner = threading.Thread(target=executor.spin, daemon=True)
     spinner.start()
     diagnostics: list[dict[str, str]] = []
-    client.create_subscription(DiagnosticArray, "/bench_cam/diagnostics", lambda m: diagnostics
-                               .append({kv.key: kv.value for kv in m.status[0].values}), 10)
+    client.create_subscription(
+        DiagnosticArray,
+        "/bench_cam/diagnostics",
+        lambda m: diagnostics.append({kv.key: kv.value for kv in m.status[0].values}),
+        10,
+    )
     if raw:
-        msg: Any = Image(width=640, height=480, encoding="rgb8", step=640 * 3,
-                         data=bytes(random.getrandbits(8) for _ in range(64)) * (640 * 3 * 480
-                                                                                  // 64))
+        msg: Any = Image(
+            width=640,
+            height=480,
+            encoding="rgb8",
+            step=640 * 3,
+            data=bytes(random.getrandbits(8) for _ in range(64)) * (640 * 3 * 480 // 64),
+        )
         kind = "sensor_msgs/Image rgb8, 921.6 kB"
         pub = client.create_publisher(Image, topic, RELIABLE)
     else:
@@ -279,8 +314,14 @@ def bench_camera(seconds: float, raw: bool) -> dict[str, Any]:
         executor.shutdown(timeout_sec=2.0)
         spinner.join(2.0)
         client.destroy_node()
-    return {"idle": idle, "busy": busy, "rate": rate, "sent": sent, "received": received,
-            "kind": kind}
+    return {
+        "idle": idle,
+        "busy": busy,
+        "rate": rate,
+        "sent": sent,
+        "received": received,
+        "kind": kind,
+    }
 
 
 def ms(value: float) -> str:
@@ -305,54 +346,71 @@ def main() -> None:
         rclpy.try_shutdown()
 
     def row(what: str, target: str, p: dict[str, float]) -> str:
-        return (f"| {what} | {target} | {ms(p['p50'])} | {ms(p['p99'])} | {ms(p['max'])} | "
-                f"{p['n']:.0f} |")
+        return (
+            f"| {what} | {target} | {ms(p['p50'])} | {ms(p['p99'])} | {ms(p['max'])} | "
+            f"{p['n']:.0f} |"
+        )
 
     def cam(c: dict[str, Any], target: str) -> str:
-        return (f"| {c['kind']} at {c['rate']:.1f} frames/s for {args.seconds:.0f} s | {target} "
-                f"| {100 * c['busy']:.1f}% (idle {100 * c['idle']:.1f}%) | {c['received']} of "
-                f"{c['sent']} |")
+        return (
+            f"| {c['kind']} at {c['rate']:.1f} frames/s for {args.seconds:.0f} s | {target} "
+            f"| {100 * c['busy']:.1f}% (idle {100 * c['idle']:.1f}%) | {c['received']} of "
+            f"{c['sent']} |"
+        )
 
-    section = "\n".join([
-        "<!-- ros:start -->",
-        "## ROS 2 node (issue 4)",
-        "",
-        f"Measured {date.today().isoformat()} with `python bench/bench_ros.py --write` (CPython "
-        f"{platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores; ROS 2 "
-        "Jazzy rclpy from PyPI, Fast DDS on shared memory / loopback)." + (f" {args.note}"
-                                                                       if args.note else ""),
-        "",
-        "| what | target | p50 | p99 | max | runs |",
-        "|---|---|---|---|---|---|",
-        row("`/shadowhound/estop` publish to robot velocity zero, robot walking", "p99 < 10 ms",
-            estop),
-        row("the same while 640x480 JPEG camera frames arrive at 30 frames/s", "p99 < 10 ms",
-            estop_camera),
-        row("`mission_command` publish to first robot command (\"turn left 90 degrees\", offline "
-            "planner)", "< 50 ms", start["first"]),
-        row("`mission_command` publish to `EXECUTING:` received back", "-", start["executing"]),
-        "",
-        "| camera ingest, node process CPU | target | CPU of one core | frames taken |",
-        "|---|---|---|---|",
-        cam(jpeg, "< 10%"),
-        cam(raw, "-"),
-        "",
-        "How: the latency rows run a real `MissionNode` in the benchmark process on its own "
-        "executor thread, driving a SimRobot whose `emergency_stop` / "
-        "`send_velocity` / `set_posture` / `perform` record `time.perf_counter()`; another node "
-        "in the same process publishes on the real topics, so the path is publish -> Fast DDS "
-        "(shared memory) -> executor -> callback -> `RobotAgent` -> robot, timed on one clock. "
-        "The e-stop is published 0-100 ms after the robot starts walking; the stamp is taken "
-        "after the velocity is zero. The node takes the e-stop on a companion node and thread "
-        "of its own (ros/estop_listener.py); in the camera row another thread of the client "
-        "publishes a 640x480 JPEG on the node's camera topic at 30 frames/s throughout. "
-        "The camera rows start the node as its own process "
-        "(`python -m shadowhound node`, default 1 Hz diagnostics and 5 Hz robot status) and "
-        "read its user+system CPU time from `/proc/<pid>/stat`; \"idle\" is the same process "
-        "with no camera traffic; \"frames taken\" is the node's own `camera_frames` "
-        "diagnostic (best-effort subscription, depth 1).",
-        "<!-- ros:end -->",
-    ])
+    section = "\n".join(
+        [
+            "<!-- ros:start -->",
+            "## ROS 2 node (issue 4)",
+            "",
+            f"Measured {date.today().isoformat()} with `python bench/bench_ros.py --write` "
+            f"(CPython {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores; "
+            "ROS 2 Jazzy rclpy from PyPI, Fast DDS on shared memory / loopback)."
+            + (f" {args.note}" if args.note else ""),
+            "",
+            "| what | target | p50 | p99 | max | runs |",
+            "|---|---|---|---|---|---|",
+            row(
+                "`/shadowhound/estop` publish to robot velocity zero, robot walking",
+                "p99 < 10 ms",
+                estop,
+            ),
+            row(
+                "the same while 640x480 JPEG camera frames arrive at 30 frames/s",
+                "p99 < 10 ms",
+                estop_camera,
+            ),
+            row(
+                '`mission_command` publish to first robot command ("turn left 90 degrees", offline '
+                "planner)",
+                "< 50 ms",
+                start["first"],
+            ),
+            row("`mission_command` publish to `EXECUTING:` received back", "-", start["executing"]),
+            "",
+            "| camera ingest, node process CPU | target | CPU of one core | frames taken |",
+            "|---|---|---|---|",
+            cam(jpeg, "< 10%"),
+            cam(raw, "-"),
+            "",
+            "How: the latency rows run a real `MissionNode` in the benchmark process on its own "
+            "executor thread, driving a SimRobot whose `emergency_stop` / "
+            "`send_velocity` / `set_posture` / `perform` record `time.perf_counter()`; another "
+            "node in the same process publishes on the real topics, so the path is publish -> "
+            "Fast DDS (shared memory) -> executor -> callback -> `RobotAgent` -> robot, timed on "
+            "one clock. "
+            "The e-stop is published 0-100 ms after the robot starts walking; the stamp is taken "
+            "after the velocity is zero. The node takes the e-stop on a companion node and thread "
+            "of its own (ros/estop_listener.py); in the camera row another thread of the client "
+            "publishes a 640x480 JPEG on the node's camera topic at 30 frames/s throughout. "
+            "The camera rows start the node as its own process "
+            "(`python -m shadowhound node`, default 1 Hz diagnostics and 5 Hz robot status) and "
+            'read its user+system CPU time from `/proc/<pid>/stat`; "idle" is the same process '
+            'with no camera traffic; "frames taken" is the node\'s own `camera_frames` '
+            "diagnostic (best-effort subscription, depth 1).",
+            "<!-- ros:end -->",
+        ]
+    )
     print(section)
     if args.write:
         write_section("ros", section)

@@ -51,6 +51,7 @@ def p99(values: list[float]) -> float:
 
 # -- the server process ---------------------------------------------------------------------
 
+
 def run_server(time_scale: float, camera_fps: float) -> None:
     """`--serve`: the dashboard on a free port; prints the port, runs until stdin closes."""
     from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
@@ -64,8 +65,9 @@ def run_server(time_scale: float, camera_fps: float) -> None:
             print(f"stopped {time.monotonic():.6f}", flush=True)
 
     settings = ShadowHoundConfig()
-    agent = RobotAgent(RobotAgentConfig(robot=TimedRobot(settings.sim, time_scale=time_scale),
-                                        settings=settings))
+    agent = RobotAgent(
+        RobotAgentConfig(robot=TimedRobot(settings.sim, time_scale=time_scale), settings=settings)
+    )
     server = WebServer(create_app(agent), "127.0.0.1", 0).start()
     if camera_fps > 0:
         threading.Thread(target=_feed_camera, args=(agent, camera_fps), daemon=True).start()
@@ -96,9 +98,19 @@ def _feed_camera(agent: Any, fps: float) -> None:
 class ServerProcess:
     def __init__(self, time_scale: float, camera_fps: float = 0.0) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, __file__, "--serve", "--time-scale", str(time_scale),
-             "--camera-fps", str(camera_fps)], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-            text=True)
+            [
+                sys.executable,
+                __file__,
+                "--serve",
+                "--time-scale",
+                str(time_scale),
+                "--camera-fps",
+                str(camera_fps),
+            ],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         assert self.proc.stdout is not None
         self.url = f"http://127.0.0.1:{int(self.proc.stdout.readline())}"
 
@@ -136,6 +148,7 @@ def _wait(check: Any, timeout: float = 15.0) -> Any:
 
 # -- measurements ---------------------------------------------------------------------------
 
+
 class Load:
     """Clients in a thread of their own (one asyncio loop): `kind` is sse, ws or mjpeg."""
 
@@ -148,8 +161,9 @@ class Load:
         self.loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self.loop.run_forever, daemon=True)
         self._thread.start()
-        self._tasks = [asyncio.run_coroutine_threadsafe(self._client(), self.loop)
-                       for _ in range(count)]
+        self._tasks = [
+            asyncio.run_coroutine_threadsafe(self._client(), self.loop) for _ in range(count)
+        ]
         _wait(lambda: self.connected >= count, 60)
 
     async def _client(self) -> None:
@@ -191,9 +205,12 @@ class LoadProcess:
     with the timed requests. `messages` is known after `close()`."""
 
     def __init__(self, url: str, kind: str, count: int) -> None:
-        self.proc = subprocess.Popen([sys.executable, __file__, "--load", kind, "--clients",
-                                      str(count), "--url", url], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, text=True)
+        self.proc = subprocess.Popen(
+            [sys.executable, __file__, "--load", kind, "--clients", str(count), "--url", url],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         assert self.proc.stdout is not None
         if self.proc.stdout.readline().strip() != "ready":
             raise RuntimeError(f"the {kind} clients did not connect")
@@ -243,8 +260,11 @@ def bench_estop(runs: int, load: str = "", clients: int = 0) -> dict[str, Any]:
                 to_stop.append((server.stopped_at() - t0) * 1e3)
                 robot = answer["robot"]
                 assert robot["estopped"] and not robot["moving"], robot
-                _wait(lambda mid=mission_id: client.get(f"/api/missions/{mid}").json()["state"]
-                      == "finished")
+                _wait(
+                    lambda mid=mission_id: (
+                        client.get(f"/api/missions/{mid}").json()["state"] == "finished"
+                    )
+                )
                 client.post("/api/estop/release")
             status = _status_latencies(client, 5.0, 100.0)
     finally:
@@ -282,8 +302,10 @@ def bench_mjpeg(seconds: float, clients: int = 3) -> dict[str, float]:
         stop = threading.Event()
 
         def read(slot: int) -> None:
-            with httpx.Client(timeout=10) as client, \
-                    client.stream("GET", server.url + "/api/camera/stream?fps=30") as stream:
+            with (
+                httpx.Client(timeout=10) as client,
+                client.stream("GET", server.url + "/api/camera/stream?fps=30") as stream,
+            ):
                 for chunk in stream.iter_bytes():
                     counts[slot] += chunk.count(b"--shadowhound-frame")
                     if stop.is_set():
@@ -300,19 +322,22 @@ def bench_mjpeg(seconds: float, clients: int = 3) -> dict[str, float]:
         stop.set()
     finally:
         server.close()
-    return {"idle": idle * 100, "streaming": busy * 100, "extra": (busy - idle) * 100,
-            "fps": fps}
+    return {"idle": idle * 100, "streaming": busy * 100, "extra": (busy - idle) * 100, "fps": fps}
 
 
 # -- report ---------------------------------------------------------------------------------
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--write", action="store_true", help="update bench/RESULTS.md")
     parser.add_argument("--quick", action="store_true", help="fewer runs (a smoke test)")
     parser.add_argument("--note", default="", help="a sentence for RESULTS.md (e.g. the load)")
-    parser.add_argument("--cases", default="idle,sse,ws,mjpeg",
-                        help="e-stop cases to run, comma-separated: idle, sse, ws, mjpeg")
+    parser.add_argument(
+        "--cases",
+        default="idle,sse,ws,mjpeg",
+        help="e-stop cases to run, comma-separated: idle, sse, ws, mjpeg",
+    )
     parser.add_argument("--repeat", type=int, default=1, help="runs of each e-stop case")
     parser.add_argument("--serve", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--time-scale", type=float, default=1.0, help=argparse.SUPPRESS)
@@ -329,29 +354,37 @@ def main() -> None:
         return
     seconds = 3.0 if args.quick else 10.0
     runs = 10 if args.quick else 40
-    scenarios = {"idle": ("idle", "", 0), "sse": ("200 SSE clients", "sse", 200),
-                 "ws": ("200 WebSocket clients", "ws", 200),
-                 "mjpeg": ("3 MJPEG streams at 30 frames/s", "mjpeg", 3)}
+    scenarios = {
+        "idle": ("idle", "", 0),
+        "sse": ("200 SSE clients", "sse", 200),
+        "ws": ("200 WebSocket clients", "ws", 200),
+        "mjpeg": ("3 MJPEG streams at 30 frames/s", "mjpeg", 3),
+    }
     cases = [c.strip() for c in args.cases.split(",") if c.strip()]
     unknown = [c for c in cases if c not in scenarios]
     if unknown:
-        parser.error(f"unknown case(s) {', '.join(unknown)}; the cases are "
-                     f"{', '.join(scenarios)}")
+        parser.error(f"unknown case(s) {', '.join(unknown)}; the cases are {', '.join(scenarios)}")
     rows = [estop_row(*scenarios[case], runs, max(1, args.repeat)) for case in cases]
     if "mjpeg" in cases:
         mjpeg = bench_mjpeg(seconds)
-        rows.append(("MJPEG 30 frames/s to 3 clients: server CPU",
-                     f"{mjpeg['streaming']:.1f} % of a core", "< 15 %",
-                     f"{mjpeg['extra']:.1f} % above the {mjpeg['idle']:.1f} % of the camera "
-                     f"feeder alone; {mjpeg['fps']:.1f} frames/s delivered per client"))
+        rows.append(
+            (
+                "MJPEG 30 frames/s to 3 clients: server CPU",
+                f"{mjpeg['streaming']:.1f} % of a core",
+                "< 15 %",
+                f"{mjpeg['extra']:.1f} % above the {mjpeg['idle']:.1f} % of the camera "
+                f"feeder alone; {mjpeg['fps']:.1f} frames/s delivered per client",
+            )
+        )
     for name, value, target, note in rows:
         print(f"{name}: {value} (target {target}; {note})")
     if args.write:
         write(rows, args.note)
 
 
-def estop_row(name: str, load: str, clients: int, runs: int, repeat: int
-              ) -> tuple[str, str, str, str]:
+def estop_row(
+    name: str, load: str, clients: int, runs: int, repeat: int
+) -> tuple[str, str, str, str]:
     """`repeat` runs of `runs` stops each on fresh servers: one table row, stops pooled."""
     estop: list[float] = []
     to_stop: list[float] = []
@@ -363,16 +396,22 @@ def estop_row(name: str, load: str, clients: int, runs: int, repeat: int
         estop += measured["estop"]
         to_stop += measured["to_stop"]
         status += measured["status"]
-        each.append(f"p99 {p99(measured['estop']):.2f} ms at load {before:.1f}->"
-                    f"{load_average():.1f} ({measured['received']} messages to the clients)")
+        each.append(
+            f"p99 {p99(measured['estop']):.2f} ms at load {before:.1f}->"
+            f"{load_average():.1f} ({measured['received']} messages to the clients)"
+        )
         print(f"  {name}: {each[-1]}", flush=True)
     runs_text = "; ".join(f"run {i + 1}: {text}" for i, text in enumerate(each))
-    return (f"e-stop round trip, {name}", f"{p99(estop):.2f} ms", "p99 < 10 ms",
-            f"p50 {statistics.median(estop):.2f} ms, p99 {p99(estop):.2f} ms, max "
-            f"{max(estop):.2f} ms, {len(estop)} stops; request sent to velocity zero p50 "
-            f"{statistics.median(to_stop):.2f} ms, p99 {p99(to_stop):.2f} ms, max "
-            f"{max(to_stop):.2f} ms; GET /api/status p99 {p99(status):.2f} "
-            f"ms (target < 20 ms), max {max(status):.2f} ms over {len(status)}; {runs_text}")
+    return (
+        f"e-stop round trip, {name}",
+        f"{p99(estop):.2f} ms",
+        "p99 < 10 ms",
+        f"p50 {statistics.median(estop):.2f} ms, p99 {p99(estop):.2f} ms, max "
+        f"{max(estop):.2f} ms, {len(estop)} stops; request sent to velocity zero p50 "
+        f"{statistics.median(to_stop):.2f} ms, p99 {p99(to_stop):.2f} ms, max "
+        f"{max(to_stop):.2f} ms; GET /api/status p99 {p99(status):.2f} "
+        f"ms (target < 20 ms), max {max(status):.2f} ms over {len(status)}; {runs_text}",
+    )
 
 
 def write(rows: list[tuple[str, str, str, str]], note: str = "") -> None:

@@ -18,8 +18,10 @@ from shadowhound.world import OCCUPIED, OccupancyGrid, apply_scan, inflate, plan
 
 def _cluttered(seed: int) -> OccupancyGrid:
     rng = random.Random(seed)
-    objects = tuple(WorldObject(f"o{i}", rng.uniform(-8, 8), rng.uniform(-8, 8),
-                                rng.uniform(0.2, 0.6)) for i in range(40))
+    objects = tuple(
+        WorldObject(f"o{i}", rng.uniform(-8, 8), rng.uniform(-8, 8), rng.uniform(0.2, 0.6))
+        for i in range(40)
+    )
     grid = scene_grid(World(objects=objects, bounds=(-9.9, 9.9, -9.9, 9.9)))
     grid.fill_rect(-2.0, -1.8, -6.0, 9.9, OCCUPIED)  # a long wall to walk round
     return grid

@@ -39,8 +39,11 @@ def fields_of(msg_file: Path) -> dict[str, str]:
 
 
 def differences(name: str, theirs: dict[str, str], ours: dict[str, str]) -> list[str]:
-    problems = [f"{name}.{f} is {theirs[f]}, go2_ros2_sdk's is {t}"
-                for f, t in ours.items() if f in theirs and theirs[f] != t]
+    problems = [
+        f"{name}.{f} is {theirs[f]}, go2_ros2_sdk's is {t}"
+        for f, t in ours.items()
+        if f in theirs and theirs[f] != t
+    ]
     problems += [f"{name}.{f} is missing" for f in ours if f not in theirs]
     problems += [f"{name}.{f} is not in go2_ros2_sdk's" for f in theirs if f not in ours]
     if list(theirs) != list(ours) and not problems:
@@ -58,12 +61,15 @@ def main() -> int:
     where = Path(package.__file__).resolve().parents[1]
     problems = []
     for name, cls in zip(MESSAGES, classes, strict=True):
-        problems += differences(name, dict(cls.get_fields_and_field_types()),
-                                fields_of(MSG_DIR / f"{name}.msg"))
+        problems += differences(
+            name, dict(cls.get_fields_and_field_types()), fields_of(MSG_DIR / f"{name}.msg")
+        )
     print(where)
     if problems:
-        print(f"go2_interfaces at {where} is not go2_ros2_sdk's: " + "; ".join(problems),
-              file=sys.stderr)
+        print(
+            f"go2_interfaces at {where} is not go2_ros2_sdk's: " + "; ".join(problems),
+            file=sys.stderr,
+        )
         return 1
     return 0
 

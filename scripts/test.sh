@@ -45,8 +45,9 @@ export SHADOWHOUND_REQUIRE_MCP_INSPECTOR=1
 echo "== ROS 2 Jazzy and shadowhound_interfaces (for the node's tests)"
 bash scripts/build_ros.sh "$VENV"
 
-echo "== lint (ruff)"
-"$VENV/bin/ruff" check src tests bench ros2
+echo "== lint and format (ruff)"
+"$VENV/bin/ruff" check src tests bench ros2 scripts
+"$VENV/bin/ruff" format --check src tests bench ros2 scripts
 
 echo "== type check (mypy, core)"
 "$VENV/bin/mypy" --no-error-summary src/shadowhound

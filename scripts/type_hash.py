@@ -45,8 +45,11 @@ def type_hashes(package: str, files: list[Path]) -> dict[str, str]:
     from rosidl_adapter.srv import convert_srv_to_idl
     from rosidl_generator_type_description import generate_type_hash
 
-    convert = {"msg": convert_msg_to_idl, "srv": convert_srv_to_idl,
-               "action": convert_action_to_idl}
+    convert = {
+        "msg": convert_msg_to_idl,
+        "srv": convert_srv_to_idl,
+        "action": convert_action_to_idl,
+    }
     with tempfile.TemporaryDirectory() as tmp:
         src, idl, out = Path(tmp, "src"), Path(tmp, "idl"), Path(tmp, "out")
         tuples = []
@@ -60,10 +63,18 @@ def type_hashes(package: str, files: list[Path]) -> dict[str, str]:
                 convert[kind](src, package, Path(kind, file.name), idl / kind)
             tuples.append(f"{idl}:{kind}/{file.stem}.idl")
         args = Path(tmp, "args.json")
-        args.write_text(json.dumps({
-            "package_name": package, "output_dir": str(out), "idl_tuples": tuples,
-            "include_paths": [f"{name}:{path}" for name, path in _share_dirs().items()
-                              if name != package]}))
+        args.write_text(
+            json.dumps(
+                {
+                    "package_name": package,
+                    "output_dir": str(out),
+                    "idl_tuples": tuples,
+                    "include_paths": [
+                        f"{name}:{path}" for name, path in _share_dirs().items() if name != package
+                    ],
+                }
+            )
+        )
         hashes: dict[str, str] = {}
         for path in generate_type_hash(str(args)):
             for entry in json.loads(Path(path).read_text())["type_hashes"]:

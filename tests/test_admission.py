@@ -29,7 +29,8 @@ def test_the_rule_names_what_was_wrong_and_what_is_allowed() -> None:
     assert mission_text_problem(42, LIMIT) == "the mission must be a string, got int"
     assert "is empty; say what the robot should do" in str(mission_text_problem(" \n\t", LIMIT))
     assert mission_text_problem("x" * 21, LIMIT) == (
-        "the mission is 21 characters long; the limit is 20 (agent.max_mission_chars)")
+        "the mission is 21 characters long; the limit is 20 (agent.max_mission_chars)"
+    )
     assert mission_text_problem("x" * 20, LIMIT) is None
     assert str(mission_text_problem("", LIMIT, "the command")).startswith("the command is empty")
 
@@ -37,7 +38,8 @@ def test_the_rule_names_what_was_wrong_and_what_is_allowed() -> None:
 @settings(max_examples=40, deadline=None)
 @given(text=st.text(alphabet=" \t\nstandup", max_size=2 * LIMIT))
 def test_the_run_and_the_dry_run_refuse_exactly_what_the_rule_refuses(
-        agent: RobotAgent, text: str) -> None:
+    agent: RobotAgent, text: str
+) -> None:
     problem = mission_text_problem(text, LIMIT)
     for result in (agent.dry_run(text), agent.execute_mission(text)):
         if problem:

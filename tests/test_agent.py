@@ -26,8 +26,12 @@ def test_documented_usage_of_the_original_names():
     assert result.success and round(result.robot.yaw, 4) == 1.5708
     response, timing = executor.execute_mission("stand up")
     assert isinstance(response, str) and response
-    assert set(timing) >= {"agent_duration", "total_duration", "overhead_duration",
-                           "agent_percentage"}
+    assert set(timing) >= {
+        "agent_duration",
+        "total_duration",
+        "overhead_duration",
+        "agent_percentage",
+    }
     assert MockRobot is SimRobot
 
 
@@ -50,9 +54,15 @@ def test_events_in_order(agent):
     seen = []
     agent.add_listener(lambda e: seen.append((e.kind, e.data.get("step", {}).get("index"))))
     agent.execute_mission("sit down and then stand up")
-    assert seen == [("mission_started", None), ("plan_ready", None), ("step_started", 1),
-                    ("step_finished", 1), ("step_started", 2), ("step_finished", 2),
-                    ("mission_finished", None)]
+    assert seen == [
+        ("mission_started", None),
+        ("plan_ready", None),
+        ("step_started", 1),
+        ("step_finished", 1),
+        ("step_started", 2),
+        ("step_finished", 2),
+        ("mission_finished", None),
+    ]
 
 
 def test_a_broken_listener_does_not_break_the_mission(agent):
@@ -68,8 +78,19 @@ def test_unsubscribe(agent):
     assert seen == []
 
 
-@pytest.mark.parametrize("text", ["", "   ", "blorp the zanzibar", "x" * 5000, None, 42,
-                                  "walk forward 500 meters", "do a backflip"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "",
+        "   ",
+        "blorp the zanzibar",
+        "x" * 5000,
+        None,
+        42,
+        "walk forward 500 meters",
+        "do a backflip",
+    ],
+)
 def test_bad_missions_fail_clearly_and_never_move(agent, robot, text):
     result = agent.execute_mission(text)
     assert not result.success
@@ -79,12 +100,19 @@ def test_bad_missions_fail_clearly_and_never_move(agent, robot, text):
 
 
 def test_refusal_lists_every_problem(agent, robot):
-    result = agent.run_plan([SkillCall("nav.move", {"distance": 50}),
-                             SkillCall("body.sport", {"trick": "backflip"}),
-                             SkillCall("nav.fly", {})])
+    result = agent.run_plan(
+        [
+            SkillCall("nav.move", {"distance": 50}),
+            SkillCall("body.sport", {"trick": "backflip"}),
+            SkillCall("nav.fly", {}),
+        ]
+    )
     assert not result.success
-    assert {r.split(":")[0] for r in result.refusals} == {"step 1 (nav.move)",
-                                                          "step 2 (body.sport)", "step 3"}
+    assert {r.split(":")[0] for r in result.refusals} == {
+        "step 1 (nav.move)",
+        "step 2 (body.sport)",
+        "step 3",
+    }
     assert any("per step" in r for r in result.refusals)
     assert any("geofence" in r for r in result.refusals)
     assert "Refused before moving" in result.response
@@ -94,11 +122,15 @@ def test_refusal_lists_every_problem(agent, robot):
 
 def test_a_failed_step_stops_the_mission_and_the_robot(agent, robot):
     robot.send_velocity = lambda *a: None  # motors dead: moves stall
-    result = agent.run_plan([SkillCall("body.sit"), SkillCall("nav.move", {"distance": 1}),
-                             SkillCall("body.sit")])
+    result = agent.run_plan(
+        [SkillCall("body.sit"), SkillCall("nav.move", {"distance": 1}), SkillCall("body.sit")]
+    )
     assert not result.success and result.status is MissionStatus.FAILED
-    assert [s.status for s in result.steps] == [StepStatus.SUCCEEDED, StepStatus.FAILED,
-                                                StepStatus.SKIPPED]
+    assert [s.status for s in result.steps] == [
+        StepStatus.SUCCEEDED,
+        StepStatus.FAILED,
+        StepStatus.SKIPPED,
+    ]
     assert "no progress" in result.response and "The robot is stopped" in result.response
     assert robot.commands[-1].kind == "stop"
 
@@ -107,8 +139,9 @@ def test_estop_while_a_mission_runs_in_another_thread():
     robot = SimRobot(time_scale=1.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot))
     box = {}
-    worker = threading.Thread(target=lambda: box.update(r=agent.execute_mission(
-        "walk forward 2 meters")))
+    worker = threading.Thread(
+        target=lambda: box.update(r=agent.execute_mission("walk forward 2 meters"))
+    )
     worker.start()
     deadline = time.monotonic() + 5
     while robot.get_state().vx < 0.2 and time.monotonic() < deadline:
@@ -129,8 +162,11 @@ def test_estop_while_a_mission_runs_in_another_thread():
 
 
 def test_cancel_stops_the_mission(agent, robot):
-    agent.add_listener(lambda e: agent.cancel() if e.kind == "step_started" and
-                       e.data["step"]["index"] == 2 else None)
+    agent.add_listener(
+        lambda e: (
+            agent.cancel() if e.kind == "step_started" and e.data["step"]["index"] == 2 else None
+        )
+    )
     result = agent.execute_mission("turn left 90 degrees then walk forward 2 meters")
     assert result.status is MissionStatus.STOPPED
     assert result.steps[1].status is StepStatus.CANCELLED
@@ -168,9 +204,14 @@ def test_garbage_plans_from_a_planner_never_move(robot):
         needs_context = True
 
         def plan(self, text, context=None):
-            return Plan([SkillCall("nav.move", {"distance": "1e9"}),
-                         SkillCall("nav.rotate", {"degrees": "ninety"}),
-                         SkillCall(None, None), SkillCall("nav.move", "forward")])
+            return Plan(
+                [
+                    SkillCall("nav.move", {"distance": "1e9"}),
+                    SkillCall("nav.rotate", {"degrees": "ninety"}),
+                    SkillCall(None, None),
+                    SkillCall("nav.move", "forward"),
+                ]
+            )
 
     agent = RobotAgent(RobotAgentConfig(robot=robot, planner=Garbage()))
     result = agent.execute_mission("anything")
@@ -218,8 +259,15 @@ def test_camera_frame_from_interface_is_used(agent):
 
 def test_robot_status_and_skills(agent):
     status = agent.get_robot_status()
-    assert set(status) >= {"x", "y", "yaw", "posture", "battery", "distance_travelled",
-                           "angle_turned"}
+    assert set(status) >= {
+        "x",
+        "y",
+        "yaw",
+        "posture",
+        "battery",
+        "distance_travelled",
+        "angle_turned",
+    }
     assert {s["name"] for s in agent.get_available_skills()} >= {"nav.move", "body.sport"}
 
 
@@ -269,13 +317,16 @@ def test_a_robot_that_cannot_report_its_state_is_refused_clearly(agent, robot):
     assert not result.success and result.robot is None
     assert "the robot cannot report its state: no odometry" in result.response
     assert not robot.received_motion
-    assert agent.get_diagnostics()["robot"] == {"connected": False,
-                                                "error": "no odometry on /odom for 0.8 s"}
+    assert agent.get_diagnostics()["robot"] == {
+        "connected": False,
+        "error": "no odometry on /odom for 0.8 s",
+    }
 
 
 def test_explicit_plans_read_units_like_every_other_path(agent, robot):
-    result = agent.run_plan([SkillCall("nav.move", {"distance": "3cm"}),
-                             SkillCall("nav.rotate", {"degrees": "90°"})])
+    result = agent.run_plan(
+        [SkillCall("nav.move", {"distance": "3cm"}), SkillCall("nav.rotate", {"degrees": "90°"})]
+    )
     assert result.success, result.response
     assert result.steps[0].args == {"distance": 0.03}
     st = robot.get_state()

@@ -36,8 +36,19 @@ LEVELS: tuple[tuple[str, ...], ...] = (
     ("cli",),  # the `shadowhound` command: an interface itself, and it starts the others
 )
 BASE = {
-    "approval", "budget", "camera", "config", "errors", "events", "geofence", "plan", "result",
-    "state", "typos", "units", "usage",
+    "approval",
+    "budget",
+    "camera",
+    "config",
+    "errors",
+    "events",
+    "geofence",
+    "plan",
+    "result",
+    "state",
+    "typos",
+    "units",
+    "usage",
 }
 
 # Known exceptions, each with why and who removes it. Keep this list short.
@@ -82,7 +93,8 @@ class Import:
 
 def _is_type_checking(test: ast.expr) -> bool:
     return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
-        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING")
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
 
 
 def _targets(node: ast.Import | ast.ImportFrom, module: str, is_package: bool) -> list[str]:
@@ -107,8 +119,10 @@ def imports_of(module: str) -> list[Import]:
 
     def visit(node: ast.AST, module_level: bool, type_only: bool) -> None:
         if isinstance(node, (ast.Import, ast.ImportFrom)):
-            found.extend(Import(module, t, node.lineno, module_level, type_only)
-                         for t in _targets(node, module, path.name == "__init__.py"))
+            found.extend(
+                Import(module, t, node.lineno, module_level, type_only)
+                for t in _targets(node, module, path.name == "__init__.py")
+            )
             return
         if isinstance(node, ast.If) and _is_type_checking(node.test):
             for child in node.body:
@@ -117,7 +131,8 @@ def imports_of(module: str) -> list[Import]:
                 visit(child, module_level, type_only)
             return
         inner = module_level and not isinstance(
-            node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
+            node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
+        )
         for child in ast.iter_child_nodes(node):
             visit(child, inner, type_only)
 
@@ -141,8 +156,9 @@ def test_imports_point_down_the_rooms() -> None:
         if source == target or (imp.source, imp.target) in KNOWN_CROSSINGS:
             continue
         if LEVEL_OF[target] >= LEVEL_OF[source]:
-            wrong.append(f"{imp.source} ({source}) imports {imp.target} ({target}), "
-                         f"line {imp.line}")
+            wrong.append(
+                f"{imp.source} ({source}) imports {imp.target} ({target}), line {imp.line}"
+            )
     assert not wrong, "imports that point up or sideways:\n" + "\n".join(wrong)
 
 
@@ -187,8 +203,12 @@ def module_edges(*, with_types: bool = False) -> dict[str, set[str]]:
     own submodules."""
     edges: dict[str, set[str]] = {m: set() for m in MODULES}
     for imp in IMPORTS:
-        if (imp.module_level and (with_types or not imp.type_only) and imp.target in MODULES
-                and imp.target != imp.source):
+        if (
+            imp.module_level
+            and (with_types or not imp.type_only)
+            and imp.target in MODULES
+            and imp.target != imp.source
+        ):
             edges[imp.source].add(imp.target)
     return edges
 
@@ -196,7 +216,8 @@ def module_edges(*, with_types: bool = False) -> dict[str, set[str]]:
 def test_no_import_cycles() -> None:
     cycles = _cycles(module_edges())
     assert not cycles, "modules that import each other (module level): " + "; ".join(
-        " <-> ".join(c) for c in cycles)
+        " <-> ".join(c) for c in cycles
+    )
 
 
 def test_no_cycles_even_in_the_types() -> None:
@@ -204,7 +225,8 @@ def test_no_cycles_even_in_the_types() -> None:
     found = _cycles(module_edges(with_types=True))
     cycles = [c for c in found if frozenset(c) not in KNOWN_CYCLES]
     assert not cycles, "modules that import each other (with TYPE_CHECKING): " + "; ".join(
-        " <-> ".join(c) for c in cycles)
+        " <-> ".join(c) for c in cycles
+    )
     gone = KNOWN_CYCLES - {frozenset(c) for c in found}
     assert not gone, f"cycles no longer there: remove them from KNOWN_CYCLES: {gone}"
 
@@ -234,8 +256,11 @@ def test_interfaces_run_missions_only_through_the_worker() -> None:
     starts = []
     for module in interfaces:
         for node in ast.walk(ast.parse(MODULES[module].read_text(encoding="utf-8"))):
-            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
-                    and node.func.attr in ("execute_mission", "run_plan")):
+            if (
+                isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Attribute)
+                and node.func.attr in ("execute_mission", "run_plan")
+            ):
                 starts.append(f"{module}, line {node.lineno}: {node.func.attr}")
     assert "shadowhound.cli.missions" in interfaces
     assert not starts, "missions started outside the worker:\n" + "\n".join(starts)
@@ -258,6 +283,8 @@ def test_a_long_module_says_why_at_its_top(module: str) -> None:
         return
     doc = ast.get_docstring(ast.parse(text)) or ""
     reasons = [line for line in doc.splitlines() if line.startswith("Long because:")]
-    assert reasons, (f"{module} has {lines} lines (over {MAX_LINES}): split it along a seam, "
-                     "or say why it is one concept in a module docstring line starting "
-                     "'Long because:'")
+    assert reasons, (
+        f"{module} has {lines} lines (over {MAX_LINES}): split it along a seam, "
+        "or say why it is one concept in a module docstring line starting "
+        "'Long because:'"
+    )

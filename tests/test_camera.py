@@ -13,10 +13,16 @@ def test_jpeg_and_png_sizes():
     assert image_size(png) == ("png", 32, 24)
 
 
-@pytest.mark.parametrize(("data", "message"), [
-    (b"", "empty"), (b"GIF89a....", "JPEG or PNG"), (b"\xff\xd8\xff", "truncated"),
-    (b"\x89PNG\r\n\x1a\n", "truncated"), (12, "unsupported camera frame int"),
-])
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        (b"", "empty"),
+        (b"GIF89a....", "JPEG or PNG"),
+        (b"\xff\xd8\xff", "truncated"),
+        (b"\x89PNG\r\n\x1a\n", "truncated"),
+        (12, "unsupported camera frame int"),
+    ],
+)
 def test_bad_frames_are_rejected_clearly(data, message):
     with pytest.raises(ValueError, match=message):
         to_camera_frame(data)
@@ -76,12 +82,15 @@ def test_raw_frame_without_padding_keeps_its_bytes() -> None:
     assert frame.data == bytes(range(12)) and frame.encoding == "mono8"
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    ((b"\0" * 12, 2, 2, "yuv422", 6), "unsupported image encoding 'yuv422'"),
-    ((b"\0" * 12, 2, 2, "rgb8", 5), "step 5 is smaller than a rgb8 row"),
-    ((b"\0" * 11, 2, 2, "rgb8", 6), "image data has 11 bytes"),
-    ((b"", 0, 0, "mono8", 0), "image size 0x0 is out of range"),
-])
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        ((b"\0" * 12, 2, 2, "yuv422", 6), "unsupported image encoding 'yuv422'"),
+        ((b"\0" * 12, 2, 2, "rgb8", 5), "step 5 is smaller than a rgb8 row"),
+        ((b"\0" * 11, 2, 2, "rgb8", 6), "image data has 11 bytes"),
+        ((b"", 0, 0, "mono8", 0), "image size 0x0 is out of range"),
+    ],
+)
 def test_bad_raw_frames_are_refused(args: tuple, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         raw_image_frame(*args)

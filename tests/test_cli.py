@@ -17,8 +17,14 @@ DATA = Path(__file__).parent / "data"
 def shadowhound(*args, stdin=None, env=None):
     full_env = {**os.environ, **(env or {})}
     full_env.pop("SHADOWHOUND_CONFIG", None)
-    return subprocess.run([sys.executable, "-m", "shadowhound", *args], capture_output=True,
-                          text=True, input=stdin, timeout=60, env=full_env)
+    return subprocess.run(
+        [sys.executable, "-m", "shadowhound", *args],
+        capture_output=True,
+        text=True,
+        input=stdin,
+        timeout=60,
+        env=full_env,
+    )
 
 
 def test_run_json_prints_exactly_one_object():
@@ -27,11 +33,22 @@ def test_run_json_prints_exactly_one_object():
     out = json.loads(proc.stdout)  # exactly one JSON document, nothing else on stdout
     assert out["success"] is True
     assert out["robot"]["yaw"] == 1.5708
-    assert set(out["robot"]) >= {"x", "y", "yaw", "posture", "battery", "distance_travelled",
-                                 "angle_turned"}
+    assert set(out["robot"]) >= {
+        "x",
+        "y",
+        "yaw",
+        "posture",
+        "battery",
+        "distance_travelled",
+        "angle_turned",
+    }
     assert out["steps"][0]["skill"] == "nav.rotate"
-    assert set(out["timing"]) >= {"agent_duration", "total_duration", "overhead_duration",
-                                  "agent_percentage"}
+    assert set(out["timing"]) >= {
+        "agent_duration",
+        "total_duration",
+        "overhead_duration",
+        "agent_percentage",
+    }
     assert out["usage"]["total_tokens"] == 0
     assert "nav.rotate" in proc.stderr  # progress goes to stderr
 
@@ -76,8 +93,9 @@ def test_skills_listing_and_json():
 
 
 def test_chat_repl_from_stdin():
-    proc = shadowhound("chat", stdin="where are you?\n/run walk forward 1 meter\nwhere are you?\n"
-                                     "/bogus\n/quit\n")
+    proc = shadowhound(
+        "chat", stdin="where are you?\n/run walk forward 1 meter\nwhere are you?\n/bogus\n/quit\n"
+    )
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.strip().splitlines()
     assert "x=0.00 m" in lines[0]
@@ -94,8 +112,10 @@ def test_eval_public_cases_all_pass():
 
 def test_eval_json_and_failing_cases(tmp_path):
     cases = tmp_path / "cases.yaml"
-    cases.write_text('- mission: "walk forward 1 meter"\n  expect: {x: 2.0, moved: true}\n'
-                     '- mission: "sit down"\n  expect: {posture: sitting}\n')
+    cases.write_text(
+        '- mission: "walk forward 1 meter"\n  expect: {x: 2.0, moved: true}\n'
+        '- mission: "sit down"\n  expect: {posture: sitting}\n'
+    )
     proc = shadowhound("eval", "--json", str(cases))
     assert proc.returncode == 1
     report = json.loads(proc.stdout)
@@ -103,12 +123,15 @@ def test_eval_json_and_failing_cases(tmp_path):
     assert report["cases"][0]["failures"] == ["x: expected 2.0, got 1.0006"]
 
 
-@pytest.mark.parametrize(("content", "message"), [
-    ("mission: x", "must be a YAML list"),
-    ("- {expect: {}}", "case 1"),
-    ("- {mission: hi, expect: {z: 1}}", "unknown expect keys ['z']"),
-    ("- {mission: hi, expect: {x: far}}", "expect.x must be a number"),
-])
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("mission: x", "must be a YAML list"),
+        ("- {expect: {}}", "case 1"),
+        ("- {mission: hi, expect: {z: 1}}", "unknown expect keys ['z']"),
+        ("- {mission: hi, expect: {x: far}}", "expect.x must be a number"),
+    ],
+)
 def test_eval_bad_case_file(tmp_path, content, message):
     cases = tmp_path / "cases.yaml"
     cases.write_text(content)
@@ -126,8 +149,10 @@ def test_run_dry_run_shows_plan_and_path_without_moving():
     proc = shadowhound("run", "--dry-run", "walk forward 1 meter then come back")
     assert proc.returncode == 0
     assert "[1] nav.move(distance=1.0)" in proc.stdout
-    assert "predicted path (2.00 m, 3 waypoints): (0.00, 0.00) -> (1.00, 0.00) -> (0.00, 0.00)" \
+    assert (
+        "predicted path (2.00 m, 3 waypoints): (0.00, 0.00) -> (1.00, 0.00) -> (0.00, 0.00)"
         in proc.stdout
+    )
     assert "nothing moved" in proc.stdout
     out = json.loads(shadowhound("run", "--dry-run", "--json", "walk forward 9 meters").stdout)
     assert out["dry_run"] and not out["success"] and out["robot"]["distance_travelled"] == 0
@@ -177,25 +202,39 @@ def closed_port():
 
 def test_run_json_unreachable_backend_is_one_json_error(tmp_path):
     url = f"http://127.0.0.1:{closed_port()}/v1"
-    proc = shadowhound("run", "--json", "--backend", "llamacpp", "--base-url", url, "--model",
-                       "m", "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+    proc = shadowhound(
+        "run",
+        "--json",
+        "--backend",
+        "llamacpp",
+        "--base-url",
+        url,
+        "--model",
+        "m",
+        "stand up",
+        env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)},
+    )
     answer = one_error_object(proc, 2, "backend_unavailable")
     assert url in answer["error"] and answer["mission"] == "stand up"
 
 
 def test_run_json_corrupt_history_database_is_one_json_error(tmp_path):
     (tmp_path / "history.db").write_bytes(b"this is not a database" * 100)
-    proc = shadowhound("run", "--json", "stand up",
-                       env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+    proc = shadowhound(
+        "run", "--json", "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)}
+    )
     answer = one_error_object(proc, 2, "configuration")
     assert "history.db" in answer["error"] and "corrupt" in answer["response"]
 
 
-@pytest.mark.parametrize("args", [
-    ("--config", "nope", "run", "--json", "stand up"),
-    ("run", "--json", "--config", "nope", "stand up"),
-    ("run", "--json", "--config", "BAD", "stand up"),
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("--config", "nope", "run", "--json", "stand up"),
+        ("run", "--json", "--config", "nope", "stand up"),
+        ("run", "--json", "--config", "BAD", "stand up"),
+    ],
+)
 def test_run_json_bad_profile_is_one_json_error(tmp_path, args):
     bad = tmp_path / "bad.yaml"
     bad.write_text("safety: {max_linear_speed: fast}")
@@ -204,11 +243,14 @@ def test_run_json_bad_profile_is_one_json_error(tmp_path, args):
     assert "nope" in answer["response"] or "safety.max_linear_speed" in answer["response"]
 
 
-@pytest.mark.parametrize("args", [
-    ("run", "--json"),  # no mission
-    ("run", "--json", "--backend", "skynet", "stand up"),
-    ("--time-scale", "slow", "run", "--json", "stand up"),
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("run", "--json"),  # no mission
+        ("run", "--json", "--backend", "skynet", "stand up"),
+        ("--time-scale", "slow", "run", "--json", "stand up"),
+    ],
+)
 def test_run_json_usage_errors_are_one_json_error(args):
     proc = shadowhound(*args)
     one_error_object(proc, 2, "usage")
@@ -228,9 +270,13 @@ def test_run_json_results_carry_the_exit_code():
 def start_json_run(*args, env=None):
     full_env = {**os.environ, **(env or {})}
     full_env.pop("SHADOWHOUND_CONFIG", None)
-    return subprocess.Popen([sys.executable, "-m", "shadowhound", "run", "--json", *args],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=full_env)
+    return subprocess.Popen(
+        [sys.executable, "-m", "shadowhound", "run", "--json", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=full_env,
+    )
 
 
 def interrupt(proc):
@@ -245,8 +291,16 @@ def test_run_json_interrupted_while_connecting_is_one_json_error(tmp_path):
         listener.bind(("127.0.0.1", 0))
         listener.listen(8)
         url = f"http://127.0.0.1:{listener.getsockname()[1]}/v1"
-        proc = start_json_run("--backend", "llamacpp", "--base-url", url, "--model", "m",
-                              "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+        proc = start_json_run(
+            "--backend",
+            "llamacpp",
+            "--base-url",
+            url,
+            "--model",
+            "m",
+            "stand up",
+            env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)},
+        )
         listener.settimeout(60)
         conn, _ = listener.accept()  # the check is now waiting for an answer
         with conn:
@@ -260,9 +314,16 @@ def test_run_json_interrupted_while_planning_is_one_json_error(tmp_path):
 
     with ScriptedLLM(models=("m",)) as srv:
         srv.script(delay(60, json_plan([{"skill": "body.stand", "args": {}}])))
-        proc = start_json_run("--backend", "llamacpp", "--base-url", srv.url, "--model", "m",
-                              "stand up", env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path),
-                                               "SHADOWHOUND_LLM__HYBRID": "false"})
+        proc = start_json_run(
+            "--backend",
+            "llamacpp",
+            "--base-url",
+            srv.url,
+            "--model",
+            "m",
+            "stand up",
+            env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path), "SHADOWHOUND_LLM__HYBRID": "false"},
+        )
         deadline = time.monotonic() + 60
         while not srv.requests and time.monotonic() < deadline and proc.poll() is None:
             time.sleep(0.05)
@@ -277,8 +338,12 @@ def test_run_json_interrupted_while_planning_is_one_json_error(tmp_path):
 
 
 def test_run_json_interrupted_while_moving_is_the_result_with_an_error(tmp_path):
-    proc = start_json_run("--time-scale", "1", "walk backward 4 meters",
-                          env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)})
+    proc = start_json_run(
+        "--time-scale",
+        "1",
+        "walk backward 4 meters",
+        env={"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)},
+    )
     assert proc.stderr is not None
     for line in proc.stderr:  # progress: wait until the robot walks
         if "nav.move" in line:
@@ -292,9 +357,13 @@ def test_run_json_interrupted_while_moving_is_the_result_with_an_error(tmp_path)
 
 def test_chat_estop_acts_while_a_mission_walks():
     """/estop typed while /run walks is not queued behind the mission: it stops it."""
-    proc = subprocess.Popen([sys.executable, "-m", "shadowhound", "--time-scale", "1", "chat"],
-                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-                            env={k: v for k, v in os.environ.items() if k != "SHADOWHOUND_CONFIG"})
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "shadowhound", "--time-scale", "1", "chat"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+        env={k: v for k, v in os.environ.items() if k != "SHADOWHOUND_CONFIG"},
+    )
     out, _ = proc.communicate("/run walk backward 2 meters\n/estop\n", timeout=60)
     lines = out.strip().splitlines()
     assert proc.returncode == 0

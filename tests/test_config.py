@@ -11,8 +11,12 @@ def test_offline_profile_is_the_default():
 
 
 def test_environment_overrides_profile_and_options_override_environment():
-    env = {"SHADOWHOUND_SAFETY__MAX_LINEAR_SPEED": "0.3", "SHADOWHOUND_SIM__TIME_SCALE": "1",
-           "SHADOWHOUND_PLACES": "{lab: [1, 2]}", "UNRELATED": "x"}
+    env = {
+        "SHADOWHOUND_SAFETY__MAX_LINEAR_SPEED": "0.3",
+        "SHADOWHOUND_SIM__TIME_SCALE": "1",
+        "SHADOWHOUND_PLACES": "{lab: [1, 2]}",
+        "UNRELATED": "x",
+    }
     cfg = load_config("offline", environ=env)
     assert cfg.safety.max_linear_speed == 0.3 and cfg.sim.time_scale == 1.0
     assert cfg.places["lab"] == (1.0, 2.0) and "kitchen" in cfg.places  # added, not replaced
@@ -28,14 +32,20 @@ def test_yaml_file_profile(tmp_path):
     assert cfg.places == {"living room": (1.0, 1.0)}
 
 
-@pytest.mark.parametrize(("content", "message"), [
-    ("safety: {max_linear_speed: -1}", "safety.max_linear_speed: Input should be greater than 0"),
-    ("safety: {max_speed: 1}", "safety.max_speed: Extra inputs are not permitted"),
-    ("backend: gpt5", "backend: Input should be 'offline'"),
-    ("places: {kitchen: [1]}", "places: Value error, must be a pair"),
-    ("- a\n- b", "must be a YAML mapping"),
-    ("safety: [", "cannot read config"),
-])
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (
+            "safety: {max_linear_speed: -1}",
+            "safety.max_linear_speed: Input should be greater than 0",
+        ),
+        ("safety: {max_speed: 1}", "safety.max_speed: Extra inputs are not permitted"),
+        ("backend: gpt5", "backend: Input should be 'offline'"),
+        ("places: {kitchen: [1]}", "places: Value error, must be a pair"),
+        ("- a\n- b", "must be a YAML mapping"),
+        ("safety: [", "cannot read config"),
+    ],
+)
 def test_bad_config_is_explained(tmp_path, content, message):
     path = tmp_path / "bad.yaml"
     path.write_text(content)

@@ -18,16 +18,25 @@ from shadowhound import errors
 from shadowhound.exit_codes import ExitCode
 
 SRC = Path(errors.__file__).resolve().parent
-BUILTIN_EXCEPTIONS = {name for name, value in vars(builtins).items()
-                      if inspect.isclass(value) and issubclass(value, BaseException)}
-TREE = {name for name, value in vars(errors).items()
-        if inspect.isclass(value) and issubclass(value, BaseException)
-        and value.__module__ == errors.__name__}
+BUILTIN_EXCEPTIONS = {
+    name
+    for name, value in vars(builtins).items()
+    if inspect.isclass(value) and issubclass(value, BaseException)
+}
+TREE = {
+    name
+    for name, value in vars(errors).items()
+    if inspect.isclass(value)
+    and issubclass(value, BaseException)
+    and value.__module__ == errors.__name__
+}
 
 
 def _modules() -> list[tuple[Path, ast.Module]]:
-    return [(path, ast.parse(path.read_text(encoding="utf-8"), str(path)))
-            for path in sorted(SRC.rglob("*.py"))]
+    return [
+        (path, ast.parse(path.read_text(encoding="utf-8"), str(path)))
+        for path in sorted(SRC.rglob("*.py"))
+    ]
 
 
 def _base_name(node: ast.expr) -> str:
@@ -59,30 +68,56 @@ def test_every_class_of_the_tree_derives_from_the_root_and_is_exported() -> None
         assert cls.__doc__, f"{name} needs a docstring saying what it means"
 
 
-@pytest.mark.parametrize("module, name", [
-    ("shadowhound", "ShadowHoundError"), ("shadowhound", "ConfigError"),
-    ("shadowhound", "PlanningError"), ("shadowhound", "RobotError"),
-    ("shadowhound", "SkillValidationError"), ("shadowhound.config", "ConfigError"),
-    ("shadowhound.plan", "PlanningError"), ("shadowhound.robot.base", "RobotError"),
-    ("shadowhound.skills", "SkillValidationError"), ("shadowhound.skills.context", "SkillError"),
-    ("shadowhound.skills.context", "SkillTimeout"), ("shadowhound.skills.context", "PlanProblem"),
-    ("shadowhound.skills.context", "MissionCancelled"), ("shadowhound.llm", "BackendError"),
-    ("shadowhound.llm", "BackendUnavailable"), ("shadowhound.llm.backend", "BackendCancelled"),
-    ("shadowhound.units", "UnitError"), ("shadowhound.world", "PlanError"),
-    ("shadowhound.world.grid", "GridError"), ("shadowhound.memory", "MemoryStoreError"),
-    ("shadowhound.memory", "RecallStoreError"), ("shadowhound.evaluation", "CaseFileError"),
-    ("shadowhound.planning._errors", "NotUnderstood"), ("shadowhound.cli", "UsageError"),
-    ("shadowhound.ros.params", "ParameterError"), ("shadowhound.web.security", "ServeError"),
-    ("shadowhound.web.frames", "FrameUnavailable"), ("shadowhound.mcp.desk", "ToolInputError"),
-])
+@pytest.mark.parametrize(
+    "module, name",
+    [
+        ("shadowhound", "ShadowHoundError"),
+        ("shadowhound", "ConfigError"),
+        ("shadowhound", "PlanningError"),
+        ("shadowhound", "RobotError"),
+        ("shadowhound", "SkillValidationError"),
+        ("shadowhound.config", "ConfigError"),
+        ("shadowhound.plan", "PlanningError"),
+        ("shadowhound.robot.base", "RobotError"),
+        ("shadowhound.skills", "SkillValidationError"),
+        ("shadowhound.skills.context", "SkillError"),
+        ("shadowhound.skills.context", "SkillTimeout"),
+        ("shadowhound.skills.context", "PlanProblem"),
+        ("shadowhound.skills.context", "MissionCancelled"),
+        ("shadowhound.llm", "BackendError"),
+        ("shadowhound.llm", "BackendUnavailable"),
+        ("shadowhound.llm.backend", "BackendCancelled"),
+        ("shadowhound.units", "UnitError"),
+        ("shadowhound.world", "PlanError"),
+        ("shadowhound.world.grid", "GridError"),
+        ("shadowhound.memory", "MemoryStoreError"),
+        ("shadowhound.memory", "RecallStoreError"),
+        ("shadowhound.evaluation", "CaseFileError"),
+        ("shadowhound.planning._errors", "NotUnderstood"),
+        ("shadowhound.cli", "UsageError"),
+        ("shadowhound.ros.params", "ParameterError"),
+        ("shadowhound.web.security", "ServeError"),
+        ("shadowhound.web.frames", "FrameUnavailable"),
+        ("shadowhound.mcp.desk", "ToolInputError"),
+    ],
+)
 def test_old_import_paths_give_the_one_class(module: str, name: str) -> None:
     if module.startswith(("shadowhound.web", "shadowhound.mcp", "shadowhound.ros")):
         pytest.importorskip({"web": "fastapi", "mcp": "mcp", "ros": "rclpy"}[module.split(".")[1]])
     assert getattr(importlib.import_module(module), name) is getattr(errors, name)
 
 
-@pytest.mark.parametrize("name", ["SkillValidationError", "PlanProblem", "GridError",
-                                  "UnitError", "CaseFileError", "ToolInputError"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "SkillValidationError",
+        "PlanProblem",
+        "GridError",
+        "UnitError",
+        "CaseFileError",
+        "ToolInputError",
+    ],
+)
 def test_value_errors_stay_value_errors(name: str) -> None:
     # pydantic turns a ValueError raised in a validator into a field error; callers catch them
     assert issubclass(getattr(errors, name), ValueError)
@@ -133,8 +168,9 @@ def test_exit_codes_are_defined_once() -> None:
             elif isinstance(node, ast.AnnAssign):
                 targets = [node.target]
             names = [n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)]
-            elsewhere += [f"{path.relative_to(SRC)}:{node.lineno} {n}" for n in names
-                          if n.startswith("EXIT_")]
+            elsewhere += [
+                f"{path.relative_to(SRC)}:{node.lineno} {n}" for n in names if n.startswith("EXIT_")
+            ]
     assert not elsewhere, f"exit codes defined outside shadowhound/exit_codes.py: {elsewhere}"
 
 

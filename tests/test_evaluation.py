@@ -20,8 +20,10 @@ def test_held_out_case(case):
 
 # -- several planners side by side ---------------------------------------------------------------
 
-CASES = ('- mission: "walk forward 1 meter"\n  expect: {success: true, x: 1.0}\n'
-         '- mission: "go sniff around the garden"\n  expect: {success: false, moved: false}\n')
+CASES = (
+    '- mission: "walk forward 1 meter"\n  expect: {success: true, x: 1.0}\n'
+    '- mission: "go sniff around the garden"\n  expect: {success: false, moved: false}\n'
+)
 
 
 def _model(request):
@@ -42,14 +44,26 @@ def test_eval_compares_planners_in_one_table(tmp_path):
     with ScriptedLLM(models=("m",)) as srv:
         srv.script(*[dynamic(_model) for _ in range(4)])
         common = ["--base-url", srv.url, "--model", "m", str(cases)]
-        proc = shadowhound("eval", "--backend", "offline", "--backend", "llamacpp",
-                           "--backend", "llamacpp:llm", *common)
+        proc = shadowhound(
+            "eval",
+            "--backend",
+            "offline",
+            "--backend",
+            "llamacpp",
+            "--backend",
+            "llamacpp:llm",
+            *common,
+        )
         assert proc.returncode == 0, proc.stdout + proc.stderr
         assert len(srv.requests) == 3  # hybrid asked once (the garden), llm twice
-        json_proc = shadowhound("eval", "--json", "--backend", "offline", "--backend",
-                                "llamacpp", *common)
-    rows = {line.split(" | ")[0].strip("| "): line.split(" | ")
-            for line in proc.stdout.splitlines() if line.startswith("| ")}
+        json_proc = shadowhound(
+            "eval", "--json", "--backend", "offline", "--backend", "llamacpp", *common
+        )
+    rows = {
+        line.split(" | ")[0].strip("| "): line.split(" | ")
+        for line in proc.stdout.splitlines()
+        if line.startswith("| ")
+    }
     # planner | passed | model calls/mission | planned offline | prompt | completion | ...
     assert rows["offline"][1:4] == ["2/2 (100%)", "0.00", "1/2"]
     assert rows["llamacpp"][1:4] == ["2/2 (100%)", "0.50", "1/2"]
@@ -67,10 +81,13 @@ def test_invalid_plans_before_repair_are_counted():
     from tests.llm_server import ScriptedLLM, json_plan
 
     with ScriptedLLM(models=("m",)) as srv:
-        srv.script(json_plan([{"skill": "nav.move", "args": {"distance": 1.0, "meters": 1}}]),
-                   json_plan([{"skill": "nav.move", "args": {"distance": 1.0}}]))
-        settings = load_config("llamacpp", {"llm": {"base_url": srv.url, "model": "m",
-                                                    "hybrid": False}}, environ={})
+        srv.script(
+            json_plan([{"skill": "nav.move", "args": {"distance": 1.0, "meters": 1}}]),
+            json_plan([{"skill": "nav.move", "args": {"distance": 1.0}}]),
+        )
+        settings = load_config(
+            "llamacpp", {"llm": {"base_url": srv.url, "model": "m", "hybrid": False}}, environ={}
+        )
         outcomes = run_cases([MissionCase("walk forward 1 meter", {"x": 1.0})], settings)
     card = scorecard("llm", outcomes)
     assert (card.passed, card.model_calls, card.invalid_plans) == (1, 2, 1)

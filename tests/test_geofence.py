@@ -35,8 +35,10 @@ def test_u_fence_gap_along_the_top_edge_is_refused(margin):
     agent, robot = agent_on_sim(geofence_polygon=U_FENCE, geofence_margin=margin)
     result = agent.execute_mission("go to x 0.5 y 3 then go to x 2.5 y 3")
     assert not result.success and result.response.startswith("Refused before moving")
-    assert "step 2 (nav.goto): its path from (0.50, 3.00) to (2.50, 3.00) leaves the " \
-           "geofence polygon (safety.geofence_polygon) at (1.00, 3.00)" in result.response
+    assert (
+        "step 2 (nav.goto): its path from (0.50, 3.00) to (2.50, 3.00) leaves the "
+        "geofence polygon (safety.geofence_polygon) at (1.00, 3.00)" in result.response
+    )
     assert not robot.received_motion and robot.get_state().pose.distance_to(0, 0) == 0
     agent.cleanup()
 
@@ -46,11 +48,19 @@ def test_u_fence_paths_along_edges_inside_pass_the_check_without_margin():
     passes (a dry run: a robot that really stops on an edge measures itself a hair inside or
     outside it, which is why the margin is there)."""
     agent, robot = agent_on_sim(geofence_polygon=U_FENCE, geofence_margin=0.0)
-    result = agent.dry_run("go to x 0 y 3 then go to x 1 y 3 then go to x 1 y 1 "
-                           "then go to x 2 y 1 then go to x 2 y 3 then go to x 3 y 0")
+    result = agent.dry_run(
+        "go to x 0 y 3 then go to x 1 y 3 then go to x 1 y 1 "
+        "then go to x 2 y 1 then go to x 2 y 3 then go to x 3 y 0"
+    )
     assert result.success, result.response
-    assert [(p.x, p.y) for p in result.predicted_path[1:]] == [(0, 3), (1, 3), (1, 1), (2, 1),
-                                                              (2, 3), (3, 0)]
+    assert [(p.x, p.y) for p in result.predicted_path[1:]] == [
+        (0, 3),
+        (1, 3),
+        (1, 1),
+        (2, 1),
+        (2, 3),
+        (3, 0),
+    ]
     agent.cleanup()
 
 
@@ -59,9 +69,11 @@ def test_margin_keeps_the_body_off_the_fence():
     agent, robot = agent_on_sim(geofence_polygon=big_u, geofence_margin=0.4)
     near = agent.execute_mission("go to x -0.7 y 0")  # the centre inside, the body not
     assert not near.success and not robot.received_motion
-    assert ("takes the robot's body outside the geofence polygon (safety.geofence_polygon) "
-            "when its centre passes (-0.60, 0.00) (0.4 m kept around its centre for the "
-            "robot's body (safety.geofence_margin))") in near.response
+    assert (
+        "takes the robot's body outside the geofence polygon (safety.geofence_polygon) "
+        "when its centre passes (-0.60, 0.00) (0.4 m kept around its centre for the "
+        "robot's body (safety.geofence_margin))"
+    ) in near.response
     ok = agent.execute_mission("go to x -0.6 y 0")
     assert ok.success, ok.response
     agent.cleanup()
@@ -71,8 +83,10 @@ def test_margin_applies_to_the_radius_fence():
     agent, robot = agent_on_sim(geofence_radius=3.0, geofence_margin=0.5)
     refused = agent.execute_mission("walk forward 2.6 meters")
     assert not refused.success and not robot.received_motion
-    assert ("takes the robot's body outside the geofence of 3 m around the origin "
-            "(safety.geofence_radius) when its centre passes (2.50, 0.00)") in refused.response
+    assert (
+        "takes the robot's body outside the geofence of 3 m around the origin "
+        "(safety.geofence_radius) when its centre passes (2.50, 0.00)"
+    ) in refused.response
     assert agent.execute_mission("walk forward 2.5 meters").success
     agent.cleanup()
 
@@ -94,16 +108,22 @@ def test_a_robot_that_stopped_within_the_margin_may_turn_and_walk_back_only():
 # -- configuration -----------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("polygon", "message"), [
-    ([[0, 0], [1, 1]], "must be a list of 3 to 1000 [x, y] vertices"),
-    ([[math.cos(k / 200), math.sin(k / 200)] for k in range(1001)], "3 to 1000"),
-    ([[0, 0], [1, 0], ["nan", 1]], "must be finite numbers"),
-    ([[0, 0], [1, 1], [1, 0], [0, 1]], "edges 0 (0, 0)-(1, 1) and 2 (1, 0)-(0, 1) cross or touch"),
-    ([[0, 0], [2, 0], [1, 0], [1, 1]], "edges 0 and 1 fold back on each other at (2, 0)"),
-    ([[0, 0], [1, 0], [1, 0], [0, 1]], "vertices 1 and 2 are the same point (1, 0)"),
-    ([[0, 0], [1, 1], [2, 2]], "zero area: all its vertices lie on one line"),
-    ([[0, 0], [2, 0], [2, 2], [1, 0.0], [0, 2]], "cross or touch"),  # a vertex on an edge
-])
+@pytest.mark.parametrize(
+    ("polygon", "message"),
+    [
+        ([[0, 0], [1, 1]], "must be a list of 3 to 1000 [x, y] vertices"),
+        ([[math.cos(k / 200), math.sin(k / 200)] for k in range(1001)], "3 to 1000"),
+        ([[0, 0], [1, 0], ["nan", 1]], "must be finite numbers"),
+        (
+            [[0, 0], [1, 1], [1, 0], [0, 1]],
+            "edges 0 (0, 0)-(1, 1) and 2 (1, 0)-(0, 1) cross or touch",
+        ),
+        ([[0, 0], [2, 0], [1, 0], [1, 1]], "edges 0 and 1 fold back on each other at (2, 0)"),
+        ([[0, 0], [1, 0], [1, 0], [0, 1]], "vertices 1 and 2 are the same point (1, 0)"),
+        ([[0, 0], [1, 1], [2, 2]], "zero area: all its vertices lie on one line"),
+        ([[0, 0], [2, 0], [2, 2], [1, 0.0], [0, 2]], "cross or touch"),  # a vertex on an edge
+    ],
+)
 def test_polygon_is_validated_at_load(polygon, message):
     with pytest.raises(ConfigError) as info:
         load_config("offline", {"safety": {"geofence_polygon": polygon}}, environ={})
@@ -111,10 +131,12 @@ def test_polygon_is_validated_at_load(polygon, message):
 
 
 def test_margin_must_leave_room_inside_the_radius():
-    with pytest.raises(ConfigError, match=r"geofence_margin \(3 m\) must be smaller than "
-                                          r"geofence_radius \(2 m\)"):
-        load_config("offline", {"safety": {"geofence_radius": 2, "geofence_margin": 3}},
-                    environ={})
+    with pytest.raises(
+        ConfigError,
+        match=r"geofence_margin \(3 m\) must be smaller than "
+        r"geofence_radius \(2 m\)",
+    ):
+        load_config("offline", {"safety": {"geofence_radius": 2, "geofence_margin": 3}}, environ={})
     assert load_config("offline", environ={}).safety.geofence_margin == 0.4
 
 
@@ -138,8 +160,7 @@ def ref_seg_dist(p, a, b):
     ax, ay, bx, by = *a, *b
     dx, dy = bx - ax, by - ay
     length2 = dx * dx + dy * dy
-    t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy)
-                                              / length2))
+    t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy) / length2))
     return math.hypot(p[0] - ax - t * dx, p[1] - ay - t * dy)
 
 
@@ -238,9 +259,13 @@ def star_polygons(draw):
     for g in gaps:
         angles.append(total)
         total += g
-    pts = [(round(cx + r * math.cos(turn + 2 * math.pi * a / total), 3),
-            round(cy + r * math.sin(turn + 2 * math.pi * a / total), 3))
-           for r, a in zip(radii, angles, strict=True)]
+    pts = [
+        (
+            round(cx + r * math.cos(turn + 2 * math.pi * a / total), 3),
+            round(cy + r * math.sin(turn + 2 * math.pi * a / total), 3),
+        )
+        for r, a in zip(radii, angles, strict=True)
+    ]
     return pts
 
 
@@ -253,8 +278,9 @@ def orthogonal_polygons(draw):
     ceilings = draw(st.lists(st.integers(1, 4), min_size=k, max_size=k))
     x0 = draw(st.integers(-3, 0))
     bottom = [p for i, f in enumerate(floors) for p in ((x0 + i, f), (x0 + i + 1, f))]
-    top = [p for i, c in reversed(list(enumerate(ceilings)))
-           for p in ((x0 + i + 1, c), (x0 + i, c))]
+    top = [
+        p for i, c in reversed(list(enumerate(ceilings))) for p in ((x0 + i + 1, c), (x0 + i, c))
+    ]
     pts = []
     for p in bottom + top:
         if not pts or pts[-1] != p:
@@ -270,8 +296,9 @@ polygons = st.one_of(star_polygons(), orthogonal_polygons(), st.just(U_FENCE))
 @st.composite
 def points_near(draw, poly):
     """Mostly points that make legs hard: vertices, points on edges, edge extensions."""
-    kind = draw(st.sampled_from(["vertex", "vertex", "edge", "edge", "line", "offset", "free",
-                                 "free"]))
+    kind = draw(
+        st.sampled_from(["vertex", "vertex", "edge", "edge", "line", "offset", "free", "free"])
+    )
     n = len(poly)
     i = draw(st.integers(0, n - 1))
     (x0, y0), (x1, y1) = poly[i], poly[(i + 1) % n]
@@ -304,15 +331,19 @@ def test_polygon_legs_agree_with_dense_sampling(data):
     a, b = data.draw(points_near(poly)), data.draw(points_near(poly))
     margin = data.draw(margins)
     fence = PolygonFence(poly)
-    event(check_against_reference(fence, lambda p: ref_clearance(p, poly),
-                                  ref_ts(a, b, poly), a, b, margin))
+    event(
+        check_against_reference(
+            fence, lambda p: ref_clearance(p, poly), ref_ts(a, b, poly), a, b, margin
+        )
+    )
 
 
 @settings(max_examples=150, deadline=None)
 @given(st.floats(0.5, 20), st.data())
 def test_circle_legs_agree_with_dense_sampling(radius, data):
-    ring = [(radius * math.cos(k * math.pi / 4), radius * math.sin(k * math.pi / 4))
-            for k in range(8)]
+    ring = [
+        (radius * math.cos(k * math.pi / 4), radius * math.sin(k * math.pi / 4)) for k in range(8)
+    ]
     coord = st.floats(-1.5 * radius, 1.5 * radius)
     a = data.draw(st.sampled_from(ring) | st.tuples(coord, coord))
     b = data.draw(st.sampled_from(ring) | st.tuples(coord, coord))
@@ -322,8 +353,9 @@ def test_circle_legs_agree_with_dense_sampling(radius, data):
     dx, dy = b[0] - a[0], b[1] - a[1]
     if dx * dx + dy * dy > 0:  # the point nearest the centre
         ts.append(max(0.0, min(1.0, -(a[0] * dx + a[1] * dy) / (dx * dx + dy * dy))))
-    event(check_against_reference(fence, lambda p: radius - math.hypot(*p), sorted(ts), a, b,
-                                  margin))
+    event(
+        check_against_reference(fence, lambda p: radius - math.hypot(*p), sorted(ts), a, b, margin)
+    )
 
 
 def test_polygon_check_handles_the_hard_cases_exactly():
@@ -348,9 +380,14 @@ def fence_for_robot(poly, margin):
     """Move the polygon so the robot (at the origin) starts where it has room to move."""
     fence = PolygonFence(poly)
     xs, ys = [p[0] for p in poly], [p[1] for p in poly]
-    best = max(((x / 8, y / 8) for x in range(int(min(xs) * 8), int(max(xs) * 8) + 1)
-                for y in range(int(min(ys) * 8), int(max(ys) * 8) + 1)),
-               key=fence.clearance)
+    best = max(
+        (
+            (x / 8, y / 8)
+            for x in range(int(min(xs) * 8), int(max(xs) * 8) + 1)
+            for y in range(int(min(ys) * 8), int(max(ys) * 8) + 1)
+        ),
+        key=fence.clearance,
+    )
     assume(fence.clearance(best) > margin + 0.05)
     return [(x - best[0], y - best[1]) for x, y in poly]
 
@@ -359,17 +396,22 @@ def fence_for_robot(poly, margin):
 def plans_in(draw, poly, clearance, margin):
     """Plans whose goto targets are mostly hard ones (vertices, edges) or well inside."""
     xs, ys = [p[0] for p in poly], [p[1] for p in poly]
-    roomy = [(x / 4, y / 4) for x in range(int(min(xs) * 4), int(max(xs) * 4) + 1)
-             for y in range(int(min(ys) * 4), int(max(ys) * 4) + 1)
-             if clearance((x / 4, y / 4)) >= margin]
+    roomy = [
+        (x / 4, y / 4)
+        for x in range(int(min(xs) * 4), int(max(xs) * 4) + 1)
+        for y in range(int(min(ys) * 4), int(max(ys) * 4) + 1)
+        if clearance((x / 4, y / 4)) >= margin
+    ]
     n = draw(st.integers(1, 4))
     calls = []
     for _ in range(n):
-        kind = draw(st.sampled_from(["goto", "goto", "inside", "inside", "move", "strafe",
-                                     "rotate", "patrol"]))
+        kind = draw(
+            st.sampled_from(
+                ["goto", "goto", "inside", "inside", "move", "strafe", "rotate", "patrol"]
+            )
+        )
         if kind in ("goto", "inside"):
-            x, y = draw(st.sampled_from(roomy) if kind == "inside" and roomy
-                        else points_near(poly))
+            x, y = draw(st.sampled_from(roomy) if kind == "inside" and roomy else points_near(poly))
             calls.append(SkillCall("nav.goto", {"x": round(x, 3), "y": round(y, 3)}))
         elif kind == "rotate":
             calls.append(SkillCall("nav.rotate", {"degrees": draw(st.floats(-270, 270))}))
@@ -380,8 +422,11 @@ def plans_in(draw, poly, clearance, margin):
     return calls
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow,
-                                                                  HealthCheck.filter_too_much])
+@settings(
+    max_examples=60,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much],
+)
 @given(st.data())
 def test_the_robots_true_path_never_leaves_the_fence(data):
     """Random plans (goto points snapped to the fence's vertices and edges) on the simulator:
@@ -394,8 +439,10 @@ def test_the_robots_true_path_never_leaves_the_fence(data):
         clearance = lambda p: ref_clearance(p, poly)  # noqa: E731
     else:
         radius = data.draw(st.floats(1.0, 4.0))
-        poly = [(radius * math.cos(k * math.pi / 4), radius * math.sin(k * math.pi / 4))
-                for k in range(8)]  # targets on (and beyond) the circle
+        poly = [
+            (radius * math.cos(k * math.pi / 4), radius * math.sin(k * math.pi / 4))
+            for k in range(8)
+        ]  # targets on (and beyond) the circle
         fence = {"geofence_radius": radius}
         clearance = lambda p: radius - math.hypot(*p)  # noqa: E731
     plan = data.draw(plans_in(poly, clearance, margin))

@@ -40,8 +40,17 @@ class LateRobot:
         now = self.sim.now()
         x, y, yaw = self.tracker.pose(now)
         vx, vy, wz = self.tracker.velocity(now)
-        return RobotState(x=x, y=y, yaw=yaw, vx=vx, vy=vy, wz=wz, battery=None,
-                          posture=self.sim.get_state().posture, stamp=now)
+        return RobotState(
+            x=x,
+            y=y,
+            yaw=yaw,
+            vx=vx,
+            vy=vy,
+            wz=wz,
+            battery=None,
+            posture=self.sim.get_state().posture,
+            stamp=now,
+        )
 
     def send_velocity(self, vx: float, vy: float, wz: float) -> None:
         if not (vx or vy or wz):
@@ -114,8 +123,9 @@ class LateRobot:
 
 
 @pytest.mark.parametrize(("rate", "delay"), [(20.0, 0.0), (20.0, 0.2), (10.0, 0.5)])
-def test_walk_and_turn_end_on_target_in_truth_and_report_the_truth(rate: float,
-                                                                    delay: float) -> None:
+def test_walk_and_turn_end_on_target_in_truth_and_report_the_truth(
+    rate: float, delay: float
+) -> None:
     robot = LateRobot(rate, delay)
     settings = ShadowHoundConfig(robot="go2")
     settings.motion = settings.motion.model_copy(update=GO2_MOTION)
@@ -133,8 +143,10 @@ def test_walk_and_turn_end_on_target_in_truth_and_report_the_truth(rate: float,
 
 def test_a_robot_without_a_battery_source_never_claims_a_level() -> None:
     agent = RobotAgent(RobotAgentConfig(robot=LateRobot(20.0, 0.2)))
-    assert agent.chat("how is your battery?") == \
-        "I cannot tell my battery level: this robot reports none."
+    assert (
+        agent.chat("how is your battery?")
+        == "I cannot tell my battery level: this robot reports none."
+    )
     assert agent.get_robot_status()["battery"] is None
     assert "battery unknown" in agent.execute_mission("report your status").response
 
@@ -167,8 +179,9 @@ class JitteryRobot(LateRobot):
     the rest, in order, each stamped when the driver sent it on a clock `clock_offset` seconds
     away from ours. The Go2 robot reads them as go2_ros.py does, through a StampClock."""
 
-    def __init__(self, rate: float, delay: float, extra: float, seed: int,
-                 clock_offset: float) -> None:
+    def __init__(
+        self, rate: float, delay: float, extra: float, seed: int, clock_offset: float
+    ) -> None:
         self.rng = random.Random(seed)
         self.extra, self.clock_offset = extra, clock_offset
         self.stamps = StampClock()
@@ -193,13 +206,16 @@ class JitteryRobot(LateRobot):
                 self.tracker.odometry(t, *pose)
 
 
-@settings(max_examples=8, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow])
-@given(seed=st.integers(0, 10_000), extra=st.floats(0.05, 0.3),
-       clock_offset=st.sampled_from([0.0, 1.7e9, 250.0]),
-       turn=st.sampled_from([5, 15, 90]))
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    seed=st.integers(0, 10_000),
+    extra=st.floats(0.05, 0.3),
+    clock_offset=st.sampled_from([0.0, 1.7e9, 250.0]),
+    turn=st.sampled_from([5, 15, 90]),
+)
 def test_odometry_jitter_does_not_throw_the_closed_loop_off_target(
-        seed: int, extra: float, clock_offset: float, turn: int) -> None:
+    seed: int, extra: float, clock_offset: float, turn: int
+) -> None:
     """Poses that arrive late by a random fraction of a second (a busy link or process) are
     placed in time by their stamps, so small and large turns and a walk still end on target
     in truth (found on CI: a 5 degree turn failed with "10 degrees to go" under load)."""
@@ -208,9 +224,10 @@ def test_odometry_jitter_does_not_throw_the_closed_loop_off_target(
     config.motion = config.motion.model_copy(update=GO2_MOTION)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=config))
     # The first motions teach the tracker the link's delay; the later ones steer on it.
-    for mission, ahead, left in [("walk forward 1 meter and turn left 90 degrees", 1.0, 90),
-                                 (f"turn left {turn} degrees and walk forward 0.5 meters",
-                                  0.5, turn)]:
+    for mission, ahead, left in [
+        ("walk forward 1 meter and turn left 90 degrees", 1.0, 90),
+        (f"turn left {turn} degrees and walk forward 0.5 meters", 0.5, turn),
+    ]:
         start = robot.sim.get_state()
         result = agent.execute_mission(mission)
         assert result.success, (mission, result.response)

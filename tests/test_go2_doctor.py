@@ -18,16 +18,21 @@ DRIVER = "go2_driver_node"
 
 def healthy(**changes: object) -> Observation:
     obs = Observation(
-        names={k: "/" + k for k in ("odom", "go2_states", "webrtc_req", "cmd_vel",
-                                    "cmd_vel_out")},
-        publishers={"odom": [Endpoint(DRIVER, ODOM_TYPE)],
-                    "go2_states": [Endpoint(DRIVER, STATE_TYPE, UPSTREAM_HASHES[STATE_TYPE])]},
-        subscribers={"webrtc_req": [Endpoint(DRIVER, REQUEST_TYPE,
-                                             UPSTREAM_HASHES[REQUEST_TYPE])],
-                     "cmd_vel": [Endpoint("twist_mux", TWIST_TYPE)],
-                     "cmd_vel_out": [Endpoint(DRIVER, TWIST_TYPE)]},
-        local_hashes=dict(UPSTREAM_HASHES), odom_receipts=[i * 0.05 for i in range(60)],
-        ended=3.0, states=[(1, 0.32)])
+        names={k: "/" + k for k in ("odom", "go2_states", "webrtc_req", "cmd_vel", "cmd_vel_out")},
+        publishers={
+            "odom": [Endpoint(DRIVER, ODOM_TYPE)],
+            "go2_states": [Endpoint(DRIVER, STATE_TYPE, UPSTREAM_HASHES[STATE_TYPE])],
+        },
+        subscribers={
+            "webrtc_req": [Endpoint(DRIVER, REQUEST_TYPE, UPSTREAM_HASHES[REQUEST_TYPE])],
+            "cmd_vel": [Endpoint("twist_mux", TWIST_TYPE)],
+            "cmd_vel_out": [Endpoint(DRIVER, TWIST_TYPE)],
+        },
+        local_hashes=dict(UPSTREAM_HASHES),
+        odom_receipts=[i * 0.05 for i in range(60)],
+        ended=3.0,
+        states=[(1, 0.32)],
+    )
     for key, value in changes.items():
         setattr(obs, key, value)
     return obs
@@ -50,8 +55,9 @@ def test_a_healthy_driver_passes_and_says_where_velocity_goes() -> None:
 def test_no_driver_says_how_to_start_one() -> None:
     found = lines(healthy(publishers={}, subscribers={}, odom_receipts=[], states=[]))
     assert found[0].startswith("fail no Go2 driver") and "same ROS_DOMAIN_ID" in found[0]
-    assert any(line.startswith("fail nothing subscribes /cmd_vel or /cmd_vel_out")
-               for line in found)
+    assert any(
+        line.startswith("fail nothing subscribes /cmd_vel or /cmd_vel_out") for line in found
+    )
 
 
 def test_a_different_type_hash_is_named_with_the_fix() -> None:
@@ -63,12 +69,12 @@ def test_a_different_type_hash_is_named_with_the_fix() -> None:
 
 def test_stopped_odometry_fails_and_slow_odometry_warns() -> None:
     stopped = lines(healthy(ended=5.0))
-    assert any(line.startswith("fail odometry on /odom") and "(stopped)" in line
-               for line in stopped)
+    assert any(
+        line.startswith("fail odometry on /odom") and "(stopped)" in line for line in stopped
+    )
     slow = lines(healthy(odom_receipts=[0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 2.9], ended=3.0))
     assert any(line.startswith("warn odometry on /odom: 2.0 Hz") for line in slow)
-    bursts = lines(healthy(odom_receipts=[0.0, 0.001, 0.002, 0.5, 1.0, 1.5, 2.0, 2.5],
-                           ended=2.6))
+    bursts = lines(healthy(odom_receipts=[0.0, 0.001, 0.002, 0.5, 1.0, 1.5, 2.0, 2.5], ended=2.6))
     assert any(line.startswith("warn odometry on /odom: 2.0 Hz") for line in bursts)
 
 
@@ -81,8 +87,7 @@ def test_without_twist_mux_velocity_goes_to_the_drivers_cmd_vel_out() -> None:
 
 def test_a_namespaced_robot_is_told_twist_mux_does_not_reach_it() -> None:
     found = lines(healthy(namespace="robot0", subscribers={}, root_cmd_vel_subscribed=True))
-    assert any("twist_mux listens on /cmd_vel, but it is not namespaced" in line
-               for line in found)
+    assert any("twist_mux listens on /cmd_vel, but it is not namespaced" in line for line in found)
 
 
 def test_the_battery_source_is_reported() -> None:

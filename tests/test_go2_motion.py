@@ -54,10 +54,15 @@ def test_pose_math_round_trips() -> None:
 
 
 @settings(max_examples=25, deadline=None)
-@given(delay=st.floats(0.0, 0.6), rate=st.sampled_from([10.0, 20.0, 50.0]),
-       vx=st.floats(-0.6, 0.6), wz=st.floats(-1.0, 1.0))
-def test_latency_is_measured_and_the_pose_predicted_while_moving(delay: float, rate: float,
-                                                                  vx: float, wz: float) -> None:
+@given(
+    delay=st.floats(0.0, 0.6),
+    rate=st.sampled_from([10.0, 20.0, 50.0]),
+    vx=st.floats(-0.6, 0.6),
+    wz=st.floats(-1.0, 1.0),
+)
+def test_latency_is_measured_and_the_pose_predicted_while_moving(
+    delay: float, rate: float, vx: float, wz: float
+) -> None:
     tracker = MotionTracker(linear_accel=1.0, angular_accel=3.0)
     robot = DelayedOdometry(tracker, rate, delay)
     robot.run(1.0)
@@ -178,10 +183,14 @@ def test_a_gap_in_odometry_is_no_velocity() -> None:
 
 
 @settings(max_examples=60, deadline=None)
-@given(offset=st.floats(-50.0, 2e9), base=st.floats(0.01, 0.5),
-       lates=st.lists(st.floats(0.0, 0.4), min_size=5, max_size=60))
+@given(
+    offset=st.floats(-50.0, 2e9),
+    base=st.floats(0.01, 0.5),
+    lates=st.lists(st.floats(0.0, 0.4), min_size=5, max_size=60),
+)
 def test_stamp_clock_removes_the_jitter_of_arrival_whatever_the_clocks(
-        offset: float, base: float, lates: list[float]) -> None:
+    offset: float, base: float, lates: list[float]
+) -> None:
     """Poses sent every 50 ms arrive `base` + a random lateness later, on a sender clock
     `offset` away from ours: once the fastest one has arrived, each maps to its send time plus
     the steady delay, so the jitter is gone; times never go backwards."""

@@ -65,8 +65,12 @@ def test_rejection_and_time_out_refuse_without_moving():
     agent, robot = agent_with(approval_timeout=0.3)
     agent.enable_approvals()
     seen = []
-    approve_when_asked(agent, lambda r: seen.append(agent.pending_approval()) or
-                       agent.reject(r["mission_id"], "not indoors"))
+    approve_when_asked(
+        agent,
+        lambda r: (
+            seen.append(agent.pending_approval()) or agent.reject(r["mission_id"], "not indoors")
+        ),
+    )
     result = agent.execute_mission("do a backflip")
     assert not result.success and "rejected: not indoors" in result.response
     assert seen[0]["reasons"][0].startswith("step 1 (body.sport): backflip is a risky trick")
@@ -151,9 +155,16 @@ def test_watchdog_leaves_healthy_real_time_missions_alone():
 
 def test_a_step_that_claims_motion_that_never_happened_fails():
     registry = default_registry()
-    registry.register(Skill("test.fake_walk", "says it walked 1 m", NoArgs,
-                            lambda ctx, a: "walked 1 m", moves=True,
-                            predict=lambda p, a, env: [Pose2D(p.x + 1.0, p.y, p.yaw)]))
+    registry.register(
+        Skill(
+            "test.fake_walk",
+            "says it walked 1 m",
+            NoArgs,
+            lambda ctx, a: "walked 1 m",
+            moves=True,
+            predict=lambda p, a, env: [Pose2D(p.x + 1.0, p.y, p.yaw)],
+        )
+    )
     agent, robot = agent_with(registry=registry)
     result = agent.run_plan([SkillCall("test.fake_walk")])
     assert not result.success
@@ -172,22 +183,51 @@ def test_velocity_commands_respect_acceleration_caps():
 
 # -- property tests: nothing outside the limits reaches the robot ------------------------------
 
-LIMITS = {"max_linear_speed": 0.4, "max_angular_speed": 0.8, "geofence_radius": 3.0,
-          "max_step_distance": 2.5}
-numbers = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=32),
-                    st.integers(-10**6, 10**6), st.sampled_from(["1.5", "x", "", "-2", "1e9"]))
+LIMITS = {
+    "max_linear_speed": 0.4,
+    "max_angular_speed": 0.8,
+    "geofence_radius": 3.0,
+    "max_step_distance": 2.5,
+}
+numbers = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True, width=32),
+    st.integers(-(10**6), 10**6),
+    st.sampled_from(["1.5", "x", "", "-2", "1e9"]),
+)
 skill_names = st.sampled_from(default_registry().names + ["nav_move", "nav.fly", "", "body"])
-arg_names = st.sampled_from(["distance", "degrees", "x", "y", "speed", "seconds", "trick",
-                             "place", "laps", "heading_degrees", "bogus"])
-garbage_calls = st.builds(SkillCall, skill_names, st.dictionaries(
-    arg_names, numbers | st.sampled_from(["kitchen", "start", "backflip", "hello", "garage"]),
-    max_size=3))
+arg_names = st.sampled_from(
+    [
+        "distance",
+        "degrees",
+        "x",
+        "y",
+        "speed",
+        "seconds",
+        "trick",
+        "place",
+        "laps",
+        "heading_degrees",
+        "bogus",
+    ]
+)
+garbage_calls = st.builds(
+    SkillCall,
+    skill_names,
+    st.dictionaries(
+        arg_names,
+        numbers | st.sampled_from(["kitchen", "start", "backflip", "hello", "garage"]),
+        max_size=3,
+    ),
+)
 metres, speeds = st.floats(-6, 6), st.none() | st.floats(0.05, 1.5)
 well_formed_calls = st.one_of(
     st.builds(lambda d, v: SkillCall("nav.move", {"distance": d, "speed": v}), metres, speeds),
     st.builds(lambda d: SkillCall("nav.strafe", {"distance": d}), metres),
-    st.builds(lambda a, v: SkillCall("nav.rotate", {"degrees": a, "speed": v}),
-              st.floats(-720, 720), speeds),
+    st.builds(
+        lambda a, v: SkillCall("nav.rotate", {"degrees": a, "speed": v}),
+        st.floats(-720, 720),
+        speeds,
+    ),
     st.builds(lambda x, y: SkillCall("nav.goto", {"x": x, "y": y}), metres, metres),
     st.just(SkillCall("nav.patrol", {"laps": 1})),
     st.just(SkillCall("body.sit")),
@@ -217,9 +257,17 @@ def test_random_plans_never_exceed_limits_or_fence(plan):
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.one_of(st.text(max_size=200), st.lists(st.fixed_dictionaries(
-    {"skill": skill_names, "args": st.dictionaries(arg_names, numbers, max_size=3)}),
-    max_size=4).map(lambda steps: __import__("json").dumps({"steps": steps}))))
+@given(
+    st.one_of(
+        st.text(max_size=200),
+        st.lists(
+            st.fixed_dictionaries(
+                {"skill": skill_names, "args": st.dictionaries(arg_names, numbers, max_size=3)}
+            ),
+            max_size=4,
+        ).map(lambda steps: __import__("json").dumps({"steps": steps})),
+    )
+)
 def test_random_model_answers_never_exceed_limits_or_fence(content):
     reply = parse_reply({"role": "assistant", "content": content})
     agent, robot = agent_with(**LIMITS)

@@ -31,8 +31,13 @@ ROOT = Path(__file__).parent.parent
 def cli(data: Path, *args: str) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "SHADOWHOUND_MEMORY__DATA_DIR": str(data)}
     env.pop("SHADOWHOUND_CONFIG", None)
-    return subprocess.run([sys.executable, "-m", "shadowhound", *args], capture_output=True,
-                          text=True, timeout=120, env=env)
+    return subprocess.run(
+        [sys.executable, "-m", "shadowhound", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
 
 
 def listed(data: Path) -> dict[str, dict[str, Any]]:
@@ -45,8 +50,13 @@ def listed(data: Path) -> dict[str, dict[str, Any]]:
 def start(script: str) -> subprocess.Popen[str]:
     """A Python process running `script` (with this checkout's package importable)."""
     source = "import sys; sys.path.insert(0, 'src')\n" + textwrap.dedent(script)
-    return subprocess.Popen([sys.executable, "-c", source], cwd=ROOT, text=True,
-                            stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+    return subprocess.Popen(
+        [sys.executable, "-c", source],
+        cwd=ROOT,
+        text=True,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+    )
 
 
 def first_line(process: subprocess.Popen[str]) -> str:
@@ -106,11 +116,15 @@ def test_rows_from_before_owners_were_recorded_are_still_marked(tmp_path):
     import sqlite3
 
     db = sqlite3.connect(tmp_path / "history.db")
-    db.execute("CREATE TABLE missions (id TEXT PRIMARY KEY, mission TEXT NOT NULL, status TEXT "
-               "NOT NULL, success INTEGER, response TEXT, started_at REAL NOT NULL, "
-               "finished_at REAL, record TEXT)")
-    db.execute("INSERT INTO missions (id, mission, status, started_at) VALUES "
-               "('old', 'sit', 'running', 1.0)")
+    db.execute(
+        "CREATE TABLE missions (id TEXT PRIMARY KEY, mission TEXT NOT NULL, status TEXT "
+        "NOT NULL, success INTEGER, response TEXT, started_at REAL NOT NULL, "
+        "finished_at REAL, record TEXT)"
+    )
+    db.execute(
+        "INSERT INTO missions (id, mission, status, started_at) VALUES "
+        "('old', 'sit', 'running', 1.0)"
+    )
     db.commit()
     db.close()
     store = MissionHistory(tmp_path / "history.db")
@@ -153,14 +167,15 @@ def test_missions_queued_when_the_process_is_killed_are_listed_as_not_run(tmp_pa
     for mission in waiting:
         assert after[mission]["status"] == "not_run"
         assert after[mission]["response"] == NEVER_STARTED and after[mission]["success"] == 0
-    assert {after[m]["mission"] for m in waiting} == {"walk forward 1 meter",
-                                                      "turn left 90 degrees"}
+    assert {after[m]["mission"] for m in waiting} == {
+        "walk forward 1 meter",
+        "turn left 90 degrees",
+    }
 
 
 def _worker(data: Path) -> tuple[RobotAgent, MissionWorker]:
     cfg = ShadowHoundConfig(memory={"enabled": True, "data_dir": str(data)})
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(cfg.sim, time_scale=1.0),
-                                        settings=cfg))
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(cfg.sim, time_scale=1.0), settings=cfg))
     agent.initialize()
     return agent, MissionWorker(agent, on_start=lambda job: None, on_finish=lambda job: None)
 

@@ -44,9 +44,17 @@ def srv() -> Iterator[ScriptedLLM]:
 
 def make_agent(srv: ScriptedLLM, data_dir: Any = None, **llm: Any) -> tuple[RobotAgent, SimRobot]:
     memory = {"enabled": data_dir is not None, "data_dir": str(data_dir or "")}
-    overrides = {"llm": {"base_url": srv.url, "model": "test-model", "max_retries": 2,
-                         "timeout": PATIENT, "hybrid": False, **llm},  # the model plans all
-                 "memory": memory}
+    overrides = {
+        "llm": {
+            "base_url": srv.url,
+            "model": "test-model",
+            "max_retries": 2,
+            "timeout": PATIENT,
+            "hybrid": False,
+            **llm,
+        },  # the model plans all
+        "memory": memory,
+    }
     settings = load_config("llamacpp", overrides, environ={})
     robot = SimRobot(time_scale=0.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
@@ -69,8 +77,13 @@ def press_when(srv: ScriptedLLM, requests: int, press: Callable[[], None]) -> th
     return presser
 
 
-def run_and_press(agent: RobotAgent, srv: ScriptedLLM, requests: int, press: str,
-                  mission: str = "walk forward 1 meter") -> tuple[MissionResult, float]:
+def run_and_press(
+    agent: RobotAgent,
+    srv: ScriptedLLM,
+    requests: int,
+    press: str,
+    mission: str = "walk forward 1 meter",
+) -> tuple[MissionResult, float]:
     presser = press_when(srv, requests, getattr(agent, press))
     started = time.monotonic()
     result = agent.execute_mission(mission)
@@ -85,8 +98,9 @@ def assert_no_retry(srv: ScriptedLLM, expected: int) -> None:
     assert len(srv.requests) == expected
 
 
-@pytest.mark.parametrize(("press", "reason"), [("cancel", "mission cancelled"),
-                                                ("estop", "e-stop pressed")])
+@pytest.mark.parametrize(
+    ("press", "reason"), [("cancel", "mission cancelled"), ("estop", "e-stop pressed")]
+)
 def test_press_while_planning_ends_the_mission_at_once(srv, press, reason):
     agent, robot = make_agent(srv)
     srv.script(hang(), hang(), hang())
@@ -150,8 +164,10 @@ def test_press_while_react_waits_for_the_next_call(srv):
 
 def test_press_while_a_vision_step_asks_the_model(srv):
     agent, robot = make_agent(srv, vision=True)
-    srv.script(json_plan([{"skill": "perception.describe", "args": {"question": "what?"}},
-                          *MOVE_1]), hang())
+    srv.script(
+        json_plan([{"skill": "perception.describe", "args": {"question": "what?"}}, *MOVE_1]),
+        hang(),
+    )
     result, elapsed = run_and_press(agent, srv, 2, "cancel", "what do you see, then walk")
     assert elapsed < BOUND and result.status.value == "stopped", result.response
     assert [s.status.value for s in result.steps] == ["cancelled", "skipped"]
@@ -191,13 +207,16 @@ def test_a_dry_run_after_a_press_still_asks_the_model(srv, press):
 # -- the retries LLMBackend does itself (so that a cancel can stop them) ---------------------
 
 
-@pytest.mark.parametrize(("replies", "requests", "success"), [
-    ([status(401, "bad key"), json_plan(MOVE_1)], 1, False),  # retrying cannot help
-    ([status(429, retry_after_ms=10), json_plan(MOVE_1)], 2, True),  # rate limited: wait
-    ([status(503, retry_after_ms=61_000), json_plan(MOVE_1)], 1, False),  # too long a wait
-    ([drop(), json_plan(MOVE_1)], 2, True),  # the connection was lost: try again
-    ([status(500, retry_after_ms=10)] * 3 + [json_plan(MOVE_1)], 3, False),  # 1 + 2 retries
-])
+@pytest.mark.parametrize(
+    ("replies", "requests", "success"),
+    [
+        ([status(401, "bad key"), json_plan(MOVE_1)], 1, False),  # retrying cannot help
+        ([status(429, retry_after_ms=10), json_plan(MOVE_1)], 2, True),  # rate limited: wait
+        ([status(503, retry_after_ms=61_000), json_plan(MOVE_1)], 1, False),  # too long a wait
+        ([drop(), json_plan(MOVE_1)], 2, True),  # the connection was lost: try again
+        ([status(500, retry_after_ms=10)] * 3 + [json_plan(MOVE_1)], 3, False),  # 1 + 2 retries
+    ],
+)
 def test_which_failures_are_retried(srv, replies, requests, success):
     agent, robot = make_agent(srv)
     srv.script(*replies)
@@ -217,10 +236,13 @@ _PLAN_PREFIXES: dict[str, list[Any]] = {
 }
 
 
-@settings(max_examples=12, deadline=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(where=st.sampled_from(["plan", "repair", "replan", "react", "react_later", "vision"]),
-       press=st.sampled_from(["cancel", "estop"]))
+@settings(
+    max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    where=st.sampled_from(["plan", "repair", "replan", "react", "react_later", "vision"]),
+    press=st.sampled_from(["cancel", "estop"]),
+)
 def test_any_press_on_any_model_request_stops_the_mission(srv, where, press):
     srv.clear()
     srv.requests.clear()
@@ -228,13 +250,16 @@ def test_any_press_on_any_model_request_stops_the_mission(srv, where, press):
     agent, robot = make_agent(srv, mode=mode, vision=where == "vision")
     if where == "replan":
         robot.send_velocity = lambda *a: None
-    prefix = {"react": [], "react_later": [tool_calls(("nav_move", {"distance": 0.3}))],
-              "vision": [json_plan([{"skill": "perception.describe", "args": {}}, *MOVE_1])],
-              }.get(where) or _PLAN_PREFIXES.get(where, [])
+    prefix = {
+        "react": [],
+        "react_later": [tool_calls(("nav_move", {"distance": 0.3}))],
+        "vision": [json_plan([{"skill": "perception.describe", "args": {}}, *MOVE_1])],
+    }.get(where) or _PLAN_PREFIXES.get(where, [])
     srv.script(*prefix, hang(), text("never read"))
     pose: list[Any] = []
-    presser = press_when(srv, len(prefix) + 1,
-                         lambda: (pose.append(robot.get_state()), getattr(agent, press)()))
+    presser = press_when(
+        srv, len(prefix) + 1, lambda: (pose.append(robot.get_state()), getattr(agent, press)())
+    )
     started = time.monotonic()
     result = agent.execute_mission("walk forward 1 meter")
     elapsed = time.monotonic() - started

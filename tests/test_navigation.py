@@ -74,14 +74,19 @@ def test_a_goal_inside_an_objects_clearance_is_refused_naming_it():
     agent, robot = make()
     result = agent.execute_mission("go to position 3, 2")
     assert not result.success and not robot.received_motion
-    assert ("no safe path to (3.00, 2.00): the goal (3.00, 2.00) is inside the blue box's "
-            "clearance (0.35 m kept for the body)") in result.response
+    assert (
+        "no safe path to (3.00, 2.00): the goal (3.00, 2.00) is inside the blue box's "
+        "clearance (0.35 m kept for the body)"
+    ) in result.response
 
 
 def test_a_goal_nothing_can_reach_is_refused_with_the_planners_reason():
-    ring = World(objects=tuple(
-        WorldObject(f"post {i}", 3 + 1.2 * math.cos(a), 1.2 * math.sin(a), radius=0.3)
-        for i, a in enumerate(k * math.pi / 6 for k in range(12))))
+    ring = World(
+        objects=tuple(
+            WorldObject(f"post {i}", 3 + 1.2 * math.cos(a), 1.2 * math.sin(a), radius=0.3)
+            for i, a in enumerate(k * math.pi / 6 for k in range(12))
+        )
+    )
     agent, robot = make(world=ring)
     result = agent.execute_mission("go to position 3, 0")
     assert not result.success and not robot.received_motion
@@ -132,9 +137,14 @@ def test_a_planned_detour_counts_in_full_against_the_mission_distance():
 def _scenes():
     obj = st.builds(
         lambda i, x, y, r: WorldObject(f"thing {i}", x, y, radius=r),
-        st.integers(0, 999), st.floats(-5, 5), st.floats(-5, 5), st.floats(0.1, 0.6))
+        st.integers(0, 999),
+        st.floats(-5, 5),
+        st.floats(-5, 5),
+        st.floats(0.1, 0.6),
+    )
     return st.lists(obj, max_size=6, unique_by=lambda o: o.name).map(
-        lambda objs: World(objects=tuple(objs)))
+        lambda objs: World(objects=tuple(objs))
+    )
 
 
 _length = st.floats(-5, 5).map(lambda v: round(v, 2))
@@ -148,39 +158,58 @@ _calls = st.one_of(
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(world=_scenes(), start=st.tuples(st.floats(-5, 5), st.floats(-5, 5),
-                                        st.floats(-math.pi, math.pi)),
-       calls=st.lists(_calls, min_size=1, max_size=4))
+@given(
+    world=_scenes(),
+    start=st.tuples(st.floats(-5, 5), st.floats(-5, 5), st.floats(-math.pi, math.pi)),
+    calls=st.lists(_calls, min_size=1, max_size=4),
+)
 def test_random_plans_in_random_scenes_never_touch_anything(world, start, calls):
     if penetration(world, start[0], start[1], BODY)[0] > 0:
         return  # a start inside something is not a pose the robot can be in
     agent, robot = make(world=world, start=start, geofence_radius=20.0)
     result = agent.run_plan(calls)
-    event(f"moved, {'succeeded' if result.success else 'failed'}" if robot.received_motion
-          else "refused before moving")
+    event(
+        f"moved, {'succeeded' if result.success else 'failed'}"
+        if robot.received_motion
+        else "refused before moving"
+    )
     assert robot.true_path_complete
     assert deepest(robot) == 0.0, result.response
     assert "blocked by" not in result.response  # the map was true: no contact at all
     agent.cleanup()
 
 
-PUBLIC = ["walk forward three meters", "walk in a square with 1 meter sides",
-          "patrol the perimeter", "go to position 2, 1", "go to the kitchen", "go to x=4, y=0",
-          "walk forward 2 meters, turn left 90 degrees, then walk forward 3 meters",
-          "move forward 4 meters", "walk a square with sides of 2 meters", "come back"]
+PUBLIC = [
+    "walk forward three meters",
+    "walk in a square with 1 meter sides",
+    "patrol the perimeter",
+    "go to position 2, 1",
+    "go to the kitchen",
+    "go to x=4, y=0",
+    "walk forward 2 meters, turn left 90 degrees, then walk forward 3 meters",
+    "move forward 4 meters",
+    "walk a square with sides of 2 meters",
+    "come back",
+]
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(mission=st.sampled_from(PUBLIC), world=_scenes(),
-       start=st.tuples(st.floats(-4, 4), st.floats(-4, 4), st.floats(-math.pi, math.pi)))
+@given(
+    mission=st.sampled_from(PUBLIC),
+    world=_scenes(),
+    start=st.tuples(st.floats(-4, 4), st.floats(-4, 4), st.floats(-math.pi, math.pi)),
+)
 def test_public_missions_in_random_scenes_never_touch_anything(mission, world, start):
     scene = World(objects=DEFAULT_WORLD.objects + world.objects) if start[0] > 0 else world
     if penetration(scene, start[0], start[1], BODY)[0] > 0:
         return
     agent, robot = make(world=scene, start=start)
     result = agent.execute_mission(mission)
-    event(f"moved, {'succeeded' if result.success else 'failed'}" if robot.received_motion
-          else "refused before moving")
+    event(
+        f"moved, {'succeeded' if result.success else 'failed'}"
+        if robot.received_motion
+        else "refused before moving"
+    )
     assert deepest(robot) == 0.0, result.response
     assert "blocked by" not in result.response
     agent.cleanup()

@@ -85,8 +85,10 @@ def test_near_is_checked_and_its_form_too(tmp_path):
     from shadowhound.evaluation import CaseFileError
 
     good = tmp_path / "near.yaml"
-    good.write_text('- mission: "go to x=4, y=0"\n  expect: {near: {x: 4.5, y: 0, within: 0.6}}\n'
-                    '- mission: "go to x=4, y=0"\n  expect: {near: {x: 4.5, y: 0, within: 0.4}}\n')
+    good.write_text(
+        '- mission: "go to x=4, y=0"\n  expect: {near: {x: 4.5, y: 0, within: 0.6}}\n'
+        '- mission: "go to x=4, y=0"\n  expect: {near: {x: 4.5, y: 0, within: 0.4}}\n'
+    )
     near, far = (run_case(c, ShadowHoundConfig()) for c in load_cases(good))
     assert near.passed and not far.passed
     assert far.failures == ["near: expected within 0.4 m of (4.5, 0), ended 0.50 m away"]

@@ -22,8 +22,9 @@ BODY = 0.35
 
 def agent_with(navigation: str) -> tuple[RobotAgent, SimRobot]:
     robot = SimRobot(time_scale=0.0)
-    agent = RobotAgent(RobotAgentConfig(robot=robot,
-                                        settings=ShadowHoundConfig(navigation=navigation)))
+    agent = RobotAgent(
+        RobotAgentConfig(robot=robot, settings=ShadowHoundConfig(navigation=navigation))
+    )
     agent.initialize()
     return agent, robot
 
@@ -45,8 +46,10 @@ def test_nav2_required_without_a_navigator_fails_clearly_and_does_not_move() -> 
     agent, robot = agent_with("nav2")
     result = agent.execute_mission("go to x=4, y=0")
     assert not result.success and not robot.received_motion
-    assert ("navigation is 'nav2', but the robot 'sim-go2' has no Nav2 navigator (only a Go2 on "
-            "ROS 2 has one); set navigation: auto or direct") in result.response
+    assert (
+        "navigation is 'nav2', but the robot 'sim-go2' has no Nav2 navigator (only a Go2 on "
+        "ROS 2 has one); set navigation: auto or direct"
+    ) in result.response
 
 
 def test_navigation_is_checked_in_the_config() -> None:
@@ -55,14 +58,25 @@ def test_navigation_is_checked_in_the_config() -> None:
     assert load_config("offline").navigation == "auto"
 
 
-@pytest.mark.parametrize(("code", "message", "words"), [
-    (206, "", "the goal is occupied on the costmap (inside an obstacle or its inflation) "
-              "(Nav2 error code 206)"),
-    (105, "  stuck   behind a chair ", "the robot failed to make progress along the path "
-                                       "(Nav2 error code 105): stuck behind a chair"),
-    (9999, "", "navigation failed (Nav2 error code 9999)"),
-    (0, "aborted by the BT", "navigation failed: aborted by the BT"),
-])
+@pytest.mark.parametrize(
+    ("code", "message", "words"),
+    [
+        (
+            206,
+            "",
+            "the goal is occupied on the costmap (inside an obstacle or its inflation) "
+            "(Nav2 error code 206)",
+        ),
+        (
+            105,
+            "  stuck   behind a chair ",
+            "the robot failed to make progress along the path "
+            "(Nav2 error code 105): stuck behind a chair",
+        ),
+        (9999, "", "navigation failed (Nav2 error code 9999)"),
+        (0, "aborted by the BT", "navigation failed: aborted by the BT"),
+    ],
+)
 def test_nav2_error_codes_in_words(code: int, message: str, words: str) -> None:
     assert nav2_error_words(code, message) == words
 
@@ -81,8 +95,9 @@ def drive(robot: SimRobot, follower: PathFollower, seconds: float = 120.0) -> bo
 
 @settings(max_examples=15, deadline=None)
 @given(x=st.floats(-4.5, 4.5), y=st.floats(-4.5, 4.5), yaw=st.floats(-math.pi, math.pi))
-def test_the_follower_reaches_planned_goals_without_touching_anything(x: float, y: float,
-                                                                      yaw: float) -> None:
+def test_the_follower_reaches_planned_goals_without_touching_anything(
+    x: float, y: float, yaw: float
+) -> None:
     robot = SimRobot(time_scale=0.0)
     belief = scene_belief(DEFAULT_WORLD, BODY)
     cell = belief.grid.cell_of(x, y)
@@ -94,6 +109,5 @@ def test_the_follower_reaches_planned_goals_without_touching_anything(x: float, 
     end = robot.get_state()
     assert math.hypot(end.x - x, end.y - y) <= follower.tolerance + 0.01
     assert abs(math.remainder(end.yaw - yaw, math.tau)) <= follower.yaw_tolerance + 0.01
-    assert max(penetration(robot.world, px, py, BODY)[0] for _t, px, py in robot.true_path) \
-        == 0.0
+    assert max(penetration(robot.world, px, py, BODY)[0] for _t, px, py in robot.true_path) == 0.0
     assert follower.remaining(Pose2D(end.x, end.y, end.yaw)) <= follower.tolerance + 0.01

@@ -31,10 +31,20 @@ def with_look_up(skill=look_up_skill.SKILL) -> SkillRegistry:
 
 
 def make_agent(srv, tmp_path, **memory) -> tuple[RobotAgent, SimRobot]:
-    settings = load_config("llamacpp", {
-        "llm": {"base_url": srv.url, "model": "m", "max_retries": 0, "timeout": 5,
-                "hybrid": False},
-        "memory": {"enabled": True, "data_dir": str(tmp_path), **memory}}, environ={})
+    settings = load_config(
+        "llamacpp",
+        {
+            "llm": {
+                "base_url": srv.url,
+                "model": "m",
+                "max_retries": 0,
+                "timeout": 5,
+                "hybrid": False,
+            },
+            "memory": {"enabled": True, "data_dir": str(tmp_path), **memory},
+        },
+        environ={},
+    )
     robot = SimRobot(time_scale=0.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings, registry=with_look_up()))
     agent.initialize()
@@ -45,20 +55,24 @@ def test_a_model_plans_it_the_robot_runs_it_the_result_says_it_the_history_keeps
     with ScriptedLLM(models=("m",)) as srv:
         agent, robot = make_agent(srv, tmp_path)
         robot.set_posture(Posture.SITTING)
-        srv.script(json_plan([{"skill": "body.look_up", "args": {"degrees": "20 deg",
-                                                                  "hold": "2 s"}}]))
+        srv.script(
+            json_plan([{"skill": "body.look_up", "args": {"degrees": "20 deg", "hold": "2 s"}}])
+        )
         result = agent.execute_mission("look up at the ceiling")
         request = srv.requests[0]
     # The model was offered it: in the prompt's skill list and the plan's schema.
     assert "body.look_up(" in request["messages"][0]["content"]
     offered = request["response_format"]["schema"]["properties"]["steps"]["items"]["anyOf"]
-    assert {"type": "string", "const": "body.look_up"} in [s["properties"]["skill"]
-                                                          for s in offered]
+    assert {"type": "string", "const": "body.look_up"} in [
+        s["properties"]["skill"] for s in offered
+    ]
     assert result.success, result.response
     [step] = result.steps
-    assert (step.skill, step.args, step.status) == ("body.look_up",
-                                                    {"degrees": 20.0, "hold": 2.0},
-                                                    StepStatus.SUCCEEDED)
+    assert (step.skill, step.args, step.status) == (
+        "body.look_up",
+        {"degrees": 20.0, "hold": 2.0},
+        StepStatus.SUCCEEDED,
+    )
     # It runs standing, so the sitting robot stood up first; it held the view 2 s (robot clock).
     assert robot.get_state().posture is Posture.STANDING
     assert step.output.startswith("stood up first (was sitting); looking up 20 degrees: ")
@@ -70,8 +84,7 @@ def test_a_model_plans_it_the_robot_runs_it_the_result_says_it_the_history_keeps
     # The history holds the mission with its step.
     record = agent.memory.history.get(result.mission_id)
     assert record["status"] == "succeeded"
-    assert [(s["skill"], s["output"]) for s in record["steps"]] == [("body.look_up",
-                                                                     step.output)]
+    assert [(s["skill"], s["output"]) for s in record["steps"]] == [("body.look_up", step.output)]
     agent.cleanup()
 
 
@@ -79,14 +92,17 @@ def test_a_model_plans_it_the_robot_runs_it_the_result_says_it_the_history_keeps
 def test_retrieval_memory_keeps_what_it_saw_as_an_observation(tmp_path):
     with ScriptedLLM(models=("m",)) as srv:
         agent, _robot = make_agent(srv, tmp_path, enable_rag=True)
-        srv.script(json_plan([{"skill": "body.look_up", "args": {}}]),
-                   json_plan([{"skill": "body.stand", "args": {}}]))
+        srv.script(
+            json_plan([{"skill": "body.look_up", "args": {}}]),
+            json_plan([{"skill": "body.stand", "args": {}}]),
+        )
         looked = agent.execute_mission("look up")
         assert looked.success and agent.execute_mission("stand").success
     # Its output, and nothing of body.stand (which declares no memory), is an observation.
     kept = agent.memory.recall.search("looking up at the room", k=5, kind="observation")
     assert [(m.text, m.meta.get("mission")) for m in kept] == [
-        (looked.steps[0].output, looked.mission_id)]
+        (looked.steps[0].output, looked.mission_id)
+    ]
     assert kept[0].text.startswith("looking up 30 degrees: ")
     agent.cleanup()
 
@@ -99,7 +115,8 @@ def check(calls, registry=None, start=None, auto_stand=True, **limits):
     settings = ShadowHoundConfig(safety=SafetyConfig(**limits))
     start = start or RobotState()
     return Governor(settings.safety, auto_stand, registry).check_plan(
-        [registry.validate(c) for c in calls], start, PlanEnv(settings, start.pose))
+        [registry.validate(c) for c in calls], start, PlanEnv(settings, start.pose)
+    )
 
 
 def reasons(verdict) -> list[str]:
@@ -109,24 +126,35 @@ def reasons(verdict) -> list[str]:
 def test_it_runs_standing_and_leaves_the_robot_standing():
     sitting = RobotState(posture=Posture.SITTING)
     look = SkillCall("body.look_up", {})
-    assert "will be sitting here; add body.stand" in reasons(
-        check([look], start=sitting, auto_stand=False))[0]
+    assert (
+        "will be sitting here; add body.stand"
+        in reasons(check([look], start=sitting, auto_stand=False))[0]
+    )
     # After it the robot stands, so a move needs no body.stand of its own.
-    assert check([SkillCall("body.stand"), look, SkillCall("nav.move", {"distance": 1})],
-                 start=sitting, auto_stand=False).refusals == []
+    assert (
+        check(
+            [SkillCall("body.stand"), look, SkillCall("nav.move", {"distance": 1})],
+            start=sitting,
+            auto_stand=False,
+        ).refusals
+        == []
+    )
 
 
 def test_a_low_battery_refuses_it_unless_it_declares_otherwise():
     low = RobotState(battery=9.0)
     refused = reasons(check([SkillCall("body.look_up", {})], start=low))
-    assert refused == ["step 1 (body.look_up): the battery is at 9%, below the floor of 15% "
-                       "(safety.battery_floor): only nav.stop, body.sit, body.lie_down, "
-                       "sys.status are allowed"]
+    assert refused == [
+        "step 1 (body.look_up): the battery is at 9%, below the floor of 15% "
+        "(safety.battery_floor): only nav.stop, body.sit, body.lie_down, "
+        "sys.status are allowed"
+    ]
     gentle = with_look_up(dataclasses.replace(look_up_skill.SKILL, low_battery=True))
     assert check([SkillCall("body.look_up", {})], gentle, start=low).refusals == []
     still = check([SkillCall("nav.move", {"distance": 1})], gentle, start=low)
-    assert reasons(still)[0].endswith("only nav.stop, body.sit, body.lie_down, sys.status, "
-                                      "body.look_up are allowed")
+    assert reasons(still)[0].endswith(
+        "only nav.stop, body.sit, body.lie_down, sys.status, body.look_up are allowed"
+    )
 
 
 def test_a_steep_look_needs_approval_and_its_hold_counts_toward_the_missions_time():
@@ -134,15 +162,18 @@ def test_a_steep_look_needs_approval_and_its_hold_counts_toward_the_missions_tim
     assert steep.refusals == []
     assert [str(a) for a in steep.approvals] == [
         "step 1 (body.look_up): looking up 50 degrees can tip the robot over backwards and "
-        "needs approval, or safety.allow_risky_tricks: true"]
+        "needs approval, or safety.allow_risky_tricks: true"
+    ]
     assert check([SkillCall("body.look_up", {"degrees": 40})]).approvals == []
-    assert check([SkillCall("body.look_up", {"degrees": 50})],
-                 allow_risky_tricks=True).approvals == []
+    assert (
+        check([SkillCall("body.look_up", {"degrees": 50})], allow_risky_tricks=True).approvals == []
+    )
     long = check([SkillCall("body.look_up", {"hold": 20})], max_mission_duration=15)
-    assert "would take at least 20.0 s on the robot's clock, more than the limit of 15 s" in \
-        reasons(long)[0]
-    assert check([SkillCall("body.look_up", {"hold": 10})], max_mission_duration=15).refusals \
-        == []
+    assert (
+        "would take at least 20.0 s on the robot's clock, more than the limit of 15 s"
+        in reasons(long)[0]
+    )
+    assert check([SkillCall("body.look_up", {"hold": 10})], max_mission_duration=15).refusals == []
 
 
 def test_a_call_is_said_in_its_own_words():
@@ -166,8 +197,9 @@ def test_no_fact_about_a_skill_is_keyed_by_its_name_outside_the_skills():
     found = []
     for path in sorted(PACKAGE.rglob("*.py")):
         where = path.relative_to(PACKAGE)
-        if where.parts[0] == "skills" or (where.parts[0] == "planning"
-                                          and where.name != "_errors.py"):
+        if where.parts[0] == "skills" or (
+            where.parts[0] == "planning" and where.name != "_errors.py"
+        ):
             continue
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.Constant) and node.value in names:
@@ -176,6 +208,7 @@ def test_no_fact_about_a_skill_is_keyed_by_its_name_outside_the_skills():
 
 
 def test_a_skill_that_walks_cannot_be_declared_fit_for_a_low_battery():
-    with pytest.raises(ValueError, match="'body.look_up' moves the robot, so it cannot be "
-                                         "allowed on a low battery"):
+    with pytest.raises(
+        ValueError, match="'body.look_up' moves the robot, so it cannot be allowed on a low battery"
+    ):
         dataclasses.replace(look_up_skill.SKILL, moves=True, low_battery=True)

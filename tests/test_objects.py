@@ -69,12 +69,15 @@ def test_a_sighting_is_remembered_replaced_by_a_newer_one_and_sized_from_the_map
     assert belief.find("the red ball") is belief.find("ball") is belief.objects[0]
 
 
-@pytest.mark.parametrize("args,words", [
-    (("", 1.0, 1.0, 0.0), "non-empty name"),
-    (("box", math.nan, 1.0, 0.0), "position must be finite"),
-    (("box", 1.0, 1.0, 0.0, 1.5), "confidence must be in 0..1"),
-    (("box", 1.0, 1.0, math.inf), "stamp must be finite"),
-])
+@pytest.mark.parametrize(
+    "args,words",
+    [
+        (("", 1.0, 1.0, 0.0), "non-empty name"),
+        (("box", math.nan, 1.0, 0.0), "position must be finite"),
+        (("box", 1.0, 1.0, 0.0, 1.5), "confidence must be in 0..1"),
+        (("box", 1.0, 1.0, math.inf), "stamp must be finite"),
+    ],
+)
 def test_a_bad_sighting_is_refused_saying_why(args, words):
     belief = Belief(scene_grid(DEFAULT_WORLD))
     with pytest.raises(ValueError, match=words):
@@ -94,12 +97,15 @@ def test_the_simulator_tells_the_map_but_not_the_objects_until_seen():
 # -- going to a known object -------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("mission,name", [
-    ("go to the red ball", "red ball"),
-    ("bring me to the fridge", "white fridge"),  # its last word names it
-    ("find the blue box", "blue box"),
-    ("walk over to the grene plant", "green plant"),  # misspelt
-])
+@pytest.mark.parametrize(
+    "mission,name",
+    [
+        ("go to the red ball", "red ball"),
+        ("bring me to the fridge", "white fridge"),  # its last word names it
+        ("find the blue box", "blue box"),
+        ("walk over to the grene plant", "green plant"),  # misspelt
+    ],
+)
 def test_a_seen_object_is_approached_to_its_standoff_facing_it(mission, name):
     agent, robot = make()
     result = agent.execute_mission(mission)
@@ -128,11 +134,14 @@ def test_dry_run_predicts_the_standoff_path_facing_the_object():
 # -- searching for an object not seen yet ---------------------------------------------------------
 
 
-@pytest.mark.parametrize("mission,name,after", [
-    ("go to the person and say hello", "person", "hello"),
-    ("walk to the charging dock and sit down", "charging dock", None),
-    ("look for the yellow chair", "yellow chair", None),
-])
+@pytest.mark.parametrize(
+    "mission,name,after",
+    [
+        ("go to the person and say hello", "person", "hello"),
+        ("walk to the charging dock and sit down", "charging dock", None),
+        ("look for the yellow chair", "yellow chair", None),
+    ],
+)
 def test_an_object_out_of_view_is_searched_for_then_approached(mission, name, after):
     agent, robot = make()
     assert robot.belief().find(name) is None
@@ -142,8 +151,7 @@ def test_an_object_out_of_view_is_searched_for_then_approached(mission, name, af
     stands_before(robot, name)
     never_touched(robot)
     if after == "hello":
-        assert any(c.kind == "trick" and c.value == "hello" and c.accepted
-                   for c in robot.commands)
+        assert any(c.kind == "trick" and c.value == "hello" and c.accepted for c in robot.commands)
     if "sit" in mission:
         assert robot.get_state().posture.value == "sitting"
 
@@ -151,10 +159,10 @@ def test_an_object_out_of_view_is_searched_for_then_approached(mission, name, af
 def test_an_object_hidden_behind_a_wall_is_found_by_walking_round_it():
     # A wall of posts across the room with a gap at the top; the box stands behind it, out of
     # sight from the start whichever way the robot turns.
-    posts = tuple(WorldObject(f"post {i}", 1.0, -3.75 + 0.4 * i, 0.25, height=2.0)
-                  for i in range(16))
-    world = World(objects=(*posts, WorldObject("blue box", 3.0, -2.0, 0.3)),
-                  bounds=(-4, 5, -4, 4))
+    posts = tuple(
+        WorldObject(f"post {i}", 1.0, -3.75 + 0.4 * i, 0.25, height=2.0) for i in range(16)
+    )
+    world = World(objects=(*posts, WorldObject("blue box", 3.0, -2.0, 0.3)), bounds=(-4, 5, -4, 4))
     agent, robot = make(world=world, start=(-2.0, -1.0, 0.0))
     result = agent.execute_mission("find the blue box")
     assert result.success, result.response
@@ -185,25 +193,29 @@ def test_without_a_map_an_unknown_name_is_refused_before_moving():
 
 def _fences():
     circle = st.floats(2.5, 6.0)
-    polygon = st.sampled_from([None, [(-3, -3), (3, -3), (3, 3), (-3, 3)],
-                               [(-1, -2), (4, -2), (4, 2), (-1, 2)]])
+    polygon = st.sampled_from(
+        [None, [(-3, -3), (3, -3), (3, 3), (-3, 3)], [(-1, -2), (4, -2), (4, 2), (-1, 2)]]
+    )
     return st.tuples(circle, polygon)
 
 
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(seed=st.integers(0, 10_000), fence=_fences(), seconds=st.floats(15, 60),
-       metres=st.floats(1, 8))
-def test_a_search_never_leaves_the_geofence_nor_exceeds_its_budget(seed, fence, seconds,
-                                                                   metres):
+@given(
+    seed=st.integers(0, 10_000), fence=_fences(), seconds=st.floats(15, 60), metres=st.floats(1, 8)
+)
+def test_a_search_never_leaves_the_geofence_nor_exceeds_its_budget(seed, fence, seconds, metres):
     rng = random.Random(seed)
-    objects = tuple(WorldObject(f"thing {i}", rng.uniform(-4, 4), rng.uniform(-3, 3),
-                                rng.uniform(0.1, 0.5)) for i in range(rng.randint(0, 6)))
+    objects = tuple(
+        WorldObject(f"thing {i}", rng.uniform(-4, 4), rng.uniform(-3, 3), rng.uniform(0.1, 0.5))
+        for i in range(rng.randint(0, 6))
+    )
     objects = tuple(o for o in objects if math.hypot(o.x, o.y) > o.radius + 0.5)
     world = World(objects=objects, bounds=(-5, 5, -4, 4))
     radius, polygon = fence
     safety = SafetyConfig(geofence_radius=radius, geofence_polygon=polygon)
-    agent, robot = make(world=world, safety=safety,
-                        search=SearchConfig(max_seconds=seconds, max_distance=metres))
+    agent, robot = make(
+        world=world, safety=safety, search=SearchConfig(max_seconds=seconds, max_distance=metres)
+    )
     began = robot.now()
     result = agent.execute_mission("find the unicorn")  # not in the scene: the whole budget
     assert not result.success
@@ -238,8 +250,13 @@ def test_sightings_are_kept_in_memory_for_later_missions_and_history(tmp_path):
     agent.cleanup()
     env = {**os.environ, "SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path)}
     env.pop("SHADOWHOUND_CONFIG", None)
-    shown = subprocess.run([sys.executable, "-m", "shadowhound", "history"],
-                           capture_output=True, text=True, env=env, timeout=120)
+    shown = subprocess.run(
+        [sys.executable, "-m", "shadowhound", "history"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert shown.returncode == 0, shown.stderr
     assert "objects seen" in shown.stdout and "yellow chair" in shown.stdout
 
@@ -269,8 +286,12 @@ def test_the_offline_planner_reads_requests_about_things(text, skills, place):
 
 
 def test_the_model_is_told_the_objects_seen_after_the_stable_prefix():
-    prompt = system_prompt(default_registry(), style="plan", places={"kitchen": (4.0, 2.5)},
-                           objects={"red ball": (3.0, 0.0)})
+    prompt = system_prompt(
+        default_registry(),
+        style="plan",
+        places={"kitchen": (4.0, 2.5)},
+        objects={"red ball": (3.0, 0.0)},
+    )
     assert "Objects seen: red ball (3.0, 0.0)." in prompt
     assert prompt.index("Rules:") < prompt.index("Places:") < prompt.index("Objects seen:")
     assert "nav.goto with its name as place" in prompt
@@ -281,9 +302,20 @@ def test_an_llm_planned_mission_gets_the_objects_and_goes_to_one():
 
     with ScriptedLLM(models=("test-model",)) as srv:
         srv.script(json_plan([{"skill": "nav.goto", "args": {"place": "red ball"}}]))
-        cfg = load_config("llamacpp", {"llm": {"base_url": srv.url, "model": "test-model",
-                                                "max_retries": 0, "timeout": 5,
-                                                "hybrid": False}, **_NO_PLACES}, environ={})
+        cfg = load_config(
+            "llamacpp",
+            {
+                "llm": {
+                    "base_url": srv.url,
+                    "model": "test-model",
+                    "max_retries": 0,
+                    "timeout": 5,
+                    "hybrid": False,
+                },
+                **_NO_PLACES,
+            },
+            environ={},
+        )
         robot = SimRobot(time_scale=0.0)
         agent = RobotAgent(RobotAgentConfig(robot=robot, settings=cfg))
         result = agent.execute_mission("walk up to that ball")
@@ -300,7 +332,6 @@ def test_known_objects_from_memory_are_marked_remembered_and_replaced_by_a_fresh
     assert belief.sight("red ball", 3.05, 0.0, stamp=1.0).x == 3.05  # another run's clock
 
 
-
 def test_an_object_found_by_a_search_is_approached_only_on_a_path_the_governor_passes():
     # The dock is behind the robot and outside the geofence: the search sees it, the approach
     # to its standoff is refused, and the robot never leaves the fence.
@@ -314,8 +345,10 @@ def test_an_object_found_by_a_search_is_approached_only_on_a_path_the_governor_p
 
 
 def test_a_name_that_fits_two_objects_seen_is_refused_asking_which():
-    world = World(objects=(WorldObject("red ball", 2.0, 0.5, 0.2),
-                           WorldObject("blue ball", 2.0, -0.5, 0.2)), bounds=(-4, 4, -4, 4))
+    world = World(
+        objects=(WorldObject("red ball", 2.0, 0.5, 0.2), WorldObject("blue ball", 2.0, -0.5, 0.2)),
+        bounds=(-4, 4, -4, 4),
+    )
     agent, robot = make(world=world)
     result = agent.execute_mission("go to the ball")
     assert not result.success and not robot.received_motion

@@ -11,6 +11,5 @@ def test_import_is_light_and_exports_the_public_names():
         "'onnxruntime', 'numpy', 'mcp', 'mcp_types') if m in sys.modules]\n"
         "print(','.join(heavy))\n"
     )
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          check=True)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stdout.strip() == ""

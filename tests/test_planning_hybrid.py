@@ -27,9 +27,11 @@ def srv():
 
 def agent_for(srv, tmp_path=None, **llm):
     memory = {"enabled": True, "data_dir": str(tmp_path)} if tmp_path else {"enabled": False}
-    settings = load_config("llamacpp", {"llm": {"base_url": srv.url, "model": "m",
-                                                "max_retries": 0, **llm}, "memory": memory},
-                           environ={})
+    settings = load_config(
+        "llamacpp",
+        {"llm": {"base_url": srv.url, "model": "m", "max_retries": 0, **llm}, "memory": memory},
+        environ={},
+    )
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
     agent.initialize()
     return agent
@@ -37,8 +39,7 @@ def agent_for(srv, tmp_path=None, **llm):
 
 def test_hybrid_is_the_default_with_a_model_and_a_setting_turns_it_off(srv):
     def settings(**llm):
-        return load_config("vllm", {"llm": {"base_url": srv.url, "model": "m", **llm}},
-                           environ={})
+        return load_config("vllm", {"llm": {"base_url": srv.url, "model": "m", **llm}}, environ={})
 
     assert isinstance(make_planner(settings()), HybridPlanner)
     assert isinstance(make_planner(settings(hybrid=False)), LLMPlanner)
@@ -48,12 +49,15 @@ def test_hybrid_is_the_default_with_a_model_and_a_setting_turns_it_off(srv):
     assert env.llm.hybrid is False
 
 
-@pytest.mark.parametrize("mission", [
-    "stand up and walk forward 1 meter",
-    "turn right 45 degrees then sit down",
-    "walk in a square of 1 meter",
-    "go back to the start",
-])
+@pytest.mark.parametrize(
+    "mission",
+    [
+        "stand up and walk forward 1 meter",
+        "turn right 45 degrees then sit down",
+        "walk in a square of 1 meter",
+        "go back to the start",
+    ],
+)
 def test_sentences_the_rules_understand_cost_no_model_call(srv, mission):
     agent = agent_for(srv)
     result = agent.execute_mission(mission)
@@ -69,8 +73,14 @@ def test_the_model_plans_what_the_rules_do_not_understand_from_the_sentence_as_w
     # The rules understand the first clause only; the model gets the whole sentence and
     # nothing of the rules' partial reading.
     mission = "walk forward 1 meter and then fetch my slippers from the hallway"
-    srv.script(json_plan([{"skill": "nav.move", "args": {"distance": 1.0}},
-                          {"skill": "nav.goto", "args": {"place": "start"}}]))
+    srv.script(
+        json_plan(
+            [
+                {"skill": "nav.move", "args": {"distance": 1.0}},
+                {"skill": "nav.goto", "args": {"place": "start"}},
+            ]
+        )
+    )
     result = agent.execute_mission(mission)
     assert result.success, result.response
     assert len(srv.requests) == 1 and result.usage.round_trips == 1
@@ -115,13 +125,32 @@ def test_cli_run_reports_the_planner(srv):
     env = {**os.environ, "SHADOWHOUND_LLM__MAX_RETRIES": "0"}
     env.pop("SHADOWHOUND_CONFIG", None)
     proc = subprocess.run(
-        [sys.executable, "-m", "shadowhound", "run", "--backend", "llamacpp", "--base-url",
-         srv.url, "--model", "m", "--json", "walk forward 2 meters"],
-        capture_output=True, text=True, timeout=60, env=env)
+        [
+            sys.executable,
+            "-m",
+            "shadowhound",
+            "run",
+            "--backend",
+            "llamacpp",
+            "--base-url",
+            srv.url,
+            "--model",
+            "m",
+            "--json",
+            "walk forward 2 meters",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+    )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert (out["planner"], out["planned_by"], out["usage"]["round_trips"]) == (
-        "hybrid", "offline", 0)
+        "hybrid",
+        "offline",
+        0,
+    )
     assert srv.requests == []  # no completion asked: the start-up check lists models only
 
 
@@ -131,8 +160,9 @@ def test_planners_declare_what_the_agent_may_use_of_them(srv):
     from shadowhound.planning import Planner, ReplanningPlanner, StepwisePlanner
 
     def planner(**llm):
-        return make_planner(load_config("vllm", {"llm": {"base_url": srv.url, "model": "m",
-                                                         **llm}}, environ={}))
+        return make_planner(
+            load_config("vllm", {"llm": {"base_url": srv.url, "model": "m", **llm}}, environ={})
+        )
 
     rules = make_planner(load_config("offline", environ={}))
     assert isinstance(rules, Planner) and not rules.needs_context

@@ -10,9 +10,28 @@ from shadowhound import units
 from shadowhound.planning._numbers import SPEED_UNITS, UNIT_KINDS, UNITS, to_digits
 from shadowhound.planning.rules import RulePlanner
 
-ONES = ["zero", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
-        "eleven", "twelve", "thirteen", "fourteen", "fifteen", "sixteen", "seventeen",
-        "eighteen", "nineteen"]
+ONES = [
+    "zero",
+    "one",
+    "two",
+    "three",
+    "four",
+    "five",
+    "six",
+    "seven",
+    "eight",
+    "nine",
+    "ten",
+    "eleven",
+    "twelve",
+    "thirteen",
+    "fourteen",
+    "fifteen",
+    "sixteen",
+    "seventeen",
+    "eighteen",
+    "nineteen",
+]
 TENS = ["", "", "twenty", "thirty", "forty", "fifty", "sixty", "seventy", "eighty", "ninety"]
 
 
@@ -53,24 +72,27 @@ def test_number_words_are_read_as_their_value(n, british_and):
 @settings(max_examples=200, deadline=None)
 @given(st.integers(1, 999_999), st.integers(0, 999_999))
 def test_a_larger_scale_multiplies_what_came_before(millions, rest):
-    """"one thousand million" is 10**9 (the long-scale way to say a billion), not 1,001,000."""
+    """ "one thousand million" is 10**9 (the long-scale way to say a billion), not 1,001,000."""
     text = f"{in_words(millions)} million" + (f" {in_words(rest)}" if rest else "")
     assert to_digits(text) == str(millions * 10**6 + rest)
 
 
-@pytest.mark.parametrize(("text", "digits"), [
-    ("one thousand million", "1000000000"),
-    ("a thousand million", "1000000000"),
-    ("two thousand five hundred million", "2500000000"),
-    ("five hundred thousand", "500000"),
-    ("two million three thousand", "2003000"),
-    ("one hundred and five", "105"),
-    ("nineteen hundred", "1900"),
-    ("a billion", "1000000000"),
-    ("two one", "2 1"),
-    ("twenty one", "21"),
-    ("one point five", "1.5"),
-])
+@pytest.mark.parametrize(
+    ("text", "digits"),
+    [
+        ("one thousand million", "1000000000"),
+        ("a thousand million", "1000000000"),
+        ("two thousand five hundred million", "2500000000"),
+        ("five hundred thousand", "500000"),
+        ("two million three thousand", "2003000"),
+        ("one hundred and five", "105"),
+        ("nineteen hundred", "1900"),
+        ("a billion", "1000000000"),
+        ("two one", "2 1"),
+        ("twenty one", "21"),
+        ("one point five", "1.5"),
+    ],
+)
 def test_compound_number_words(text, digits):
     assert to_digits(text) == digits
 

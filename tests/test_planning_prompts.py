@@ -30,26 +30,38 @@ def test_the_prefix_is_everything_constant_and_nothing_that_changes(style):
 
 
 def _agent(srv, tmp_path, **llm):
-    settings = load_config("llamacpp", {
-        "llm": {"base_url": srv.url, "model": "m", "max_retries": 0, "hybrid": False, **llm},
-        "memory": {"enabled": True, "data_dir": str(tmp_path)}}, environ={})
+    settings = load_config(
+        "llamacpp",
+        {
+            "llm": {"base_url": srv.url, "model": "m", "max_retries": 0, "hybrid": False, **llm},
+            "memory": {"enabled": True, "data_dir": str(tmp_path)},
+        },
+        environ={},
+    )
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
     agent.initialize()
     return agent
 
 
-@pytest.mark.parametrize("style,fmt,mode", [("plan", "auto", "plan"),
-                                            ("tools", "tools", "plan"),
-                                            ("react", "auto", "react")])
+@pytest.mark.parametrize(
+    "style,fmt,mode",
+    [("plan", "auto", "plan"), ("tools", "tools", "plan"), ("react", "auto", "react")],
+)
 def test_two_different_missions_share_the_prefix_byte_for_byte(tmp_path, style, fmt, mode):
     with ScriptedLLM(models=("m",)) as srv:
         agent = _agent(srv, tmp_path, plan_format=fmt, mode=mode)
         if style == "plan":
-            srv.script(json_plan([{"skill": "nav.move", "args": {"distance": 1.5}}]),
-                       json_plan([{"skill": "body.sit", "args": {}}]))
+            srv.script(
+                json_plan([{"skill": "nav.move", "args": {"distance": 1.5}}]),
+                json_plan([{"skill": "body.sit", "args": {}}]),
+            )
         else:
-            srv.script(tool_calls(("nav_move", {"distance": 1.5})), text("done"),
-                       tool_calls(("body_sit", {})), text("done"))
+            srv.script(
+                tool_calls(("nav_move", {"distance": 1.5})),
+                text("done"),
+                tool_calls(("body_sit", {})),
+                text("done"),
+            )
         agent.execute_mission("walk forward one and a half meters")
         agent.execute_mission("take a seat over there")  # robot moved; history grew
         firsts = [r for r in srv.requests if len(r["messages"]) == 2]
@@ -67,9 +79,14 @@ def test_two_different_missions_share_the_prefix_byte_for_byte(tmp_path, style, 
 
 def test_the_prefix_does_not_depend_on_the_places_or_state(tmp_path):
     registry = default_registry()
-    a = prompts.system_prompt(registry, style="plan", places={"kitchen": (3, 2)},
-                              history=["succeeded: 'sit' -> Done."], history_size=5,
-                              memories=["the dock is behind the sofa"])
+    a = prompts.system_prompt(
+        registry,
+        style="plan",
+        places={"kitchen": (3, 2)},
+        history=["succeeded: 'sit' -> Done."],
+        history_size=5,
+        memories=["the dock is behind the sofa"],
+    )
     b = prompts.system_prompt(registry, style="plan")
     prefix = prompts.stable_prefix(registry, style="plan")
     assert a.startswith(prefix + "\n") and b.startswith(prefix + "\n")

@@ -22,8 +22,7 @@ REGISTRY = default_registry()
 
 
 def valid(instance: Any, dialect: str) -> bool:
-    return jsonschema.Draft202012Validator(schema.plan_schema(REGISTRY, dialect)).is_valid(
-        instance)
+    return jsonschema.Draft202012Validator(schema.plan_schema(REGISTRY, dialect)).is_valid(instance)
 
 
 def plan(*steps: tuple[str, dict[str, Any]], **extra: Any) -> dict[str, Any]:
@@ -42,34 +41,46 @@ def test_the_schema_is_byte_identical_for_fresh_registries(dialect):
 
 
 @pytest.mark.parametrize("dialect", ["json_schema", "llamacpp"])
-@pytest.mark.parametrize("bad", [
-    plan(("nav.fly", {"distance": 1.0})),                      # not a skill
-    plan(("nav.move", {"distance": 1.0, "meters": 1})),        # an invented argument
-    plan(("nav.move", {})),                                    # a required argument missing
-    plan(("nav.move", {"distance": "one"})),                   # text for a number
-    plan(("nav.rotate", {"distance": 1.0})),                   # another skill's argument
-    plan(("body.sport", {"trick": "moonwalk backwards"})),     # not one of the tricks
-    plan(("body.stand", {"speed": 1.0})),                      # a skill without arguments
-    plan(("nav.patrol", {"laps": 1.5})),                       # a count must be whole
-    {"steps": [{"skill": "nav.move", "args": {"distance": 1.0}, "why": "x"}]},
-    {"steps": [], "plan": []},
-])
+@pytest.mark.parametrize(
+    "bad",
+    [
+        plan(("nav.fly", {"distance": 1.0})),  # not a skill
+        plan(("nav.move", {"distance": 1.0, "meters": 1})),  # an invented argument
+        plan(("nav.move", {})),  # a required argument missing
+        plan(("nav.move", {"distance": "one"})),  # text for a number
+        plan(("nav.rotate", {"distance": 1.0})),  # another skill's argument
+        plan(("body.sport", {"trick": "moonwalk backwards"})),  # not one of the tricks
+        plan(("body.stand", {"speed": 1.0})),  # a skill without arguments
+        plan(("nav.patrol", {"laps": 1.5})),  # a count must be whole
+        {"steps": [{"skill": "nav.move", "args": {"distance": 1.0}, "why": "x"}]},
+        {"steps": [], "plan": []},
+    ],
+)
 def test_invalid_plans_are_outside_the_schema(dialect, bad):
     assert not valid(bad, dialect)
 
 
 @pytest.mark.parametrize("dialect", ["json_schema", "llamacpp"])
 def test_valid_plans_are_inside_the_schema(dialect):
-    assert valid(plan(("body.stand", {}), ("nav.move", {"distance": 1.0}),
-                      ("nav.move", {"distance": -2}), ("nav.goto", {"place": "kitchen"}),
-                      ("nav.goto", {"x": 1, "y": -2.5}), ("body.sport", {"trick": "hello"}),
-                      ("nav.patrol", {})), dialect)
+    assert valid(
+        plan(
+            ("body.stand", {}),
+            ("nav.move", {"distance": 1.0}),
+            ("nav.move", {"distance": -2}),
+            ("nav.goto", {"place": "kitchen"}),
+            ("nav.goto", {"x": 1, "y": -2.5}),
+            ("body.sport", {"trick": "hello"}),
+            ("nav.patrol", {}),
+        ),
+        dialect,
+    )
     assert valid({"steps": [], "answer": "I cannot fly."}, dialect)
 
 
 @pytest.mark.parametrize("dialect", DIALECTS)
-@pytest.mark.parametrize("args", [{"x": 1.0}, {"y": 1.0}, {"x": 1, "y": 2, "place": "kitchen"},
-                                  {}, {"speed": 0.5}])
+@pytest.mark.parametrize(
+    "args", [{"x": 1.0}, {"y": 1.0}, {"x": 1, "y": 2, "place": "kitchen"}, {}, {"speed": 0.5}]
+)
 def test_a_half_target_is_outside_the_schema(dialect, args):
     """nav.goto takes x and y, or a place: its alternatives are steps of their own."""
     step = {"skill": "nav.goto", "args": args}
@@ -122,8 +133,11 @@ def _keys(node: Any) -> set[str]:
 def test_openai_strict_subset(where):
     """OpenAI's strict mode: every object closed with all properties required; no const,
     string lengths or defaults."""
-    root = (schema.plan_schema(REGISTRY, "openai") if where == "plan"
-            else [t["function"]["parameters"] for t in schema.strict_tools(REGISTRY)])
+    root = (
+        schema.plan_schema(REGISTRY, "openai")
+        if where == "plan"
+        else [t["function"]["parameters"] for t in schema.strict_tools(REGISTRY)]
+    )
     objects = _objects(root)
     assert len(objects) >= len(REGISTRY)
     for obj in objects:
@@ -139,22 +153,30 @@ def test_openai_optional_arguments_are_nullable_and_accepted_as_null():
     step = {"skill": "nav.move", "args": {"distance": 1.0, "speed": None}}
     assert valid({"steps": [step], "answer": ""}, "openai")
     assert REGISTRY.validate(SkillCall(step["skill"], step["args"])).args_dict() == {
-        "distance": 1.0}
+        "distance": 1.0
+    }
 
 
 # Any step a schema admits names a real skill with only its own, well-typed arguments in a
 # combination it accepts: the registry may still refuse a value (a required distance beyond
 # its range where the grammar has no ranges, a name that breaks its pattern), but never for an
 # unknown skill, an invented or missing argument, a wrong type, or a half target.
-_VALUES = st.one_of(st.integers(-3, 3), st.floats(-2, 2), st.sampled_from(
-    ["hello", "kitchen", "1 m", "", "moonwalk"]), st.none(), st.booleans())
+_VALUES = st.one_of(
+    st.integers(-3, 3),
+    st.floats(-2, 2),
+    st.sampled_from(["hello", "kitchen", "1 m", "", "moonwalk"]),
+    st.none(),
+    st.booleans(),
+)
 _ARG_NAMES = sorted({n for s in REGISTRY for n in s.args_model.model_fields} | {"meters", "foo"})
 
 
 @settings(max_examples=300, deadline=None)
-@given(name=st.sampled_from([*REGISTRY.names, "nav.fly", "nav_move"]),
-       args=st.dictionaries(st.sampled_from(_ARG_NAMES), _VALUES, max_size=3),
-       dialect=st.sampled_from(DIALECTS))
+@given(
+    name=st.sampled_from([*REGISTRY.names, "nav.fly", "nav_move"]),
+    args=st.dictionaries(st.sampled_from(_ARG_NAMES), _VALUES, max_size=3),
+    dialect=st.sampled_from(DIALECTS),
+)
 def test_schema_valid_steps_are_registry_valid_in_name_and_type(name, args, dialect):
     step = {"skill": name, "args": args}
     if not valid({"steps": [step], "answer": ""}, dialect):
@@ -168,13 +190,15 @@ def test_schema_valid_steps_are_registry_valid_in_name_and_type(name, args, dial
             assert "valid number" not in problem and "valid string" not in problem, problem
 
 
-@pytest.mark.skipif(importlib.util.find_spec("llama_cpp") is None,
-                    reason="llama-cpp-python is not installed")
+@pytest.mark.skipif(
+    importlib.util.find_spec("llama_cpp") is None, reason="llama-cpp-python is not installed"
+)
 def test_llama_cpp_compiles_the_schema_to_a_grammar_of_every_skill():
     from llama_cpp import llama_grammar
 
     grammar = llama_grammar.json_schema_to_gbnf(
-        json.dumps(schema.plan_schema(REGISTRY, "llamacpp")))
+        json.dumps(schema.plan_schema(REGISTRY, "llamacpp"))
+    )
     for name in REGISTRY.names:
         assert f'"\\"{name}\\""' in grammar, name
     assert '"\\"meters\\""' not in grammar
@@ -184,29 +208,40 @@ def test_llama_cpp_compiles_the_schema_to_a_grammar_of_every_skill():
 
 
 def _agent(srv: ScriptedLLM, backend: str, **llm: Any) -> RobotAgent:
-    settings = load_config(backend, {"llm": {"base_url": srv.url, "model": "m", "max_retries": 0,
-                                             "hybrid": False, **llm}}, environ={})
+    settings = load_config(
+        backend,
+        {"llm": {"base_url": srv.url, "model": "m", "max_retries": 0, "hybrid": False, **llm}},
+        environ={},
+    )
     return RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
 
 
-@pytest.mark.parametrize("backend,dialect", [("openai", "openai"), ("vllm", "json_schema"),
-                                             ("ollama", "json_schema"),
-                                             ("llamacpp", "llamacpp")])
-def test_each_backend_gets_its_dialect_byte_identical_across_missions(backend, dialect,
-                                                                      monkeypatch):
+@pytest.mark.parametrize(
+    "backend,dialect",
+    [
+        ("openai", "openai"),
+        ("vllm", "json_schema"),
+        ("ollama", "json_schema"),
+        ("llamacpp", "llamacpp"),
+    ],
+)
+def test_each_backend_gets_its_dialect_byte_identical_across_missions(
+    backend, dialect, monkeypatch
+):
     monkeypatch.setenv("OPENAI_API_KEY", "sk-test")
     with ScriptedLLM(models=("m",), ollama_tags=["m:latest"]) as srv:
         agent = _agent(srv, backend, check_on_start=False)
-        srv.script(json_plan([{"skill": "nav.move", "args": {"distance": 1.0}}]),
-                   json_plan([{"skill": "body.sit", "args": {}}]))
+        srv.script(
+            json_plan([{"skill": "nav.move", "args": {"distance": 1.0}}]),
+            json_plan([{"skill": "body.sit", "args": {}}]),
+        )
         assert agent.execute_mission("walk a meter").success
         assert agent.execute_mission("take a seat").success
         first, second = (r["response_format"] for r in srv.requests)
     assert json.dumps(first) == json.dumps(second)
     sent = first["schema"] if backend == "llamacpp" else first["json_schema"]["schema"]
     assert sent == schema.plan_schema(default_registry(), dialect)
-    assert (first.get("json_schema") or {}).get("strict") is (True if backend == "openai"
-                                                             else None)
+    assert (first.get("json_schema") or {}).get("strict") is (True if backend == "openai" else None)
 
 
 def test_openai_tools_are_strict_and_others_are_not(monkeypatch):

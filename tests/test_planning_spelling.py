@@ -28,23 +28,35 @@ def refusal(text: str) -> str:
 # -- misspellings, by kind of word -------------------------------------------------------------
 
 
-@pytest.mark.parametrize("typo,clean,read", [
-    ("rotaet right 30 degrees", "rotate right 30 degrees", ("rotaet", "rotate")),     # verb, swap
-    ("stafe left half a meter", "strafe left half a meter", ("stafe", "strafe")),     # verb, drop
-    ("move backwrd 40 cm", "move backward 40 cm", ("backwrd", "backward")),           # direction
-    ("turn counterclokwise 15 degrees", "turn counterclockwise 15 degrees",
-     ("counterclokwise", "counterclockwise")),                                        # long word
-    ("walk forward three metres quikcly", "walk forward three metres quickly",
-     ("quikcly", "quickly")),                                                         # adverb
-    ("go ahead siex meters", "go ahead six meters", ("siex", "six")),                  # number
-    ("walk forward twnety centimeters", "walk forward twenty centimeters",
-     ("twnety", "twenty")),                                                           # number
-    ("wait for 4 secodns", "wait for 4 seconds", ("secodns", "seconds")),             # unit
-    ("turn left 120 dgerees", "turn left 120 degrees", ("dgerees", "degrees")),       # 2 edits
-    ("stnad up", "stand up", ("stnad", "stand")),                                     # posture
-    ("lie dwon", "lie down", ("dwon", "down")),                                       # posture
-    ("pivto left 45 degrees", "pivot left 45 degrees", ("pivto", "pivot")),           # other verb
-])
+@pytest.mark.parametrize(
+    "typo,clean,read",
+    [
+        ("rotaet right 30 degrees", "rotate right 30 degrees", ("rotaet", "rotate")),  # verb, swap
+        ("stafe left half a meter", "strafe left half a meter", ("stafe", "strafe")),  # verb, drop
+        ("move backwrd 40 cm", "move backward 40 cm", ("backwrd", "backward")),  # direction
+        (
+            "turn counterclokwise 15 degrees",
+            "turn counterclockwise 15 degrees",
+            ("counterclokwise", "counterclockwise"),
+        ),  # long word
+        (
+            "walk forward three metres quikcly",
+            "walk forward three metres quickly",
+            ("quikcly", "quickly"),
+        ),  # adverb
+        ("go ahead siex meters", "go ahead six meters", ("siex", "six")),  # number
+        (
+            "walk forward twnety centimeters",
+            "walk forward twenty centimeters",
+            ("twnety", "twenty"),
+        ),  # number
+        ("wait for 4 secodns", "wait for 4 seconds", ("secodns", "seconds")),  # unit
+        ("turn left 120 dgerees", "turn left 120 degrees", ("dgerees", "degrees")),  # 2 edits
+        ("stnad up", "stand up", ("stnad", "stand")),  # posture
+        ("lie dwon", "lie down", ("dwon", "down")),  # posture
+        ("pivto left 45 degrees", "pivot left 45 degrees", ("pivto", "pivot")),  # other verb
+    ],
+)
 def test_a_misspelt_word_of_the_vocabulary_is_read_and_said(typo, clean, read):
     plan = PLANNER.plan(typo)
     assert [(s.skill, s.args) for s in plan.steps] == steps(clean)
@@ -54,7 +66,8 @@ def test_a_misspelt_word_of_the_vocabulary_is_read_and_said(typo, clean, read):
 def test_several_misspellings_in_several_clauses_each_said_once():
     plan = PLANNER.plan("stnad up, wlak forwrd two meters then tunr rigth")
     assert [(s.skill, s.args) for s in plan.steps] == steps(
-        "stand up, walk forward two meters then turn right")
+        "stand up, walk forward two meters then turn right"
+    )
     read = [n for n in plan.notes if n.startswith("read ")]
     assert len(read) == 5 and all(n.count("'") == 6 for n in read)
 
@@ -73,50 +86,62 @@ def test_words_written_correctly_are_never_rewritten():
 # -- postures with extra words --------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("text,skill", [
-    ("lay down on the ground", "body.lie_down"),
-    ("lie down right here please", "body.lie_down"),
-    ("sit down now", "body.sit"),
-    ("kindly sit down where you are", "body.sit"),
-    ("stand up straight", "body.stand"),
-    ("get up nicely", "body.stand"),
-])
+@pytest.mark.parametrize(
+    "text,skill",
+    [
+        ("lay down on the ground", "body.lie_down"),
+        ("lie down right here please", "body.lie_down"),
+        ("sit down now", "body.sit"),
+        ("kindly sit down where you are", "body.sit"),
+        ("stand up straight", "body.stand"),
+        ("get up nicely", "body.stand"),
+    ],
+)
 def test_postures_with_words_that_change_nothing(text, skill):
     assert steps(text) == [(skill, {})]
 
 
 def test_a_posture_keeps_its_duration_among_extra_words():
-    assert steps("sit down on the floor for 8 seconds") == [("body.sit", {}),
-                                                            ("sys.wait", {"seconds": 8.0})]
+    assert steps("sit down on the floor for 8 seconds") == [
+        ("body.sit", {}),
+        ("sys.wait", {"seconds": 8.0}),
+    ]
 
 
 # -- still refused, naming what stands in the way -------------------------------------------------
 
 
-@pytest.mark.parametrize("text,word", [
-    ("turn left unless someone is there", "unless"),
-    ("walk forward until the wall", "until"),
-    ("stand up as soon as the battery is charged", "as soon as"),
-    ("if the hallway is clear walk forward 2 meters", "if"),
-    ("lie down when the music stops", "when"),
-])
+@pytest.mark.parametrize(
+    "text,word",
+    [
+        ("turn left unless someone is there", "unless"),
+        ("walk forward until the wall", "until"),
+        ("stand up as soon as the battery is charged", "as soon as"),
+        ("if the hallway is clear walk forward 2 meters", "if"),
+        ("lie down when the music stops", "when"),
+    ],
+)
 def test_conditions_are_refused_not_half_planned(text, word):
     message = refusal(text)
     assert f"conditions ('{word}')" in message
 
 
-@pytest.mark.parametrize("text", ["never turn right", "do not walk backward 2 meters",
-                                  "dont sti down"])
+@pytest.mark.parametrize(
+    "text", ["never turn right", "do not walk backward 2 meters", "dont sti down"]
+)
 def test_negations_are_refused_also_misspelt(text):
     assert "'not'" in refusal(text)
 
 
-@pytest.mark.parametrize("text,words", [
-    ("carry the basket to the garage", ["basket", "garage"]),
-    ("sit on the sofa", ["sofa"]),
-    ("lie down under the piano", ["under", "piano"]),
-    ("walk forward 2 meters and water the plants", ["water", "plants"]),
-])
+@pytest.mark.parametrize(
+    "text,words",
+    [
+        ("carry the basket to the garage", ["basket", "garage"]),
+        ("sit on the sofa", ["sofa"]),
+        ("lie down under the piano", ["under", "piano"]),
+        ("walk forward 2 meters and water the plants", ["water", "plants"]),
+    ],
+)
 def test_unknown_words_are_refused_and_named(text, words):
     message = refusal(text)
     for word in words:
@@ -142,22 +167,27 @@ SENTENCES = st.builds(
     st.sampled_from(["forward", "backward", "left", "right", "clockwise"]),
     st.sampled_from(["two", "three", "seven", "twelve", "forty", "90", "1.5"]),
     st.sampled_from(["meters", "metres", "degrees", "centimeters", "feet", "seconds"]),
-) | st.sampled_from(["sit down", "stand up", "lie down", "wait five seconds",
-                     "turn around", "walk in a square"])
+) | st.sampled_from(
+    ["sit down", "stand up", "lie down", "wait five seconds", "turn around", "walk in a square"]
+)
 
 
 def typo(word: str, kind: str, at: int) -> str:
     at = 1 + at % max(1, len(word) - 2)  # never the first letter (see _spelling)
     if kind == "swap":
-        return word[:at] + word[at + 1] + word[at] + word[at + 2:]
+        return word[:at] + word[at + 1] + word[at] + word[at + 2 :]
     if kind == "drop":
-        return word[:at] + word[at + 1:]
+        return word[:at] + word[at + 1 :]
     return word[:at] + word[at] + word[at:]  # a doubled letter
 
 
 @settings(max_examples=300, deadline=None)
-@given(sentence=SENTENCES, which=st.integers(0, 3),
-       kind=st.sampled_from(["swap", "drop", "double"]), at=st.integers(0, 20))
+@given(
+    sentence=SENTENCES,
+    which=st.integers(0, 3),
+    kind=st.sampled_from(["swap", "drop", "double"]),
+    at=st.integers(0, 20),
+)
 @example(sentence="turn left 90 degrees", which=0, kind="swap", at=1)
 def test_a_typo_gives_the_same_plan_or_a_refusal_naming_it(sentence, which, kind, at):
     try:
@@ -169,7 +199,7 @@ def test_a_typo_gives_the_same_plan_or_a_refusal_naming_it(sentence, which, kind
     assume(len(words[index]) >= 4 and words[index].isalpha())
     misspelt = typo(words[index], kind, at)
     assume(misspelt not in spelling.known_words())  # a real word is not a typo
-    text = " ".join(words[:index] + [misspelt] + words[index + 1:])
+    text = " ".join(words[:index] + [misspelt] + words[index + 1 :])
     try:
         plan = PLANNER.plan(text)
     except PlanningError as exc:

@@ -12,8 +12,9 @@ def check(calls, start=None, auto_stand=True, **limits):
     settings = ShadowHoundConfig(safety=SafetyConfig(**limits))
     validated = [registry.validate(c) for c in calls]
     start = start or RobotState()
-    return Governor(settings.safety, auto_stand).check_plan(validated, start,
-                                                            PlanEnv(settings, start.pose))
+    return Governor(settings.safety, auto_stand).check_plan(
+        validated, start, PlanEnv(settings, start.pose)
+    )
 
 
 def reasons(verdict):
@@ -21,17 +22,23 @@ def reasons(verdict):
 
 
 def test_plan_within_limits_passes_and_predicts_path():
-    verdict = check([SkillCall("nav.move", {"distance": 2}),
-                     SkillCall("nav.rotate", {"degrees": 90}),
-                     SkillCall("nav.move", {"distance": 1})])
+    verdict = check(
+        [
+            SkillCall("nav.move", {"distance": 2}),
+            SkillCall("nav.rotate", {"degrees": 90}),
+            SkillCall("nav.move", {"distance": 1}),
+        ]
+    )
     assert verdict.refusals == [] and verdict.approvals == []
     assert (verdict.path[-1].x, verdict.path[-1].y) == (pytest.approx(2.0), pytest.approx(1.0))
     assert verdict.distance == pytest.approx(3.0)
 
 
 def test_step_distance_limit():
-    assert "exceeds the limit of 5 m per step" in reasons(check([SkillCall(
-        "nav.move", {"distance": 6})]))[0]
+    assert (
+        "exceeds the limit of 5 m per step"
+        in reasons(check([SkillCall("nav.move", {"distance": 6})]))[0]
+    )
 
 
 def test_geofence_counts_the_whole_plan():
@@ -61,8 +68,12 @@ def test_mission_distance_limit():
 
 
 def test_speed_caps():
-    verdict = check([SkillCall("nav.move", {"distance": 1, "speed": 0.9}),
-                     SkillCall("nav.rotate", {"degrees": 90, "speed": 1.5})])
+    verdict = check(
+        [
+            SkillCall("nav.move", {"distance": 1, "speed": 0.9}),
+            SkillCall("nav.rotate", {"degrees": 90, "speed": 1.5}),
+        ]
+    )
     assert "0.9 m/s exceeds the cap of 0.5 m/s" in verdict.refusals[0].reason
     assert "1.5 rad/s exceeds the cap of 1 rad/s" in verdict.refusals[1].reason
 
@@ -70,22 +81,33 @@ def test_speed_caps():
 def test_risky_tricks_need_approval_unless_allowed():
     verdict = check([SkillCall("body.sport", {"trick": "backflip"})])
     assert verdict.refusals == [] and "needs approval" in verdict.approvals[0].reason
-    assert check([SkillCall("body.sport", {"trick": "backflip"})],
-                 allow_risky_tricks=True).approvals == []
+    assert (
+        check([SkillCall("body.sport", {"trick": "backflip"})], allow_risky_tricks=True).approvals
+        == []
+    )
     assert check([SkillCall("body.sport", {"trick": "hello"})]).approvals == []
 
 
 def test_battery_floor_allows_only_stopping_and_sitting():
     low = RobotState(battery=9.0)
-    verdict = check([SkillCall("nav.move", {"distance": 1}), SkillCall("body.sit"),
-                     SkillCall("nav.stop"), SkillCall("sys.status")], start=low)
+    verdict = check(
+        [
+            SkillCall("nav.move", {"distance": 1}),
+            SkillCall("body.sit"),
+            SkillCall("nav.stop"),
+            SkillCall("sys.status"),
+        ],
+        start=low,
+    )
     assert [r.step for r in verdict.refusals] == [1]
     assert "battery is at 9%, below the floor of 15%" in verdict.refusals[0].reason
 
 
 def test_allow_and_deny_lists():
-    verdict = check([SkillCall("nav.move", {"distance": 1}), SkillCall("body.sport",
-                     {"trick": "dance1"})], allow_skills=["nav.*", "sys.*"])
+    verdict = check(
+        [SkillCall("nav.move", {"distance": 1}), SkillCall("body.sport", {"trick": "dance1"})],
+        allow_skills=["nav.*", "sys.*"],
+    )
     assert [r.step for r in verdict.refusals] == [2]
     verdict = check([SkillCall("perception.look_around")], deny_skills=["perception.*"])
     assert "safety.deny_skills" in verdict.refusals[0].reason
@@ -95,15 +117,20 @@ def test_posture_preconditions_when_auto_stand_is_off():
     sitting = RobotState(posture=Posture.SITTING)
     verdict = check([SkillCall("nav.move", {"distance": 1})], start=sitting, auto_stand=False)
     assert "will be sitting here; add body.stand" in verdict.refusals[0].reason
-    assert check([SkillCall("body.stand"), SkillCall("nav.move", {"distance": 1})],
-                 start=sitting, auto_stand=False).refusals == []
+    assert (
+        check(
+            [SkillCall("body.stand"), SkillCall("nav.move", {"distance": 1})],
+            start=sitting,
+            auto_stand=False,
+        ).refusals
+        == []
+    )
     assert check([SkillCall("nav.move", {"distance": 1})], start=sitting).refusals == []
 
 
 def test_patrol_legs_and_places_are_checked():
     assert check([SkillCall("nav.patrol", {"laps": 2})]).refusals == []
-    assert "unknown place 'attic'" in reasons(check([SkillCall("nav.goto",
-                                                              {"place": "attic"})]))[0]
+    assert "unknown place 'attic'" in reasons(check([SkillCall("nav.goto", {"place": "attic"})]))[0]
     verdict = check([SkillCall("nav.goto", {"x": 30, "y": 0})], max_step_distance=100)
     assert "geofence" in verdict.refusals[0].reason
 
@@ -111,9 +138,13 @@ def test_patrol_legs_and_places_are_checked():
 def test_an_unknown_battery_is_said_not_pretended_and_a_known_low_one_refuses():
     unknown = check([SkillCall("nav.move", {"distance": 1})], start=RobotState(battery=None))
     assert unknown.refusals == []
-    assert unknown.notes == ["battery level unknown (the robot reports none): the battery floor "
-                             "of 15% (safety.battery_floor) cannot be checked"]
+    assert unknown.notes == [
+        "battery level unknown (the robot reports none): the battery floor "
+        "of 15% (safety.battery_floor) cannot be checked"
+    ]
     low = check([SkillCall("nav.move", {"distance": 1})], start=RobotState(battery=14.9))
     assert "battery is at 15%, below the floor of 15%" in reasons(low)[0] and low.notes == []
-    assert check([SkillCall("nav.move", {"distance": 1})],
-                 start=RobotState(battery=15.0)).refusals == []
+    assert (
+        check([SkillCall("nav.move", {"distance": 1})], start=RobotState(battery=15.0)).refusals
+        == []
+    )

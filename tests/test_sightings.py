@@ -30,54 +30,83 @@ FRAMES = Frames("odom", "base_link")
 def test_odom_positions_are_kept_and_body_positions_placed_with_the_robot_pose() -> None:
     pose = Pose2D(1.0, 2.0, math.pi / 2)
     odom = to_sighting("red ball", 3.0, -1.0, "odom", 0.9, 0.2, 5.0, pose, FRAMES)
-    assert (odom.name, odom.x, odom.y, odom.radius, odom.confidence, odom.stamp) == \
-        ("red ball", 3.0, -1.0, 0.2, 0.9, 5.0)
+    assert (odom.name, odom.x, odom.y, odom.radius, odom.confidence, odom.stamp) == (
+        "red ball",
+        3.0,
+        -1.0,
+        0.2,
+        0.9,
+        5.0,
+    )
     ahead = to_sighting("  person ", 2.0, 0.0, "/base_link", 0.5, 0.0, 5.0, pose, FRAMES)
     assert ahead.name == "person" and ahead.radius == DEFAULT_RADIUS
     assert math.isclose(ahead.x, 1.0, abs_tol=1e-9) and math.isclose(ahead.y, 4.0)
 
 
-@pytest.mark.parametrize(("label", "x", "frame", "confidence", "radius", "said"), [
-    ("", 1.0, "odom", 0.5, 0.0, "needs a label"),
-    ("x" * 101, 1.0, "odom", 0.5, 0.0, "at most 100"),
-    ("ball", math.nan, "odom", 0.5, 0.0, "finite"),
-    ("ball", 1.0, "odom", 1.5, 0.0, "between 0 and 1"),
-    ("ball", 1.0, "odom", 0.5, -1.0, "radius"),
-    ("ball", 1.0, "camera_link", 0.5, 0.0, "'odom' (the odometry frame) or 'base_link'"),
-    ("ball", 1.0, "", 0.5, 0.0, "(empty)"),
-])
+@pytest.mark.parametrize(
+    ("label", "x", "frame", "confidence", "radius", "said"),
+    [
+        ("", 1.0, "odom", 0.5, 0.0, "needs a label"),
+        ("x" * 101, 1.0, "odom", 0.5, 0.0, "at most 100"),
+        ("ball", math.nan, "odom", 0.5, 0.0, "finite"),
+        ("ball", 1.0, "odom", 1.5, 0.0, "between 0 and 1"),
+        ("ball", 1.0, "odom", 0.5, -1.0, "radius"),
+        ("ball", 1.0, "camera_link", 0.5, 0.0, "'odom' (the odometry frame) or 'base_link'"),
+        ("ball", 1.0, "", 0.5, 0.0, "(empty)"),
+    ],
+)
 def test_bad_detections_are_refused_saying_what_is_allowed(
-        label: str, x: float, frame: str, confidence: float, radius: float, said: str) -> None:
+    label: str, x: float, frame: str, confidence: float, radius: float, said: str
+) -> None:
     with pytest.raises(DetectionError) as info:
         to_sighting(label, x, 0.0, frame, confidence, radius, 0.0, Pose2D(), FRAMES)
     assert said in str(info.value)
 
 
 def detection(label: str, x: float, frame: str = "", sec: int = 0) -> NS:
-    return NS(label=label, position=NS(x=x, y=0.0, z=1.0), confidence=0.8, radius=0.3,
-              header=NS(frame_id=frame, stamp=NS(sec=sec, nanosec=0)))
+    return NS(
+        label=label,
+        position=NS(x=x, y=0.0, z=1.0),
+        confidence=0.8,
+        radius=0.3,
+        header=NS(frame_id=frame, stamp=NS(sec=sec, nanosec=0)),
+    )
 
 
 def test_an_array_uses_its_header_for_detections_that_leave_theirs_empty() -> None:
-    msg = NS(header=NS(frame_id="odom", stamp=NS(sec=100, nanosec=0)),
-             detections=[detection("box", 1.0), detection("dock", 1.0, "base_link", sec=98),
-                         detection("cup", 1.0, "camera")])
+    msg = NS(
+        header=NS(frame_id="odom", stamp=NS(sec=100, nanosec=0)),
+        detections=[
+            detection("box", 1.0),
+            detection("dock", 1.0, "base_link", sec=98),
+            detection("cup", 1.0, "camera"),
+        ],
+    )
     ages = {100: 0.5, 98: 2.5}
-    seen, problems = sightings_from_msg(msg, Pose2D(5.0, 0.0, 0.0), FRAMES, 50.0,
-                                        lambda stamp: ages[stamp.sec])
+    seen, problems = sightings_from_msg(
+        msg, Pose2D(5.0, 0.0, 0.0), FRAMES, 50.0, lambda stamp: ages[stamp.sec]
+    )
     assert [(o.name, o.x, o.stamp) for o in seen] == [("box", 1.0, 49.5), ("dock", 6.0, 47.5)]
     assert len(problems) == 1 and "'camera' is not supported" in problems[0]
 
 
 names = st.sampled_from(["red ball", "The red ball", "RED  ball", "box", "dock"])
-sightings = st.builds(KnownObject, names, st.floats(-5, 5), st.floats(-5, 5),
-                      st.just(0.25), st.floats(0, 1), st.floats(0, 100))
+sightings = st.builds(
+    KnownObject,
+    names,
+    st.floats(-5, 5),
+    st.floats(-5, 5),
+    st.just(0.25),
+    st.floats(0, 1),
+    st.floats(0, 100),
+)
 
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(sightings, max_size=6), st.lists(sightings, max_size=6))
 def test_merging_keeps_one_object_per_name_the_latest_seen(
-        known: list[KnownObject], seen: list[KnownObject]) -> None:
+    known: list[KnownObject], seen: list[KnownObject]
+) -> None:
     merged = merge_sightings(merge_sightings((), known), seen)
     keys = [object_key(o.name) for o in merged]
     assert len(keys) == len(set(keys))
@@ -116,12 +145,15 @@ def test_path_poses_face_along_each_leg() -> None:
 
 
 def test_each_object_gets_a_cylinder_its_size_and_a_label() -> None:
-    specs = object_markers([KnownObject("red ball", 3.0, 0.0, 0.2, 0.5),
-                            KnownObject("box", -1.0, 2.0, 0.35)])
+    specs = object_markers(
+        [KnownObject("red ball", 3.0, 0.0, 0.2, 0.5), KnownObject("box", -1.0, 2.0, 0.35)]
+    )
     cylinders = [s for s in specs if s.ns == OBJECTS_NS]
     labels = [s for s in specs if s.ns == LABELS_NS]
-    assert [(s.id, s.x, s.y, s.scale[0]) for s in cylinders] == [(0, 3.0, 0.0, 0.4),
-                                                                  (1, -1.0, 2.0, 0.7)]
+    assert [(s.id, s.x, s.y, s.scale[0]) for s in cylinders] == [
+        (0, 3.0, 0.0, 0.4),
+        (1, -1.0, 2.0, 0.7),
+    ]
     assert [s.text for s in labels] == ["red ball", "box"]
     assert cylinders[0].rgba[3] < cylinders[1].rgba[3]  # less sure: fainter
 

@@ -165,8 +165,9 @@ def test_motion_at_a_tiny_time_scale_succeeds(scale):
     result = agent.execute_mission("walk forward 1 meter then turn left 90 degrees")
     assert result.success, result.response
     state = robot.get_state()
-    assert state.x == pytest.approx(1.0, abs=0.01) and state.yaw == pytest.approx(math.pi / 2,
-                                                                                  abs=0.01)
+    assert state.x == pytest.approx(1.0, abs=0.01) and state.yaw == pytest.approx(
+        math.pi / 2, abs=0.01
+    )
     agent.cleanup()
 
 
@@ -208,9 +209,13 @@ _COLLIDING = SimConfig(collisions=True)
 @settings(max_examples=30, deadline=None)
 @given(
     start=st.tuples(st.floats(-5.5, 5.5), st.floats(-5.5, 5.5), st.floats(-3.1, 3.1)),
-    commands=st.lists(st.tuples(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5),
-                                st.floats(-2.5, 2.5), st.floats(0.1, 3.0)),
-                      min_size=1, max_size=6),
+    commands=st.lists(
+        st.tuples(
+            st.floats(-1.5, 1.5), st.floats(-1.5, 1.5), st.floats(-2.5, 2.5), st.floats(0.1, 3.0)
+        ),
+        min_size=1,
+        max_size=6,
+    ),
 )
 def test_random_motion_never_makes_the_body_overlap_an_object_or_wall(start, commands):
     robot = SimRobot(_COLLIDING)

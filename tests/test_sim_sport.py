@@ -47,14 +47,16 @@ class Outcome:
 
 @pytest.fixture
 def robot() -> Iterator[SimSportMode]:
-    body = SimSportMode(SimRobot(SimConfig(time_scale=1.0)), move_timeout=5.0,
-                        posture_seconds=POSTURE_SECONDS)
+    body = SimSportMode(
+        SimRobot(SimConfig(time_scale=1.0)), move_timeout=5.0, posture_seconds=POSTURE_SECONDS
+    )
     yield body
     body.close()
 
 
-def request(body: SimSportMode, api_id: int, parameter: object = "",
-            topic: str = go2_api.SPORT_TOPIC) -> tuple[bool, str]:
+def request(
+    body: SimSportMode, api_id: int, parameter: object = "", topic: str = go2_api.SPORT_TOPIC
+) -> tuple[bool, str]:
     outcome = Outcome()
     body.request(api_id, parameter, topic, outcome)
     return outcome.wait()
@@ -71,8 +73,9 @@ def wait_idle(body: SimSportMode) -> None:
 
 @given(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3))
 @settings(max_examples=200)
-def test_a_twist_is_dropped_only_when_all_zero_and_otherwise_rounded(x: float, y: float,
-                                                                      z: float) -> None:
+def test_a_twist_is_dropped_only_when_all_zero_and_otherwise_rounded(
+    x: float, y: float, z: float
+) -> None:
     move = move_parameter(x, y, z)
     if x == 0 and y == 0 and z == 0:
         assert move is None
@@ -119,8 +122,7 @@ def test_a_move_lapses_unless_renewed() -> None:
         body.close()
 
 
-def test_postures_take_time_ignore_moves_and_leave_progress_at_zero(
-        robot: SimSportMode) -> None:
+def test_postures_take_time_ignore_moves_and_leave_progress_at_zero(robot: SimSportMode) -> None:
     outcome = Outcome()
     robot.request(go2_api.STAND_DOWN, "", go2_api.SPORT_TOPIC, outcome)
     assert outcome.wait() == (True, "")
@@ -146,13 +148,14 @@ def test_postures_take_time_ignore_moves_and_leave_progress_at_zero(
     assert robot.move(0.5, 0.0, 0.0) == ""
 
 
-def test_tricks_raise_progress_and_ai_mode_ones_need_the_motion_switch(
-        robot: SimSportMode) -> None:
+def test_tricks_raise_progress_and_ai_mode_ones_need_the_motion_switch(robot: SimSportMode) -> None:
     handstand = go2_api.TRICKS["handstand"].api_id
     accepted, note = request(robot, handstand)
     assert not accepted and "'ai' motion mode" in note
-    assert request(robot, go2_api.MOTION_SWITCH, {"name": "ai"},
-                   go2_api.MOTION_SWITCHER_TOPIC) == (True, "")
+    assert request(robot, go2_api.MOTION_SWITCH, {"name": "ai"}, go2_api.MOTION_SWITCHER_TOPIC) == (
+        True,
+        "",
+    )
     assert robot.truth().ai_mode
     assert request(robot, go2_api.TRICKS["hello"].api_id) == (True, "")
     assert robot.progress == 1 and robot.truth().trick == "hello"

@@ -33,9 +33,21 @@ def run(registry, robot, skill, settings=None, **args):
 
 def test_builtin_skills_are_namespaced_and_described(registry):
     names = registry.names
-    for expected in ("nav.move", "nav.strafe", "nav.rotate", "nav.goto", "nav.stop",
-                     "nav.patrol", "body.stand", "body.sit", "body.lie_down", "body.sport",
-                     "sys.wait", "sys.status", "perception.describe"):
+    for expected in (
+        "nav.move",
+        "nav.strafe",
+        "nav.rotate",
+        "nav.goto",
+        "nav.stop",
+        "nav.patrol",
+        "body.stand",
+        "body.sit",
+        "body.lie_down",
+        "body.sport",
+        "sys.wait",
+        "sys.status",
+        "perception.describe",
+    ):
         assert expected in names
     for skill in registry:
         assert skill.description and "." in skill.name
@@ -59,13 +71,23 @@ def test_numbers_as_strings_are_accepted(registry):
 
 
 # A valid call of every skill with numeric arguments; each argument is then varied alone.
-VALID = {"nav.move": {"distance": 1}, "nav.strafe": {"distance": 1}, "nav.rotate": {"degrees": 9},
-         "nav.goto": {"x": 1, "y": 1}, "nav.patrol": {}, "sys.wait": {"seconds": 1}}
+VALID = {
+    "nav.move": {"distance": 1},
+    "nav.strafe": {"distance": 1},
+    "nav.rotate": {"degrees": 9},
+    "nav.goto": {"x": 1, "y": 1},
+    "nav.patrol": {},
+    "sys.wait": {"seconds": 1},
+}
 
 
 def numeric_arguments(registry):
-    return [(skill, name, info) for skill in registry
-            for name, info in skill.args_model.model_fields.items() if is_numeric(info)]
+    return [
+        (skill, name, info)
+        for skill in registry
+        for name, info in skill.args_model.model_fields.items()
+        if is_numeric(info)
+    ]
 
 
 def test_every_numeric_argument_reads_units_and_refuses_booleans(registry):
@@ -79,13 +101,11 @@ def test_every_numeric_argument_reads_units_and_refuses_booleans(registry):
         kind = argument_kind(info)
         if kind is None:
             continue
-        call = registry.validate(SkillCall(skill.name, {**VALID[skill.name],
-                                                        name: kind.example}))
+        call = registry.validate(SkillCall(skill.name, {**VALID[skill.name], name: kind.example}))
         assert getattr(call.args, name) == units.read(kind.example, kind), (skill.name, name)
         other = next(k for k in units.KINDS if k is not kind)
         with pytest.raises(SkillValidationError, match=f"not an? {kind.name}"):
-            registry.validate(SkillCall(skill.name, {**VALID[skill.name],
-                                                     name: f"1 {other.unit}"}))
+            registry.validate(SkillCall(skill.name, {**VALID[skill.name], name: f"1 {other.unit}"}))
 
 
 def test_numbers_with_units_are_read_for_every_caller(registry):
@@ -94,8 +114,9 @@ def test_numbers_with_units_are_read_for_every_caller(registry):
     assert move.args_dict() == {"distance": 0.03, "speed": 0.2}
     turn = registry.validate(SkillCall("nav.rotate", {"degrees": "1/4 turn"}))
     assert turn.args.degrees == 90.0
-    goto = registry.validate(SkillCall("nav.goto", {"x": "6 in", "y": "-2 ft",
-                                                    "heading_degrees": "90°"}))
+    goto = registry.validate(
+        SkillCall("nav.goto", {"x": "6 in", "y": "-2 ft", "heading_degrees": "90°"})
+    )
     assert (goto.args.x, goto.args.y, goto.args.heading_degrees) == (0.1524, -0.6096, 90.0)
     assert registry.validate(SkillCall("sys.wait", {"seconds": "500ms"})).args.seconds == 0.5
     assert registry.validate(SkillCall("nav.patrol", {"laps": "2"})).args.laps == 2
@@ -103,10 +124,12 @@ def test_numbers_with_units_are_read_for_every_caller(registry):
 
 def test_a_numeric_argument_must_be_declared_with_its_kind():
     with pytest.raises(TypeError, match="Plain.distance: declare a numeric skill argument"):
+
         class Plain(SkillArgs):
             distance: float
 
     with pytest.raises(TypeError, match="MaybeCount.n: declare"):
+
         class MaybeCount(SkillArgs):
             n: int | None = None
 
@@ -202,8 +225,12 @@ def test_stall_is_detected(registry, robot):
 def test_cancel_stops_a_move(registry, robot):
     call = registry.validate(SkillCall("nav.move", {"distance": 3.0}))
     cancelled = threading.Event()
-    ctx = SkillContext(robot, PlanEnv(ShadowHoundConfig()), cancelled,
-                       on_progress=lambda f: cancelled.set() if f > 0.3 else None)
+    ctx = SkillContext(
+        robot,
+        PlanEnv(ShadowHoundConfig()),
+        cancelled,
+        on_progress=lambda f: cancelled.set() if f > 0.3 else None,
+    )
     ctx.start_clock(60)
     with pytest.raises(MissionCancelled):
         call.skill.run(ctx, call.args)
@@ -252,6 +279,9 @@ def test_unknown_place_is_a_plan_problem_without_a_map(registry):
 
 
 def test_with_a_map_an_unknown_name_is_searched_for_and_the_failure_says_where(registry, robot):
-    with pytest.raises(SkillError, match=r"did not find the garage: looked around from "
-                       r"\(0\.0, 0\.0\), \("):
+    with pytest.raises(
+        SkillError,
+        match=r"did not find the garage: looked around from "
+        r"\(0\.0, 0\.0\), \(",
+    ):
         run(registry, robot, "nav.goto", place="garage")

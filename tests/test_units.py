@@ -45,10 +45,12 @@ REFERENCE: dict[units.Kind, dict[str, Fraction | tuple[Fraction, str]]] = {
     SPEED: {
         **dict.fromkeys(["m/s", "mps", "meters per second", "metre/sec"], Fraction(1)),
         **dict.fromkeys(["cm/s", "centimeters per second"], Fraction(1, 100)),
-        **dict.fromkeys(["km/h", "kph", "kmh", "km per hour", "kilometres/hr"],
-                        Fraction(1000, 3600)),
-        **dict.fromkeys(["mph", "miles per hour", "miles an hour", "mi/h"],
-                        Fraction(1609344, 3600000)),
+        **dict.fromkeys(
+            ["km/h", "kph", "kmh", "km per hour", "kilometres/hr"], Fraction(1000, 3600)
+        ),
+        **dict.fromkeys(
+            ["mph", "miles per hour", "miles an hour", "mi/h"], Fraction(1609344, 3600000)
+        ),
         "ft/s": Fraction(3048, 10000),
     },
     ANGULAR_SPEED: {
@@ -103,11 +105,20 @@ def fractions(draw) -> tuple[str, Fraction]:
     return f"{top}{slash}{bottom}", Fraction(top, bottom)
 
 
-WORDS = [("a", Fraction(1)), ("an", Fraction(1)), ("one", Fraction(1)),
-         ("half a", Fraction(1, 2)), ("half of a", Fraction(1, 2)), ("a half", Fraction(1, 2)),
-         ("a quarter of a", Fraction(1, 4)), ("quarter", Fraction(1, 4)),
-         ("three quarters of a", Fraction(3, 4)), ("one and a half", Fraction(3, 2)),
-         ("2 and a quarter", Fraction(9, 4)), ("12 and a half", Fraction(25, 2))]
+WORDS = [
+    ("a", Fraction(1)),
+    ("an", Fraction(1)),
+    ("one", Fraction(1)),
+    ("half a", Fraction(1, 2)),
+    ("half of a", Fraction(1, 2)),
+    ("a half", Fraction(1, 2)),
+    ("a quarter of a", Fraction(1, 4)),
+    ("quarter", Fraction(1, 4)),
+    ("three quarters of a", Fraction(3, 4)),
+    ("one and a half", Fraction(3, 2)),
+    ("2 and a quarter", Fraction(9, 4)),
+    ("12 and a half", Fraction(25, 2)),
+]
 
 
 @st.composite
@@ -153,8 +164,7 @@ def test_units_without_pi_convert_exactly(data):
 
 
 @settings(max_examples=200, deadline=None)
-@given(st.sampled_from(KINDS), st.one_of(plain_numbers(), fractions()),
-       st.sampled_from(["", " "]))
+@given(st.sampled_from(KINDS), st.one_of(plain_numbers(), fractions()), st.sampled_from(["", " "]))
 def test_a_bare_number_is_in_the_kinds_own_unit(kind, number, pad):
     text, value = number
     assert units.read(f"{pad}{text}{pad}", kind) == float(value)
@@ -175,24 +185,47 @@ def test_a_unit_of_another_kind_is_refused_never_read_as_a_number(data):
 
 
 READ_RIGHT = [
-    ("3cm", LENGTH, 0.03), ("3 cm", LENGTH, 0.03), ("30 cm", LENGTH, 0.3),
-    ("0.3m", LENGTH, 0.3), ("300mm", LENGTH, 0.3), ("2 ft", LENGTH, 0.6096),
-    ("2 feet", LENGTH, 0.6096), ("6 in", LENGTH, 0.1524), ("1.5 metres", LENGTH, 1.5),
-    ("half a meter", LENGTH, 0.5), ("1e-1 m", LENGTH, 0.1), ("1 1/2 m", LENGTH, 1.5),
-    ("one and a half meters", LENGTH, 1.5), (" 2 KM ", LENGTH, 2000.0),
-    ("90deg", ANGLE, 90.0), ("90°", ANGLE, 90.0), ("90 °", ANGLE, 90.0),
-    ("1/4 turn", ANGLE, 90.0), ("half a turn", ANGLE, 180.0), ("a quarter turn", ANGLE, 90.0),
-    ("three quarters of a turn", ANGLE, 270.0), ("-90 degrees", ANGLE, -90.0),
-    ("\u221290 degrees", ANGLE, -90.0), ("1.5 rad", ANGLE, math.degrees(1.5)),
-    ("2 min", DURATION, 120.0), ("half an hour", DURATION, 1800.0), ("500ms", DURATION, 0.5),
-    ("0.5 m/s", SPEED, 0.5), ("50 cm/s", SPEED, 0.5), ("3.6 km/h", SPEED, 1.0),
-    ("1 rad/s", ANGULAR_SPEED, 1.0), ("30 deg/s", ANGULAR_SPEED, math.radians(30)),
-    ("1.5", LENGTH, 1.5), (2, LENGTH, 2.0), (-0.25, ANGLE, -0.25),
+    ("3cm", LENGTH, 0.03),
+    ("3 cm", LENGTH, 0.03),
+    ("30 cm", LENGTH, 0.3),
+    ("0.3m", LENGTH, 0.3),
+    ("300mm", LENGTH, 0.3),
+    ("2 ft", LENGTH, 0.6096),
+    ("2 feet", LENGTH, 0.6096),
+    ("6 in", LENGTH, 0.1524),
+    ("1.5 metres", LENGTH, 1.5),
+    ("half a meter", LENGTH, 0.5),
+    ("1e-1 m", LENGTH, 0.1),
+    ("1 1/2 m", LENGTH, 1.5),
+    ("one and a half meters", LENGTH, 1.5),
+    (" 2 KM ", LENGTH, 2000.0),
+    ("90deg", ANGLE, 90.0),
+    ("90°", ANGLE, 90.0),
+    ("90 °", ANGLE, 90.0),
+    ("1/4 turn", ANGLE, 90.0),
+    ("half a turn", ANGLE, 180.0),
+    ("a quarter turn", ANGLE, 90.0),
+    ("three quarters of a turn", ANGLE, 270.0),
+    ("-90 degrees", ANGLE, -90.0),
+    ("\u221290 degrees", ANGLE, -90.0),
+    ("1.5 rad", ANGLE, math.degrees(1.5)),
+    ("2 min", DURATION, 120.0),
+    ("half an hour", DURATION, 1800.0),
+    ("500ms", DURATION, 0.5),
+    ("0.5 m/s", SPEED, 0.5),
+    ("50 cm/s", SPEED, 0.5),
+    ("3.6 km/h", SPEED, 1.0),
+    ("1 rad/s", ANGULAR_SPEED, 1.0),
+    ("30 deg/s", ANGULAR_SPEED, math.radians(30)),
+    ("1.5", LENGTH, 1.5),
+    (2, LENGTH, 2.0),
+    (-0.25, ANGLE, -0.25),
 ]
 
 
-@pytest.mark.parametrize(("value", "kind", "want"), READ_RIGHT,
-                         ids=[repr(c[0]) for c in READ_RIGHT])
+@pytest.mark.parametrize(
+    ("value", "kind", "want"), READ_RIGHT, ids=[repr(c[0]) for c in READ_RIGHT]
+)
 def test_what_people_and_models_write_is_read_right(value, kind, want):
     assert units.read(value, kind) == pytest.approx(want, rel=1e-12)
 
@@ -244,10 +277,13 @@ def test_garbage_and_wrong_kinds_are_refused_with_what_is_allowed(value, kind, w
 
 
 @settings(max_examples=500, deadline=None)
-@given(st.sampled_from(KINDS), st.one_of(
-    st.text(alphabet="0123456789 .+-/eEmcinftdgrasuh°/per", max_size=24),
-    st.text(max_size=24),
-))
+@given(
+    st.sampled_from(KINDS),
+    st.one_of(
+        st.text(alphabet="0123456789 .+-/eEmcinftdgrasuh°/per", max_size=24),
+        st.text(max_size=24),
+    ),
+)
 def test_any_text_is_read_as_a_finite_number_or_refused(kind, text):
     try:
         value = units.read(text, kind)

@@ -66,12 +66,42 @@ def test_a_rotated_origin_maps_points_through_its_yaw():
     "msg, words",
     [
         ({"info": {}}, "missing or bad"),
-        ({"info": {"width": 2, "height": 2, "resolution": 0.05,
-                   "origin": {"position": {"x": 0, "y": 0}}}, "data": [0, 0, 0]}, "expected"),
-        ({"info": {"width": 0, "height": 2, "resolution": 0.05,
-                   "origin": {"position": {"x": 0, "y": 0}}}, "data": []}, "positive"),
-        ({"info": {"width": 1, "height": 1, "resolution": -1,
-                   "origin": {"position": {"x": 0, "y": 0}}}, "data": [0]}, "resolution"),
+        (
+            {
+                "info": {
+                    "width": 2,
+                    "height": 2,
+                    "resolution": 0.05,
+                    "origin": {"position": {"x": 0, "y": 0}},
+                },
+                "data": [0, 0, 0],
+            },
+            "expected",
+        ),
+        (
+            {
+                "info": {
+                    "width": 0,
+                    "height": 2,
+                    "resolution": 0.05,
+                    "origin": {"position": {"x": 0, "y": 0}},
+                },
+                "data": [],
+            },
+            "positive",
+        ),
+        (
+            {
+                "info": {
+                    "width": 1,
+                    "height": 1,
+                    "resolution": -1,
+                    "origin": {"position": {"x": 0, "y": 0}},
+                },
+                "data": [0],
+            },
+            "resolution",
+        ),
     ],
 )
 def test_a_malformed_map_is_refused_with_a_reason(msg, words):
@@ -80,9 +110,17 @@ def test_a_malformed_map_is_refused_with_a_reason(msg, words):
 
 
 def test_values_outside_the_occupancy_range_read_as_unknown():
-    grid = OccupancyGrid.from_msg({"info": {"width": 3, "height": 1, "resolution": 1.0,
-                                            "origin": {"position": {"x": 0, "y": 0}}},
-                                   "data": [-5, 101, 7]})
+    grid = OccupancyGrid.from_msg(
+        {
+            "info": {
+                "width": 3,
+                "height": 1,
+                "resolution": 1.0,
+                "origin": {"position": {"x": 0, "y": 0}},
+            },
+            "data": [-5, 101, 7],
+        }
+    )
     assert grid.int8_data() == [-1, -1, 7]
 
 
@@ -104,8 +142,12 @@ def test_grid_from_the_scene_marks_objects_walls_and_free_floor():
 
 def _brute_inflation(grid: OccupancyGrid, radius: float) -> set[Cell]:
     """Cells any point of which lies within `radius` of an occupied cell's square."""
-    occupied = [Cell(c, r) for r in range(grid.height) for c in range(grid.width)
-                if grid.is_occupied(Cell(c, r))]
+    occupied = [
+        Cell(c, r)
+        for r in range(grid.height)
+        for c in range(grid.width)
+        if grid.is_occupied(Cell(c, r))
+    ]
     out = set()
     for r in range(grid.height):
         for c in range(grid.width):
@@ -129,8 +171,12 @@ def test_inflation_blocks_exactly_the_cells_within_the_radius_of_an_obstacle(see
         x, y = rng.uniform(-0.2, 1.5), rng.uniform(-0.2, 1.2)
         grid.fill_rect(x, x + rng.uniform(0.01, 0.6), y, y + rng.uniform(0.01, 1.0), OCCUPIED)
     inflated = inflate(grid, radius)
-    got = {Cell(c, r) for r in range(grid.height) for c in range(grid.width)
-           if inflated.is_blocked(Cell(c, r))}
+    got = {
+        Cell(c, r)
+        for r in range(grid.height)
+        for c in range(grid.width)
+        if inflated.is_blocked(Cell(c, r))
+    }
     assert got == _brute_inflation(grid, radius)
 
 
@@ -162,8 +208,13 @@ def _reference_length(inflated, start: Cell, goal: Cell) -> float:
                 n = Cell(c + dc, r + dr)
                 if inflated.is_blocked(n):
                     continue
-                if dc and dr and (inflated.is_blocked(Cell(c + dc, r))
-                                  or inflated.is_blocked(Cell(c, r + dr))):
+                if (
+                    dc
+                    and dr
+                    and (
+                        inflated.is_blocked(Cell(c + dc, r)) or inflated.is_blocked(Cell(c, r + dr))
+                    )
+                ):
                     continue
                 nd = d + (SQRT2 if dc and dr else 1.0)
                 if nd < dist.get(n, math.inf):
@@ -244,8 +295,11 @@ def _segment_distance(p, a, b) -> float:
     ax, ay = a
     bx, by = b
     dx, dy = bx - ax, by - ay
-    t = 0.0 if not (dx or dy) else max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy)
-                                                / (dx * dx + dy * dy)))
+    t = (
+        0.0
+        if not (dx or dy)
+        else max(0.0, min(1.0, ((p[0] - ax) * dx + (p[1] - ay) * dy) / (dx * dx + dy * dy)))
+    )
     return math.hypot(ax + t * dx - p[0], ay + t * dy - p[1])
 
 
@@ -394,8 +448,10 @@ def test_an_object_with_no_room_around_it_has_no_standoff():
 @given(seed=st.integers(0, 100_000))
 def test_a_scan_never_marks_free_what_is_inside_an_object_or_a_wall(seed):
     rng = random.Random(seed)
-    objects = tuple(WorldObject(f"thing {i}", rng.uniform(-4, 4), rng.uniform(-4, 4),
-                                rng.uniform(0.1, 0.8)) for i in range(rng.randint(0, 8)))
+    objects = tuple(
+        WorldObject(f"thing {i}", rng.uniform(-4, 4), rng.uniform(-4, 4), rng.uniform(0.1, 0.8))
+        for i in range(rng.randint(0, 8))
+    )
     world = World(objects=objects, bounds=(-4.5, 4.5, -3.0, 3.0))
     while True:
         x, y = rng.uniform(-4.3, 4.3), rng.uniform(-2.8, 2.8)
@@ -417,8 +473,10 @@ def test_a_scan_never_marks_free_what_is_inside_an_object_or_a_wall(seed):
     for i, rng_ in enumerate(scan.ranges):
         if scan.is_hit(rng_) and rng_ > 0.3:
             a = scan.beam_angle(i)
-            assert grid.value_at(x + (rng_ + 0.0125) * math.cos(a),
-                                 y + (rng_ + 0.0125) * math.sin(a)) == OCCUPIED
+            assert (
+                grid.value_at(x + (rng_ + 0.0125) * math.cos(a), y + (rng_ + 0.0125) * math.sin(a))
+                == OCCUPIED
+            )
 
 
 def test_a_path_on_a_rotated_map_keeps_clear_in_the_map_frame():

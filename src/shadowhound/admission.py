@@ -23,6 +23,7 @@ def mission_text_problem(text: object, limit: int, what: str = "the mission") ->
     if not text.strip():
         return f"{what} is empty; say what the robot should do, e.g. {EXAMPLE}"
     if len(text) > limit:
-        return (f"{what} is {len(text)} characters long; the limit is {limit} "
-                "(agent.max_mission_chars)")
+        return (
+            f"{what} is {len(text)} characters long; the limit is {limit} (agent.max_mission_chars)"
+        )
     return None

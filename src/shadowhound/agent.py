@@ -62,8 +62,9 @@ class RobotAgent:
         self.config = config or RobotAgentConfig()
         self.settings = self.config.settings
         self.registry = self.config.registry or default_registry()
-        self.governor = Governor(self.settings.safety, self.settings.motion.auto_stand,
-                                 self.registry)
+        self.governor = Governor(
+            self.settings.safety, self.settings.motion.auto_stand, self.registry
+        )
         self._approvals = ApprovalDesk()
         self._watchdog: Watchdog | None = None
         self._stop = StopSignal()
@@ -77,7 +78,8 @@ class RobotAgent:
         self._tracker = MissionTracker()
         self._camera_frame: CameraFrame | None = None
         self._history: deque[MissionResult] = deque(
-            maxlen=max(1, self.settings.agent.conversation_history_size))
+            maxlen=max(1, self.settings.agent.conversation_history_size)
+        )
         self._chat: Chat = answer_offline
         self._crew: Crew | None = None
 
@@ -112,10 +114,23 @@ class RobotAgent:
             self._memory = AgentMemory.open(s, self._backend, skills=self.registry)
             self.add_listener(self._memory.on_event)
         self._crew = Crew(
-            s, self.registry, self.governor, self._robot, self._memory, self._events,
-            self._tracker, self._stop, self._approvals, self._history, self._planner.kind,
-            self.latest_frame, self._vision(), self._arm_watchdog, self._known_places,
-            self.recent_summaries)
+            s,
+            self.registry,
+            self.governor,
+            self._robot,
+            self._memory,
+            self._events,
+            self._tracker,
+            self._stop,
+            self._approvals,
+            self._history,
+            self._planner.kind,
+            self.latest_frame,
+            self._vision(),
+            self._arm_watchdog,
+            self._known_places,
+            self.recent_summaries,
+        )
         return True
 
     def cleanup(self) -> None:
@@ -161,11 +176,13 @@ class RobotAgent:
         """
         return self._execute(text, self.planner, mission_id)
 
-    def run_plan(self, calls: list[SkillCall], text: str = "",
-                 mission_id: str | None = None) -> MissionResult:
+    def run_plan(
+        self, calls: list[SkillCall], text: str = "", mission_id: str | None = None
+    ) -> MissionResult:
         """Run explicit skill calls (from the web, a test, a script) through the same checks."""
-        plan = Plan(list(calls), text=text or "explicit plan", planner="explicit",
-                    planned_by="explicit")
+        plan = Plan(
+            list(calls), text=text or "explicit plan", planner="explicit", planned_by="explicit"
+        )
         return self._execute(plan.text, FixedPlanner(plan), mission_id)
 
     def dry_run(self, text: str, mission_id: str | None = None) -> MissionResult:
@@ -179,8 +196,9 @@ class RobotAgent:
     def _execute(self, text: str, planner: Planner, mission_id: str | None) -> MissionResult:
         run = self._new_run(text, planner, mission_id)
         if not self._mission_lock.acquire(blocking=False):
-            return run.refuse("another mission is running; wait for it to finish or cancel it",
-                              record=False)
+            return run.refuse(
+                "another mission is running; wait for it to finish or cancel it", record=False
+            )
         try:
             return run.execute()
         finally:
@@ -252,8 +270,9 @@ class RobotAgent:
         if self._watchdog is None:
             self._watchdog = Watchdog(robot.stop, self._watchdog_tripped)
         period = 1.0 / self.settings.motion.control_rate_hz
-        self._watchdog.arm(max(self.settings.safety.watchdog_timeout,
-                               3 * period * robot.time_scale))
+        self._watchdog.arm(
+            max(self.settings.safety.watchdog_timeout, 3 * period * robot.time_scale)
+        )
         return self._watchdog
 
     def _watchdog_tripped(self, message: str) -> None:
@@ -283,11 +302,16 @@ class RobotAgent:
             return True
 
         return ChatContext(
-            state=self.get_robot_state, progress=lambda: self._tracker.snapshot()[0],
-            estop=self.estop_latched, skills=[s["name"] for s in self.get_available_skills()],
-            recent_missions=self.recent_missions, recall=self._memory.search,
-            frame=self.latest_frame, is_command=is_command,
-            planning=lambda text: crew.planning_context(text, None, self.get_robot_state()))
+            state=self.get_robot_state,
+            progress=lambda: self._tracker.snapshot()[0],
+            estop=self.estop_latched,
+            skills=[s["name"] for s in self.get_available_skills()],
+            recent_missions=self.recent_missions,
+            recall=self._memory.search,
+            frame=self.latest_frame,
+            is_command=is_command,
+            planning=lambda text: crew.planning_context(text, None, self.get_robot_state()),
+        )
 
     def diagnostics(self) -> Diagnostics:
         """What the agent is doing now, as one typed snapshot."""
@@ -298,10 +322,19 @@ class RobotAgent:
             state = self.robot.get_state()
         except RobotError as exc:
             problem = str(exc)
-        return Diagnostics(progress, errors, self.estop_latched, self.settings.backend, state,
-                           problem, last.summary() if last else None,
-                           list(last.refusals) if last else [], self._approvals.pending(),
-                           self.settings.safety, self._memory.status())
+        return Diagnostics(
+            progress,
+            errors,
+            self.estop_latched,
+            self.settings.backend,
+            state,
+            problem,
+            last.summary() if last else None,
+            list(last.refusals) if last else [],
+            self._approvals.pending(),
+            self.settings.safety,
+            self._memory.status(),
+        )
 
     def get_diagnostics(self) -> dict[str, Any]:
         """`diagnostics()` as JSON (the Python API's and the web API's form)."""
@@ -368,9 +401,18 @@ class RobotAgent:
         rows = self._memory.recent_missions(limit)
         if rows or self._memory.history is not None:
             return rows
-        return [{"id": r.mission_id, "mission": r.mission, "status": r.status.value,
-                 "success": r.success, "response": r.response, "started_at": None,
-                 "finished_at": None} for r in reversed(self._history)][:limit]
+        return [
+            {
+                "id": r.mission_id,
+                "mission": r.mission,
+                "status": r.status.value,
+                "success": r.success,
+                "response": r.response,
+                "started_at": None,
+                "finished_at": None,
+            }
+            for r in reversed(self._history)
+        ][:limit]
 
     def recent_summaries(self) -> list[str]:
         """Oldest first, as one line each, for prompts and chat."""

@@ -30,9 +30,15 @@ class ApprovalRequest:
     _decided: threading.Event = field(default_factory=threading.Event, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"request_id": self.request_id, "mission_id": self.mission_id,
-                "mission": self.mission, "steps": self.steps, "reasons": self.reasons,
-                "timeout": self.timeout, "expires_at": self.created + self.timeout}
+        return {
+            "request_id": self.request_id,
+            "mission_id": self.mission_id,
+            "mission": self.mission,
+            "steps": self.steps,
+            "reasons": self.reasons,
+            "timeout": self.timeout,
+            "expires_at": self.created + self.timeout,
+        }
 
 
 class ApprovalDesk:
@@ -59,8 +65,7 @@ class ApprovalDesk:
                 if cancelled.is_set():
                     return "cancelled while waiting for approval"
                 if time.monotonic() > deadline:
-                    return (f"no approval within {request.timeout:g} s "
-                            "(safety.approval_timeout)")
+                    return f"no approval within {request.timeout:g} s (safety.approval_timeout)"
             if request.approved:
                 return None
             return "rejected" + (f": {request.note}" if request.note else "")
@@ -75,8 +80,10 @@ class ApprovalDesk:
         """
         with self._lock:
             request = self._pending
-            if request is None or (request_id is not None and request_id not in
-                                   (request.request_id, request.mission_id)):
+            if request is None or (
+                request_id is not None
+                and request_id not in (request.request_id, request.mission_id)
+            ):
                 return False
             request.approved, request.note = approved, note
             request._decided.set()

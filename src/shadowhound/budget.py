@@ -54,11 +54,15 @@ class MissionBudget:
 
 def walked_too_far(walked: float, limit: float) -> str:
     """Why a step stopped when the robot measurably walked past the mission's distance."""
-    return (f"the robot has walked {walked:.2f} m in this mission, past the limit of {limit:g} m "
-            "(safety.max_mission_distance)")
+    return (
+        f"the robot has walked {walked:.2f} m in this mission, past the limit of {limit:g} m "
+        "(safety.max_mission_distance)"
+    )
 
 
 def out_of_time(limit: float) -> str:
     """Why a step stopped or was refused when the mission's time ran out."""
-    return (f"the mission's time is up: it may take {limit:g} s on the robot's clock "
-            "(safety.max_mission_duration)")
+    return (
+        f"the mission's time is up: it may take {limit:g} s on the robot's clock "
+        "(safety.max_mission_duration)"
+    )

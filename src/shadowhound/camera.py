@@ -24,8 +24,9 @@ def image_size(data: bytes) -> tuple[str, int, int]:
         return "png", width, height
     if data[:2] == b"\xff\xd8":
         return ("jpeg", *_jpeg_size(data))
-    raise ValueError("image bytes must be JPEG or PNG (unknown signature "
-                     f"{data[:4].hex() or 'empty'})")
+    raise ValueError(
+        f"image bytes must be JPEG or PNG (unknown signature {data[:4].hex() or 'empty'})"
+    )
 
 
 def _jpeg_size(data: bytes) -> tuple[int, int]:
@@ -74,31 +75,40 @@ def to_camera_frame(frame: Any, source: str = "camera") -> CameraFrame:
     )
 
 
-def raw_image_frame(data: bytes | bytearray | memoryview, width: int, height: int,
-                    encoding: str, step: int, source: str = "camera") -> CameraFrame:
+def raw_image_frame(
+    data: bytes | bytearray | memoryview,
+    width: int,
+    height: int,
+    encoding: str,
+    step: int,
+    source: str = "camera",
+) -> CameraFrame:
     """A sensor_msgs/Image (rgb8, bgr8, mono8) as a CameraFrame; row padding is removed.
 
     Raises ValueError naming what is wrong (encoding, sizes, data length).
     """
     channels = RAW_ENCODINGS.get(encoding)
     if channels is None:
-        raise ValueError(f"unsupported image encoding {encoding!r}; supported: "
-                         f"{', '.join(RAW_ENCODINGS)} (or send sensor_msgs/CompressedImage)")
+        raise ValueError(
+            f"unsupported image encoding {encoding!r}; supported: "
+            f"{', '.join(RAW_ENCODINGS)} (or send sensor_msgs/CompressedImage)"
+        )
     if not (0 < width <= _MAX_RAW_SIDE and 0 < height <= _MAX_RAW_SIDE):
-        raise ValueError(f"image size {width}x{height} is out of range "
-                         f"(1..{_MAX_RAW_SIDE} a side)")
+        raise ValueError(f"image size {width}x{height} is out of range (1..{_MAX_RAW_SIDE} a side)")
     row = width * channels
     if step < row:
-        raise ValueError(f"image step {step} is smaller than a {encoding} row of {width} "
-                         f"pixels ({row} bytes)")
+        raise ValueError(
+            f"image step {step} is smaller than a {encoding} row of {width} pixels ({row} bytes)"
+        )
     if len(data) != step * height:
-        raise ValueError(f"image data has {len(data)} bytes; {height} rows of step {step} "
-                         f"need {step * height}")
+        raise ValueError(
+            f"image data has {len(data)} bytes; {height} rows of step {step} need {step * height}"
+        )
     view = memoryview(data)
     if step == row:
         pixels = bytes(view)
     else:
-        pixels = b"".join(view[r * step: r * step + row] for r in range(height))
+        pixels = b"".join(view[r * step : r * step + row] for r in range(height))
     return CameraFrame(pixels, width, height, encoding, stamp=time.time(), source=source)
 
 
@@ -123,8 +133,9 @@ def encode_jpeg(frame: CameraFrame, max_side: int | None = None, quality: int = 
             image = Image.open(io.BytesIO(frame.data))
             image.load()
         elif frame.encoding in _PIL_MODES:
-            image = Image.frombytes(_PIL_MODES[frame.encoding], (frame.width, frame.height),
-                                    frame.data)
+            image = Image.frombytes(
+                _PIL_MODES[frame.encoding], (frame.width, frame.height), frame.data
+            )
             if frame.encoding == "bgr8":
                 blue, green, red = image.split()
                 image = Image.merge("RGB", (red, green, blue))

@@ -31,13 +31,20 @@ class CheckedPlan:
     invalid: list[list[str]]  # per proposed step, why it is not a valid call (empty: valid)
 
 
-def check_plan(plan: Plan, registry: SkillRegistry, governor: Governor,
-               settings: ShadowHoundConfig, env: PlanEnv, start: RobotState,
-               first: int = 1) -> CheckedPlan:
+def check_plan(
+    plan: Plan,
+    registry: SkillRegistry,
+    governor: Governor,
+    settings: ShadowHoundConfig,
+    env: PlanEnv,
+    start: RobotState,
+    first: int = 1,
+) -> CheckedPlan:
     """Validate every step and run the governor over the whole plan from `start`."""
     calls, problems, invalid = _validate(plan, registry, settings)
-    steps = [StepResult(i, c.skill, plain_args(c.args), c.label)
-             for i, c in enumerate(plan.steps, first)]
+    steps = [
+        StepResult(i, c.skill, plain_args(c.args), c.label) for i, c in enumerate(plan.steps, first)
+    ]
     verdict = governor.check_plan(calls, start, env)
     plan.notes.extend(n for n in verdict.notes if n not in plan.notes)
 
@@ -58,8 +65,9 @@ def check_plan(plan: Plan, registry: SkillRegistry, governor: Governor,
     return CheckedPlan(steps, valid, problems, approvals, verdict.path, invalid)
 
 
-def _validate(plan: Plan, registry: SkillRegistry, settings: ShadowHoundConfig
-              ) -> tuple[list[ValidatedCall | None], list[str], list[list[str]]]:
+def _validate(
+    plan: Plan, registry: SkillRegistry, settings: ShadowHoundConfig
+) -> tuple[list[ValidatedCall | None], list[str], list[list[str]]]:
     """Validate every step; invalid ones become None so the rest can still be checked."""
     problems: list[str] = []
     calls: list[ValidatedCall | None] = []
@@ -67,8 +75,10 @@ def _validate(plan: Plan, registry: SkillRegistry, settings: ShadowHoundConfig
     if not plan.steps:
         problems.append("the plan has no steps")
     if len(plan.steps) > settings.agent.max_steps:
-        problems.append(f"the plan has {len(plan.steps)} steps; at most "
-                        f"{settings.agent.max_steps} are allowed (agent.max_steps)")
+        problems.append(
+            f"the plan has {len(plan.steps)} steps; at most "
+            f"{settings.agent.max_steps} are allowed (agent.max_steps)"
+        )
     for index, call in enumerate(plan.steps, start=1):
         try:
             calls.append(registry.validate(call))
@@ -89,8 +99,10 @@ def new_mission_id(given: str | None = None) -> str:
     """`given` if it is a valid id (1-64 of [A-Za-z0-9_-]), else a fresh one when None."""
     if given is None:
         return uuid.uuid4().hex[:12]
-    if not isinstance(given, str) or not (0 < len(given) <= 64) or not all(
-            c.isascii() and (c.isalnum() or c in "-_") for c in given):
-        raise ValueError(f"a mission id must be 1 to 64 letters, digits, '-' or '_', "
-                         f"got {given!r}")
+    if (
+        not isinstance(given, str)
+        or not (0 < len(given) <= 64)
+        or not all(c.isascii() and (c.isalnum() or c in "-_") for c in given)
+    ):
+        raise ValueError(f"a mission id must be 1 to 64 letters, digits, '-' or '_', got {given!r}")
     return given

@@ -50,8 +50,11 @@ class SafetyConfig(_Section):
         None, description="optional polygon [[x, y], ...] in the odom frame the robot must stay in"
     )
     geofence_margin: float = Field(
-        0.40, ge=0, le=10, description="metres the robot's centre keeps from every fence edge: "
-        "its body (a Go2 is about 0.70 x 0.31 m, 0.38 m from centre to corner)"
+        0.40,
+        ge=0,
+        le=10,
+        description="metres the robot's centre keeps from every fence edge: "
+        "its body (a Go2 is about 0.70 x 0.31 m, 0.38 m from centre to corner)",
     )
     max_linear_accel: float = Field(1.0, gt=0, le=10, description="m/s^2 cap on commands")
     max_angular_accel: float = Field(3.0, gt=0, le=20, description="rad/s^2 cap on commands")
@@ -125,11 +128,13 @@ class SearchConfig(_Section):
     """Going to objects: how close to stand, and the budget for looking for one not seen yet."""
 
     standoff: float = Field(0.6, gt=0, le=5, description="metres from the object's surface")
-    max_seconds: float = Field(120.0, gt=0, le=3600,
-                               description="robot-clock seconds a search may take")
+    max_seconds: float = Field(
+        120.0, gt=0, le=3600, description="robot-clock seconds a search may take"
+    )
     max_distance: float = Field(20.0, gt=0, le=1000, description="metres a search may walk")
-    view_range: float = Field(4.0, gt=0, le=20,
-                              description="metres within which a look counts a spot as seen")
+    view_range: float = Field(
+        4.0, gt=0, le=20, description="metres within which a look counts a spot as seen"
+    )
 
 
 class SimConfig(_Section):
@@ -146,8 +151,9 @@ class SimConfig(_Section):
         0.35, ge=0.05, le=2.0, description="metres: the body's collision circle in the scene"
     )
     collisions: bool = Field(
-        True, description="the body stops at contact with the scene's objects and walls, and "
-        "the robot is given the scene's map (off: a ghost that walks through them, no map)"
+        True,
+        description="the body stops at contact with the scene's objects and walls, and "
+        "the robot is given the scene's map (off: a ghost that walks through them, no map)",
     )
     battery_drain_idle: float = Field(0.01, ge=0, description="percent per second standing")
     battery_drain_per_metre: float = Field(0.05, ge=0, description="percent per metre walked")
@@ -175,8 +181,9 @@ class LLMConfig(_Section):
         "plan", description="plan: whole plan in one request; react: tool loop with observations"
     )
     plan_format: Literal["auto", "json_schema", "tools", "plain"] = Field(
-        "auto", description="how plan mode asks for a plan: json_schema (the strict plan schema "
-        "the server enforces), tools, or plain (JSON asked for in words); auto picks json_schema"
+        "auto",
+        description="how plan mode asks for a plan: json_schema (the strict plan schema "
+        "the server enforces), tools, or plain (JSON asked for in words); auto picks json_schema",
     )
     hybrid: bool = Field(
         True, description="offline rules first; the model plans only what they do not understand"
@@ -225,8 +232,10 @@ class ShadowHoundConfig(_Section):
     backend: Literal["offline", "openai", "ollama", "vllm", "llamacpp"] = "offline"
     robot: Literal["sim", "go2"] = "sim"
     navigation: Literal["auto", "nav2", "direct"] = Field(
-        "auto", description="nav.goto: auto = the robot's Nav2 (navigate_to_pose) when it "
-        "answers, else the project's own planner; nav2 = Nav2 required; direct = never Nav2")
+        "auto",
+        description="nav.goto: auto = the robot's Nav2 (navigate_to_pose) when it "
+        "answers, else the project's own planner; nav2 = Nav2 required; direct = never Nav2",
+    )
     safety: SafetyConfig = Field(default_factory=SafetyConfig)
     motion: MotionConfig = Field(default_factory=MotionConfig)
     search: SearchConfig = Field(default_factory=SearchConfig)

@@ -41,8 +41,13 @@ class ChatContext:
 Chat = Callable[[str, ChatContext], str]
 
 _TOPICS: list[tuple[str, re.Pattern[str]]] = [
-    ("recall", re.compile(r"\b(did you see|have you seen|saw|remember|earlier|this morning|"
-                          r"yesterday|last time|where is|where are the)\b")),
+    (
+        "recall",
+        re.compile(
+            r"\b(did you see|have you seen|saw|remember|earlier|this morning|"
+            r"yesterday|last time|where is|where are the)\b"
+        ),
+    ),
     ("see", re.compile(r"\b(see|seeing|look|view|camera|in front|ahead of you|surround)")),
     ("battery", re.compile(r"\b(battery|charge|charged|power|energy)\b")),
     ("where", re.compile(r"\b(where|position|pose|location|located|heading|facing)\b")),
@@ -61,11 +66,15 @@ def answer_offline(text: str, chat: ChatContext) -> str:
         topics = [t for t in topics if t not in ("see", "where")]
     if not topics or topics == ["status"] and chat.is_command(text):
         if chat.is_command(text):
-            return ("That sounds like a mission. I only move when a mission is run: use "
-                    f"`shadowhound run \"{text.strip()}\"`, or type `/run {text.strip()}` in the "
-                    "chat.")
-        return ("I can answer questions about where I am, my battery, what I see, what I did "
-                "and what I can do. For anything else a language-model backend is needed.")
+            return (
+                "That sounds like a mission. I only move when a mission is run: use "
+                f'`shadowhound run "{text.strip()}"`, or type `/run {text.strip()}` in the '
+                "chat."
+            )
+        return (
+            "I can answer questions about where I am, my battery, what I see, what I did "
+            "and what I can do. For anything else a language-model backend is needed."
+        )
     st = chat.state()
     answers = []
     for topic in dict.fromkeys(topics):
@@ -73,16 +82,22 @@ def answer_offline(text: str, chat: ChatContext) -> str:
             answers.append("Hello! I am ShadowHound.")
         elif topic == "recall":
             found = chat.recall(text)
-            answers.append("I remember: " + " | ".join(found) if found else
-                           "I remember nothing about that.")
+            answers.append(
+                "I remember: " + " | ".join(found) if found else "I remember nothing about that."
+            )
         elif topic == "see":
             answers.append(describe_frame(chat.frame(), text))
         elif topic == "battery":
-            answers.append(f"My battery is at {st.battery:.1f}%." if st.battery is not None
-                           else "I cannot tell my battery level: this robot reports none.")
+            answers.append(
+                f"My battery is at {st.battery:.1f}%."
+                if st.battery is not None
+                else "I cannot tell my battery level: this robot reports none."
+            )
         elif topic == "where":
-            answers.append(f"I am at x={st.x:.2f} m, y={st.y:.2f} m, facing "
-                           f"{math.degrees(st.yaw):.0f} degrees (odom frame).")
+            answers.append(
+                f"I am at x={st.x:.2f} m, y={st.y:.2f} m, facing "
+                f"{math.degrees(st.yaw):.0f} degrees (odom frame)."
+            )
         elif topic == "history":
             answers.append(_history(chat))
         elif topic == "skills":
@@ -90,8 +105,10 @@ def answer_offline(text: str, chat: ChatContext) -> str:
             answers.append(f"My skills are: {names}.")
         elif topic == "status":
             status = chat.progress().status.value
-            answers.append(f"I am {st.posture.value}, status {status}, battery "
-                           f"{st.battery_text}" + (", e-stop latched." if chat.estop else "."))
+            answers.append(
+                f"I am {st.posture.value}, status {status}, battery "
+                f"{st.battery_text}" + (", e-stop latched." if chat.estop else ".")
+            )
     return " ".join(answers)
 
 
@@ -120,22 +137,27 @@ class ModelChat:
         ctx = chat.planning(text)
         lines = [
             "You are ShadowHound, a Unitree Go2 quadruped robot, answering your operator "
-            "briefly. You cannot move in this conversation; missions are run separately."]
+            "briefly. You cannot move in this conversation; missions are run separately."
+        ]
         if ctx is not None:
-            lines += [prompts.state_line(ctx.state), prompts.places_line(ctx.places),
-                      prompts.history_lines(ctx.history, self.history_size),
-                      prompts.memory_lines(ctx.memories)]
+            lines += [
+                prompts.state_line(ctx.state),
+                prompts.places_line(ctx.places),
+                prompts.history_lines(ctx.history, self.history_size),
+                prompts.memory_lines(ctx.memories),
+            ]
         system = "\n".join(p for p in lines if p)
         with self._lock:
             turns = list(self._turns)
         try:
             completion = self.backend.complete(
-                [{"role": "system", "content": system}, *turns,
-                 {"role": "user", "content": text}])
+                [{"role": "system", "content": system}, *turns, {"role": "user", "content": text}]
+            )
         except BackendError as exc:
             return f"I cannot answer right now: {exc}"
         answer = str(completion.message.get("content") or "").strip() or "(no answer)"
         with self._lock:
-            self._turns.extend([{"role": "user", "content": text},
-                                {"role": "assistant", "content": answer}])
+            self._turns.extend(
+                [{"role": "user", "content": text}, {"role": "assistant", "content": answer}]
+            )
         return answer

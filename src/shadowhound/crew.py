@@ -60,8 +60,9 @@ class Crew:
     places: Callable[[], dict[str, tuple[float, float]]]  # the profile's, then taught ones
     summaries: Callable[[], list[str]]  # recent missions, one line each, oldest first
 
-    def planning_context(self, text: str, planner: Planner | None,
-                         state: RobotState) -> PlanningContext | None:
+    def planning_context(
+        self, text: str, planner: Planner | None, state: RobotState
+    ) -> PlanningContext | None:
         """What the planner (or a model's chat, for None) may read; None for planners that read
         nothing (the offline rules), so no history query or memory search is spent on them."""
         if planner is not None and not planner.needs_context:
@@ -69,9 +70,15 @@ class Crew:
         rag = self.settings.memory.enable_rag and self.settings.backend != "offline"
         belief = self.robot.belief()
         seen = {o.name: (o.x, o.y) for o in belief.objects} if belief is not None else {}
-        return PlanningContext(self.registry, state, self.places(), self.summaries(),
-                               self.stop.cancelled,
-                               self.memory.search(text) if rag and text else [], seen)
+        return PlanningContext(
+            self.registry,
+            state,
+            self.places(),
+            self.summaries(),
+            self.stop.cancelled,
+            self.memory.search(text) if rag and text else [],
+            seen,
+        )
 
     def note_error(self, text: str) -> None:
         self.tracker.note_error(text)

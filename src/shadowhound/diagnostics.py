@@ -133,8 +133,7 @@ class Diagnostics:
             "robot": self.robot_dict(),
             "last_mission": self.last_mission,
             "refusals": list(self.refusals),
-            "pending_approval": self.pending_approval.to_dict() if self.pending_approval
-            else None,
+            "pending_approval": self.pending_approval.to_dict() if self.pending_approval else None,
             "limits": self.limits.model_dump(),
             "memory": dict(self.memory),
         }

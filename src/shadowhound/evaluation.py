@@ -55,10 +55,17 @@ class CaseOutcome:
     planned_by: str = ""  # offline | llm | "" (no plan)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"mission": self.case.mission, "expect": self.case.expect, "passed": self.passed,
-                "failures": self.failures, "actual": self.actual, "response": self.response,
-                "usage": self.usage.to_dict(), "planning_seconds": round(self.planning_seconds, 6),
-                "planned_by": self.planned_by}
+        return {
+            "mission": self.case.mission,
+            "expect": self.case.expect,
+            "passed": self.passed,
+            "failures": self.failures,
+            "actual": self.actual,
+            "response": self.response,
+            "usage": self.usage.to_dict(),
+            "planning_seconds": round(self.planning_seconds, 6),
+            "planned_by": self.planned_by,
+        }
 
 
 @dataclass(frozen=True)
@@ -85,13 +92,20 @@ class Scorecard:
         return self.model_calls / self.cases if self.cases else 0.0
 
     def to_dict(self) -> dict[str, Any]:
-        return {"planner": self.planner, "cases": self.cases, "passed": self.passed,
-                "pass_rate": round(self.pass_rate, 4), "model_calls": self.model_calls,
-                "calls_per_mission": round(self.calls_per_mission, 3),
-                "prompt_tokens": self.prompt_tokens, "completion_tokens": self.completion_tokens,
-                "invalid_plans": self.invalid_plans, "offline_planned": self.offline_planned,
-                "latency_p50_ms": round(self.latency_p50 * 1e3, 3),
-                "latency_p95_ms": round(self.latency_p95 * 1e3, 3)}
+        return {
+            "planner": self.planner,
+            "cases": self.cases,
+            "passed": self.passed,
+            "pass_rate": round(self.pass_rate, 4),
+            "model_calls": self.model_calls,
+            "calls_per_mission": round(self.calls_per_mission, 3),
+            "prompt_tokens": self.prompt_tokens,
+            "completion_tokens": self.completion_tokens,
+            "invalid_plans": self.invalid_plans,
+            "offline_planned": self.offline_planned,
+            "latency_p50_ms": round(self.latency_p50 * 1e3, 3),
+            "latency_p95_ms": round(self.latency_p95 * 1e3, 3),
+        }
 
 
 # What a planner spec "BACKEND[:OPTION...]" may say after the backend, as llm settings.
@@ -111,8 +125,10 @@ def planner_options(spec: str) -> tuple[str, dict[str, Any]]:
     llm: dict[str, Any] = {}
     for option in options:
         if option not in PLANNER_OPTIONS:
-            raise ConfigError(f"unknown planner option {option!r} in {spec!r}; allowed after "
-                              f"the backend: {', '.join(PLANNER_OPTIONS)}")
+            raise ConfigError(
+                f"unknown planner option {option!r} in {spec!r}; allowed after "
+                f"the backend: {', '.join(PLANNER_OPTIONS)}"
+            )
         llm.update(PLANNER_OPTIONS[option])
     return backend, llm
 
@@ -121,11 +137,17 @@ def scorecard(planner: str, outcomes: list[CaseOutcome]) -> Scorecard:
     times = sorted(o.planning_seconds for o in outcomes) or [0.0]
     p95 = statistics.quantiles(times, n=20, method="inclusive")[18] if len(times) > 1 else times[0]
     return Scorecard(
-        planner, len(outcomes), sum(o.passed for o in outcomes),
-        sum(o.usage.round_trips for o in outcomes), sum(o.usage.prompt_tokens for o in outcomes),
+        planner,
+        len(outcomes),
+        sum(o.passed for o in outcomes),
+        sum(o.usage.round_trips for o in outcomes),
+        sum(o.usage.prompt_tokens for o in outcomes),
         sum(o.usage.completion_tokens for o in outcomes),
         sum(o.usage.invalid_plans for o in outcomes),
-        sum(o.planned_by == "offline" for o in outcomes), statistics.median(times), p95)
+        sum(o.planned_by == "offline" for o in outcomes),
+        statistics.median(times),
+        p95,
+    )
 
 
 def load_cases(path: str | Path) -> list[MissionCase]:
@@ -137,8 +159,9 @@ def load_cases(path: str | Path) -> list[MissionCase]:
     except yaml.YAMLError as exc:
         raise CaseFileError(f"{str(path)!r} is not valid YAML: {exc}") from exc
     if not isinstance(data, list):
-        raise CaseFileError(f"{str(path)!r} must be a YAML list of cases, got "
-                            f"{type(data).__name__}")
+        raise CaseFileError(
+            f"{str(path)!r} must be a YAML list of cases, got {type(data).__name__}"
+        )
     cases = []
     for i, entry in enumerate(data, start=1):
         where = f"case {i} in {str(path)!r}"
@@ -151,11 +174,13 @@ def load_cases(path: str | Path) -> list[MissionCase]:
             raise CaseFileError(f"{where}: 'expect' must be a mapping")
         unknown = set(expect) - _EXPECT_KEYS
         if unknown:
-            raise CaseFileError(f"{where}: unknown expect keys {sorted(unknown)}; allowed: "
-                                f"{sorted(_EXPECT_KEYS)}")
+            raise CaseFileError(
+                f"{where}: unknown expect keys {sorted(unknown)}; allowed: {sorted(_EXPECT_KEYS)}"
+            )
         for key in ("x", "y", "yaw_deg"):
-            if key in expect and (isinstance(expect[key], bool)
-                                  or not isinstance(expect[key], (int, float))):
+            if key in expect and (
+                isinstance(expect[key], bool) or not isinstance(expect[key], (int, float))
+            ):
                 raise CaseFileError(f"{where}: expect.{key} must be a number")
         for key in ("success", "moved"):
             if key in expect and not isinstance(expect[key], bool):
@@ -169,15 +194,24 @@ def load_cases(path: str | Path) -> list[MissionCase]:
 
 
 def _check_near(near: Any, where: str) -> None:
-    if (not isinstance(near, dict) or set(near) != {"x", "y", "within"}
-            or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                       and math.isfinite(v) for v in near.values()) or near["within"] <= 0):
-        raise CaseFileError(f"{where}: expect.near must be {{x: metres, y: metres, within: "
-                            f"metres > 0}}, got {near!r}")
+    if (
+        not isinstance(near, dict)
+        or set(near) != {"x", "y", "within"}
+        or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in near.values()
+        )
+        or near["within"] <= 0
+    ):
+        raise CaseFileError(
+            f"{where}: expect.near must be {{x: metres, y: metres, within: "
+            f"metres > 0}}, got {near!r}"
+        )
 
 
-def _scene_and_start(entry: dict[str, Any], where: str
-                     ) -> tuple[World | None, tuple[float, float, float]]:
+def _scene_and_start(
+    entry: dict[str, Any], where: str
+) -> tuple[World | None, tuple[float, float, float]]:
     scene = None
     if entry.get("scene") is not None:
         try:
@@ -185,11 +219,17 @@ def _scene_and_start(entry: dict[str, Any], where: str
         except ValueError as exc:
             raise CaseFileError(f"{where}: scene: {exc}") from exc
     raw = entry.get("start", [0.0, 0.0])
-    if (not isinstance(raw, list) or len(raw) not in (2, 3)
-            or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                       and math.isfinite(v) for v in raw)):
-        raise CaseFileError(f"{where}: start must be [x, y] or [x, y, yaw_deg] in numbers, "
-                            f"got {raw!r}")
+    if (
+        not isinstance(raw, list)
+        or len(raw) not in (2, 3)
+        or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in raw
+        )
+    ):
+        raise CaseFileError(
+            f"{where}: start must be [x, y] or [x, y, yaw_deg] in numbers, got {raw!r}"
+        )
     yaw = math.radians(raw[2]) if len(raw) == 3 else 0.0
     return scene, (float(raw[0]), float(raw[1]), yaw)
 
@@ -204,26 +244,36 @@ def run_case(case: MissionCase, settings: ShadowHoundConfig) -> CaseOutcome:
     began = robot.now()
     result = agent.execute_mission(case.mission)
     st = robot.get_state()
-    actual = {"success": result.success, "x": round(st.x, 4), "y": round(st.y, 4),
-              "yaw_deg": round(math.degrees(st.yaw), 2), "posture": st.posture.value,
-              "moved": robot.received_motion}
+    actual = {
+        "success": result.success,
+        "x": round(st.x, 4),
+        "y": round(st.y, 4),
+        "yaw_deg": round(math.degrees(st.yaw), 2),
+        "posture": st.posture.value,
+        "moved": robot.received_motion,
+    }
     # Measured, not expected: how far the body walked, in how long, after how many re-plans.
     path = robot.true_path
-    actual["path_length"] = round(sum(math.dist(a[1:], b[1:])
-                                      for a, b in zip(path, path[1:], strict=False)), 3)
+    actual["path_length"] = round(
+        sum(math.dist(a[1:], b[1:]) for a, b in zip(path, path[1:], strict=False)), 3
+    )
     actual["seconds"] = round(robot.now() - began, 2)
     actual["replans"] = sum(s.output.count("re-planned") for s in result.steps)
     failures = []
-    depth, what = max((penetration(robot.world, x, y, robot.config.body_radius)
-                       for _t, x, y in path), key=lambda d: d[0])
+    depth, what = max(
+        (penetration(robot.world, x, y, robot.config.body_radius) for _t, x, y in path),
+        key=lambda d: d[0],
+    )
     if depth > 1e-9:
         failures.append(f"the body overlapped {what} by {depth:.3f} m")
     for key, want in case.expect.items():
         if key == "near":
             off = math.hypot(st.x - want["x"], st.y - want["y"])
             if off > want["within"]:
-                failures.append(f"near: expected within {want['within']:g} m of "
-                                f"({want['x']:g}, {want['y']:g}), ended {off:.2f} m away")
+                failures.append(
+                    f"near: expected within {want['within']:g} m of "
+                    f"({want['x']:g}, {want['y']:g}), ended {off:.2f} m away"
+                )
             continue
         got = actual[key]
         if key in ("x", "y"):
@@ -235,13 +285,23 @@ def run_case(case: MissionCase, settings: ShadowHoundConfig) -> CaseOutcome:
         if not ok:
             failures.append(f"{key}: expected {want!r}, got {got!r}")
     agent.cleanup()
-    return CaseOutcome(case, not failures, failures, actual, result.response, result.usage,
-                       result.timing.agent_duration,
-                       result.plan.planned_by if result.plan else "")
+    return CaseOutcome(
+        case,
+        not failures,
+        failures,
+        actual,
+        result.response,
+        result.usage,
+        result.timing.agent_duration,
+        result.plan.planned_by if result.plan else "",
+    )
 
 
-def run_cases(cases: list[MissionCase], settings: ShadowHoundConfig,
-              on_case: Callable[[CaseOutcome], None] | None = None) -> list[CaseOutcome]:
+def run_cases(
+    cases: list[MissionCase],
+    settings: ShadowHoundConfig,
+    on_case: Callable[[CaseOutcome], None] | None = None,
+) -> list[CaseOutcome]:
     outcomes = []
     for case in cases:
         outcome = run_case(case, settings)

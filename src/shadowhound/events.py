@@ -55,8 +55,7 @@ class MissionEvent:
         return self.payload()
 
     def to_dict(self) -> dict[str, Any]:
-        return {"kind": self.kind, "mission_id": self.mission_id, "time": self.time,
-                **self.data}
+        return {"kind": self.kind, "mission_id": self.mission_id, "time": self.time, **self.data}
 
 
 @dataclass(frozen=True)
@@ -77,13 +76,14 @@ class PlanReady(MissionEvent):
     path: tuple[tuple[float, float], ...] = ()  # the checked predicted path (maps, RViz)
 
     @classmethod
-    def of(cls, mission_id: str, plan: Plan,
-           path: Iterable[tuple[float, float]] = ()) -> PlanReady:
+    def of(cls, mission_id: str, plan: Plan, path: Iterable[tuple[float, float]] = ()) -> PlanReady:
         return cls(mission_id, copy.deepcopy(plan), tuple(path))
 
     def payload(self) -> dict[str, Any]:
-        return {"plan": self.plan.to_dict(),
-                "path": [{"x": round(x, 4), "y": round(y, 4)} for x, y in self.path]}
+        return {
+            "plan": self.plan.to_dict(),
+            "path": [{"x": round(x, 4), "y": round(y, 4)} for x, y in self.path],
+        }
 
 
 @dataclass(frozen=True)

@@ -129,8 +129,9 @@ class PolygonFence:
             return self._first_outside(a, b)
         # The start keeps `need` > 0, so before the centre can leave, it must come within
         # `need` of an edge: the first such point over all edges is the answer.
-        hits = [t for e0, e1 in self.edges
-                if (t := _first_within(a, b, e0, e1, need - EPS)) is not None]
+        hits = [
+            t for e0, e1 in self.edges if (t := _first_within(a, b, e0, e1, need - EPS)) is not None
+        ]
         return min(hits, default=None)
 
     def _first_outside(self, a: Point, b: Point) -> float | None:
@@ -176,13 +177,19 @@ def polygon_problem(vertices: Sequence[Point]) -> str:
                 other_p = p0 if shared == p1 else p1
                 other_q = q1 if shared == q0 else q0
                 # Neighbours may only share their common vertex: folding back overlaps them.
-                if (_point_segment_distance(other_q, p0, p1) <= EPS
-                        or _point_segment_distance(other_p, q0, q1) <= EPS):
-                    return (f"edges {i} and {j} fold back on each other at "
-                            f"{_fmt(shared)}: the polygon must not cross or touch itself")
+                if (
+                    _point_segment_distance(other_q, p0, p1) <= EPS
+                    or _point_segment_distance(other_p, q0, q1) <= EPS
+                ):
+                    return (
+                        f"edges {i} and {j} fold back on each other at "
+                        f"{_fmt(shared)}: the polygon must not cross or touch itself"
+                    )
             elif _segment_distance(p0, p1, q0, q1) <= EPS:
-                return (f"edges {i} {_fmt(p0)}-{_fmt(p1)} and {j} {_fmt(q0)}-{_fmt(q1)} "
-                        "cross or touch: the polygon must not cross or touch itself")
+                return (
+                    f"edges {i} {_fmt(p0)}-{_fmt(p1)} and {j} {_fmt(q0)}-{_fmt(q1)} "
+                    "cross or touch: the polygon must not cross or touch itself"
+                )
     area = abs(sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in edges)) / 2
     if area <= 1e-6:
         return f"its area is {area:.2g} square metres, too small to stand in"
@@ -265,8 +272,12 @@ def _segment_distance(p0: Point, p1: Point, q0: Point, q1: Point) -> float:
     """Shortest distance between two segments (0 when they cross or touch)."""
     if _proper_cross(p0, p1, q0, q1):
         return 0.0
-    return min(_point_segment_distance(p0, q0, q1), _point_segment_distance(p1, q0, q1),
-               _point_segment_distance(q0, p0, p1), _point_segment_distance(q1, p0, p1))
+    return min(
+        _point_segment_distance(p0, q0, q1),
+        _point_segment_distance(p1, q0, q1),
+        _point_segment_distance(q0, p0, p1),
+        _point_segment_distance(q1, p0, p1),
+    )
 
 
 def _proper_cross(p0: Point, p1: Point, q0: Point, q1: Point) -> bool:
@@ -280,6 +291,7 @@ def _first_within(a: Point, b: Point, e0: Point, e1: Point, need: float) -> floa
 
     The distance from a point moving along a line to a fixed segment is convex in t, so the
     points closer than `need` form one interval: find its nearest point, then bisect."""
+
     def gap(t: float) -> float:
         return _point_segment_distance(_at(a, b, t), e0, e1)
 
@@ -302,5 +314,4 @@ def _nearest_t(a: Point, b: Point, e0: Point, e1: Point) -> float:
         return 0.0
     cross = _meet(a, b, e0, e1)
     candidates = [*cross, 0.0, 1.0, _project(e0, a, b), _project(e1, a, b)]
-    return min(candidates,
-               key=lambda t: (_point_segment_distance(_at(a, b, t), e0, e1), t))
+    return min(candidates, key=lambda t: (_point_segment_distance(_at(a, b, t), e0, e1), t))

@@ -72,8 +72,11 @@ class MissionRun:
         if isinstance(plan, MissionResult):
             return plan
         checked = self.check(plan, self._start(), first=1)
-        problems = checked.problems + checked.approvals if checked.problems else \
-            self.approve(checked.steps, checked)
+        problems = (
+            checked.problems + checked.approvals
+            if checked.problems
+            else self.approve(checked.steps, checked)
+        )
         if problems:
             return self.refused_before_moving(plan, checked.steps, problems)
         self.emit(ev.PlanReady.of(self.id, plan, ((p.x, p.y) for p in checked.path)))
@@ -81,9 +84,12 @@ class MissionRun:
         status, error = self.run_steps(checked.steps, checked.calls)
         if status is MissionStatus.FAILED and isinstance(self.planner, ReplanningPlanner):
             status, error = self.replan(self.planner, plan, error)
-        return self.report(status, compose_response(status, self.steps, plan, error,
-                                                    self.crew.registry), plan,
-                           error=error)
+        return self.report(
+            status,
+            compose_response(status, self.steps, plan, error, self.crew.registry),
+            plan,
+            error=error,
+        )
 
     def dry_run(self) -> MissionResult:
         """Plan and check without moving: the plan, the predicted path, any refusals."""
@@ -101,14 +107,28 @@ class MissionRun:
         if problems:
             response = "Dry run: the plan would be refused: " + "; ".join(problems)
         else:
-            response = (f"Dry run: {len(checked.steps)} step(s) would run and end near "
-                        f"x={end.x:.2f} m, y={end.y:.2f} m; nothing moved.")
+            response = (
+                f"Dry run: {len(checked.steps)} step(s) would run and end near "
+                f"x={end.x:.2f} m, y={end.y:.2f} m; nothing moved."
+            )
             if checked.approvals:
                 response += " It needs approval: " + "; ".join(checked.approvals) + "."
-        return MissionResult(self.id, self.text, not problems, response, MissionStatus.IDLE,
-                             checked.steps, self.robot.get_state(), self.timing, plan.usage,
-                             plan, problems, None if not problems else response, True,
-                             checked.path)
+        return MissionResult(
+            self.id,
+            self.text,
+            not problems,
+            response,
+            MissionStatus.IDLE,
+            checked.steps,
+            self.robot.get_state(),
+            self.timing,
+            plan.usage,
+            plan,
+            problems,
+            None if not problems else response,
+            True,
+            checked.path,
+        )
 
     # 1. Read: the text, the e-stop, and the robot's state, once, before planning.
 
@@ -129,8 +149,13 @@ class MissionRun:
             return f"the robot cannot report its state: {exc}"
         belief = self.robot.belief()
         see_at_start(self.robot, belief, self.crew.memory)  # objects in view count as known
-        self.env = PlanEnv(self.crew.settings, self.start.pose, self.crew.places(),
-                           MissionBudget.start(self.start, self.robot.now), belief)
+        self.env = PlanEnv(
+            self.crew.settings,
+            self.start.pose,
+            self.crew.places(),
+            MissionBudget.start(self.start, self.robot.now),
+            belief,
+        )
         return None
 
     def begin(self) -> None:
@@ -148,8 +173,9 @@ class MissionRun:
         except PlanningError as exc:
             self.timing.agent_duration = time.perf_counter() - t
             if self.crew.stop.cancelled.is_set():  # the wait on the model was abandoned
-                return self.report(MissionStatus.STOPPED, self.crew.stop.reason(), None,
-                                   usage=exc.usage)
+                return self.report(
+                    MissionStatus.STOPPED, self.crew.stop.reason(), None, usage=exc.usage
+                )
             return self.report(MissionStatus.FAILED, exc.message, None, usage=exc.usage)
         self.timing.agent_duration = time.perf_counter() - t
         if self.crew.stop.cancelled.is_set():
@@ -172,10 +198,17 @@ class MissionRun:
         reasons = checked.approvals
         c = self.crew
         if not c.approvals.enabled:
-            return ["needs approval, and no interface that can ask a person is attached: "
-                    + "; ".join(reasons)]
-        request = ApprovalRequest(self.id, self.text, [s.to_dict() for s in steps], reasons,
-                                  c.settings.safety.approval_timeout)
+            return [
+                "needs approval, and no interface that can ask a person is attached: "
+                + "; ".join(reasons)
+            ]
+        request = ApprovalRequest(
+            self.id,
+            self.text,
+            [s.to_dict() for s in steps],
+            reasons,
+            c.settings.safety.approval_timeout,
+        )
         c.approvals.open(request)  # before the event, so an instant answer finds it
         self.emit(ev.ApprovalRequired(self.id, request))
         refused = c.approvals.wait(request, c.stop.cancelled)
@@ -187,34 +220,42 @@ class MissionRun:
             return []
         return [f"not approved ({refused}): " + "; ".join(reasons)]
 
-    def refused_before_moving(self, plan: Plan, steps: list[StepResult],
-                              problems: list[str]) -> MissionResult:
+    def refused_before_moving(
+        self, plan: Plan, steps: list[StepResult], problems: list[str]
+    ) -> MissionResult:
         for s in steps:
             s.status = StepStatus.SKIPPED
         self.steps = steps
         if self.crew.stop.cancelled.is_set():
-            return self.report(MissionStatus.STOPPED, self.crew.stop.reason(), plan,
-                               refusals=problems)
-        return self.report(MissionStatus.FAILED, "Refused before moving: " + "; ".join(problems),
-                           plan, refusals=problems)
+            return self.report(
+                MissionStatus.STOPPED, self.crew.stop.reason(), plan, refusals=problems
+            )
+        return self.report(
+            MissionStatus.FAILED,
+            "Refused before moving: " + "; ".join(problems),
+            plan,
+            refusals=problems,
+        )
 
     # 5. Execute: the steps in order; the first failure stops the mission and the robot.
 
-    def run_steps(self, steps: list[StepResult],
-                  calls: list[ValidatedCall]) -> tuple[MissionStatus, str | None]:
+    def run_steps(
+        self, steps: list[StepResult], calls: list[ValidatedCall]
+    ) -> tuple[MissionStatus, str | None]:
         self.crew.tracker.set_status(MissionStatus.EXECUTING)
         self.crew.tracker.at_least_steps(steps[-1].index if steps else 0)
         for position, (step, call) in enumerate(zip(steps, calls, strict=True)):
             outcome = self.run_step(step, call)
             if outcome is not MissionStatus.SUCCEEDED:
                 self.robot.stop()
-                for later in steps[position + 1:]:
+                for later in steps[position + 1 :]:
                     later.status = StepStatus.SKIPPED
                 return outcome, step.error
         return MissionStatus.SUCCEEDED, None
 
-    def replan(self, planner: ReplanningPlanner, plan: Plan,
-               error: str | None) -> tuple[MissionStatus, str | None]:
+    def replan(
+        self, planner: ReplanningPlanner, plan: Plan, error: str | None
+    ) -> tuple[MissionStatus, str | None]:
         """A failed step may be re-planned once, from where the robot is now."""
         status: MissionStatus = MissionStatus.FAILED
         if not self.crew.settings.agent.replan_on_failure:
@@ -254,8 +295,9 @@ class MissionRun:
 
         def run_step(call: SkillCall) -> str:
             # Each step is a batch of one, checked against what the mission already used.
-            checked = self.check(Plan([call], text=self.text), self.robot.get_state(),
-                                 first=len(self.steps) + 1)
+            checked = self.check(
+                Plan([call], text=self.text), self.robot.get_state(), first=len(self.steps) + 1
+            )
             step = checked.steps[0]
             step.skill = str(call.skill)
             self.steps.append(step)
@@ -288,8 +330,9 @@ class MissionRun:
             answer, finished, status = stop.reason(), False, MissionStatus.STOPPED
         except RobotError as exc:
             answer, finished = f"the robot cannot report its state: {exc}", False
-        self.timing.agent_duration = max(0.0, time.perf_counter() - t
-                                         - self.timing.execution_duration)
+        self.timing.agent_duration = max(
+            0.0, time.perf_counter() - t - self.timing.execution_duration
+        )
         failed = [s for s in self.steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)]
         if status is not MissionStatus.STOPPED and (not finished or failed or refusals):
             status = MissionStatus.FAILED
@@ -297,10 +340,20 @@ class MissionRun:
             status, answer = MissionStatus.STOPPED, stop.reason()
         if refusals and status is MissionStatus.FAILED:
             answer = f"{answer} Refused: {'; '.join(refusals)}."
-        plan = Plan([SkillCall(s.skill, s.args, s.label) for s in self.steps], text=self.text,
-                    usage=usage, planner=planner.name, planned_by="llm")
-        return self.report(status, answer, plan, refusals=refusals,
-                           error=None if status is MissionStatus.SUCCEEDED else answer)
+        plan = Plan(
+            [SkillCall(s.skill, s.args, s.label) for s in self.steps],
+            text=self.text,
+            usage=usage,
+            planner=planner.name,
+            planned_by="llm",
+        )
+        return self.report(
+            status,
+            answer,
+            plan,
+            refusals=refusals,
+            error=None if status is MissionStatus.SUCCEEDED else answer,
+        )
 
     def run_step(self, step: StepResult, call: ValidatedCall) -> MissionStatus:
         """One checked step on the robot: the governor's step check, the skill, its outcome."""
@@ -313,10 +366,16 @@ class MissionRun:
         wall, robot_t0 = time.perf_counter(), robot.now()
         status = MissionStatus.SUCCEEDED
         watchdog = c.arm_watchdog()
-        ctx = SkillContext(robot, env, c.stop.cancelled, camera=c.camera, vision=c.vision,
-                           memory=c.memory,
-                           on_progress=lambda f: c.tracker.step_progress(step.index, f),
-                           heartbeat=watchdog.beat if watchdog else lambda _moving: None)
+        ctx = SkillContext(
+            robot,
+            env,
+            c.stop.cancelled,
+            camera=c.camera,
+            vision=c.vision,
+            memory=c.memory,
+            on_progress=lambda f: c.tracker.step_progress(step.index, f),
+            heartbeat=watchdog.beat if watchdog else lambda _moving: None,
+        )
         try:
             before = robot.get_state()
             refused = c.governor.check_step(call, before, env)
@@ -356,9 +415,16 @@ class MissionRun:
 
     # 6. Report: one record for the history, the diagnostics and the listeners.
 
-    def report(self, status: MissionStatus, response: str, plan: Plan | None, *,
-               error: str | None = None, usage: Usage | None = None,
-               refusals: list[str] | None = None) -> MissionResult:
+    def report(
+        self,
+        status: MissionStatus,
+        response: str,
+        plan: Plan | None,
+        *,
+        error: str | None = None,
+        usage: Usage | None = None,
+        refusals: list[str] | None = None,
+    ) -> MissionResult:
         c = self.crew
         if status is not MissionStatus.SUCCEEDED:
             self.robot.stop()
@@ -366,9 +432,19 @@ class MissionRun:
             c.note_error(error)
         self.timing.total_duration = self._elapsed()
         result = MissionResult(
-            self.id, self.text, status is MissionStatus.SUCCEEDED, response, status, self.steps,
-            self._state_or_none(), self.timing, usage or (plan.usage if plan else Usage()),
-            plan, refusals or [], error, planner=c.planner_kind,
+            self.id,
+            self.text,
+            status is MissionStatus.SUCCEEDED,
+            response,
+            status,
+            self.steps,
+            self._state_or_none(),
+            self.timing,
+            usage or (plan.usage if plan else Usage()),
+            plan,
+            refusals or [],
+            error,
+            planner=c.planner_kind,
         )
         c.history.append(result)
         c.tracker.finished(status)
@@ -377,9 +453,16 @@ class MissionRun:
 
     def refuse(self, reason: str, record: bool = True) -> MissionResult:
         """Refused before anything started (no mission events)."""
-        result = MissionResult(self.id, str(self.text), False, f"Refused: {reason.rstrip('.')}.",
-                               MissionStatus.FAILED, robot=self._state_or_none(), error=reason,
-                               refusals=[reason])
+        result = MissionResult(
+            self.id,
+            str(self.text),
+            False,
+            f"Refused: {reason.rstrip('.')}.",
+            MissionStatus.FAILED,
+            robot=self._state_or_none(),
+            error=reason,
+            refusals=[reason],
+        )
         result.timing.total_duration = self._elapsed()
         if record:
             self.crew.note_error(reason)
@@ -400,10 +483,12 @@ class MissionRun:
         assert self.env is not None, "read() first"
         return self.env
 
-    def _context(self, state: RobotState | None = None,
-                 text: str | None = None) -> PlanningContext | None:
-        return self.crew.planning_context(self.text if text is None else text, self.planner,
-                                          state or self._start())
+    def _context(
+        self, state: RobotState | None = None, text: str | None = None
+    ) -> PlanningContext | None:
+        return self.crew.planning_context(
+            self.text if text is None else text, self.planner, state or self._start()
+        )
 
     def _elapsed(self) -> float:
         return time.perf_counter() - self.started

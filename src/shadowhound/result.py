@@ -141,8 +141,10 @@ class MissionResult:
             "dry_run": self.dry_run,
             "planner": self.planner,
             "planned_by": self.plan.planned_by if self.plan else "",
-            "predicted_path": [{"x": round(p.x, 4), "y": round(p.y, 4), "yaw": round(p.yaw, 4)}
-                               for p in self.predicted_path],
+            "predicted_path": [
+                {"x": round(p.x, 4), "y": round(p.y, 4), "yaw": round(p.yaw, 4)}
+                for p in self.predicted_path
+            ],
             "plan": self.plan.to_dict() if self.plan else None,
             "steps": [s.to_dict() for s in self.steps],
             "robot": self.robot.to_dict() if self.robot else None,
@@ -154,8 +156,9 @@ class MissionResult:
         return f"{self.status.value}: {self.mission!r} -> {self.response}"
 
 
-def compose_response(status: MissionStatus, steps: list[StepResult], plan: Plan,
-                     error: str | None, skills: SkillBook) -> str:
+def compose_response(
+    status: MissionStatus, steps: list[StepResult], plan: Plan, error: str | None, skills: SkillBook
+) -> str:
     """The sentence a person reads: what was done and, for reports, the answers themselves
     (the output of a skill of `skills` that declares `reports`)."""
     done = [s.output for s in steps if s.status is StepStatus.SUCCEEDED and s.output]
@@ -167,8 +170,7 @@ def compose_response(status: MissionStatus, steps: list[StepResult], plan: Plan,
         if plan.notes:
             parts.append("(" + "; ".join(plan.notes) + ")")
         return " ".join(parts)
-    failed = next((s for s in steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)),
-                  None)
+    failed = next((s for s in steps if s.status in (StepStatus.FAILED, StepStatus.CANCELLED)), None)
     where = f" at step {failed.index} ({failed.skill})" if failed else ""
     verb = "Stopped" if status is MissionStatus.STOPPED else "Failed"
     text = f"{verb}{where}: {error}."

@@ -61,8 +61,9 @@ class Governor:
     run on a low battery.
     """
 
-    def __init__(self, limits: SafetyConfig, auto_stand: bool = True,
-                 skills: SkillRegistry | None = None) -> None:
+    def __init__(
+        self, limits: SafetyConfig, auto_stand: bool = True, skills: SkillRegistry | None = None
+    ) -> None:
         self.limits = limits
         self.auto_stand = auto_stand
         self.skills = skills if skills is not None else default_registry()
@@ -74,9 +75,11 @@ class Governor:
         is skipped and the rest still checked."""
         check = PlanCheck(path=[start.pose])
         if start.battery is None:  # say so, rather than pass a level nobody measured
-            check.notes.append(f"battery level unknown (the robot reports none): the battery "
-                               f"floor of {self.limits.battery_floor:g}% "
-                               "(safety.battery_floor) cannot be checked")
+            check.notes.append(
+                f"battery level unknown (the robot reports none): the battery "
+                f"floor of {self.limits.battery_floor:g}% "
+                "(safety.battery_floor) cannot be checked"
+            )
         pose, posture = start.pose, start.posture
         budget = env.budget
         walked = budget.travelled(start) if budget else 0.0
@@ -102,8 +105,9 @@ class Governor:
             posture = call.skill.posture_after(posture)
         return check
 
-    def check_outcome(self, call: ValidatedCall, before: RobotState, after: RobotState,
-                      env: PlanEnv) -> str:
+    def check_outcome(
+        self, call: ValidatedCall, before: RobotState, after: RobotState, env: PlanEnv
+    ) -> str:
         """Compare where a motion step should have ended with where the robot measurably is.
 
         Returns why the outcome is off ("" when it is within tolerance): a step whose robot did
@@ -124,10 +128,12 @@ class Governor:
         lim = self.limits
         if off <= lim.outcome_tolerance and turn <= lim.outcome_tolerance_deg:
             return ""
-        return (f"outcome check failed: expected to end at ({want.x:.2f}, {want.y:.2f}, "
-                f"{math.degrees(want.yaw):.0f} deg) but measured ({after.x:.2f}, {after.y:.2f}, "
-                f"{math.degrees(after.yaw):.0f} deg): {off:.2f} m and {turn:.0f} degrees off "
-                "(safety.outcome_tolerance, outcome_tolerance_deg)")
+        return (
+            f"outcome check failed: expected to end at ({want.x:.2f}, {want.y:.2f}, "
+            f"{math.degrees(want.yaw):.0f} deg) but measured ({after.x:.2f}, {after.y:.2f}, "
+            f"{math.degrees(after.yaw):.0f} deg): {off:.2f} m and {turn:.0f} degrees off "
+            "(safety.outcome_tolerance, outcome_tolerance_deg)"
+        )
 
     def check_step(self, call: ValidatedCall, state: RobotState, env: PlanEnv) -> list[str]:
         """Re-check one step from the measured state just before it runs.
@@ -138,8 +144,9 @@ class Governor:
         belongs to already passed on predictions and each step may end that far off).
         """
         try:
-            reasons, poses, needs_approval = self._check(call, state.pose, state.posture,
-                                                         state, env)
+            reasons, poses, needs_approval = self._check(
+                call, state.pose, state.posture, state, env
+            )
         except PlanProblem as exc:
             return [str(exc)]
         budget = env.budget
@@ -148,8 +155,9 @@ class Governor:
         if needs_approval and not budget.granted(call):
             reasons.append(f"not approved: {needs_approval}")
         distance = sum(paths.legs(state.pose, poses))
-        reasons += self._mission_distance(budget.travelled(state), distance,
-                                          self.limits.outcome_tolerance)
+        reasons += self._mission_distance(
+            budget.travelled(state), distance, self.limits.outcome_tolerance
+        )
         elapsed = budget.elapsed()
         if elapsed > self.limits.max_mission_duration + 1e-9:
             reasons.append(out_of_time(self.limits.max_mission_duration))
@@ -164,8 +172,10 @@ class Governor:
         if total <= limit + slack + 1e-9:
             return []
         already = f" in all ({walked:.1f} m walked already)" if walked > 0 else ""
-        return [f"the mission would travel {total:.1f} m{already}, more than the limit of "
-                f"{limit:g} m (safety.max_mission_distance)"]
+        return [
+            f"the mission would travel {total:.1f} m{already}, more than the limit of "
+            f"{limit:g} m (safety.max_mission_distance)"
+        ]
 
     def _mission_time(self, seconds: float) -> list[str]:
         """The mission's time limit, against the robot-clock time used so far plus at least
@@ -173,8 +183,10 @@ class Governor:
         limit = self.limits.max_mission_duration
         if seconds <= limit + 1e-9:
             return []
-        return [f"the mission would take at least {seconds:.1f} s on the robot's clock, more "
-                f"than the limit of {limit:g} s (safety.max_mission_duration)"]
+        return [
+            f"the mission would take at least {seconds:.1f} s on the robot's clock, more "
+            f"than the limit of {limit:g} s (safety.max_mission_duration)"
+        ]
 
     def _least_seconds(self, call: ValidatedCall, distance: float) -> float:
         """A lower bound on a step's robot time (never more than it can take): its distance at
@@ -187,7 +199,11 @@ class Governor:
         return [s.name for s in self.skills if s.low_battery]
 
     def _check(
-        self, call: ValidatedCall, pose: Pose2D, posture: Posture, start: RobotState,
+        self,
+        call: ValidatedCall,
+        pose: Pose2D,
+        posture: Posture,
+        start: RobotState,
         env: PlanEnv,
     ) -> tuple[list[str], list[Pose2D], str]:
         lim = self.limits
@@ -209,8 +225,10 @@ class Governor:
         if seconds is not None and seconds > lim.max_wait:
             reasons.append(f"waiting {seconds:g} s exceeds safety.max_wait ({lim.max_wait:g} s)")
         if call.skill.runs_standing and posture is not Posture.STANDING and not self.auto_stand:
-            reasons.append(f"the robot will be {posture.value} here; add body.stand before it "
-                           "(motion.auto_stand is off)")
+            reasons.append(
+                f"the robot will be {posture.value} here; add body.stand before it "
+                "(motion.auto_stand is off)"
+            )
         approval = ""
         risk = call.skill.why_risky(args)
         if risk and not lim.allow_risky_tricks:
@@ -224,8 +242,10 @@ class Governor:
     def _speed_caps(self, call: ValidatedCall) -> list[str]:
         """Every speed argument against its cap, by the kind of quantity it is declared as."""
         lim = self.limits
-        caps = {units.SPEED: (lim.max_linear_speed, "max_linear_speed"),
-                units.ANGULAR_SPEED: (lim.max_angular_speed, "max_angular_speed")}
+        caps = {
+            units.SPEED: (lim.max_linear_speed, "max_linear_speed"),
+            units.ANGULAR_SPEED: (lim.max_angular_speed, "max_angular_speed"),
+        }
         reasons = []
         for name, info in type(call.args).model_fields.items():
             kind = argument_kind(info)
@@ -234,12 +254,15 @@ class Governor:
                 continue
             cap, setting = caps[kind]
             if speed > cap:
-                reasons.append(f"{name} {speed:g} {kind.unit} exceeds the cap of {cap:g} "
-                               f"{kind.unit} (safety.{setting})")
+                reasons.append(
+                    f"{name} {speed:g} {kind.unit} exceeds the cap of {cap:g} "
+                    f"{kind.unit} (safety.{setting})"
+                )
         return reasons
 
-    def path_problems(self, pose: Pose2D, poses: list[Pose2D], env: PlanEnv, what: str
-                      ) -> list[str]:
+    def path_problems(
+        self, pose: Pose2D, poses: list[Pose2D], env: PlanEnv, what: str
+    ) -> list[str]:
         """Why the straight legs from `pose` through `poses` may not be walked (skills/paths.py:
         the step limit per leg, the geofences, and with a map anything in the way)."""
         return paths.path_problems(self.limits, pose, poses, env, what)
@@ -272,14 +295,17 @@ class Watchdog:
         self.timeout = 0.25
         self.trips = 0
         self._closed = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="shadowhound-watchdog",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._run, name="shadowhound-watchdog", daemon=True)
         self._thread.start()
 
     def arm(self, timeout: float) -> None:
         with self._lock:
-            self.timeout, self._armed, self._last, self._moving = timeout, True, \
-                time.monotonic(), False
+            self.timeout, self._armed, self._last, self._moving = (
+                timeout,
+                True,
+                time.monotonic(),
+                False,
+            )
 
     def disarm(self) -> None:
         with self._lock:
@@ -306,5 +332,7 @@ class Watchdog:
                     self.trips += 1
             if tripped:
                 self._stop()
-                self._on_trip(f"watchdog: no control tick for {stale:.2f} s while the robot "
-                              "was moving; velocity set to zero")
+                self._on_trip(
+                    f"watchdog: no control tick for {stale:.2f} s while the robot "
+                    "was moving; velocity set to zero"
+                )

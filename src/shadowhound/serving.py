@@ -19,23 +19,31 @@ from .errors import ServeError
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 
 MIN_TOKEN_CHARS = 16
-_TOKEN_HINT = ("for example: export SHADOWHOUND_TOKEN=$(python3 -c "
-               "'import secrets; print(secrets.token_urlsafe(24))')")
+_TOKEN_HINT = (
+    "for example: export SHADOWHOUND_TOKEN=$(python3 -c "
+    "'import secrets; print(secrets.token_urlsafe(24))')"
+)
 
 
 def check_binding(host: str, token: str | None, what: str = "the dashboard") -> None:
     """Refuse to listen beyond loopback without a strong enough token. Raises ServeError."""
     if not is_loopback(host) and not token:
-        raise ServeError(f"refusing to listen on {host}: only a literal loopback address "
-                         "(127.x.x.x, ::1) or localhost counts as loopback (names are not "
-                         f"resolved), and beyond loopback {what} needs a token; set "
-                         "SHADOWHOUND_TOKEN or pass --token, " + _TOKEN_HINT)
+        raise ServeError(
+            f"refusing to listen on {host}: only a literal loopback address "
+            "(127.x.x.x, ::1) or localhost counts as loopback (names are not "
+            f"resolved), and beyond loopback {what} needs a token; set "
+            "SHADOWHOUND_TOKEN or pass --token, " + _TOKEN_HINT
+        )
     if token is not None and len(token) < MIN_TOKEN_CHARS:
-        raise ServeError(f"the token is {len(token)} characters long; use at least "
-                         f"{MIN_TOKEN_CHARS}, " + _TOKEN_HINT)
+        raise ServeError(
+            f"the token is {len(token)} characters long; use at least "
+            f"{MIN_TOKEN_CHARS}, " + _TOKEN_HINT
+        )
     if token is not None and not all(c.isalnum() or c in "-._~" for c in token):
-        raise ServeError("the token may contain only letters, digits and - . _ ~ (it travels "
-                         "in headers, URLs and WebSocket subprotocols), " + _TOKEN_HINT)
+        raise ServeError(
+            "the token may contain only letters, digits and - . _ ~ (it travels "
+            "in headers, URLs and WebSocket subprotocols), " + _TOKEN_HINT
+        )
 
 
 def is_loopback(host: str) -> bool:

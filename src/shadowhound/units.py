@@ -122,8 +122,9 @@ def _unit(name: str) -> _Unit | None:
     top, bottom = _UNITS.get(m.group(1)), _UNITS.get(m.group(2))
     if top is None or bottom is None or (top.kind, bottom.kind) not in _COMPOSED:
         return None
-    return _Unit(_COMPOSED[top.kind, bottom.kind], top.factor / bottom.factor,
-                 top.pi_power - bottom.pi_power)
+    return _Unit(
+        _COMPOSED[top.kind, bottom.kind], top.factor / bottom.factor, top.pi_power - bottom.pi_power
+    )
 
 
 def kind_of(unit: str) -> Kind | None:
@@ -181,8 +182,10 @@ def read(value: object, kind: Kind) -> float:
 
 def allowed(kind: Kind) -> str:
     """What `read` accepts for `kind`, as the second half of an error message."""
-    return (f"give a number of {kind.unit_words}, or text with {_a(kind.name)} unit "
-            f"({', '.join(kind.shown_units)}) such as '{kind.example}'")
+    return (
+        f"give a number of {kind.unit_words}, or text with {_a(kind.name)} unit "
+        f"({', '.join(kind.shown_units)}) such as '{kind.example}'"
+    )
 
 
 def format_number(value: float) -> str:
@@ -201,11 +204,15 @@ def _read_text(text: str, kind: Kind) -> float:
     if m is None:
         if _NOT_FINITE.search(clean):
             raise UnitError(f"{shown} is not a finite number; {allowed(kind)}")
-        raise UnitError(f"{shown} is not {_a(kind.name)}: expected one number and at most one "
-                        f"unit; {allowed(kind)}")
+        raise UnitError(
+            f"{shown} is not {_a(kind.name)}: expected one number and at most one "
+            f"unit; {allowed(kind)}"
+        )
     if m.group("of") and not (m.group("fraction") or _is_fraction_word(m.group("words"))):
-        raise UnitError(f"{shown} is not {_a(kind.name)}: 'of a' only follows a fraction, as in "
-                        f"'half a meter'; {allowed(kind)}")
+        raise UnitError(
+            f"{shown} is not {_a(kind.name)}: 'of a' only follows a fraction, as in "
+            f"'half a meter'; {allowed(kind)}"
+        )
     number = _number(m, shown, kind)
     name = m.group("unit")
     if name is None:
@@ -216,8 +223,7 @@ def _read_text(text: str, kind: Kind) -> float:
     if unit is None:
         raise UnitError(f"{shown}: unknown unit '{name}'; {allowed(kind)}")
     if unit.kind is not kind:
-        raise UnitError(f"{shown} is {_a(unit.kind.name)}, not {_a(kind.name)}; "
-                        f"{allowed(kind)}")
+        raise UnitError(f"{shown} is {_a(unit.kind.name)}, not {_a(kind.name)}; {allowed(kind)}")
     ratio = unit.per(_own_unit(kind))
     if isinstance(ratio, Fraction) and isinstance(number, Fraction):
         return _finite(number * ratio, text, kind)
@@ -225,8 +231,11 @@ def _read_text(text: str, kind: Kind) -> float:
 
 
 def _is_fraction_word(words: str | None) -> bool:
-    return words is not None and "and" not in words.lower().split() and \
-        _WORDS[" ".join(words.lower().split())] < 1
+    return (
+        words is not None
+        and "and" not in words.lower().split()
+        and _WORDS[" ".join(words.lower().split())] < 1
+    )
 
 
 def _number(m: re.Match[str], shown: str, kind: Kind) -> Fraction | float:

@@ -49,8 +49,14 @@ class MissionJob:
 class MissionWorker:
     """Runs `MissionJob`s on one thread. `on_start`/`on_finish` run on that thread too."""
 
-    def __init__(self, agent: RobotAgent, *, on_start: Callable[[MissionJob], None],
-                 on_finish: Callable[[MissionJob], None], max_queue: int = 8) -> None:
+    def __init__(
+        self,
+        agent: RobotAgent,
+        *,
+        on_start: Callable[[MissionJob], None],
+        on_finish: Callable[[MissionJob], None],
+        max_queue: int = 8,
+    ) -> None:
         self._agent = agent
         self._on_start = on_start
         self._on_finish = on_finish
@@ -60,8 +66,7 @@ class MissionWorker:
         self._pending = 0  # queued + running
         self._current: MissionJob | None = None
         self._unsubscribe = agent.add_listener(self._forward)
-        self._thread = threading.Thread(target=self._run, name="shadowhound-mission",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._run, name="shadowhound-mission", daemon=True)
         self._thread.start()
 
     @property
@@ -77,8 +82,10 @@ class MissionWorker:
         """Queue a job. Returns None when accepted, else why it was refused."""
         with self._lock:
             if self._pending > self._max_queue:
-                return (f"{self._max_queue} missions are already waiting; wait for them or "
-                        "cancel the running one")
+                return (
+                    f"{self._max_queue} missions are already waiting; wait for them or "
+                    "cancel the running one"
+                )
             self._pending += 1
         self._accepted(job)
         self._queue.put(job)
@@ -137,8 +144,9 @@ class MissionWorker:
                     continue
                 self._on_start(job)
                 if job.calls is not None:  # the same checks as a planned step
-                    job.result = self._agent.run_plan(job.calls, job.command,
-                                                      mission_id=job.mission_id)
+                    job.result = self._agent.run_plan(
+                        job.calls, job.command, mission_id=job.mission_id
+                    )
                 else:
                     run = self._agent.dry_run if job.dry_run else self._agent.execute_mission
                     job.result = run(job.command, mission_id=job.mission_id)

@@ -46,8 +46,11 @@ class HttpServer:
     def __init__(self, *extra: str, time_scale: float = 0.0, env: dict[str, str] | None = None):
         self.proc = subprocess.Popen(
             server_command("--http", "--port", "0", *extra, time_scale=time_scale),
-            env=env or server_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-            text=True)
+            env=env or server_env(),
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         self.url = self._wait_for_url()
 
     def _wait_for_url(self) -> str:
@@ -94,16 +97,17 @@ def http_server() -> Iterator[Callable[..., HttpServer]]:
 
 
 @contextlib.asynccontextmanager
-async def connect(transport: str, *, time_scale: float = 0.0, url: str | None = None,
-                  **client_options: Any) -> AsyncIterator[Any]:
+async def connect(
+    transport: str, *, time_scale: float = 0.0, url: str | None = None, **client_options: Any
+) -> AsyncIterator[Any]:
     """An SDK `Client` on a new server process (stdio) or on `url` (HTTP)."""
     from mcp import Client
     from mcp.client.stdio import StdioServerParameters
 
     if transport == "stdio":
-        target: Any = StdioServerParameters(command=sys.executable,
-                                            args=server_command(time_scale=time_scale)[1:],
-                                            env=server_env())
+        target: Any = StdioServerParameters(
+            command=sys.executable, args=server_command(time_scale=time_scale)[1:], env=server_env()
+        )
     else:
         assert url is not None
         target = url

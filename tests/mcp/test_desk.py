@@ -24,8 +24,9 @@ def _noop(_job: MissionJob) -> None:
 
 def test_a_mission_from_another_interface_makes_mcp_busy():
     settings = ShadowHoundConfig()
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=1.0),
-                                        settings=settings))
+    agent = RobotAgent(
+        RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=1.0), settings=settings)
+    )
     agent.initialize()
     worker = MissionWorker(agent, on_start=_noop, on_finish=_noop)  # e.g. the ROS node's
     desk = McpDesk(agent, worker=worker)
@@ -42,8 +43,10 @@ def test_a_mission_from_another_interface_makes_mcp_busy():
         mcp_job = desk.start_skill("nav_rotate", {"degrees": 90})
         assert mcp_job.done.wait(30) and mcp_job.result is not None
         assert [s.skill for s in mcp_job.result.steps] == ["nav.rotate"]
-        assert [r.mission for r in agent.history] == ["walk forward 0.3 meters",
-                                                      "nav.rotate(degrees=90.0)"]
+        assert [r.mission for r in agent.history] == [
+            "walk forward 0.3 meters",
+            "nav.rotate(degrees=90.0)",
+        ]
     finally:
         desk.close()
         worker.stop()
@@ -57,13 +60,18 @@ def test_a_mission_from_another_interface_makes_mcp_busy():
 finite = st.floats(-50, 50, allow_nan=False)
 calls = st.one_of(
     st.builds(lambda d: ("nav_move", {"distance": d}), st.one_of(finite, st.just(math.nan))),
-    st.builds(lambda d, s: ("nav_move", {"distance": d, "speed": s}), finite,
-              st.floats(-1, 5, allow_nan=False)),
+    st.builds(
+        lambda d, s: ("nav_move", {"distance": d, "speed": s}),
+        finite,
+        st.floats(-1, 5, allow_nan=False),
+    ),
     st.builds(lambda d: ("nav_strafe", {"distance": d}), finite),
     st.builds(lambda a: ("nav_rotate", {"degrees": a}), st.floats(-720, 720)),
     st.builds(lambda x, y: ("nav_goto", {"x": x, "y": y}), finite, finite),
-    st.builds(lambda t: ("body_sport", {"trick": t}), st.sampled_from(["hello", "front_flip",
-                                                                       "backflip", "flop"])),
+    st.builds(
+        lambda t: ("body_sport", {"trick": t}),
+        st.sampled_from(["hello", "front_flip", "backflip", "flop"]),
+    ),
     st.builds(lambda s: ("sys_wait", {"seconds": s}), st.floats(-1, 400, allow_nan=False)),
 )
 
@@ -73,8 +81,9 @@ calls = st.one_of(
 def test_a_skill_tool_runs_exactly_when_its_one_step_plan_passes_the_checks(call):
     tool, args = call
     config = ShadowHoundConfig(safety={"approval_timeout": 0.05})  # nobody answers: a no
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(config.sim, time_scale=0.0),
-                                        settings=config))
+    agent = RobotAgent(
+        RobotAgentConfig(robot=SimRobot(config.sim, time_scale=0.0), settings=config)
+    )
     agent.initialize()
     desk = McpDesk(agent)
     try:

@@ -35,21 +35,27 @@ def inspector() -> list[str]:
 
 
 def _inspect(command: list[str], *args: str) -> dict:
-    proc = subprocess.run([*command, *args], capture_output=True, text=True, timeout=120,
-                          cwd=ROOT)
+    proc = subprocess.run([*command, *args], capture_output=True, text=True, timeout=120, cwd=ROOT)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
     return json.loads(proc.stdout)
 
 
 def test_inspector_lists_tools_and_calls_one_over_stdio(inspector, tmp_path):
     # The Inspector starts the server with a clean environment: pass what it needs.
-    server = [*inspector, "-e", f"PYTHONPATH={SRC}", "-e",
-              f"SHADOWHOUND_MEMORY__DATA_DIR={tmp_path}", *server_command()]
+    server = [
+        *inspector,
+        "-e",
+        f"PYTHONPATH={SRC}",
+        "-e",
+        f"SHADOWHOUND_MEMORY__DATA_DIR={tmp_path}",
+        *server_command(),
+    ]
     tools = _inspect(server, "--method", "tools/list")["tools"]
     names = {t["name"] for t in tools}
     assert {"run_mission", "plan_mission", "emergency_stop", "nav_move", "body_sit"} <= names
-    answer = _inspect(server, "--method", "tools/call", "--tool-name", "nav_rotate",
-                      "--tool-arg", "degrees=45")
+    answer = _inspect(
+        server, "--method", "tools/call", "--tool-name", "nav_rotate", "--tool-arg", "degrees=45"
+    )
     assert answer.get("isError") is not True, answer
     result = answer["structuredContent"]
     assert result["success"] is True

@@ -25,8 +25,9 @@ REAL_TIME = 1.0  # the robot takes real seconds, so there is a mission to stop
 
 
 @contextlib.asynccontextmanager
-async def client_for(transport: str, http_server: Callable[..., HttpServer],
-                     time_scale: float = 0.0, **options: Any) -> AsyncIterator[Any]:
+async def client_for(
+    transport: str, http_server: Callable[..., HttpServer], time_scale: float = 0.0, **options: Any
+) -> AsyncIterator[Any]:
     if transport == "http":
         server = http_server(time_scale=time_scale)
         async with connect("http", url=server.url, **options) as client:
@@ -61,22 +62,35 @@ def test_lists_tools_from_the_registry_resources_and_the_prompt(transport, http_
     async def scenario() -> None:
         async with client_for(transport, http_server) as client:
             tools = {t.name: t for t in (await client.list_tools()).tools}
-            for name in ("run_mission", "plan_mission", "get_state", "get_camera_image",
-                         "emergency_stop", "release_estop", "cancel_mission", "history"):
+            for name in (
+                "run_mission",
+                "plan_mission",
+                "get_state",
+                "get_camera_image",
+                "emergency_stop",
+                "release_estop",
+                "cancel_mission",
+                "history",
+            ):
                 assert name in tools
             for skill in default_registry():  # one tool per skill, the registry's schema
                 tool = tools[skill.tool_name]
                 assert tool.input_schema == skill.parameters_schema()
                 assert tool.description == skill.description
             uris = {str(r.uri) for r in (await client.list_resources()).resources}
-            assert {"shadowhound://skills", "shadowhound://places",
-                    "shadowhound://missions/last"} <= uris
-            skills = json.loads((await client.read_resource("shadowhound://skills"))
-                                .contents[0].text)
+            assert {
+                "shadowhound://skills",
+                "shadowhound://places",
+                "shadowhound://missions/last",
+            } <= uris
+            skills = json.loads(
+                (await client.read_resource("shadowhound://skills")).contents[0].text
+            )
             assert [s["name"] for s in skills] == default_registry().names
             await client.call_tool("places_remember", {"name": "dock"})
-            places = json.loads((await client.read_resource("shadowhound://places"))
-                                .contents[0].text)
+            places = json.loads(
+                (await client.read_resource("shadowhound://places")).contents[0].text
+            )
             assert places["dock"]["x"] == 0.0 and places["dock"]["y"] == 0.0
             prompt = await client.get_prompt("mission", {"task": "fetch the ball"})
             assert "fetch the ball" in prompt.messages[0].content.text
@@ -96,15 +110,18 @@ def test_run_mission_moves_the_robot_and_reports_each_step(transport, http_serve
 
     async def scenario() -> dict[str, Any]:
         async with client_for(transport, http_server) as client:
-            result = await client.call_tool("run_mission", {"text": "walk forward 1 meter and "
-                                                            "turn left 90 degrees"},
-                                            progress_callback=on_progress)
+            result = await client.call_tool(
+                "run_mission",
+                {"text": "walk forward 1 meter and turn left 90 degrees"},
+                progress_callback=on_progress,
+            )
             assert not result.is_error, text_of(result)
             state = await robot(client)
             assert state["x"] == pytest.approx(1.0, abs=0.05)
             assert state["yaw_deg"] == pytest.approx(90.0, abs=2.0)
-            last = json.loads((await client.read_resource("shadowhound://missions/last"))
-                              .contents[0].text)
+            last = json.loads(
+                (await client.read_resource("shadowhound://missions/last")).contents[0].text
+            )
             assert last["mission_id"] == structured(result)["mission_id"]
             return structured(result)
 
@@ -120,8 +137,13 @@ def test_run_mission_moves_the_robot_and_reports_each_step(transport, http_serve
 
 def test_run_mission_answers_the_same_data_as_run_json(http_server):
     mission = "walk forward 1 meter"
-    cli = subprocess.run([sys.executable, "-m", "shadowhound", "run", mission, "--json"],
-                         env=server_env(), capture_output=True, text=True, timeout=120)
+    cli = subprocess.run(
+        [sys.executable, "-m", "shadowhound", "run", mission, "--json"],
+        env=server_env(),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     expected = json.loads(cli.stdout)
 
     async def scenario() -> dict[str, Any]:
@@ -130,16 +152,18 @@ def test_run_mission_answers_the_same_data_as_run_json(http_server):
 
     answer = run(scenario())
     assert set(answer) == set(expected) - {"exit_code"}
-    assert [(s["skill"], s["args"], s["status"]) for s in answer["steps"]] == \
-        [(s["skill"], s["args"], s["status"]) for s in expected["steps"]]
+    assert [(s["skill"], s["args"], s["status"]) for s in answer["steps"]] == [
+        (s["skill"], s["args"], s["status"]) for s in expected["steps"]
+    ]
     assert answer["robot"]["x"] == pytest.approx(expected["robot"]["x"], abs=1e-6)
 
 
 def test_plan_mission_moves_nothing(http_server):
     async def scenario() -> None:
         async with client_for("stdio", http_server) as client:
-            plan = structured(await client.call_tool("plan_mission",
-                                                     {"text": "walk forward 2 meters"}))
+            plan = structured(
+                await client.call_tool("plan_mission", {"text": "walk forward 2 meters"})
+            )
             assert plan["dry_run"] is True and plan["success"] is True
             assert plan["predicted_path"][-1]["x"] == pytest.approx(2.0, abs=0.01)
             assert (await robot(client))["x"] == 0.0
@@ -168,14 +192,12 @@ def test_camera_image_is_a_downscaled_jpeg(transport, http_server):
 
 
 @pytest.mark.parametrize("transport", TRANSPORTS)
-def test_skill_call_over_the_limit_is_refused_with_the_governors_message(transport,
-                                                                          http_server):
+def test_skill_call_over_the_limit_is_refused_with_the_governors_message(transport, http_server):
     async def scenario() -> None:
         async with client_for(transport, http_server) as client:
             result = await client.call_tool("nav_move", {"distance": 100})
             assert result.is_error
-            assert "exceeds the limit of 5 m per step (safety.max_step_distance)" in \
-                text_of(result)
+            assert "exceeds the limit of 5 m per step (safety.max_step_distance)" in text_of(result)
             assert (await robot(client))["x"] == 0.0
             ok = await client.call_tool("nav_move", {"distance": "50 cm"})
             assert not ok.is_error, text_of(ok)
@@ -206,11 +228,13 @@ def test_risky_call_asks_the_person_accepted_and_declined(transport, mode, http_
     accept, decline = _elicitation("accept"), _elicitation("decline")
 
     async def scenario() -> tuple[Any, Any]:
-        async with client_for(transport, http_server, elicitation_callback=accept,
-                              mode=mode) as client:
+        async with client_for(
+            transport, http_server, elicitation_callback=accept, mode=mode
+        ) as client:
             yes = await client.call_tool("body_sport", {"trick": "front_flip"})
-        async with client_for(transport, http_server, elicitation_callback=decline,
-                              mode=mode) as client:
+        async with client_for(
+            transport, http_server, elicitation_callback=decline, mode=mode
+        ) as client:
             no = await client.call_tool("body_sport", {"trick": "front_flip"})
         return yes, no
 
@@ -244,8 +268,11 @@ def test_emergency_stop_mid_mission_stops_the_robot_and_latches(transport, http_
 
     async def scenario() -> None:
         async with client_for(transport, http_server, time_scale=REAL_TIME) as client:
-            mission = asyncio.create_task(client.call_tool(
-                "run_mission", {"text": "walk forward 2 meters"}, progress_callback=on_progress))
+            mission = asyncio.create_task(
+                client.call_tool(
+                    "run_mission", {"text": "walk forward 2 meters"}, progress_callback=on_progress
+                )
+            )
             await wait_for_step(progress, "nav.move")
             await asyncio.sleep(0.5)  # moving now
             stop = structured(await client.call_tool("emergency_stop", {}))
@@ -278,9 +305,13 @@ def test_a_second_mission_is_refused_busy_never_queued(transport, http_server):
 
     async def scenario() -> None:
         async with client_for(transport, http_server, time_scale=REAL_TIME) as client:
-            first = asyncio.create_task(client.call_tool(
-                "run_mission", {"text": "walk forward 0.5 meters"},
-                progress_callback=on_progress))
+            first = asyncio.create_task(
+                client.call_tool(
+                    "run_mission",
+                    {"text": "walk forward 0.5 meters"},
+                    progress_callback=on_progress,
+                )
+            )
             await wait_for_step(progress, "nav.move")
             second = await client.call_tool("run_mission", {"text": "turn left 90 degrees"})
             skill = await client.call_tool("nav_rotate", {"degrees": 90})
@@ -292,8 +323,9 @@ def test_a_second_mission_is_refused_busy_never_queued(transport, http_server):
             assert state["yaw"] == 0.0  # neither refused call ran later
             history = structured(await client.call_tool("history", {"limit": 10}))["missions"]
             assert history[0]["mission"] == "walk forward 0.5 meters"
-            assert not {"turn left 90 degrees", "nav.rotate(degrees=90)"} & \
-                {m["mission"] for m in history}
+            assert not {"turn left 90 degrees", "nav.rotate(degrees=90)"} & {
+                m["mission"] for m in history
+            }
 
     run(scenario())
 
@@ -307,8 +339,11 @@ def test_http_client_going_away_mid_mission_stops_the_robot(http_server):
 
     async def scenario() -> None:
         async with connect("http", url=server.url) as client:
-            mission = asyncio.create_task(client.call_tool(
-                "run_mission", {"text": "walk forward 2 meters"}, progress_callback=on_progress))
+            mission = asyncio.create_task(
+                client.call_tool(
+                    "run_mission", {"text": "walk forward 2 meters"}, progress_callback=on_progress
+                )
+            )
             await wait_for_step(progress, "nav.move")
             await asyncio.sleep(0.3)
             mission.cancel()  # the client gives up on the call and leaves
@@ -332,30 +367,56 @@ def test_http_client_going_away_mid_mission_stops_the_robot(http_server):
 
 def test_stdio_client_going_away_mid_mission_stops_the_robot(tmp_path):
     env = server_env(SHADOWHOUND_MEMORY__DATA_DIR=str(tmp_path))
-    proc = subprocess.Popen([sys.executable, "-m", "shadowhound", "mcp", "--time-scale", "1"],
-                            env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, text=True, bufsize=1)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "shadowhound", "mcp", "--time-scale", "1"],
+        env=env,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        bufsize=1,
+    )
     assert proc.stdin is not None and proc.stdout is not None
 
     def send(message: dict[str, Any]) -> None:
         proc.stdin.write(json.dumps({"jsonrpc": "2.0", **message}) + "\n")
         proc.stdin.flush()
 
-    send({"id": 1, "method": "initialize", "params": {
-        "protocolVersion": "2025-11-25", "capabilities": {},
-        "clientInfo": {"name": "test", "version": "0"}}})
+    send(
+        {
+            "id": 1,
+            "method": "initialize",
+            "params": {
+                "protocolVersion": "2025-11-25",
+                "capabilities": {},
+                "clientInfo": {"name": "test", "version": "0"},
+            },
+        }
+    )
     assert json.loads(proc.stdout.readline())["id"] == 1
     send({"method": "notifications/initialized"})
-    send({"id": 2, "method": "tools/call", "params": {
-        "name": "run_mission", "arguments": {"text": "walk forward 2 meters"},
-        "_meta": {"progressToken": "p"}}})
+    send(
+        {
+            "id": 2,
+            "method": "tools/call",
+            "params": {
+                "name": "run_mission",
+                "arguments": {"text": "walk forward 2 meters"},
+                "_meta": {"progressToken": "p"},
+            },
+        }
+    )
     while "nav.move" not in proc.stdout.readline():
         pass
     proc.stdin.close()  # the client is gone (a desktop client quitting closes the pipe)
     assert proc.wait(30) == 0
-    history = subprocess.run([sys.executable, "-m", "shadowhound", "history", "--json",
-                              "--limit", "1"], env=env, capture_output=True, text=True,
-                             timeout=60)
+    history = subprocess.run(
+        [sys.executable, "-m", "shadowhound", "history", "--json", "--limit", "1"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     last = json.loads(history.stdout)[0]
     assert last["mission"] == "walk forward 2 meters"
     assert last["status"] in ("stopped", "interrupted"), last

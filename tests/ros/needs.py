@@ -14,8 +14,10 @@ def require(*modules: str) -> None:
     missing = [m for m in modules if importlib.util.find_spec(m) is None]
     if not missing:
         return
-    why = (f"ROS 2 tests need {' and '.join(missing)}: install the 'ros' extra and run "
-           "bash scripts/build_ros.sh")
+    why = (
+        f"ROS 2 tests need {' and '.join(missing)}: install the 'ros' extra and run "
+        "bash scripts/build_ros.sh"
+    )
     if os.environ.get("SHADOWHOUND_REQUIRE_ROS") == "1":
         raise RuntimeError(why)
     pytest.skip(why, allow_module_level=True)

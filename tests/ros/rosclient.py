@@ -31,8 +31,9 @@ RELIABLE = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def wait_until(predicate: Callable[[], Any], timeout: float, what: str,
-               interval: float = 0.02) -> Any:
+def wait_until(
+    predicate: Callable[[], Any], timeout: float, what: str, interval: float = 0.02
+) -> Any:
     """Poll `predicate` until it returns something truthy; fail with `what` after `timeout`."""
     deadline = time.monotonic() + timeout
     while True:
@@ -68,10 +69,12 @@ class Inbox:
     def since(self, mark: int) -> list[Any]:
         return self.items[mark:]
 
-    def wait_for(self, match: Callable[[Any], bool], timeout: float, what: str,
-                 mark: int = 0) -> Any:
-        return wait_until(lambda: next((m for m in self.since(mark) if match(m)), None),
-                          timeout, what)
+    def wait_for(
+        self, match: Callable[[Any], bool], timeout: float, what: str, mark: int = 0
+    ) -> Any:
+        return wait_until(
+            lambda: next((m for m in self.since(mark) if match(m)), None), timeout, what
+        )
 
 
 class RosClient:
@@ -129,37 +132,51 @@ class Agent:
     def wait_ready(self, process: NodeProcess, timeout: float = 30.0) -> None:
         def ready() -> bool:
             process.check_alive()
-            return (self.missions.get_subscription_count() > 0
-                    and self.status.subscription.get_publisher_count() > 0
-                    and self.action.server_is_ready())
+            return (
+                self.missions.get_subscription_count() > 0
+                and self.status.subscription.get_publisher_count() > 0
+                and self.action.server_is_ready()
+            )
+
         wait_until(ready, timeout, f"the mission node {self.ns or '/'} to be discovered")
 
     def run(self, command: str, timeout: float = 30.0) -> str:
         """Publish a mission; return the COMPLETED/FAILED line that ends it."""
         mark = self.status.mark()
         self.missions.publish(String(data=command))
-        self.status.wait_for(lambda m: m.data.startswith("EXECUTING: ") or
-                             m.data.startswith("FAILED: "), timeout, f"{command[:40]!r} to start",
-                             mark)
-        done = self.status.wait_for(lambda m: m.data.startswith(("COMPLETED: ", "FAILED: ")),
-                                    timeout, f"{command[:40]!r} to finish", mark)
+        self.status.wait_for(
+            lambda m: m.data.startswith("EXECUTING: ") or m.data.startswith("FAILED: "),
+            timeout,
+            f"{command[:40]!r} to start",
+            mark,
+        )
+        done = self.status.wait_for(
+            lambda m: m.data.startswith(("COMPLETED: ", "FAILED: ")),
+            timeout,
+            f"{command[:40]!r} to finish",
+            mark,
+        )
         return str(done.data)
 
-    def diagnostic(self, mark: int = 0, timeout: float = 5.0,
-                   match: Callable[[dict[str, str]], bool] = lambda _v: True,
-                   ) -> tuple[Any, dict[str, str]]:
+    def diagnostic(
+        self,
+        mark: int = 0,
+        timeout: float = 5.0,
+        match: Callable[[dict[str, str]], bool] = lambda _v: True,
+    ) -> tuple[Any, dict[str, str]]:
         """The next diagnostics (from this node) whose key-values satisfy `match`."""
+
         def ours(msg: Any) -> bool:
             status = msg.status[0]
             values = {kv.key: kv.value for kv in status.values}
             return match(values)
+
         msg = self.diagnostics.wait_for(ours, timeout, "matching diagnostics", mark)
         return msg.status[0], {kv.key: kv.value for kv in msg.status[0].values}
 
     def robot_state(self, timeout: float = 5.0) -> dict[str, Any]:
         mark = self.robot.mark()
-        return json.loads(self.robot.wait_for(lambda _m: True, timeout, "robot status",
-                                              mark).data)
+        return json.loads(self.robot.wait_for(lambda _m: True, timeout, "robot status", mark).data)
 
 
 class NodeProcess:
@@ -168,8 +185,9 @@ class NodeProcess:
     `command="sim-driver"` starts the simulated Go2 driver instead; `options` go before
     `--ros-args` (the driver's own options, e.g. ("--odom-delay", "0.5"))."""
 
-    def __init__(self, *ros_args: str, command: str = "node",
-                 options: tuple[str, ...] = ()) -> None:
+    def __init__(
+        self, *ros_args: str, command: str = "node", options: tuple[str, ...] = ()
+    ) -> None:
         self.command = command
         fd, name = tempfile.mkstemp(prefix=f"{command.replace('-', '_')}_", suffix=".log")
         self.log = Path(name)
@@ -177,7 +195,10 @@ class NodeProcess:
         with os.fdopen(fd, "w") as log:
             self.proc = subprocess.Popen(
                 [sys.executable, "-m", "shadowhound", command, *options, "--ros-args", *ros_args],
-                stdout=log, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                env=env,
+                cwd=ROOT,
             )
 
     def output(self) -> str:
@@ -185,8 +206,9 @@ class NodeProcess:
 
     def check_alive(self) -> None:
         if self.proc.poll() is not None:
-            raise AssertionError(f"{self.command} exited with {self.proc.returncode}:\n"
-                                 f"{self.output()}")
+            raise AssertionError(
+                f"{self.command} exited with {self.proc.returncode}:\n{self.output()}"
+            )
 
     def stop(self, sig: int = signal.SIGINT, timeout: float = 15.0) -> int:
         if self.proc.poll() is None:
@@ -196,8 +218,10 @@ class NodeProcess:
         except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait(5)
-            raise AssertionError(f"{self.command} did not exit within {timeout} s after "
-                                 f"{signal.Signals(sig).name}:\n{self.output()}") from None
+            raise AssertionError(
+                f"{self.command} did not exit within {timeout} s after "
+                f"{signal.Signals(sig).name}:\n{self.output()}"
+            ) from None
 
     def wait(self, timeout: float = 30.0) -> int:
         return self.proc.wait(timeout)

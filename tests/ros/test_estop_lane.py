@@ -46,8 +46,11 @@ def test_estop_reaches_the_robot_while_the_node_executor_is_blocked() -> None:
     try:
         estop = client.create_publisher(Empty, ESTOP_TOPIC, RELIABLE)
         release = client.create_publisher(Empty, ESTOP_RELEASE_TOPIC, RELIABLE)
-        wait_until(lambda: estop.get_subscription_count() and release.get_subscription_count(),
-                   30, "the e-stop subscriptions")
+        wait_until(
+            lambda: estop.get_subscription_count() and release.get_subscription_count(),
+            30,
+            "the e-stop subscriptions",
+        )
         spinner.start()
         assert blocked.wait(10)
         estop.publish(Empty())
@@ -56,8 +59,11 @@ def test_estop_reaches_the_robot_while_the_node_executor_is_blocked() -> None:
         estop.publish(Empty())  # pressed twice, then released: handled in that order
         release.publish(Empty())
         wait_until(lambda: not robot.get_state().estopped, 10, "the release")
-        assert [c.kind for c in robot.commands if c.kind.startswith("estop")][-3:] == \
-            ["estop", "estop", "estop_release"]
+        assert [c.kind for c in robot.commands if c.kind.startswith("estop")][-3:] == [
+            "estop",
+            "estop",
+            "estop_release",
+        ]
     finally:
         unblock.set()
         node.shutdown()

@@ -37,8 +37,7 @@ def built_hash(name: str) -> str:
     prefix = Path(go2_interfaces.__file__).resolve().parents[4]  # PREFIX/lib/pythonX/site-p..
     path = prefix / "share" / "go2_interfaces" / "msg" / f"{name}.json"
     hashes = json.loads(path.read_text())["type_hashes"]
-    return next(h["hash_string"] for h in hashes
-                if h["type_name"] == f"go2_interfaces/msg/{name}")
+    return next(h["hash_string"] for h in hashes if h["type_name"] == f"go2_interfaces/msg/{name}")
 
 
 @pytest.mark.parametrize("name", sorted(UPSTREAM))
@@ -52,8 +51,11 @@ def test_dds_announces_upstreams_type_hashes() -> None:
         for msg_type in (Go2State, WebRtcReq):
             topic = f"/hash_check/{msg_type.__name__.lower()}"
             client.publisher(msg_type, topic)
-            info = wait_until(lambda t=topic: client.node.get_publishers_info_by_topic(t), 10,
-                              f"the {topic} publisher in the graph")
+            info = wait_until(
+                lambda t=topic: client.node.get_publishers_info_by_topic(t),
+                10,
+                f"the {topic} publisher in the graph",
+            )
             assert str(info[0].topic_type_hash) == UPSTREAM[msg_type.__name__]
     finally:
         client.close()
@@ -65,8 +67,9 @@ def test_range_obstacle_carries_metres_as_floats() -> None:
 
 
 def test_the_build_check_accepts_this_package_and_says_where_it_is() -> None:
-    done = subprocess.run([sys.executable, str(CHECK)], capture_output=True, text=True,
-                          timeout=60, cwd="/tmp")
+    done = subprocess.run(
+        [sys.executable, str(CHECK)], capture_output=True, text=True, timeout=60, cwd="/tmp"
+    )
     assert done.returncode == 0, done.stderr
     assert Path(done.stdout.strip(), "msg").is_dir()
 
@@ -82,9 +85,18 @@ def test_the_build_check_refuses_a_copy_with_other_fields(tmp_path: Path) -> Non
         f"    get_fields_and_field_types = staticmethod(lambda: "
         f"{WebRtcReq.get_fields_and_field_types()!r})\n"
         "class Go2State:\n"
-        f"    get_fields_and_field_types = staticmethod(lambda: {fields!r})\n")
-    done = subprocess.run([sys.executable, str(CHECK)], capture_output=True, text=True,
-                          timeout=60, cwd="/tmp", env={"PYTHONPATH": str(tmp_path)})
+        f"    get_fields_and_field_types = staticmethod(lambda: {fields!r})\n"
+    )
+    done = subprocess.run(
+        [sys.executable, str(CHECK)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd="/tmp",
+        env={"PYTHONPATH": str(tmp_path)},
+    )
     assert done.returncode == 1
-    assert (f"go2_interfaces at {tmp_path / 'go2_interfaces'} is not go2_ros2_sdk's: "
-            "Go2State.range_obstacle is int16[4], go2_ros2_sdk's is float[4]") in done.stderr
+    assert (
+        f"go2_interfaces at {tmp_path / 'go2_interfaces'} is not go2_ros2_sdk's: "
+        "Go2State.range_obstacle is int16[4], go2_ros2_sdk's is float[4]"
+    ) in done.stderr

@@ -46,8 +46,9 @@ def client() -> Iterator[RosClient]:
 
 
 def test_without_nav2_auto_falls_back_to_the_projects_planner(client: RosClient) -> None:
-    rig, stop = start_rig(client, ("--no-navigate-to-pose",), "/auto", "/auto", "auto",
-                          "-p", "navigation:=auto")
+    rig, stop = start_rig(
+        client, ("--no-navigate-to-pose",), "/auto", "/auto", "auto", "-p", "navigation:=auto"
+    )
     try:
         final = rig.agent.run(GOAL, 90.0)
         end = rig.truth.still()
@@ -60,14 +61,17 @@ def test_without_nav2_auto_falls_back_to_the_projects_planner(client: RosClient)
 
 
 def test_without_nav2_required_nav2_fails_clearly_and_does_not_move(client: RosClient) -> None:
-    rig, stop = start_rig(client, ("--no-navigate-to-pose",), "/req", "/req", "req",
-                          "-p", "navigation:=nav2")
+    rig, stop = start_rig(
+        client, ("--no-navigate-to-pose",), "/req", "/req", "req", "-p", "navigation:=nav2"
+    )
     try:
         before = rig.truth.still()
         final = rig.agent.run(GOAL, 90.0)
         assert final.startswith("FAILED: "), final
-        assert ("navigation is 'nav2', but Nav2 (/req/navigate_to_pose) did not answer in "
-                "5 s: launch Nav2") in final, final
+        assert (
+            "navigation is 'nav2', but Nav2 (/req/navigate_to_pose) did not answer in "
+            "5 s: launch Nav2"
+        ) in final, final
         after = rig.truth.still()
         assert math.hypot(after["x"] - before["x"], after["y"] - before["y"]) < 1e-3
     finally:
@@ -117,10 +121,10 @@ def test_the_map_reaches_the_plan_check(rig: Rig) -> None:
     assert math.hypot(rig.truth.now()["x"], rig.truth.now()["y"]) < 0.01
 
 
-def test_go_to_a_point_through_navigate_to_pose_with_feedback(client: RosClient,
-                                                              rig: Rig) -> None:
-    feedback = client.subscribe(NavigateToPose.Impl.FeedbackMessage,
-                                "/nav/navigate_to_pose/_action/feedback")
+def test_go_to_a_point_through_navigate_to_pose_with_feedback(client: RosClient, rig: Rig) -> None:
+    feedback = client.subscribe(
+        NavigateToPose.Impl.FeedbackMessage, "/nav/navigate_to_pose/_action/feedback"
+    )
     before = navigation(rig.truth.still())
     poses = rig.truth.truth.mark()
     final = rig.agent.run(GOAL, 90.0)
@@ -149,8 +153,9 @@ def start_walk(rig: Rig) -> Any:
     sent = rig.agent.action.send_goal_async(ExecuteMission.Goal(command=GOAL))
     handle = wait_until(lambda: sent.done() and sent.result(), TIMEOUT, "the goal accepted")
     assert handle.accepted
-    rig.truth.wait(lambda t: navigation(t)["active"] and t["vx"] > 0.2,
-                   "Nav2's goal to walk the robot")
+    rig.truth.wait(
+        lambda t: navigation(t)["active"] and t["vx"] > 0.2, "Nav2's goal to walk the robot"
+    )
     return handle
 
 
@@ -182,8 +187,12 @@ def test_estop_cancels_the_nav2_goal_and_stops_the_robot(client: RosClient, rig:
         assert navigation(end)["canceled"] == before["canceled"] + 1
         still = rig.truth.still()
         assert math.hypot(still["x"] - pressed["x"], still["y"] - pressed["y"]) < 0.5
-        done = rig.agent.status.wait_for(lambda m: m.data.startswith(("FAILED", "COMPLETED")),
-                                         TIMEOUT, "the mission to end", mark)
+        done = rig.agent.status.wait_for(
+            lambda m: m.data.startswith(("FAILED", "COMPLETED")),
+            TIMEOUT,
+            "the mission to end",
+            mark,
+        )
         assert done.data.startswith("FAILED: ") and "e-stop pressed" in done.data, done.data
         # Nothing drives the robot after the e-stop (no goal left running at the server).
         later = rig.truth.still()

@@ -40,8 +40,9 @@ def client() -> Iterator[RosClient]:
 
 @pytest.fixture(scope="module")
 def driver(client: RosClient) -> Iterator[SimDriver]:
-    d = SimDriver(context=client.context, namespace=NS,
-                  options={"posture_seconds": 0.5, "odom_delay": 0.2})
+    d = SimDriver(
+        context=client.context, namespace=NS, options={"posture_seconds": 0.5, "odom_delay": 0.2}
+    )
     for node in d.nodes:  # the driver and its twist_mux-like relay
         client.executor.add_node(node)
     yield d
@@ -63,8 +64,9 @@ def api_ids(requests: Inbox, mark: int = 0) -> list[int]:
     return [json.loads(m.data)["api_id"] for m in requests.since(mark)]
 
 
-def test_state_camera_caps_keep_alive_and_stop_move(client: RosClient, driver: SimDriver,
-                                                    robot: Go2RosRobot) -> None:
+def test_state_camera_caps_keep_alive_and_stop_move(
+    client: RosClient, driver: SimDriver, robot: Go2RosRobot
+) -> None:
     twists = client.subscribe(Twist, f"{NS}/cmd_vel")
     requests = client.subscribe(String, f"{NS}/sim_driver/requests")
     wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the driver")
@@ -95,7 +97,8 @@ def test_state_camera_caps_keep_alive_and_stop_move(client: RosClient, driver: S
 
 
 def test_postures_are_read_from_go2_states_and_sent_only_when_needed(
-        client: RosClient, driver: SimDriver, robot: Go2RosRobot) -> None:
+    client: RosClient, driver: SimDriver, robot: Go2RosRobot
+) -> None:
     requests = client.subscribe(String, f"{NS}/sim_driver/requests")
     wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the driver")
     robot.set_posture(Posture.STANDING)  # standing already: no StandUp, no BalanceStand
@@ -113,10 +116,14 @@ def test_postures_are_read_from_go2_states_and_sent_only_when_needed(
     robot.set_posture(Posture.STANDING)  # RiseSit ends balanced: no BalanceStand after it
     assert driver.truth().mode in (1, 3)
     # Standing with locked joints (someone sent StandUp): "stand up" only balances.
-    client.publisher(WebRtcReq, f"{NS}/webrtc_req").publish(WebRtcReq(
-        id=0, topic="rt/api/sport/request", api_id=1004, parameter="", priority=0))
-    wait_until(lambda: driver.truth().mode == 6 and not driver.truth().changing, 10,
-               "the robot standing locked")
+    client.publisher(WebRtcReq, f"{NS}/webrtc_req").publish(
+        WebRtcReq(id=0, topic="rt/api/sport/request", api_id=1004, parameter="", priority=0)
+    )
+    wait_until(
+        lambda: driver.truth().mode == 6 and not driver.truth().changing,
+        10,
+        "the robot standing locked",
+    )
     wait_until(lambda: robot.get_state().posture is Posture.STANDING, 5, "go2_states")
     robot.set_posture(Posture.STANDING)
     assert driver.truth().mode in (1, 3)
@@ -125,17 +132,22 @@ def test_postures_are_read_from_go2_states_and_sent_only_when_needed(
 
 
 def test_firmware_tricks_are_refused_unless_enabled(robot: Go2RosRobot) -> None:
-    with pytest.raises(RobotError, match=r"backflip \(api id 1044\) runs only on Go2 firmware "
-                                         "that has it"):
+    with pytest.raises(
+        RobotError,
+        match=r"backflip \(api id 1044\) runs only on Go2 firmware "
+        "that has it",
+    ):
         robot.perform("backflip")
 
 
 def test_enabled_firmware_tricks_switch_to_the_ai_motion_mode_first(
-        client: RosClient, driver: SimDriver, robot: Go2RosRobot) -> None:
+    client: RosClient, driver: SimDriver, robot: Go2RosRobot
+) -> None:
     requests = client.subscribe(String, f"{NS}/sim_driver/requests")
-    enabled = Go2RosRobot(Go2RosConfig(namespace=NS[1:], firmware_tricks=True,
-                                       node_name="shadowhound_go2_firmware"),
-                          context=client.context)
+    enabled = Go2RosRobot(
+        Go2RosConfig(namespace=NS[1:], firmware_tricks=True, node_name="shadowhound_go2_firmware"),
+        context=client.context,
+    )
     try:
         wait_until(lambda: enabled.last_state().connected, 30, "odometry")
         assert not driver.truth().ai_mode
@@ -149,7 +161,8 @@ def test_enabled_firmware_tricks_switch_to_the_ai_motion_mode_first(
 
 
 def test_the_estop_sends_stop_move_and_refuses_motion_until_released(
-        client: RosClient, driver: SimDriver, robot: Go2RosRobot) -> None:
+    client: RosClient, driver: SimDriver, robot: Go2RosRobot
+) -> None:
     twists = client.subscribe(Twist, f"{NS}/cmd_vel")
     requests = client.subscribe(String, f"{NS}/sim_driver/requests")
     wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the driver")
@@ -169,17 +182,25 @@ def test_the_estop_sends_stop_move_and_refuses_motion_until_released(
 
 
 _SPEEDS = st.sampled_from([0.0, 0.0, 0.2, -0.3])
-_OPERATIONS = st.lists(st.one_of(
-    st.tuples(st.just("move"), _SPEEDS, _SPEEDS, _SPEEDS),
-    st.just(("zero",)), st.just(("stop",)), st.just(("estop",))), min_size=1, max_size=6)
+_OPERATIONS = st.lists(
+    st.one_of(
+        st.tuples(st.just("move"), _SPEEDS, _SPEEDS, _SPEEDS),
+        st.just(("zero",)),
+        st.just(("stop",)),
+        st.just(("estop",)),
+    ),
+    min_size=1,
+    max_size=6,
+)
 
 
-@settings(max_examples=8, deadline=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(operations=_OPERATIONS)
 def test_every_stop_is_a_stop_move_and_no_zero_twist_is_ever_sent(
-        client: RosClient, driver: SimDriver, robot: Go2RosRobot,
-        operations: list[tuple[object, ...]]) -> None:
+    client: RosClient, driver: SimDriver, robot: Go2RosRobot, operations: list[tuple[object, ...]]
+) -> None:
     """The whole kind: whatever the sequence of commands, each stop (stop, e-stop, a zero
     command after motion) reaches the driver as StopMove, and no all-zero Twist goes out
     (the driver would drop it and the robot keep walking)."""
@@ -219,35 +240,44 @@ def test_every_stop_is_a_stop_move_and_no_zero_twist_is_ever_sent(
 
 
 def test_without_a_driver_commands_time_out_and_motion_is_refused(client: RosClient) -> None:
-    lonely = Go2RosRobot(Go2RosConfig(namespace="nobody", command_timeout=0.3),
-                         context=client.context)
+    lonely = Go2RosRobot(
+        Go2RosConfig(namespace="nobody", command_timeout=0.3), context=client.context
+    )
     try:
         state = lonely.get_state()  # at rest: the last (here: no) state, marked disconnected
         assert state.connected is False
         with pytest.raises(RobotError, match="no odometry received on /nobody/odom"):
             lonely.send_velocity(0.2, 0.0, 0.0)
-        with pytest.raises(RobotError, match="cannot tell the robot's posture: "
-                                             "/nobody/go2_states shows no messages"):
+        with pytest.raises(
+            RobotError,
+            match="cannot tell the robot's posture: /nobody/go2_states shows no messages",
+        ):
             lonely.set_posture(Posture.SITTING)
     finally:
         lonely.close()
 
 
-@pytest.mark.parametrize(("text", "expected"), [
-    ("{}", Faults()),
-    ('{"odom": false, "delay_ms": 250}', Faults(odom=False, delay=0.25)),
-    ('{"drop_commands": true}', Faults(drop_commands=True)),
-])
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("{}", Faults()),
+        ('{"odom": false, "delay_ms": 250}', Faults(odom=False, delay=0.25)),
+        ('{"drop_commands": true}', Faults(drop_commands=True)),
+    ],
+)
 def test_fault_messages(text: str, expected: Faults) -> None:
     assert Faults.from_json(text) == expected
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    ('{"lidar": false}', "unknown fault(s) ['lidar']"),
-    ('{"odom": "no"}', "take true or false"),
-    ('{"delay_ms": -5}', "delay_ms must be a number of milliseconds in 0..10000"),
-    ("[1]", "must be a JSON object"),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ('{"lidar": false}', "unknown fault(s) ['lidar']"),
+        ('{"odom": "no"}', "take true or false"),
+        ('{"delay_ms": -5}', "delay_ms must be a number of milliseconds in 0..10000"),
+        ("[1]", "must be a JSON object"),
+    ],
+)
 def test_bad_fault_messages_are_explained(text: str, message: str) -> None:
     with pytest.raises(ValueError) as info:
         Faults.from_json(text)
@@ -256,9 +286,22 @@ def test_bad_fault_messages_are_explained(text: str, message: str) -> None:
 
 def test_the_driver_rejects_bad_parameters_with_exit_code_2() -> None:
     done = subprocess.run(
-        [sys.executable, "-m", "shadowhound", "sim-driver", "--ros-args", "-p",
-         "odom_rate_hz:=0", "-p", "camera_width:=wide"],
-        capture_output=True, text=True, cwd=ROOT, timeout=60)
+        [
+            sys.executable,
+            "-m",
+            "shadowhound",
+            "sim-driver",
+            "--ros-args",
+            "-p",
+            "odom_rate_hz:=0",
+            "-p",
+            "camera_width:=wide",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=60,
+    )
     assert done.returncode == 2, done.stderr
     assert "odom_rate_hz must be in 1..200, got 0" in done.stderr
     assert "camera_width must be an integer, got str 'wide'" in done.stderr

@@ -54,14 +54,14 @@ class Driver:
 
     def wait_moving(self) -> None:
         mark = self.truth.mark()
-        self.truth.wait_for(lambda m: abs(json.loads(m.data)["vx"]) > 0.1, TIMEOUT,
-                            "the robot to walk", mark)
+        self.truth.wait_for(
+            lambda m: abs(json.loads(m.data)["vx"]) > 0.1, TIMEOUT, "the robot to walk", mark
+        )
 
     def wait_still(self, what: str) -> None:
         """Until go2_states (published even while odometry is off) says velocity zero."""
         mark = self.states.mark()
-        self.states.wait_for(lambda m: max(abs(v) for v in m.velocity) < 1e-3, 10.0, what,
-                             mark)
+        self.states.wait_for(lambda m: max(abs(v) for v in m.velocity) < 1e-3, 10.0, what, mark)
 
     def set_faults(self, faults: dict[str, Any]) -> None:
         """Publish faults and wait until the driver's truth shows them in force (a mission sent
@@ -69,36 +69,57 @@ class Driver:
         self.fault.publish(String(data=json.dumps(faults)))
         want = {k: v for k, v in faults.items() if k != "delay_ms"}
         mark = self.truth.mark()
-        self.truth.wait_for(lambda m: all(json.loads(m.data)["faults"].get(k, True) == v
-                                          for k, v in want.items())
-                            and (faults or not json.loads(m.data)["faults"]["drop_commands"]),
-                            10.0, f"the faults {faults} in force", mark)
+        self.truth.wait_for(
+            lambda m: (
+                all(json.loads(m.data)["faults"].get(k, True) == v for k, v in want.items())
+                and (faults or not json.loads(m.data)["faults"]["drop_commands"])
+            ),
+            10.0,
+            f"the faults {faults} in force",
+            mark,
+        )
 
 
 @pytest.fixture(scope="module")
 def rig() -> Iterator[tuple[Agent, Driver]]:
     client = RosClient("shadowhound_go2_test_client")
-    driver_process = NodeProcess("-r", f"__ns:={NS}", "-p", "camera_rate_hz:=2.0",
-                                 command="sim-driver")
-    node = NodeProcess("-p", "robot:=go2", "-p", f"robot_namespace:={NS[1:]}",
-                       "-p", "camera_topic:=/robot0/camera/image_raw")
+    driver_process = NodeProcess(
+        "-r", f"__ns:={NS}", "-p", "camera_rate_hz:=2.0", command="sim-driver"
+    )
+    node = NodeProcess(
+        "-p",
+        "robot:=go2",
+        "-p",
+        f"robot_namespace:={NS[1:]}",
+        "-p",
+        "camera_topic:=/robot0/camera/image_raw",
+    )
     agent, driver = Agent(client), Driver(client)
     try:
         agent.wait_ready(node)
-        wait_until(lambda: driver_process.check_alive() or driver.odom.items, TIMEOUT,
-                   "odometry from the simulated driver")
-        wait_until(lambda: driver.fault.get_subscription_count() > 0, TIMEOUT,
-                   "the driver's fault topic")
-        wait_until(lambda: agent.robot_state()["connected"], TIMEOUT,
-                   "the node's Go2 robot to receive odometry")
+        wait_until(
+            lambda: driver_process.check_alive() or driver.odom.items,
+            TIMEOUT,
+            "odometry from the simulated driver",
+        )
+        wait_until(
+            lambda: driver.fault.get_subscription_count() > 0, TIMEOUT, "the driver's fault topic"
+        )
+        wait_until(
+            lambda: agent.robot_state()["connected"],
+            TIMEOUT,
+            "the node's Go2 robot to receive odometry",
+        )
         yield agent, driver
         node.check_alive()
         driver_process.check_alive()
     finally:
         codes = {"node": node.stop(signal.SIGINT), "driver": driver_process.stop(signal.SIGTERM)}
         client.close()
-    assert codes == {"node": 0, "driver": 0}, (node.output()[-2000:],
-                                               driver_process.output()[-2000:])
+    assert codes == {"node": 0, "driver": 0}, (
+        node.output()[-2000:],
+        driver_process.output()[-2000:],
+    )
 
 
 def test_walk_forward_then_turn_left_ends_at_1_0_90_in_the_drivers_odometry(rig) -> None:
@@ -106,8 +127,9 @@ def test_walk_forward_then_turn_left_ends_at_1_0_90_in_the_drivers_odometry(rig)
     x0, y0, yaw0 = driver.pose()
     final = agent.run("walk forward 1 meter then turn left 90 degrees", 60.0)
     assert final.startswith("COMPLETED: "), final
-    wait_until(lambda: not json.loads(driver.truth.items[-1].data)["moving"], 10.0,
-               "the robot to be still")
+    wait_until(
+        lambda: not json.loads(driver.truth.items[-1].data)["moving"], 10.0, "the robot to be still"
+    )
     x, y, yaw = driver.pose()
     # In the frame where the mission started: 1 m ahead, heading +90 degrees.
     dx, dy = x - x0, y - y0
@@ -160,8 +182,12 @@ def test_estop_during_a_move_brings_the_drivers_velocity_to_zero(rig) -> None:
     estop.publish(Empty())
     try:
         driver.wait_still("the driver's velocity to reach zero after the e-stop")
-        done = agent.status.wait_for(lambda m: m.data.startswith(("FAILED", "COMPLETED")),
-                                     TIMEOUT, "the mission to end", mark)
+        done = agent.status.wait_for(
+            lambda m: m.data.startswith(("FAILED", "COMPLETED")),
+            TIMEOUT,
+            "the mission to end",
+            mark,
+        )
         assert done.data.startswith("FAILED: ") and "e-stop pressed" in done.data, done.data
         assert 1003 in driver.api_ids(requests)  # StopMove went to the robot too
         x0, y0, _ = driver.pose()
@@ -179,8 +205,12 @@ def test_lost_odometry_fails_the_step_clearly_and_leaves_the_robot_stopped(rig) 
     driver.wait_moving()
     driver.set_faults({"odom": False})
     try:
-        done = agent.status.wait_for(lambda m: m.data.startswith(("FAILED", "COMPLETED")),
-                                     TIMEOUT, "the mission to end", mark)
+        done = agent.status.wait_for(
+            lambda m: m.data.startswith(("FAILED", "COMPLETED")),
+            TIMEOUT,
+            "the mission to end",
+            mark,
+        )
         assert done.data.startswith("FAILED: "), done.data
         assert f"no odometry on {NS}/odom for" in done.data, done.data
         assert "The robot is stopped." in done.data, done.data
@@ -202,8 +232,9 @@ def test_dropped_commands_fail_the_move_as_a_stall(rig) -> None:
         final = agent.run("walk forward 1 meter", 60.0)
         # A stall (no progress for 3 s), or on a loaded machine the step's own time-out:
         # either way the step fails, the robot is stopped and has not moved.
-        assert final.startswith("FAILED: ") and ("no progress for" in final
-                                                 or "timed out after" in final), final
+        assert final.startswith("FAILED: ") and (
+            "no progress for" in final or "timed out after" in final
+        ), final
         assert "The robot is stopped." in final, final
         assert math.hypot(driver.pose()[0] - x0, driver.pose()[1] - y0) < 1e-3
     finally:

@@ -63,13 +63,15 @@ class Truth:
     def now(self, mark: int = 0) -> dict[str, Any]:
         """The next truth record (after `mark`)."""
         mark = max(mark, self.truth.mark())
-        return json.loads(self.truth.wait_for(lambda _m: True, 5.0, "the driver's truth",
-                                              mark).data)
+        return json.loads(
+            self.truth.wait_for(lambda _m: True, 5.0, "the driver's truth", mark).data
+        )
 
     def wait(self, match: Any, what: str, timeout: float = TIMEOUT) -> dict[str, Any]:
         mark = self.truth.mark()
-        return json.loads(self.truth.wait_for(lambda m: match(json.loads(m.data)), timeout,
-                                              what, mark).data)
+        return json.loads(
+            self.truth.wait_for(lambda m: match(json.loads(m.data)), timeout, what, mark).data
+        )
 
     def still(self) -> dict[str, Any]:
         """Truth once the robot has not moved for half a second."""
@@ -81,15 +83,20 @@ class Truth:
 
     def lie_down(self) -> None:
         """StandDown straight to the driver (as a person with the phone app would)."""
-        wait_until(lambda: self.webrtc.get_subscription_count() > 0, TIMEOUT,
-                   "the driver's webrtc_req")
-        self.webrtc.publish(WebRtcReq(id=0, topic="rt/api/sport/request", api_id=1005,
-                                      parameter="", priority=0))
+        wait_until(
+            lambda: self.webrtc.get_subscription_count() > 0, TIMEOUT, "the driver's webrtc_req"
+        )
+        self.webrtc.publish(
+            WebRtcReq(id=0, topic="rt/api/sport/request", api_id=1005, parameter="", priority=0)
+        )
         self.wait(lambda t: t["posture"] == "lying" and not t["changing"], "the robot lying")
 
     def stop_moves(self, mark: int) -> list[dict[str, Any]]:
-        return [r for r in (json.loads(m.data) for m in self.requests.since(mark))
-                if r["api_id"] == 1003]
+        return [
+            r
+            for r in (json.loads(m.data) for m in self.requests.since(mark))
+            if r["api_id"] == 1003
+        ]
 
 
 @dataclass
@@ -101,30 +108,48 @@ class Rig:
     web_port: int
 
 
-def start_rig(client: RosClient, options: tuple[str, ...], ns: str, prefix: str,
-              robot_namespace: str, *node_args: str) -> tuple[Rig, Any]:
+def start_rig(
+    client: RosClient,
+    options: tuple[str, ...],
+    ns: str,
+    prefix: str,
+    robot_namespace: str,
+    *node_args: str,
+) -> tuple[Rig, Any]:
     """The driver (options, `-r __ns:=ns`) and the node, ready, with their stopper."""
     driver_ros = ("-r", f"__ns:={ns}") if ns else ()
-    driver = NodeProcess(*driver_ros, command="sim-driver",
-                         options=("--camera-rate-hz", "0", *options))
+    driver = NodeProcess(
+        *driver_ros, command="sim-driver", options=("--camera-rate-hz", "0", *options)
+    )
     port = free_port()
     where = ("-p", f"robot_namespace:={robot_namespace}") if robot_namespace else ()
-    node = NodeProcess("-p", "robot:=go2", *where, "-p", "enable_web_ui:=true",
-                       "-p", f"web_interface_port:={port}", *node_args)
+    node = NodeProcess(
+        "-p",
+        "robot:=go2",
+        *where,
+        "-p",
+        "enable_web_ui:=true",
+        "-p",
+        f"web_interface_port:={port}",
+        *node_args,
+    )
     agent, truth = Agent(client), Truth(client, prefix)
     rig = Rig(agent, truth, node, driver, port)
 
     def stop() -> None:
         codes = {"node": node.stop(signal.SIGINT), "driver": driver.stop(signal.SIGTERM)}
-        assert codes == {"node": 0, "driver": 0}, (node.output()[-3000:],
-                                                   driver.output()[-3000:])
+        assert codes == {"node": 0, "driver": 0}, (node.output()[-3000:], driver.output()[-3000:])
 
     try:
         agent.wait_ready(node)
-        wait_until(lambda: driver.check_alive() or truth.truth.items, TIMEOUT,
-                   "the driver's ground truth")
-        wait_until(lambda: agent.robot_state()["connected"], TIMEOUT,
-                   "the node's Go2 robot to receive odometry")
+        wait_until(
+            lambda: driver.check_alive() or truth.truth.items, TIMEOUT, "the driver's ground truth"
+        )
+        wait_until(
+            lambda: agent.robot_state()["connected"],
+            TIMEOUT,
+            "the node's Go2 robot to receive odometry",
+        )
     except BaseException:
         stop()
         raise
@@ -160,20 +185,25 @@ def check_mission_from_lying(rig: Rig) -> None:
     assert math.hypot(ahead - 1.0, left) < METRES, (ahead, left)
     assert abs(turned - 90.0) < DEGREES, turned
     # What the agent reports as the final pose is the truth's, within the same tolerances.
-    reported = json.loads(rig.agent.robot.wait_for(lambda _m: True, 5.0, "robot status",
-                                                   max(status, rig.agent.robot.mark())).data)
-    assert math.hypot(reported["x"] - end["x"], reported["y"] - end["y"]) < METRES, \
-        (reported, end)
+    reported = json.loads(
+        rig.agent.robot.wait_for(
+            lambda _m: True, 5.0, "robot status", max(status, rig.agent.robot.mark())
+        ).data
+    )
+    assert math.hypot(reported["x"] - end["x"], reported["y"] - end["y"]) < METRES, (reported, end)
     assert abs(math.degrees(math.remainder(reported["yaw"] - end["yaw"], math.tau))) < DEGREES
     assert reported["battery"] is None  # the driver publishes none: unknown, never 100
 
 
 LAYOUTS = {
-    "odometry 10 Hz, 0.5 s late": (("--odom-rate-hz", "10", "--odom-delay", "0.5"),
-                                   "/late", "/late", "late"),
+    "odometry 10 Hz, 0.5 s late": (
+        ("--odom-rate-hz", "10", "--odom-delay", "0.5"),
+        "/late",
+        "/late",
+        "late",
+    ),
     "robot0/ names (twist_mux not namespaced)": (("--robots", "2"), "", "/robot0", "robot0"),
-    "driver on cmd_vel_out only (no relay)": (("--no-relay",), "/norelay", "/norelay",
-                                              "norelay"),
+    "driver on cmd_vel_out only (no relay)": (("--no-relay",), "/norelay", "/norelay", "norelay"),
 }
 
 
@@ -191,17 +221,25 @@ def test_the_mission_ends_on_target_in_truth(client: RosClient, layout: str) -> 
 
 
 def test_a_battery_source_is_read_and_the_floor_refuses_a_mission_under_it(
-        client: RosClient) -> None:
-    rig, stop = start_rig(client, ("--battery", "12", "--battery-drain", "0"), "/bat", "/bat",
-                          "bat", "-p", "battery_topic:=battery_state")
+    client: RosClient,
+) -> None:
+    rig, stop = start_rig(
+        client,
+        ("--battery", "12", "--battery-drain", "0"),
+        "/bat",
+        "/bat",
+        "bat",
+        "-p",
+        "battery_topic:=battery_state",
+    )
     try:
-        wait_until(lambda: rig.agent.robot_state()["battery"] is not None, TIMEOUT,
-                   "the battery level")
+        wait_until(
+            lambda: rig.agent.robot_state()["battery"] is not None, TIMEOUT, "the battery level"
+        )
         assert rig.agent.robot_state()["battery"] == pytest.approx(12.0, abs=0.5)
         before = rig.truth.still()
         final = rig.agent.run("walk forward 1 meter")
-        assert final.startswith("FAILED: ") and "battery is at 12%, below the floor" in final, \
-            final
+        assert final.startswith("FAILED: ") and "battery is at 12%, below the floor" in final, final
         after = rig.truth.now()
         assert math.hypot(after["x"] - before["x"], after["y"] - before["y"]) < 1e-3
         doctor = run_doctor("--namespace", "bat", "--battery-topic", "battery_state")
@@ -254,8 +292,9 @@ def walk_then(rig: Rig, press: Any) -> tuple[float, dict[str, Any], str]:
     press()
     stop = wait_until(lambda: rig.truth.stop_moves(requests), 5.0, "StopMove at the driver")[0]
     end = rig.truth.still()
-    done = rig.agent.status.wait_for(lambda m: m.data.startswith(("FAILED", "COMPLETED")),
-                                     TIMEOUT, "the mission to end", mark)
+    done = rig.agent.status.wait_for(
+        lambda m: m.data.startswith(("FAILED", "COMPLETED")), TIMEOUT, "the mission to end", mark
+    )
     # The truth stopped within braking distance of where it was when the e-stop was pressed.
     assert math.hypot(end["x"] - walking["x"], end["y"] - walking["y"]) < 0.5
     return stop["mono"] - sent, end, done.data
@@ -285,8 +324,7 @@ def test_estop_from_the_web_stops_the_truth(rig: Rig) -> None:
     with httpx.Client(base_url=base, timeout=10.0) as web:
         wait_until(lambda: web.get("/api/health").status_code == 200, TIMEOUT, "the web server")
         try:
-            latency, _end, done = walk_then(
-                rig, lambda: web.post("/api/estop").raise_for_status())
+            latency, _end, done = walk_then(rig, lambda: web.post("/api/estop").raise_for_status())
             assert done.startswith("FAILED: ") and "e-stop" in done, done
             assert 0 <= latency < 1.0
         finally:
@@ -312,8 +350,11 @@ def test_cancelling_the_mission_action_during_a_walk_sends_stop_move(rig: Rig) -
 
 def test_without_a_battery_source_the_battery_is_unknown_everywhere(rig: Rig) -> None:
     final = rig.agent.run("turn left 5 degrees")
-    assert final.startswith("COMPLETED: ") and "battery level unknown" in final, \
-        (final, rig.node.output()[-4000:], rig.truth.now())
+    assert final.startswith("COMPLETED: ") and "battery level unknown" in final, (
+        final,
+        rig.node.output()[-4000:],
+        rig.truth.now(),
+    )
     assert rig.agent.robot_state()["battery"] is None
     status, values = rig.agent.diagnostic(rig.agent.diagnostics.mark(), 5.0)
     assert values["battery"] == "unknown" and status.level == bytes([1])  # WARN
@@ -323,9 +364,13 @@ def test_without_a_battery_source_the_battery_is_unknown_everywhere(rig: Rig) ->
 
 
 def run_doctor(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "shadowhound", "doctor", "--go2",
-                           "--seconds", "8", *args],
-                          capture_output=True, text=True, cwd=ROOT, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "shadowhound", "doctor", "--go2", "--seconds", "8", *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+    )
 
 
 def test_doctor_finds_the_driver_and_says_what_to_fix_when_odometry_stops(rig: Rig) -> None:

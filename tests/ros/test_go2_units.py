@@ -12,34 +12,62 @@ from shadowhound.ros.sim_options import DriverSettings, build_parser, parse_sett
 
 
 def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
-    settings = parse_parameters({"robot": "go2", "robot_namespace": "robot0",
-                                 "odom_topic": "/robot0/odom", "odom_timeout": 1})
+    settings = parse_parameters(
+        {
+            "robot": "go2",
+            "robot_namespace": "robot0",
+            "odom_topic": "/robot0/odom",
+            "odom_timeout": 1,
+        }
+    )
     assert settings.go2_options() == {
-        "namespace": "robot0", "cmd_vel_topic": "", "webrtc_topic": "webrtc_req",
-        "odom_topic": "/robot0/odom", "state_topic": "go2_states", "odom_timeout": 1.0,
-        "odom_latency": None, "battery_topic": "", "detections_topic": "",
-        "firmware_tricks": False, "map_topic": "map", "scan_topic": "scan",
-        "nav2_action": "navigate_to_pose"}
+        "namespace": "robot0",
+        "cmd_vel_topic": "",
+        "webrtc_topic": "webrtc_req",
+        "odom_topic": "/robot0/odom",
+        "state_topic": "go2_states",
+        "odom_timeout": 1.0,
+        "odom_latency": None,
+        "battery_topic": "",
+        "detections_topic": "",
+        "firmware_tricks": False,
+        "map_topic": "map",
+        "scan_topic": "scan",
+        "nav2_action": "navigate_to_pose",
+    }
 
 
 def test_go2_options_for_latency_battery_and_firmware_tricks_are_checked() -> None:
-    settings = parse_parameters({"robot": "go2", "odom_latency": 0.3,
-                                 "battery_topic": "battery_state", "go2_firmware_tricks": True,
-                                 "cmd_vel_topic": "cmd_vel_out", "detections_topic": "detections"})
+    settings = parse_parameters(
+        {
+            "robot": "go2",
+            "odom_latency": 0.3,
+            "battery_topic": "battery_state",
+            "go2_firmware_tricks": True,
+            "cmd_vel_topic": "cmd_vel_out",
+            "detections_topic": "detections",
+        }
+    )
     options = settings.go2_options()
     assert options["detections_topic"] == "detections"
-    assert (options["odom_latency"], options["battery_topic"], options["firmware_tricks"],
-            options["cmd_vel_topic"]) == (0.3, "battery_state", True, "cmd_vel_out")
+    assert (
+        options["odom_latency"],
+        options["battery_topic"],
+        options["firmware_tricks"],
+        options["cmd_vel_topic"],
+    ) == (0.3, "battery_state", True, "cmd_vel_out")
     with pytest.raises(ParameterError) as info:
-        parse_parameters({"odom_latency": 5.0, "battery_topic": "9bad",
-                          "detections_topic": "bad topic"})
+        parse_parameters(
+            {"odom_latency": 5.0, "battery_topic": "9bad", "detections_topic": "bad topic"}
+        )
     assert "odom_latency must be -1 (measured) or seconds in 0..2, got 5.0" in str(info.value)
     assert "battery_topic '9bad' is not a valid ROS topic name" in str(info.value)
     assert "detections_topic 'bad topic' is not a valid ROS topic name" in str(info.value)
 
 
 def test_go2_gets_motion_settings_for_real_odometry_unless_the_profile_sets_them(
-        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     sim = parse_parameters({"robot": "sim"}).agent_settings().motion
     assert sim.position_tolerance == 0.002 and sim.control_rate_hz == 20.0
     go2 = parse_parameters({"robot": "go2"}).agent_settings().motion
@@ -56,27 +84,55 @@ def test_driver_settings_default_and_are_checked_all_at_once() -> None:
     chosen = parse_settings({"camera_rate_hz": 0, "odom_rate_hz": 10, "battery": 80})
     assert (chosen.odom_rate_hz, chosen.battery) == (10.0, 80.0)
     with pytest.raises(ParameterError) as info:
-        parse_settings({"odom_rate_hz": 0.0, "camera_width": 2.5, "move_timeout": True,
-                        "battery": 120, "battery_topic": "1bad", "lidar": 1,
-                        "start_posture": "kneeling"})
+        parse_settings(
+            {
+                "odom_rate_hz": 0.0,
+                "camera_width": 2.5,
+                "move_timeout": True,
+                "battery": 120,
+                "battery_topic": "1bad",
+                "lidar": 1,
+                "start_posture": "kneeling",
+            }
+        )
     message = str(info.value)
-    for part in ("odom_rate_hz must be in 1..200, got 0.0",
-                 "camera_width must be an integer, got float 2.5",
-                 "move_timeout must be a number, got bool True",
-                 "battery must be in 0..100, got 120",
-                 "battery_topic '1bad' is not a valid ROS topic name",
-                 "unknown setting(s) lidar",
-                 "start_posture must be one of standing, sitting, lying, got 'kneeling'"):
+    for part in (
+        "odom_rate_hz must be in 1..200, got 0.0",
+        "camera_width must be an integer, got float 2.5",
+        "move_timeout must be a number, got bool True",
+        "battery must be in 0..100, got 120",
+        "battery_topic '1bad' is not a valid ROS topic name",
+        "unknown setting(s) lidar",
+        "start_posture must be one of standing, sitting, lying, got 'kneeling'",
+    ):
         assert part in message
 
 
 def test_every_driver_setting_has_a_command_line_option() -> None:
     parser = build_parser("sim-driver", "", "")
     assert vars(parser.parse_args([])) == {}  # only given options override ROS parameters
-    given = vars(parser.parse_args(["--battery", "42.5", "--no-relay", "--robots", "2",
-                                    "--odom-delay", "0.5", "--battery-topic", "bat"]))
-    assert given == {"battery": 42.5, "relay": False, "robots": 2, "odom_delay": 0.5,
-                     "battery_topic": "bat"}
+    given = vars(
+        parser.parse_args(
+            [
+                "--battery",
+                "42.5",
+                "--no-relay",
+                "--robots",
+                "2",
+                "--odom-delay",
+                "0.5",
+                "--battery-topic",
+                "bat",
+            ]
+        )
+    )
+    assert given == {
+        "battery": 42.5,
+        "relay": False,
+        "robots": 2,
+        "odom_delay": 0.5,
+        "battery_topic": "bat",
+    }
     text = parser.format_help()
     for name in DriverSettings.__dataclass_fields__:
         assert "--" + name.replace("_", "-") in text

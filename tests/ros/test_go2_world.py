@@ -87,17 +87,22 @@ def test_a_maps_frame_origin_and_resolution_are_respected(client: RosClient) -> 
     # A 10 cm map turned 90 degrees, its corner at (1, 2): cell (col 2, row 0) is occupied.
     grid = OccupancyGrid(4, 3, 0.1, Pose2D(1.0, 2.0, math.pi / 2), bytearray(12))
     grid.cells[2] = OCCUPIED
-    publisher = client.publisher(type(grid_to_msg(grid, "odom", client.node.get_clock()
-                                                  .now().to_msg())), "/turned/map", MAP_QOS)
+    publisher = client.publisher(
+        type(grid_to_msg(grid, "odom", client.node.get_clock().now().to_msg())),
+        "/turned/map",
+        MAP_QOS,
+    )
     publisher.publish(grid_to_msg(grid, "odom", client.node.get_clock().now().to_msg()))
-    robot = Go2RosRobot(Go2RosConfig(namespace="turned", camera_topic="", nav2_action=""),
-                        context=client.context)
+    robot = Go2RosRobot(
+        Go2RosConfig(namespace="turned", camera_topic="", nav2_action=""), context=client.context
+    )
     try:
         belief = wait_until(robot.belief, 10, "the turned map")
         got = belief.grid
         assert (got.width, got.height, got.resolution) == (4, 3, pytest.approx(0.1))
         assert (got.origin.x, got.origin.y, got.origin.yaw) == pytest.approx(
-            (1.0, 2.0, math.pi / 2))
+            (1.0, 2.0, math.pi / 2)
+        )
         # Column 2 runs along the origin's x axis, which points along the world's +y.
         assert got.value_at(1.0 - 0.05, 2.0 + 0.25) == OCCUPIED
         assert got.value_at(1.0 - 0.05, 2.0 + 0.15) == 0
@@ -124,7 +129,8 @@ def test_a_nav2_failure_comes_back_in_words(robot: Go2RosRobot) -> None:
     assert report.status is NavStatus.FAILED
     assert report.message.startswith(
         "the goal is occupied on the costmap (inside an obstacle or its inflation) (Nav2 error "
-        "code 206): the goal (2.50, 2.00) is inside the blue box's clearance"), report.message
+        "code 206): the goal (2.50, 2.00) is inside the blue box's clearance"
+    ), report.message
 
 
 def test_stop_cancels_a_running_nav2_goal(driver: SimDriver, robot: Go2RosRobot) -> None:
@@ -132,8 +138,11 @@ def test_stop_cancels_a_running_nav2_goal(driver: SimDriver, robot: Go2RosRobot)
     assert navigator is not None and navigator.ready(10.0)
     start = driver.truth()
     goal = navigator.navigate(start.x - 1.0, start.y, math.pi)
-    wait_until(lambda: goal.report().status is NavStatus.RUNNING and driver.truth().moving, 20,
-               "the goal to drive the robot")
+    wait_until(
+        lambda: goal.report().status is NavStatus.RUNNING and driver.truth().moving,
+        20,
+        "the goal to drive the robot",
+    )
     robot.stop()
     report = wait_until(lambda: goal.report().done and goal.report(), 10, "the goal to end")
     assert report.status is NavStatus.CANCELED
@@ -142,11 +151,13 @@ def test_stop_cancels_a_running_nav2_goal(driver: SimDriver, robot: Go2RosRobot)
     assert not driver.truth().moving  # nothing drives it on
 
 
-@settings(max_examples=6, deadline=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=6, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @given(delay=st.floats(0.0, 1.2))
 def test_a_stop_at_any_moment_ends_the_goal_and_nothing_drives_on(
-        driver: SimDriver, robot: Go2RosRobot, delay: float) -> None:
+    driver: SimDriver, robot: Go2RosRobot, delay: float
+) -> None:
     """Whenever the stop comes (before Nav2 accepted the goal, while it turns, while it walks),
     the goal ends cancelled and the robot stays still: a stop no goal outlives."""
     navigator = robot.navigator()

@@ -52,11 +52,26 @@ WEB_PORT = free_port()
 
 @pytest.fixture(scope="module")
 def nodes(client: RosClient) -> Iterator[dict[str, tuple[NodeProcess, Agent]]]:
-    main = NodeProcess("-p", "time_scale:=1.0", "-p", "enable_web_ui:=true",
-                       "-p", f"web_interface_port:={WEB_PORT}")
-    cam = NodeProcess("-r", "__ns:=/cam", "-p", "camera_topic:=/cam/camera/compressed",
-                      "-p", "diagnostics_topic:=/cam/diagnostics",
-                      "-p", "robot_status_topic:=/cam/robot_status", "-p", "time_scale:=0.0")
+    main = NodeProcess(
+        "-p",
+        "time_scale:=1.0",
+        "-p",
+        "enable_web_ui:=true",
+        "-p",
+        f"web_interface_port:={WEB_PORT}",
+    )
+    cam = NodeProcess(
+        "-r",
+        "__ns:=/cam",
+        "-p",
+        "camera_topic:=/cam/camera/compressed",
+        "-p",
+        "diagnostics_topic:=/cam/diagnostics",
+        "-p",
+        "robot_status_topic:=/cam/robot_status",
+        "-p",
+        "time_scale:=0.0",
+    )
     started = {"main": (main, Agent(client)), "cam": (cam, Agent(client, "/cam"))}
     try:
         for process, agent in started.values():
@@ -64,8 +79,7 @@ def nodes(client: RosClient) -> Iterator[dict[str, tuple[NodeProcess, Agent]]]:
         yield started
     finally:
         codes = {name: process.stop(signal.SIGINT) for name, (process, _a) in started.items()}
-    assert codes == {"main": 0, "cam": 0}, {n: p.output()[-2000:] for n, (p, _a) in
-                                           started.items()}
+    assert codes == {"main": 0, "cam": 0}, {n: p.output()[-2000:] for n, (p, _a) in started.items()}
 
 
 @pytest.fixture
@@ -82,12 +96,15 @@ def cam_agent(nodes: dict[str, tuple[NodeProcess, Agent]]) -> Iterator[Agent]:
     process.check_alive()
 
 
-def send_goal(agent: Agent, command: str, dry_run: bool = False,
-              feedback: list | None = None) -> object:
+def send_goal(
+    agent: Agent, command: str, dry_run: bool = False, feedback: list | None = None
+) -> object:
     future = agent.action.send_goal_async(
         ExecuteMission.Goal(command=command, dry_run=dry_run),
-        feedback_callback=(lambda fb: feedback.append(fb.feedback)) if feedback is not None
-        else None)
+        feedback_callback=(lambda fb: feedback.append(fb.feedback))
+        if feedback is not None
+        else None,
+    )
     wait_until(future.done, TIMEOUT, "the goal to be answered")
     return future.result()
 
@@ -99,8 +116,9 @@ def get_result(goal_handle: object) -> object:
 
 
 def wait_moving(agent: Agent) -> dict:
-    return wait_until(lambda: (s := agent.robot_state()) and s["moving"] and s, TIMEOUT,
-                      "the robot to move")
+    return wait_until(
+        lambda: (s := agent.robot_state()) and s["moving"] and s, TIMEOUT, "the robot to move"
+    )
 
 
 # -- missions on the topic -------------------------------------------------------------------
@@ -130,8 +148,9 @@ def test_malformed_missions_fail_and_the_node_keeps_running(agent: Agent) -> Non
 
 def test_action_goal_gets_feedback_per_step_and_a_result(agent: Agent) -> None:
     feedback: list = []
-    handle = send_goal(agent, "walk forward 0.2 meters then turn left 20 degrees",
-                       feedback=feedback)
+    handle = send_goal(
+        agent, "walk forward 0.2 meters then turn left 20 degrees", feedback=feedback
+    )
     assert handle.accepted
     response = get_result(handle)
     assert response.status == GoalStatus.STATUS_SUCCEEDED
@@ -171,8 +190,9 @@ def test_cancel_stops_the_robot_and_a_second_goal_is_rejected(agent: Agent) -> N
     assert response.status == GoalStatus.STATUS_CANCELED
     assert not response.result.success
     assert "mission cancelled" in response.result.response
-    stopped = wait_until(lambda: (s := agent.robot_state()) and not s["moving"] and s, 5,
-                         "the robot to stop")
+    stopped = wait_until(
+        lambda: (s := agent.robot_state()) and not s["moving"] and s, 5, "the robot to stop"
+    )
     assert stopped["x"] < 1.8  # cancelled before the end (x = 2.0)
     # the node takes goals again
     assert get_result(send_goal(agent, "turn right 5 degrees")).result.success
@@ -190,18 +210,23 @@ def test_empty_goal_is_aborted_with_a_reason(agent: Agent) -> None:
 def test_estop_stops_latches_and_releases(agent: Agent, client: RosClient) -> None:
     estop = client.publisher(Empty, "/shadowhound/estop")
     release = client.publisher(Empty, "/shadowhound/estop_release")
-    wait_until(lambda: estop.get_subscription_count() and release.get_subscription_count(),
-               TIMEOUT, "the e-stop subscriptions")
+    wait_until(
+        lambda: estop.get_subscription_count() and release.get_subscription_count(),
+        TIMEOUT,
+        "the e-stop subscriptions",
+    )
     mark = agent.status.mark()
     agent.missions.publish(String(data="walk forward 2 meters"))
     wait_moving(agent)
     diag_mark = agent.diagnostics.mark()
     estop.publish(Empty())
-    final = agent.status.wait_for(lambda m: m.data.startswith(("COMPLETED", "FAILED")), TIMEOUT,
-                                  "the mission to end", mark)
+    final = agent.status.wait_for(
+        lambda m: m.data.startswith(("COMPLETED", "FAILED")), TIMEOUT, "the mission to end", mark
+    )
     assert final.data.startswith("FAILED: Stopped") and "e-stop" in final.data, final.data
-    state = wait_until(lambda: (s := agent.robot_state()) and not s["moving"] and s, 5,
-                       "the robot to stop")
+    state = wait_until(
+        lambda: (s := agent.robot_state()) and not s["moving"] and s, 5, "the robot to stop"
+    )
     assert state["estopped"]
     status, values = agent.diagnostic(diag_mark, match=lambda v: v["estop"] == "true")
     assert status.level == b"\x02" and status.message == "e-stop latched"
@@ -220,15 +245,26 @@ def test_diagnostics_decode_as_diagnostic_array(agent: Agent) -> None:
     assert status.name == "shadowhound: mission agent"
     assert status.hardware_id == "sim-go2"
     assert status.level in (b"\x00", b"\x01")
-    for key in ("status", "current_skill", "progress", "errors", "backend", "pose_x", "pose_y",
-                "pose_yaw", "battery", "estop"):
+    for key in (
+        "status",
+        "current_skill",
+        "progress",
+        "errors",
+        "backend",
+        "pose_x",
+        "pose_y",
+        "pose_yaw",
+        "battery",
+        "estop",
+    ):
         assert key in values, key
     assert values["backend"] == "offline"
     float(values["battery"]), float(values["pose_yaw"])
     wait_until(lambda: len(agent.diagnostics.since(mark)) >= 2, 5, "a second diagnostics")
     first, second = agent.diagnostics.since(mark)[:2]
-    gap = (second.header.stamp.sec + second.header.stamp.nanosec * 1e-9) - \
-        (first.header.stamp.sec + first.header.stamp.nanosec * 1e-9)
+    gap = (second.header.stamp.sec + second.header.stamp.nanosec * 1e-9) - (
+        first.header.stamp.sec + first.header.stamp.nanosec * 1e-9
+    )
     assert 0.5 < gap < 1.5  # 1 Hz
 
 
@@ -253,18 +289,29 @@ def test_risky_plans_wait_for_approval_over_ros(agent: Agent, client: RosClient)
     def decide(command: str, yes: bool) -> str:
         mark, seen = agent.status.mark(), requests.mark()
         agent.missions.publish(String(data=command))
-        announced = json.loads(requests.wait_for(lambda m: command in m.data, TIMEOUT,
-                                                 "the approval request", seen).data)
+        announced = json.loads(
+            requests.wait_for(
+                lambda m: command in m.data, TIMEOUT, "the approval request", seen
+            ).data
+        )
         assert "risky trick" in announced["reasons"][0]
-        future = approve.call_async(Approve.Request(request_id=announced["request_id"],
-                                                    approve=yes, reason="not indoors"))
+        future = approve.call_async(
+            Approve.Request(request_id=announced["request_id"], approve=yes, reason="not indoors")
+        )
         wait_until(future.done, TIMEOUT, "the approve service to answer")
         assert future.result().accepted
-        return str(agent.status.wait_for(lambda m: m.data.startswith(("COMPLETED", "FAILED")),
-                                         TIMEOUT, "the mission to end", mark).data)
+        return str(
+            agent.status.wait_for(
+                lambda m: m.data.startswith(("COMPLETED", "FAILED")),
+                TIMEOUT,
+                "the mission to end",
+                mark,
+            ).data
+        )
 
-    assert decide("do a front flip", yes=False).startswith("FAILED: Refused before moving: "
-                                                            "not approved (rejected: not indoors)")
+    assert decide("do a front flip", yes=False).startswith(
+        "FAILED: Refused before moving: not approved (rejected: not indoors)"
+    )
     assert decide("do a backflip", yes=True) == "COMPLETED: Done: performed backflip."
     nothing = approve.call_async(Approve.Request(approve=True))
     wait_until(nothing.done, TIMEOUT, "the approve service to answer")
@@ -278,8 +325,9 @@ def test_risky_plans_wait_for_approval_over_ros(agent: Agent, client: RosClient)
 def raw_image(width: int, height: int, encoding: str, pad: int = 0) -> Image:
     channels = {"rgb8": 3, "bgr8": 3, "mono8": 1}.get(encoding, 2)
     step = width * channels + pad
-    return Image(width=width, height=height, encoding=encoding, step=step,
-                 data=bytes(step * height))
+    return Image(
+        width=width, height=height, encoding=encoding, step=step, data=bytes(step * height)
+    )
 
 
 def deliver(agent: Agent, publisher: object, msg: object, expect: str, key: str) -> None:
@@ -289,11 +337,13 @@ def deliver(agent: Agent, publisher: object, msg: object, expect: str, key: str)
     def taken() -> bool:
         publisher.publish(msg)
         try:
-            agent.diagnostic(agent.diagnostics.mark(), timeout=1.5,
-                             match=lambda v: expect in v[key])
+            agent.diagnostic(
+                agent.diagnostics.mark(), timeout=1.5, match=lambda v: expect in v[key]
+            )
         except AssertionError:
             return False
         return True
+
     wait_until(taken, TIMEOUT, f"{key} to show {expect!r}", interval=0.0)
 
 
@@ -302,15 +352,19 @@ def test_raw_frames_reach_the_agent(agent: Agent, client: RosClient) -> None:
     deliver(agent, camera, raw_image(64, 48, "rgb8", pad=8), "64x48 rgb8", "camera_last_frame")
     assert "64x48 RGB8 frame from the camera" in agent.run("what do you see?")
     deliver(agent, camera, raw_image(32, 24, "bgr8"), "32x24 bgr8", "camera_last_frame")
-    deliver(agent, camera, raw_image(30, 20, "mono8", pad=2), "30x20 mono8",
-            "camera_last_frame")
+    deliver(agent, camera, raw_image(30, 20, "mono8", pad=2), "30x20 mono8", "camera_last_frame")
     assert "30x20 MONO8 frame" in agent.run("what do you see?")
 
 
 def test_bad_raw_frames_are_dropped_with_a_warning(agent: Agent, client: RosClient) -> None:
     camera = client.publisher(Image, "/camera/image_raw", RELIABLE)
-    deliver(agent, camera, raw_image(16, 16, "yuv422"), "unsupported image encoding 'yuv422'",
-            "camera_last_error")
+    deliver(
+        agent,
+        camera,
+        raw_image(16, 16, "yuv422"),
+        "unsupported image encoding 'yuv422'",
+        "camera_last_error",
+    )
     short = raw_image(16, 16, "rgb8")
     short.data = bytes(100)
     deliver(agent, camera, short, "image data has 100 bytes", "camera_last_error")
@@ -322,10 +376,16 @@ def test_compressed_frames_reach_the_agent(cam_agent: Agent, client: RosClient) 
     jpeg = CompressedImage(format="jpeg", data=tiny_jpeg(64, 48))
     deliver(cam_agent, camera, jpeg, "64x48 jpeg", "camera_last_frame")
     assert "64x48 JPEG frame from the camera" in cam_agent.run("what do you see?")
-    deliver(cam_agent, camera, CompressedImage(format="jpeg", data=b"not an image at all"),
-            "image bytes must be JPEG or PNG", "camera_last_error")
-    deliver(cam_agent, camera, CompressedImage(format="png", data=b""), "empty",
-            "camera_last_error")
+    deliver(
+        cam_agent,
+        camera,
+        CompressedImage(format="jpeg", data=b"not an image at all"),
+        "image bytes must be JPEG or PNG",
+        "camera_last_error",
+    )
+    deliver(
+        cam_agent, camera, CompressedImage(format="png", data=b""), "empty", "camera_last_error"
+    )
     assert cam_agent.run("turn left 5 degrees").startswith("COMPLETED: ")
 
 
@@ -334,8 +394,11 @@ def test_compressed_frames_reach_the_agent(cam_agent: Agent, client: RosClient) 
 
 def web(path: str, body: dict | None = None) -> dict:
     data = json.dumps(body).encode() if body is not None else None
-    request = urllib.request.Request(f"http://127.0.0.1:{WEB_PORT}{path}", data=data,
-                                     headers={"Content-Type": "application/json"})
+    request = urllib.request.Request(
+        f"http://127.0.0.1:{WEB_PORT}{path}",
+        data=data,
+        headers={"Content-Type": "application/json"},
+    )
     with urllib.request.urlopen(request, timeout=10) as response:
         return json.loads(response.read())
 
@@ -345,12 +408,20 @@ def test_web_ui_shares_the_nodes_mission_worker(agent: Agent) -> None:
     mark = agent.status.mark()
     mission_id = web("/api/mission", {"command": "turn left 10 degrees"})["mission_id"]
     # The page's mission runs on the node's worker, so ROS sees it like any other.
-    agent.status.wait_for(lambda m: m.data == "EXECUTING: turn left 10 degrees", TIMEOUT,
-                          "the web mission on mission_status", mark)
-    agent.status.wait_for(lambda m: m.data.startswith("COMPLETED: "), TIMEOUT,
-                          "the web mission to complete", mark)
-    wait_until(lambda: web(f"/api/missions/{mission_id}").get("status") == "succeeded",
-               TIMEOUT, "the web record to finish")
+    agent.status.wait_for(
+        lambda m: m.data == "EXECUTING: turn left 10 degrees",
+        TIMEOUT,
+        "the web mission on mission_status",
+        mark,
+    )
+    agent.status.wait_for(
+        lambda m: m.data.startswith("COMPLETED: "), TIMEOUT, "the web mission to complete", mark
+    )
+    wait_until(
+        lambda: web(f"/api/missions/{mission_id}").get("status") == "succeeded",
+        TIMEOUT,
+        "the web record to finish",
+    )
     assert agent.run("sit down").startswith("COMPLETED")  # a topic mission, listed too
     listed = [m["command"] for m in web("/api/missions")["missions"]]
     assert "sit down" in listed and "turn left 10 degrees" in listed

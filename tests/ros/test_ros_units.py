@@ -25,14 +25,18 @@ def test_defaults_match_the_original_node() -> None:
     s = parse_parameters({})
     assert s == NodeSettings()
     assert (s.mission_topic, s.status_topic, s.diagnostics_topic) == (
-        "mission_command", "mission_status", "/shadowhound/diagnostics")
+        "mission_command",
+        "mission_status",
+        "/shadowhound/diagnostics",
+    )
     assert s.web_interface_port == 8080 and s.time_scale == 1.0 and not s.camera_compressed
 
 
 def test_camera_type_auto_follows_the_topic_name() -> None:
     assert parse_parameters({"camera_topic": "/camera/compressed"}).camera_compressed
-    assert not parse_parameters({"camera_topic": "/camera/compressed",
-                                 "camera_type": "raw"}).camera_compressed
+    assert not parse_parameters(
+        {"camera_topic": "/camera/compressed", "camera_type": "raw"}
+    ).camera_compressed
     assert parse_parameters({"camera_type": "compressed"}).camera_compressed
 
 
@@ -40,23 +44,28 @@ def test_integers_are_accepted_for_time_scale() -> None:
     assert parse_parameters({"time_scale": 0}).time_scale == 0.0
 
 
-@pytest.mark.parametrize(("values", "message"), [
-    ({"web_interface_port": 0}, "web_interface_port must be in 1..65535, got 0"),
-    ({"web_interface_port": True}, "web_interface_port must be an integer, got bool True"),
-    ({"enable_web_ui": "yes"}, "enable_web_ui must be true or false, got str 'yes'"),
-    ({"time_scale": -1.0}, "time_scale must be a number in 0..100"),
-    ({"time_scale": float("nan")}, "time_scale must be a number in 0..100"),
-    ({"robot": "spot"}, "robot must be sim or go2, got 'spot'"),
-    ({"odom_timeout": 0.0}, "odom_timeout must be a number of seconds in 0.05..10, got 0.0"),
-    ({"robot_namespace": "robot 0"}, "robot_namespace 'robot 0' is not a valid ROS namespace"),
-    ({"cmd_vel_topic": "cmd vel"}, "cmd_vel_topic 'cmd vel' is not a valid ROS topic name"),
-    ({"camera_type": "h264"}, "camera_type must be one of auto, raw, compressed"),
-    ({"status_topic": ""}, "status_topic '' is not a valid ROS topic name"),
-    ({"backend_config": " "}, "backend_config must name a profile or a YAML file"),
-    ({"navigation": "nav3"}, "navigation must be one of auto, nav2, direct (or '' for the "
-                             "profile's), got 'nav3'"),
-    ({"map_topic": "my map"}, "map_topic 'my map' is not a valid ROS topic name"),
-])
+@pytest.mark.parametrize(
+    ("values", "message"),
+    [
+        ({"web_interface_port": 0}, "web_interface_port must be in 1..65535, got 0"),
+        ({"web_interface_port": True}, "web_interface_port must be an integer, got bool True"),
+        ({"enable_web_ui": "yes"}, "enable_web_ui must be true or false, got str 'yes'"),
+        ({"time_scale": -1.0}, "time_scale must be a number in 0..100"),
+        ({"time_scale": float("nan")}, "time_scale must be a number in 0..100"),
+        ({"robot": "spot"}, "robot must be sim or go2, got 'spot'"),
+        ({"odom_timeout": 0.0}, "odom_timeout must be a number of seconds in 0.05..10, got 0.0"),
+        ({"robot_namespace": "robot 0"}, "robot_namespace 'robot 0' is not a valid ROS namespace"),
+        ({"cmd_vel_topic": "cmd vel"}, "cmd_vel_topic 'cmd vel' is not a valid ROS topic name"),
+        ({"camera_type": "h264"}, "camera_type must be one of auto, raw, compressed"),
+        ({"status_topic": ""}, "status_topic '' is not a valid ROS topic name"),
+        ({"backend_config": " "}, "backend_config must name a profile or a YAML file"),
+        (
+            {"navigation": "nav3"},
+            "navigation must be one of auto, nav2, direct (or '' for the profile's), got 'nav3'",
+        ),
+        ({"map_topic": "my map"}, "map_topic 'my map' is not a valid ROS topic name"),
+    ],
+)
 def test_invalid_parameters_are_explained(values: dict, message: str) -> None:
     with pytest.raises(ParameterError, match="invalid ROS parameters") as info:
         parse_parameters(values)
@@ -68,8 +77,11 @@ def test_every_problem_is_reported_at_once() -> None:
         parse_parameters({"web_interface_port": 99999, "robot": "spot", "time_scale": "x"})
     message = str(info.value)
     assert message.count(";") == 2
-    for part in ("web_interface_port must be in 1..65535", "robot must be sim or go2",
-                 "time_scale must be a number, got str 'x'"):
+    for part in (
+        "web_interface_port must be in 1..65535",
+        "robot must be sim or go2",
+        "time_scale must be a number, got str 'x'",
+    ):
         assert part in message
 
 
@@ -91,11 +103,17 @@ def test_navigation_comes_from_the_profile_unless_the_parameter_sets_it() -> Non
 # -- conversions ---------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("diagnostics", "level"), [
-    ({"status": "idle"}, convert.OK), ({"status": "executing"}, convert.OK),
-    ({"status": "succeeded"}, convert.OK), ({"status": "failed"}, convert.WARN),
-    ({"status": "stopped"}, convert.WARN), ({"status": "idle", "estop": True}, convert.ERROR),
-])
+@pytest.mark.parametrize(
+    ("diagnostics", "level"),
+    [
+        ({"status": "idle"}, convert.OK),
+        ({"status": "executing"}, convert.OK),
+        ({"status": "succeeded"}, convert.OK),
+        ({"status": "failed"}, convert.WARN),
+        ({"status": "stopped"}, convert.WARN),
+        ({"status": "idle", "estop": True}, convert.ERROR),
+    ],
+)
 def test_diagnostic_level_follows_the_agent_status(diagnostics: dict, level: int) -> None:
     assert convert.diagnostic_level(diagnostics) == level
 
@@ -107,8 +125,9 @@ def test_an_unknown_battery_warns_in_diagnostics_and_is_never_a_number() -> None
     assert robot["battery"] is None
     diagnostics = {"status": "idle", "robot": robot}
     assert convert.diagnostic_level(diagnostics) == convert.WARN
-    assert convert.diagnostic_message(diagnostics) == \
-        "idle; battery level unknown (no battery source)"
+    assert (
+        convert.diagnostic_message(diagnostics) == "idle; battery level unknown (no battery source)"
+    )
     assert dict(convert.diagnostic_values(diagnostics))["battery"] == "unknown"
     assert convert.diagnostic_level({"status": "failed", "robot": robot}) == convert.WARN
     known = {"status": "idle", "robot": RobotState(battery=42.0).to_dict()}
@@ -122,8 +141,16 @@ def test_diagnostic_values_are_strings_with_the_documented_keys() -> None:
     assert all(isinstance(v, str) for v in values.values())
     assert values["status"] == "idle" and values["estop"] == "false"
     assert float(values["battery"]) == pytest.approx(100.0)
-    assert {"current_skill", "progress", "errors", "backend", "pose_x", "pose_y",
-            "pose_yaw", "robot"} <= set(values)
+    assert {
+        "current_skill",
+        "progress",
+        "errors",
+        "backend",
+        "pose_x",
+        "pose_y",
+        "pose_yaw",
+        "robot",
+    } <= set(values)
     assert values["memory_recall"] == "off" and values["memory_problem"] == ""
     broken = {"memory": {"recall": "unavailable", "recall_problem": "the store 'x' is corrupt"}}
     values = dict(convert.diagnostic_values(broken))
@@ -153,8 +180,9 @@ class _Recorder:
 
 @pytest.fixture
 def worker_agent() -> RobotAgent:
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0),
-                                        settings=ShadowHoundConfig()))
+    agent = RobotAgent(
+        RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=ShadowHoundConfig())
+    )
     agent.initialize()
     return agent
 
@@ -172,7 +200,8 @@ def test_topic_missions_queue_and_run_in_order(worker_agent: RobotAgent) -> None
 
 
 def test_action_jobs_start_only_when_idle_and_the_estop_drops_waiting_ones(
-        worker_agent: RobotAgent) -> None:
+    worker_agent: RobotAgent,
+) -> None:
     gate = threading.Event()
     seen = _Recorder()
 
@@ -180,8 +209,7 @@ def test_action_jobs_start_only_when_idle_and_the_estop_drops_waiting_ones(
         seen.start(job)
         gate.wait(10)
 
-    worker = MissionWorker(worker_agent, on_start=slow_start, on_finish=seen.finish,
-                           max_queue=1)
+    worker = MissionWorker(worker_agent, on_start=slow_start, on_finish=seen.finish, max_queue=1)
     first, waiting = MissionJob("turn left 10 degrees"), MissionJob("turn left 20 degrees")
     assert worker.submit(first) is None and worker.submit(waiting) is None
     for _ in range(1000):  # until the worker holds the first job
@@ -223,7 +251,8 @@ def test_a_job_cancelled_before_it_starts_never_runs(worker_agent: RobotAgent) -
 
 
 def test_a_cancel_between_pick_up_and_start_still_stops_the_mission(
-        worker_agent: RobotAgent) -> None:
+    worker_agent: RobotAgent,
+) -> None:
     def cancel_now(job: MissionJob) -> None:  # as if the cancel arrived right here
         job.cancelled.set()
 
@@ -250,8 +279,10 @@ def test_loopback_environment_keeps_dds_on_this_machine() -> None:
 
 
 def test_importing_the_ros_package_does_not_import_rclpy() -> None:
-    code = ("import sys, shadowhound, shadowhound.ros, shadowhound.ros.params, "
-            "shadowhound.ros.convert; assert 'rclpy' not in sys.modules")
+    code = (
+        "import sys, shadowhound, shadowhound.ros, shadowhound.ros.params, "
+        "shadowhound.ros.convert; assert 'rclpy' not in sys.modules"
+    )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
 
 
@@ -263,10 +294,16 @@ def test_the_launch_file_declares_every_parameter_with_its_default() -> None:
 
     launch = Path(__file__).resolve().parents[2] / "ros2/shadowhound/launch/mission_node.launch.py"
     tree = ast.parse(launch.read_text(encoding="utf-8"))
-    found = next(n.value for n in tree.body if isinstance(n, ast.Assign)
-                 and getattr(n.targets[0], "id", "") == "ARGUMENTS")
+    found = next(
+        n.value
+        for n in tree.body
+        if isinstance(n, ast.Assign) and getattr(n.targets[0], "id", "") == "ARGUMENTS"
+    )
     arguments = ast.literal_eval(found)
     assert set(arguments) == set(PARAMETERS)
     for name, (default, _help) in PARAMETERS.items():
-        assert arguments[name] == str(default).lower() if isinstance(default, bool) \
-            else arguments[name] == str(default), name
+        assert (
+            arguments[name] == str(default).lower()
+            if isinstance(default, bool)
+            else arguments[name] == str(default)
+        ), name

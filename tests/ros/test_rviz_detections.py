@@ -32,8 +32,9 @@ from tests.ros.rosclient import RosClient, wait_until  # noqa: E402
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 GO2 = "/viz"  # the Go2 (driver, robot, mission node) namespace
 SIM = "/vizsim"  # a mission node on the in-process simulator, with its map
-LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+LATCHED = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
 
 
 @pytest.fixture(scope="module")
@@ -58,8 +59,10 @@ def go2(client: RosClient) -> Iterator[MissionNode]:
     driver = SimDriver(context=client.context, namespace=GO2, options={"odom_delay": 0.05})
     add(client, *driver.nodes)
     # No map (map_topic ''): detections are known objects all the same.
-    robot = Go2RosRobot(Go2RosConfig(namespace=GO2[1:], detections_topic="detections",
-                                     map_topic=""), context=client.context)
+    robot = Go2RosRobot(
+        Go2RosConfig(namespace=GO2[1:], detections_topic="detections", map_topic=""),
+        context=client.context,
+    )
     wait_until(lambda: robot.last_state().connected, 30, "odometry from the in-process driver")
     settings = parse_parameters({"robot": "go2"}).agent_settings()  # as `shadowhound node`
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
@@ -77,8 +80,7 @@ def go2(client: RosClient) -> Iterator[MissionNode]:
 @pytest.fixture(scope="module")
 def sim(client: RosClient) -> Iterator[MissionNode]:
     config = ShadowHoundConfig()
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(config.sim, time_scale=0),
-                                        settings=config))
+    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(config.sim, time_scale=0), settings=config))
     node = MissionNode(agent, node_name="viz_sim_agent", namespace=SIM, context=client.context)
     add(client, node)
     yield node
@@ -90,12 +92,16 @@ def sim(client: RosClient) -> Iterator[MissionNode]:
 def objects_in(msg: MarkerArray) -> dict[str, tuple[float, float, float]]:
     """name -> (x, y, diameter), pairing each cylinder with the label of the same id."""
     labels = {m.id: m.text for m in msg.markers if m.type == Marker.TEXT_VIEW_FACING}
-    return {labels[m.id]: (m.pose.position.x, m.pose.position.y, m.scale.x)
-            for m in msg.markers if m.type == Marker.CYLINDER}
+    return {
+        labels[m.id]: (m.pose.position.x, m.pose.position.y, m.scale.x)
+        for m in msg.markers
+        if m.type == Marker.CYLINDER
+    }
 
 
 def test_the_planned_path_goes_around_the_ball_and_rviz_gets_every_object_seen(
-        client: RosClient, sim: MissionNode) -> None:
+    client: RosClient, sim: MissionNode
+) -> None:
     markers = client.subscribe(MarkerArray, f"{SIM}/known_objects", LATCHED)
     paths = client.subscribe(Path, f"{SIM}/planned_path", LATCHED)
     result = sim.agent.execute_mission("go to x=4, y=0")
@@ -122,7 +128,8 @@ def test_the_planned_path_goes_around_the_ball_and_rviz_gets_every_object_seen(
 
 
 def test_a_published_detection_becomes_a_known_object_everywhere(
-        client: RosClient, go2: MissionNode) -> None:
+    client: RosClient, go2: MissionNode
+) -> None:
     markers = client.subscribe(MarkerArray, f"{GO2}/known_objects", LATCHED)
     paths = client.subscribe(Path, f"{GO2}/planned_path", LATCHED)
     detections = client.publisher(DetectionArray, f"{GO2}/detections")
@@ -149,18 +156,21 @@ def test_a_published_detection_becomes_a_known_object_everywhere(
     msg.detections = [ahead, fixed, lost]
     detections.publish(msg)
 
-    known = wait_until(lambda: {o.name: o for o in robot_objects(robot)} or None, 10,
-                       "the detections to become known objects")
+    known = wait_until(
+        lambda: {o.name: o for o in robot_objects(robot)} or None,
+        10,
+        "the detections to become known objects",
+    )
     assert set(known) == {"charging dock", "blue box"}
     dock = known["charging dock"]
     assert math.isclose(dock.x, 0.0, abs_tol=0.05) and math.isclose(dock.y, 1.5, abs_tol=0.05)
     assert math.isclose(dock.radius, 0.3, rel_tol=1e-6)  # float32 on the wire
     assert math.isclose(dock.confidence, 0.8, rel_tol=1e-6)
-    assert (known["blue box"].x, known["blue box"].y, known["blue box"].radius) == \
-        (2.5, 2.0, 0.25)
+    assert (known["blue box"].x, known["blue box"].y, known["blue box"].radius) == (2.5, 2.0, 0.25)
 
-    shown = markers.wait_for(lambda m: set(objects_in(m)) == {"charging dock", "blue box"}, 10,
-                             "the detections in RViz")
+    shown = markers.wait_for(
+        lambda m: set(objects_in(m)) == {"charging dock", "blue box"}, 10, "the detections in RViz"
+    )
     assert math.isclose(objects_in(shown)["charging dock"][1], 1.5, abs_tol=0.05)
 
     from fastapi.testclient import TestClient

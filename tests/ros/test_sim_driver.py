@@ -38,9 +38,20 @@ from tests.ros.rosclient import ROOT, NodeProcess, RosClient, wait_until  # noqa
 
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 MOVE_TIMEOUT, ODOM_DELAY, POSTURE_SECONDS = 1.5, 0.5, 1.0
-DRIVER = ("--move-timeout", str(MOVE_TIMEOUT), "--odom-delay", str(ODOM_DELAY),
-          "--posture-seconds", str(POSTURE_SECONDS), "--battery", "50", "--battery-drain",
-          "0.1", "--camera-rate-hz", "0")
+DRIVER = (
+    "--move-timeout",
+    str(MOVE_TIMEOUT),
+    "--odom-delay",
+    str(ODOM_DELAY),
+    "--posture-seconds",
+    str(POSTURE_SECONDS),
+    "--battery",
+    "50",
+    "--battery-drain",
+    "0.1",
+    "--camera-rate-hz",
+    "0",
+)
 TIMEOUT = 20.0
 Truth = dict[str, Any]
 
@@ -60,9 +71,14 @@ class Driver:
     def wait_ready(self, process: NodeProcess) -> None:
         def ready() -> bool:
             process.check_alive()
-            return bool(self.truths.items and self.odom.items and self.states.items
-                        and self.cmd_vel_out.get_subscription_count()
-                        and self.webrtc.get_subscription_count())
+            return bool(
+                self.truths.items
+                and self.odom.items
+                and self.states.items
+                and self.cmd_vel_out.get_subscription_count()
+                and self.webrtc.get_subscription_count()
+            )
+
         wait_until(ready, TIMEOUT, f"the simulated driver's topics under {self.base or '/'}")
 
     def truth(self) -> Truth:
@@ -71,14 +87,18 @@ class Driver:
     def truths_since(self, mark: int) -> list[Truth]:
         return [json.loads(m.data) for m in self.truths.since(mark)]
 
-    def wait_truth(self, match: Callable[[Truth], bool], what: str, mark: int | None = None,
-                   timeout: float = TIMEOUT) -> Truth:
+    def wait_truth(
+        self,
+        match: Callable[[Truth], bool],
+        what: str,
+        mark: int | None = None,
+        timeout: float = TIMEOUT,
+    ) -> Truth:
         start = self.truths.mark() if mark is None else mark
         msg = self.truths.wait_for(lambda m: match(json.loads(m.data)), timeout, what, start)
         return json.loads(msg.data)
 
-    def twist(self, x: float = 0.0, y: float = 0.0, z: float = 0.0,
-              publisher: Any = None) -> None:
+    def twist(self, x: float = 0.0, y: float = 0.0, z: float = 0.0, publisher: Any = None) -> None:
         msg = Twist()
         msg.linear.x, msg.linear.y, msg.angular.z = x, y, z
         (publisher or self.cmd_vel_out).publish(msg)
@@ -90,14 +110,18 @@ class Driver:
             self.twist(x, publisher=publisher)
             time.sleep(0.1)
 
-    def request(self, api_id: int, parameter: str = "",
-                topic: str = go2_api.SPORT_TOPIC) -> None:
-        self.webrtc.publish(WebRtcReq(id=0, topic=topic, api_id=api_id, parameter=parameter,
-                                      priority=0))
+    def request(self, api_id: int, parameter: str = "", topic: str = go2_api.SPORT_TOPIC) -> None:
+        self.webrtc.publish(
+            WebRtcReq(id=0, topic=topic, api_id=api_id, parameter=parameter, priority=0)
+        )
 
     def record(self, api_id: int, mark: int) -> dict[str, Any]:
-        msg = self.records.wait_for(lambda m: json.loads(m.data)["api_id"] == api_id, TIMEOUT,
-                                    f"the driver's record of api id {api_id}", mark)
+        msg = self.records.wait_for(
+            lambda m: json.loads(m.data)["api_id"] == api_id,
+            TIMEOUT,
+            f"the driver's record of api id {api_id}",
+            mark,
+        )
         return dict(json.loads(msg.data))
 
     def rest(self) -> Truth:
@@ -105,9 +129,15 @@ class Driver:
         sent meanwhile would overtake it) and the robot is standing balanced and still."""
         stops = self.truth()["stop_moves"]
         self.request(go2_api.STOP_MOVE)
-        return self.wait_truth(lambda t: t["stop_moves"] > stops and not t["moving"]
-                               and not t["changing"] and t["mode"] == SportMode.BALANCE_STAND,
-                               "the robot at rest")
+        return self.wait_truth(
+            lambda t: (
+                t["stop_moves"] > stops
+                and not t["moving"]
+                and not t["changing"]
+                and t["mode"] == SportMode.BALANCE_STAND
+            ),
+            "the robot at rest",
+        )
 
 
 @pytest.fixture(scope="module")
@@ -146,23 +176,29 @@ def test_a_zero_twist_is_dropped_and_the_move_runs_on_until_it_lapses(driver: Dr
     moved = driver.wait_truth(lambda t: t["moves"] == before["moves"] + 1, "the Move", mark)
     driver.wait_truth(lambda t: t["vx"] > 0.29, "walking at 0.3 m/s", mark)
     driver.twist(0.0)  # what a controller sends to "stop": go2_ros2_sdk drops it
-    dropped = driver.wait_truth(lambda t: t["twists_dropped"] == before["twists_dropped"] + 1,
-                                "the zero Twist to arrive", mark)
+    dropped = driver.wait_truth(
+        lambda t: t["twists_dropped"] == before["twists_dropped"] + 1,
+        "the zero Twist to arrive",
+        mark,
+    )
     assert dropped["moving"] and dropped["vx"] > 0.29 and dropped["moves"] == moved["moves"]
-    lapsed = driver.wait_truth(lambda t: t["moves_lapsed"] == before["moves_lapsed"] + 1,
-                               "the Move to lapse", mark)
+    lapsed = driver.wait_truth(
+        lambda t: t["moves_lapsed"] == before["moves_lapsed"] + 1, "the Move to lapse", mark
+    )
     # It ran on for the whole move timeout after the last Move (truth sampled at 50 Hz).
     assert lapsed["mono"] - moved["mono"] >= MOVE_TIMEOUT - 0.05
-    assert all(t["moving"] for t in driver.truths_since(mark)
-               if dropped["mono"] <= t["mono"] < lapsed["mono"])
+    assert all(
+        t["moving"]
+        for t in driver.truths_since(mark)
+        if dropped["mono"] <= t["mono"] < lapsed["mono"]
+    )
     braking = driver.truths.mark()
     still = driver.wait_truth(lambda t: not t["moving"], "the robot to brake", braking)
     assert still["mono"] > lapsed["mono"]
     assert still["stop_moves"] == before["stop_moves"]  # the lapse stopped it, nothing else
     # A Twist that rounds to zero is not dropped: it is a Move of zero.
     driver.twist(0.004)
-    tiny = driver.wait_truth(lambda t: t["moves"] == still["moves"] + 1, "the tiny Move",
-                             braking)
+    tiny = driver.wait_truth(lambda t: t["moves"] == still["moves"] + 1, "the tiny Move", braking)
     assert tiny["twists_dropped"] == dropped["twists_dropped"] and not tiny["moving"]
 
 
@@ -173,8 +209,7 @@ def test_stop_move_stops_at_once_without_waiting_for_the_lapse(driver: Driver) -
     assert driver.truth()["vx"] > 0.39
     driver.request(go2_api.STOP_MOVE)
     driver.wait_truth(lambda t: t["stop_moves"] == before["stop_moves"] + 1, "StopMove", mark)
-    still = driver.wait_truth(lambda t: not t["moving"], "the robot to stop",
-                              driver.truths.mark())
+    still = driver.wait_truth(lambda t: not t["moving"], "the robot to stop", driver.truths.mark())
     assert still["moves_lapsed"] == before["moves_lapsed"]  # stopped long before any lapse
     record = driver.record(go2_api.STOP_MOVE, records)
     assert record["accepted"] and record["sent"] >= record["mono"]  # through the 10 Hz queue
@@ -182,8 +217,11 @@ def test_stop_move_stops_at_once_without_waiting_for_the_lapse(driver: Driver) -
 
 def test_odometry_is_the_truth_of_odom_delay_ago_and_has_no_twist(driver: Driver) -> None:
     driver.rest()
-    truth_mark, odom_mark, state_mark = (driver.truths.mark(), driver.odom.mark(),
-                                         driver.states.mark())
+    truth_mark, odom_mark, state_mark = (
+        driver.truths.mark(),
+        driver.odom.mark(),
+        driver.states.mark(),
+    )
     driver.walk(0.5, 2.5)
     walking = driver.truth()
     states = driver.states.since(state_mark)
@@ -191,8 +229,9 @@ def test_odometry_is_the_truth_of_odom_delay_ago_and_has_no_twist(driver: Driver
     truths = driver.truths_since(truth_mark)
     xs = [(t["stamp"], t["x"]) for t in truths]
     steady = [t["stamp"] for t in truths if t["vx"] > 0.49]
-    odom = [m for m in driver.odom.since(odom_mark)
-            if steady[0] + ODOM_DELAY < stamp_of(m) < steady[-1]]
+    odom = [
+        m for m in driver.odom.since(odom_mark) if steady[0] + ODOM_DELAY < stamp_of(m) < steady[-1]
+    ]
     assert len(odom) >= 10
     for msg in odom:
         stamp, x = stamp_of(msg), msg.pose.pose.position.x
@@ -202,8 +241,12 @@ def test_odometry_is_the_truth_of_odom_delay_ago_and_has_no_twist(driver: Driver
     assert all((t.linear.x, t.linear.y, t.angular.z) == (0.0, 0.0, 0.0) for t in twists)
     # go2_states carries the velocity (odom frame) and the body height from the truth.
     assert walking["mode"] == SportMode.LOCOMOTION
-    assert any(s.mode == SportMode.LOCOMOTION and abs(s.velocity[0] - 0.5) < 0.01
-               and math.isclose(s.body_height, 0.32, abs_tol=1e-6) for s in states)
+    assert any(
+        s.mode == SportMode.LOCOMOTION
+        and abs(s.velocity[0] - 0.5) < 0.01
+        and math.isclose(s.body_height, 0.32, abs_tol=1e-6)
+        for s in states
+    )
 
 
 def stamp_of(msg: Any) -> float:
@@ -227,16 +270,19 @@ def test_a_posture_takes_time_ignores_moves_and_leaves_progress_at_zero(driver: 
     assert any(s.mode == SportMode.LIE_DOWN and 0.09 < s.body_height < 0.31 for s in states)
     # Up again: StandUp locks the joints (Moves still ignored), BalanceStand lets it walk.
     driver.request(go2_api.STAND_UP)
-    driver.wait_truth(lambda t: t["mode"] == SportMode.JOINT_LOCK and not t["changing"],
-                      "StandUp to finish", mark)
+    driver.wait_truth(
+        lambda t: t["mode"] == SportMode.JOINT_LOCK and not t["changing"], "StandUp to finish", mark
+    )
     driver.request(go2_api.BALANCE_STAND)
-    up = driver.wait_truth(lambda t: t["mode"] == SportMode.BALANCE_STAND
-                           and not t["changing"], "BalanceStand", mark)
+    up = driver.wait_truth(
+        lambda t: t["mode"] == SportMode.BALANCE_STAND and not t["changing"], "BalanceStand", mark
+    )
     assert up["posture"] == "standing" and up["body_height"] == 0.32
 
 
-def test_cmd_vel_reaches_the_driver_only_through_the_relay(driver: Driver,
-                                                           client: RosClient) -> None:
+def test_cmd_vel_reaches_the_driver_only_through_the_relay(
+    driver: Driver, client: RosClient
+) -> None:
     relay_in = client.node.get_subscriptions_info_by_topic("/cmd_vel")
     assert [i.node_name for i in relay_in] == ["twist_mux"]
     driver_in = client.node.get_subscriptions_info_by_topic("/cmd_vel_out")
@@ -259,28 +305,29 @@ def test_webrtc_requests_with_a_parameter_that_is_not_json_are_dropped(driver: D
     assert not record["accepted"] and record["note"].startswith("dropped by the driver")
     driver.request(go2_api.STOP_MOVE, topic="")  # an empty topic means the sport topic
     assert driver.record(go2_api.STOP_MOVE, records)["accepted"]
-    after = driver.wait_truth(lambda t: t["stop_moves"] == before["stop_moves"] + 1,
-                              "the StopMove")
+    after = driver.wait_truth(lambda t: t["stop_moves"] == before["stop_moves"] + 1, "the StopMove")
     assert after["requests_dropped"] == before["requests_dropped"] + 1
     assert after["requests"] == before["requests"] + 1  # the Sit never reached the robot
     assert after["posture"] == "standing" and after["mode"] == SportMode.BALANCE_STAND
 
 
-def test_battery_state_drains_from_the_level_asked_for(driver: Driver,
-                                                       client: RosClient) -> None:
+def test_battery_state_drains_from_the_level_asked_for(driver: Driver, client: RosClient) -> None:
     battery = client.subscribe(BatteryState, "/battery_state")
     first = battery.wait_for(lambda _m: True, TIMEOUT, "a battery state")
-    later = battery.wait_for(lambda m: m.percentage < first.percentage, TIMEOUT,
-                             "the battery to drain", battery.mark())
+    later = battery.wait_for(
+        lambda m: m.percentage < first.percentage, TIMEOUT, "the battery to drain", battery.mark()
+    )
     assert 0.0 < later.percentage < first.percentage <= 0.5
     assert abs(driver.truth()["battery"] / 100 - later.percentage) < 0.02
 
 
-def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery(
-        client: RosClient) -> None:
-    process = NodeProcess("-r", "__ns:=/bare", command="sim-driver",
-                          options=("--no-relay", "--camera-rate-hz", "0", "--start-posture",
-                                   "lying"))
+def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery(client: RosClient) -> None:
+    process = NodeProcess(
+        "-r",
+        "__ns:=/bare",
+        command="sim-driver",
+        options=("--no-relay", "--camera-rate-hz", "0", "--start-posture", "lying"),
+    )
     bare = Driver(client, "/bare")
     try:
         bare.wait_ready(process)
@@ -303,9 +350,14 @@ def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery(
 
 
 def test_several_robots_get_robot_i_names_and_twist_mux_feeds_none_of_them(
-        client: RosClient) -> None:
-    process = NodeProcess("-r", "__ns:=/fleet", command="sim-driver",
-                          options=("--robots", "2", "--camera-rate-hz", "0"))
+    client: RosClient,
+) -> None:
+    process = NodeProcess(
+        "-r",
+        "__ns:=/fleet",
+        command="sim-driver",
+        options=("--robots", "2", "--camera-rate-hz", "0"),
+    )
     robots = [Driver(client, f"/fleet/robot{i}") for i in range(2)]
     try:
         for robot in robots:
@@ -330,8 +382,11 @@ def test_several_robots_get_robot_i_names_and_twist_mux_feeds_none_of_them(
 def test_in_process_the_truth_is_one_call_away(client: RosClient) -> None:
     from shadowhound.ros.sim_driver import SimDriver
 
-    driver = SimDriver(context=client.context, namespace="/inproc_truth",
-                       options={"camera_rate_hz": 0.0, "relay": False, "odom_delay": 0.0})
+    driver = SimDriver(
+        context=client.context,
+        namespace="/inproc_truth",
+        options={"camera_rate_hz": 0.0, "relay": False, "odom_delay": 0.0},
+    )
     for node in driver.nodes:
         client.executor.add_node(node)
     try:
@@ -344,10 +399,14 @@ def test_in_process_the_truth_is_one_call_away(client: RosClient) -> None:
         out.publish(msg)
         wait_until(lambda: driver.truth().moving, TIMEOUT, "the robot to turn")
         truth = driver.truth()
-        assert (truth.moves, truth.posture, truth.mode) == (1, Posture.STANDING,
-                                                            SportMode.LOCOMOTION)
-        seen = published.wait_for(lambda m: json.loads(m.data)["moves"] == 1, TIMEOUT,
-                                  "the published truth")
+        assert (truth.moves, truth.posture, truth.mode) == (
+            1,
+            Posture.STANDING,
+            SportMode.LOCOMOTION,
+        )
+        seen = published.wait_for(
+            lambda m: json.loads(m.data)["moves"] == 1, TIMEOUT, "the published truth"
+        )
         assert json.loads(seen.data).keys() == driver.truth_dict().keys()
     finally:
         for node in driver.nodes:
@@ -367,15 +426,24 @@ def test_the_relay_gives_the_joystick_priority_while_it_speaks() -> None:
     assert forwards(inputs, nav, now=100.6)  # the joystick's message has expired
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    (["--odom-delay", "9"], "odom_delay must be in 0..5, got 9.0"),
-    (["--start-posture", "kneeling"], "invalid choice: 'kneeling'"),
-    (["--ros-args", "-p", "battery:=101.0"], "battery must be in 0..100, got 101.0"),
-    (["--ros-args", "-p", "lidar:=true"], "unknown ROS parameter(s): lidar"),
-])
-def test_bad_options_and_parameters_exit_2_with_what_is_allowed(args: list[str],
-                                                                 message: str) -> None:
-    done = subprocess.run([sys.executable, "-m", "shadowhound", "sim-driver", *args],
-                          capture_output=True, text=True, cwd=ROOT, timeout=60)
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--odom-delay", "9"], "odom_delay must be in 0..5, got 9.0"),
+        (["--start-posture", "kneeling"], "invalid choice: 'kneeling'"),
+        (["--ros-args", "-p", "battery:=101.0"], "battery must be in 0..100, got 101.0"),
+        (["--ros-args", "-p", "lidar:=true"], "unknown ROS parameter(s): lidar"),
+    ],
+)
+def test_bad_options_and_parameters_exit_2_with_what_is_allowed(
+    args: list[str], message: str
+) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "shadowhound", "sim-driver", *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=60,
+    )
     assert done.returncode == 2, done.stderr
     assert message in done.stderr and "Traceback" not in done.stderr

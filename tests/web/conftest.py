@@ -19,12 +19,15 @@ if TYPE_CHECKING:
     from shadowhound.web import WebServer
 
 # Without the web extra these tests cannot run: skip the directory locally, fail in CI.
-_MISSING = [m for m in ("fastapi", "uvicorn", "httpx", "websockets")
-            if importlib.util.find_spec(m) is None]
+_MISSING = [
+    m for m in ("fastapi", "uvicorn", "httpx", "websockets") if importlib.util.find_spec(m) is None
+]
 if _MISSING:
     if os.environ.get("CI"):
-        raise ImportError(f"the web tests need {', '.join(_MISSING)} (pip install -e "
-                          "'.[web,dev]'); CI must run them")
+        raise ImportError(
+            f"the web tests need {', '.join(_MISSING)} (pip install -e "
+            "'.[web,dev]'); CI must run them"
+        )
     collect_ignore_glob = ["test_*.py"]
 
 TOKEN = "test-token-0123456789abcdef"
@@ -32,8 +35,9 @@ TOKEN = "test-token-0123456789abcdef"
 
 def make_agent(time_scale: float = 0.0, **settings: Any) -> RobotAgent:
     config = ShadowHoundConfig(**settings)
-    agent = RobotAgent(RobotAgentConfig(robot=SimRobot(config.sim, time_scale=time_scale),
-                                        settings=config))
+    agent = RobotAgent(
+        RobotAgentConfig(robot=SimRobot(config.sim, time_scale=time_scale), settings=config)
+    )
     agent.initialize()
     return agent
 

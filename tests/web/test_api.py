@@ -44,8 +44,10 @@ def test_missions_from_other_interfaces_are_listed(client: TestClient, agent: Ro
     finished(client, web)
     other = agent.execute_mission("sit down", mission_id="ros-topic-1")  # e.g. a ROS topic
     listed = client.get("/api/missions").json()["missions"]
-    assert [(m["mission_id"], m["source"]) for m in listed] == [(web, "web"),
-                                                               (other.mission_id, "agent")]
+    assert [(m["mission_id"], m["source"]) for m in listed] == [
+        (web, "web"),
+        (other.mission_id, "agent"),
+    ]
     assert listed[1]["command"] == "sit down" and listed[1]["success"] is True
 
 
@@ -63,8 +65,7 @@ def test_failed_mission_says_why(client: TestClient) -> None:
 
 
 def test_dry_run_plans_without_moving(client: TestClient, agent: RobotAgent) -> None:
-    reply = client.post("/api/mission", json={"command": "walk forward 2 meters",
-                                              "dry_run": True})
+    reply = client.post("/api/mission", json={"command": "walk forward 2 meters", "dry_run": True})
     assert reply.status_code == 202
     record = finished(client, reply.json()["mission_id"])
     assert record["dry_run"] is True and record["success"] is True
@@ -86,11 +87,13 @@ def test_bad_requests_get_clear_4xx(client: TestClient) -> None:
         reply = client.post("/api/mission", json=body)
         assert reply.status_code == 422, (body, reply.text)
         assert words in reply.json()["detail"], reply.json()
-    reply = client.post("/api/mission", content=b"{not json",
-                        headers={"content-type": "application/json"})
+    reply = client.post(
+        "/api/mission", content=b"{not json", headers={"content-type": "application/json"}
+    )
     assert reply.status_code == 422
-    big = client.post("/api/mission", content=b"x" * (MAX_BODY + 1),
-                      headers={"content-type": "application/json"})
+    big = client.post(
+        "/api/mission", content=b"x" * (MAX_BODY + 1), headers={"content-type": "application/json"}
+    )
     assert big.status_code == 413 and "larger than" in big.json()["detail"]
     assert client.get("/api/missions/nope").status_code == 404
     assert client.get("/api/missions?limit=0").status_code == 422
@@ -104,8 +107,7 @@ def test_estop_latches_drops_the_queue_and_refuses_missions(client: TestClient) 
     assert refused.status_code == 409
     assert "e-stop" in refused.json()["detail"] and refused.json()["success"] is False
     # A dry run moves nothing, so it is still allowed.
-    assert client.post("/api/mission", json={"command": "sit", "dry_run": True}).status_code \
-        == 202
+    assert client.post("/api/mission", json={"command": "sit", "dry_run": True}).status_code == 202
     assert client.get("/api/status").json()["estop"] is True
     released = client.post("/api/estop/release")
     assert released.json()["estop"] is False
@@ -119,8 +121,10 @@ def test_cancel_a_running_mission_and_refuse_cancelling_a_finished_one() -> None
         first = client.post("/api/mission", json={"command": "walk backward 4 meters"}).json()
         queued = client.post("/api/mission", json={"command": "turn left 90 degrees"}).json()
         assert queued["queued_ahead"] >= 1
-        wait_for(lambda: client.get("/api/status").json()["running"] == first["mission_id"],
-                 what="the first mission to run")
+        wait_for(
+            lambda: client.get("/api/status").json()["running"] == first["mission_id"],
+            what="the first mission to run",
+        )
         cancel_queued = client.post(f"/api/missions/{queued['mission_id']}/cancel")
         assert cancel_queued.json()["cancelled"] is True
         client.post(f"/api/missions/{first['mission_id']}/cancel")
@@ -137,8 +141,10 @@ def test_cancel_a_running_mission_and_refuse_cancelling_a_finished_one() -> None
 def test_queue_full_is_refused_with_429() -> None:
     agent = make_agent(time_scale=1.0)
     with TestClient(create_app(agent), base_url="http://127.0.0.1") as client:
-        codes = [client.post("/api/mission", json={"command": "wait 30 seconds"}).status_code
-                 for _ in range(12)]
+        codes = [
+            client.post("/api/mission", json={"command": "wait 30 seconds"}).status_code
+            for _ in range(12)
+        ]
         assert codes[0] == 202 and 429 in codes
         client.post("/api/estop")  # ends the waiting mission and drops the queue
     agent.cleanup()
@@ -150,8 +156,9 @@ def test_risky_trick_waits_for_approval_and_can_be_approved_or_rejected() -> Non
         assert agent.approvals_enabled
         for decision in ("reject", "approve"):
             mission = client.post("/api/mission", json={"command": "do a backflip"}).json()
-            pending = wait_for(lambda: client.get("/api/approval").json()["pending"],
-                               what="an approval request")
+            pending = wait_for(
+                lambda: client.get("/api/approval").json()["pending"], what="an approval request"
+            )
             assert pending["reasons"]
             assert client.post("/api/approval/wrong-id/approve").status_code == 404
             reply = client.post(f"/api/approval/{pending['request_id']}/{decision}")
@@ -187,7 +194,8 @@ def test_map_shows_taught_places_with_the_profiles(client: TestClient, agent: Ro
 
 
 def test_camera_latest_is_jpeg_and_the_original_json_form_still_works(
-        client: TestClient, agent: RobotAgent) -> None:
+    client: TestClient, agent: RobotAgent
+) -> None:
     reply = client.get("/api/camera/latest")  # the simulator renders PNG; served as JPEG
     assert reply.status_code == 200 and reply.headers["content-type"] == "image/jpeg"
     assert reply.content[:2] == b"\xff\xd8"
@@ -196,8 +204,10 @@ def test_camera_latest_is_jpeg_and_the_original_json_form_still_works(
     assert client.get("/api/camera/latest").content == frame  # passed through unchanged
     legacy = client.get("/api/camera/latest?format=json").json()
     assert legacy["available"] is True and base64.b64decode(legacy["image"]) == frame
-    assert client.get("/api/camera/latest",
-                      headers={"accept": "application/json"}).json()["available"] is True
+    assert (
+        client.get("/api/camera/latest", headers={"accept": "application/json"}).json()["available"]
+        is True
+    )
 
 
 def test_page_and_static_files_are_served(client: TestClient) -> None:
@@ -209,9 +219,11 @@ def test_page_and_static_files_are_served(client: TestClient) -> None:
 
 
 def test_importing_shadowhound_does_not_import_the_web_stack() -> None:
-    code = ("import sys, shadowhound, shadowhound.web; "
-            "bad = [m for m in ('fastapi', 'uvicorn', 'starlette') if m in sys.modules]; "
-            "assert not bad, bad")
+    code = (
+        "import sys, shadowhound, shadowhound.web; "
+        "bad = [m for m in ('fastapi', 'uvicorn', 'starlette') if m in sys.modules]; "
+        "assert not bad, bad"
+    )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
 
 
@@ -228,8 +240,9 @@ def _field_is_valid(field: str, value: object) -> bool:
     raise AssertionError(field)
 
 
-def test_strings_are_not_booleans_and_booleans_are_not_numbers(client: TestClient,
-                                                               agent: RobotAgent) -> None:
+def test_strings_are_not_booleans_and_booleans_are_not_numbers(
+    client: TestClient, agent: RobotAgent
+) -> None:
     for body, where in [
         ({"command": "walk forward 1 meter", "dry_run": "yes"}, "body.dry_run"),
         ({"command": "walk forward 1 meter", "dry_run": "true"}, "body.dry_run"),
@@ -257,14 +270,26 @@ def test_mission_fields_accept_exactly_their_json_type(client: TestClient) -> No
     from hypothesis import HealthCheck, given, settings
     from hypothesis import strategies as st
 
-    scalars = st.one_of(st.none(), st.booleans(), st.integers(-20, 20),
-                        st.floats(allow_nan=False, allow_infinity=False), st.text(max_size=6),
-                        st.sampled_from(["yes", "no", "true", "false", "1", "0", "on", "off"]))
-    values = st.one_of(scalars, st.lists(scalars, max_size=2),
-                       st.dictionaries(st.text(max_size=3), scalars, max_size=2))
+    scalars = st.one_of(
+        st.none(),
+        st.booleans(),
+        st.integers(-20, 20),
+        st.floats(allow_nan=False, allow_infinity=False),
+        st.text(max_size=6),
+        st.sampled_from(["yes", "no", "true", "false", "1", "0", "on", "off"]),
+    )
+    values = st.one_of(
+        scalars,
+        st.lists(scalars, max_size=2),
+        st.dictionaries(st.text(max_size=3), scalars, max_size=2),
+    )
 
-    @settings(max_examples=150, deadline=None, database=None,
-              suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @settings(
+        max_examples=150,
+        deadline=None,
+        database=None,
+        suppress_health_check=[HealthCheck.function_scoped_fixture],
+    )
     @given(st.sampled_from(["dry_run", "priority"]), values)
     def check(field: str, value: object) -> None:
         # A dry run never moves the robot, so accepted requests cost nothing.
@@ -286,11 +311,15 @@ def test_every_mission_within_the_text_limit_fits_in_a_body(agent: RobotAgent) -
     wide = make_agent(agent={"max_mission_chars": MAX_TEXT})
     with TestClient(create_app(wide), base_url="http://127.0.0.1") as client:
         text = "\U0001f600" * (MAX_TEXT - 20) + " stand up"  # each escaped as 12 bytes
-        body = ('{"command": "' + text.encode("unicode_escape").decode()
-                .replace("\\U0001f600", "\\ud83d\\ude00") + '", "dry_run": true}')
+        body = (
+            '{"command": "'
+            + text.encode("unicode_escape").decode().replace("\\U0001f600", "\\ud83d\\ude00")
+            + '", "dry_run": true}'
+        )
         assert len(body.encode()) > 12 * (MAX_TEXT - 20)
-        reply = client.post("/api/mission", content=body.encode(),
-                            headers={"content-type": "application/json"})
+        reply = client.post(
+            "/api/mission", content=body.encode(), headers={"content-type": "application/json"}
+        )
         assert reply.status_code == 202, reply.text[:300]
         over = client.post("/api/mission", json={"command": "x" * (MAX_TEXT + 1)})
         assert over.status_code == 422 and over.json()["problems"][0]["where"] == "body.command"

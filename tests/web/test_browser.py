@@ -21,8 +21,15 @@ from tests.web.conftest import make_agent, wait_for
 
 CHROMIUM = os.environ.get("SHADOWHOUND_CHROMIUM", "/usr/bin/chromium")
 ARTIFACTS = Path(__file__).resolve().parent / "artifacts"
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync", "--no-first-run"]
+ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
 PHONE = {"width": 390, "height": 844}
 
 
@@ -34,8 +41,9 @@ def _playwright() -> Any:
         sync_playwright = None
         problems.append("Playwright is not installed (pip install playwright)")
     if not shutil.which(CHROMIUM):
-        problems.append(f"Chromium is not at {CHROMIUM} (apt-get install chromium, or set "
-                        "SHADOWHOUND_CHROMIUM)")
+        problems.append(
+            f"Chromium is not at {CHROMIUM} (apt-get install chromium, or set SHADOWHOUND_CHROMIUM)"
+        )
     if problems:
         message = "browser test needs: " + "; ".join(problems)
         if os.environ.get("CI"):
@@ -45,7 +53,8 @@ def _playwright() -> Any:
 
 
 def test_dashboard_runs_a_mission_and_the_estop_stops_the_robot(
-        serve: Callable[..., WebServer], tmp_path: Path) -> None:
+    serve: Callable[..., WebServer], tmp_path: Path
+) -> None:
     sync_playwright = _playwright()
     agent = make_agent(time_scale=0.5)  # real clock, twice as fast as life
     server = serve(agent)
@@ -53,8 +62,12 @@ def test_dashboard_runs_a_mission_and_the_estop_stops_the_robot(
     errors: list[str] = []
     with sync_playwright() as p:
         browser = p.chromium.launch_persistent_context(
-            str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS,
-            viewport=PHONE)
+            str(tmp_path / "profile"),
+            executable_path=CHROMIUM,
+            headless=True,
+            args=ARGS,
+            viewport=PHONE,
+        )
         try:
             page = browser.new_page()
             page.on("pageerror", lambda exc: errors.append(str(exc)))
@@ -81,8 +94,11 @@ def test_dashboard_runs_a_mission_and_the_estop_stops_the_robot(
             assert _in_viewport(page, "#estop"), "the STOP button must stay on screen"
             page.click("#estop")
             page.wait_for_selector("#estop-banner", state="visible")
-            wait_for(lambda: agent.get_robot_state().estopped
-                     and not agent.get_robot_state().is_moving, 5, "the robot to stop")
+            wait_for(
+                lambda: agent.get_robot_state().estopped and not agent.get_robot_state().is_moving,
+                5,
+                "the robot to stop",
+            )
             page.wait_for_selector('#steps li[data-status="cancelled"]')
             page.wait_for_selector('#result[data-kind="error"]')
             assert "e-stop" in page.text_content("#result")
@@ -111,5 +127,9 @@ def _map_x(page: Any) -> float:
 def _in_viewport(page: Any, selector: str) -> bool:
     box = page.locator(selector).bounding_box()
     size = page.viewport_size
-    return bool(box and box["y"] >= 0 and box["y"] + box["height"] <= size["height"]
-                and box["x"] + box["width"] <= size["width"])
+    return bool(
+        box
+        and box["y"] >= 0
+        and box["y"] + box["height"] <= size["height"]
+        and box["x"] + box["width"] <= size["width"]
+    )

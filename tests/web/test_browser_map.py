@@ -45,8 +45,11 @@ class Canvas:
         """The pixels within a few of (x, y): a 10 cm wall is 3 px wide, antialiased."""
         px = (self.half[0] + (x - self.cx) * self.scale) * self.ratio
         py = (self.half[1] - (y - self.cy) * self.scale) * self.ratio
-        return [self.image.getpixel((round(px) + i, round(py) + j))
-                for i in range(-pixels, pixels + 1) for j in range(-pixels, pixels + 1)]
+        return [
+            self.image.getpixel((round(px) + i, round(py) + j))
+            for i in range(-pixels, pixels + 1)
+            for j in range(-pixels, pixels + 1)
+        ]
 
     def along(self, points: list[tuple[float, float]], colour: tuple[int, int, int]) -> float:
         """The share of points sampled every 2 cm along the polyline drawn in `colour`."""
@@ -65,7 +68,8 @@ def near(rgb: tuple[int, int, int], colour: tuple[int, int, int], tolerance: int
 
 
 def test_the_map_draws_grid_objects_planned_and_walked_paths(
-        serve: Callable[..., WebServer], tmp_path: Path) -> None:
+    serve: Callable[..., WebServer], tmp_path: Path
+) -> None:
     sync_playwright = _playwright()
     agent = make_agent(time_scale=0.25)  # real clock, four times as fast as life
     server = serve(agent)
@@ -80,8 +84,12 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
     errors: list[str] = []
     with sync_playwright() as p:
         browser = p.chromium.launch_persistent_context(
-            str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS,
-            viewport=DESKTOP)
+            str(tmp_path / "profile"),
+            executable_path=CHROMIUM,
+            headless=True,
+            args=ARGS,
+            viewport=DESKTOP,
+        )
         try:
             page = browser.new_page()
             page.on("pageerror", lambda exc: errors.append(str(exc)))
@@ -114,8 +122,11 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
             # 3. The mission: the walked path follows the planned one, around the ball.
             page.click("#run")
             page.wait_for_selector('#result[data-kind="ok"]')
-            wait_for(lambda: float(page.get_attribute("#map", "data-x") or 0) > 3.9, 10,
-                     "the robot to arrive on the map")
+            wait_for(
+                lambda: float(page.get_attribute("#map", "data-x") or 0) > 3.9,
+                10,
+                "the robot to arrive on the map",
+            )
             canvas = Canvas(page)
             assert canvas.along(planned, WALKED) > 0.6
             page.screenshot(path=str(ARTIFACTS / "dashboard-map-walked.png"), full_page=True)
@@ -141,7 +152,8 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
 
 
 def test_the_grid_is_drawn_behind_a_token_too(
-        serve: Callable[..., WebServer], tmp_path: Path) -> None:
+    serve: Callable[..., WebServer], tmp_path: Path
+) -> None:
     from tests.web.conftest import TOKEN
 
     sync_playwright = _playwright()
@@ -149,8 +161,12 @@ def test_the_grid_is_drawn_behind_a_token_too(
     server = serve(agent, token=TOKEN)
     with sync_playwright() as p:
         browser = p.chromium.launch_persistent_context(
-            str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS,
-            viewport=DESKTOP)
+            str(tmp_path / "profile"),
+            executable_path=CHROMIUM,
+            headless=True,
+            args=ARGS,
+            viewport=DESKTOP,
+        )
         try:
             page = browser.new_page()
             page.set_default_timeout(20_000)

@@ -31,18 +31,26 @@ class WatchedRobot(SimRobot):
 
 
 def _scope(method: str, path: str) -> dict[str, Any]:
-    return {"type": "http", "asgi": {"version": "3.0"}, "http_version": "1.1",
-            "method": method, "path": path, "raw_path": path.encode(), "root_path": "",
-            "query_string": b"", "scheme": "http", "server": ("127.0.0.1", 80),
-            "client": ("127.0.0.1", 40000),
-            "headers": [(b"host", b"127.0.0.1"), (b"content-length", b"0")]}
+    return {
+        "type": "http",
+        "asgi": {"version": "3.0"},
+        "http_version": "1.1",
+        "method": method,
+        "path": path,
+        "raw_path": path.encode(),
+        "root_path": "",
+        "query_string": b"",
+        "scheme": "http",
+        "server": ("127.0.0.1", 80),
+        "client": ("127.0.0.1", 40000),
+        "headers": [(b"host", b"127.0.0.1"), (b"content-length", b"0")],
+    }
 
 
 def test_estop_reaches_the_robot_before_an_event_reaches_hundreds_of_clients() -> None:
     log: list[str] = []
     settings = ShadowHoundConfig()
-    agent = RobotAgent(RobotAgentConfig(robot=WatchedRobot(log, settings.sim),
-                                        settings=settings))
+    agent = RobotAgent(RobotAgentConfig(robot=WatchedRobot(log, settings.sim), settings=settings))
     app = create_app(agent)
     feed = app.state.web.feed
     answers: list[dict[str, Any]] = []
@@ -63,15 +71,19 @@ def test_estop_reaches_the_robot_before_an_event_reaches_hundreds_of_clients() -
             answers.append(message)
 
         async def client_send(message: dict[str, Any]) -> None:
-            if message["type"] == "http.response.body" and b"\"kind\":\"step\"" in \
-                    message.get("body", b""):
+            if message["type"] == "http.response.body" and b'"kind":"step"' in message.get(
+                "body", b""
+            ):
                 log.append("client got the event")
                 if not estop_tasks:  # the e-stop's bytes arrive during the fan-out
-                    estop_tasks.append(loop.create_task(
-                        app(_scope("POST", "/api/estop"), receive_empty, answer)))
+                    estop_tasks.append(
+                        loop.create_task(app(_scope("POST", "/api/estop"), receive_empty, answer))
+                    )
 
-        clients = [loop.create_task(app(_scope("GET", "/api/events"), receive_nothing,
-                                        client_send)) for _ in range(CLIENTS)]
+        clients = [
+            loop.create_task(app(_scope("GET", "/api/events"), receive_nothing, client_send))
+            for _ in range(CLIENTS)
+        ]
         while feed.clients < CLIENTS:
             await asyncio.sleep(0.01)
         await asyncio.sleep(0.1)  # every client has written its snapshot and waits

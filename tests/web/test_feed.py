@@ -17,10 +17,10 @@ def _seqs(packets: list[Packet]) -> list[int]:
 
 
 @settings(max_examples=40, deadline=None)
-@given(bursts=st.lists(st.integers(1, 12), min_size=1, max_size=12),
-       size=st.integers(4, 12))
+@given(bursts=st.lists(st.integers(1, 12), min_size=1, max_size=12), size=st.integers(4, 12))
 def test_a_client_that_keeps_up_gets_every_event_in_order_and_a_slow_one_is_told(
-        bursts: list[int], size: int) -> None:
+    bursts: list[int], size: int
+) -> None:
     """Whatever the bursts, a reader that is never more than `size` behind loses nothing; a
     reader that never reads gets a contiguous prefix, then `lagged`, then nothing more."""
     feed = EventFeed(queue_size=size)
@@ -52,7 +52,7 @@ def test_a_client_that_keeps_up_gets_every_event_in_order_and_a_slow_one_is_told
     if behind:
         notice = json.loads(slow_got[-1].text)
         assert notice["missed"] >= 1 and "reconnect" in notice["detail"]
-    assert _seqs(slow_got) == published[:len(_seqs(slow_got))]  # in order, none skipped
+    assert _seqs(slow_got) == published[: len(_seqs(slow_got))]  # in order, none skipped
 
 
 def test_events_from_threads_reach_every_client_once_each_in_publish_order() -> None:
@@ -62,8 +62,10 @@ def test_events_from_threads_reach_every_client_once_each_in_publish_order() -> 
     async def run() -> list[list[int]]:
         loop = asyncio.get_running_loop()
         subs = [feed.subscribe(loop)[0] for _ in range(clients)]
-        publishers = [threading.Thread(target=lambda: [feed.publish("e", {}) for _ in
-                                                       range(count // 3)]) for _ in range(3)]
+        publishers = [
+            threading.Thread(target=lambda: [feed.publish("e", {}) for _ in range(count // 3)])
+            for _ in range(3)
+        ]
         for t in publishers:
             t.start()
 
@@ -116,11 +118,14 @@ def test_a_closed_subscription_stops_waiting_and_is_forgotten() -> None:
 
 
 @settings(max_examples=25, deadline=None)
-@given(clients=st.integers(1, 120),
-       publish_turns=st.lists(st.integers(1, 20), min_size=1, max_size=12),
-       limit=st.integers(1, 5))
+@given(
+    clients=st.integers(1, 120),
+    publish_turns=st.lists(st.integers(1, 20), min_size=1, max_size=12),
+    limit=st.integers(1, 5),
+)
 def test_a_loop_turn_runs_at_most_one_slice_of_clients_whatever_is_published(
-        clients: int, publish_turns: list[int], limit: int) -> None:
+    clients: int, publish_turns: list[int], limit: int
+) -> None:
     """Events published while the clients are being woken (a mission's events come in bursts)
     never make one event-loop turn run more than WAKE_SLICE clients, nor hand them more than
     `limit` messages each: whatever else the loop has to do, an e-stop request above all, waits

@@ -15,8 +15,9 @@ from shadowhound.web import WebServer
 from tests.images import tiny_jpeg
 from tests.web.conftest import TOKEN, finished, make_agent, wait_for
 
-websockets_sync = pytest.importorskip("websockets.sync.client",
-                                      reason="the websockets package is needed")
+websockets_sync = pytest.importorskip(
+    "websockets.sync.client", reason="the websockets package is needed"
+)
 
 Serve = Callable[..., WebServer]
 
@@ -39,28 +40,42 @@ def _collect(ws: Any, until: str, timeout: float = 15.0) -> list[dict[str, Any]]
 
 def test_websocket_reports_a_mission_step_by_step(serve: Serve) -> None:
     server = serve(make_agent(time_scale=0.05), token=TOKEN)
-    with websockets_sync.connect(_ws_url(server),
-                                 subprotocols=["shadowhound", f"bearer.{TOKEN}"]) as ws:
+    with websockets_sync.connect(
+        _ws_url(server), subprotocols=["shadowhound", f"bearer.{TOKEN}"]
+    ) as ws:
         assert json.loads(ws.recv(timeout=5))["kind"] == "snapshot"
-        reply = httpx.post(server.url + "/api/mission", json={"command": "walk forward 1 meter "
-                           "then turn left 90 degrees"},
-                           headers={"Authorization": f"Bearer {TOKEN}"})
+        reply = httpx.post(
+            server.url + "/api/mission",
+            json={"command": "walk forward 1 meter then turn left 90 degrees"},
+            headers={"Authorization": f"Bearer {TOKEN}"},
+        )
         mission_id = reply.json()["mission_id"]
         events = [m for m in _collect(ws, "mission_record") if m["kind"] != "state"]
         ws.send("ping")
         assert any(json.loads(ws.recv(timeout=5))["kind"] == "pong" for _ in range(50))
     kinds = [e["kind"] for e in events]
-    assert kinds == ["mission_queued", "mission_started", "plan_ready", "step_started",
-                     "step_finished", "step_started", "step_finished", "mission_finished",
-                     "mission_record"], kinds
+    assert kinds == [
+        "mission_queued",
+        "mission_started",
+        "plan_ready",
+        "step_started",
+        "step_finished",
+        "step_started",
+        "step_finished",
+        "mission_finished",
+        "mission_record",
+    ], kinds
     assert {e["mission_id"] for e in events} == {mission_id}  # the web id throughout
     assert events[-1]["success"] is True
-    assert [e["step"]["status"] for e in events if e["kind"] == "step_finished"] == \
-        ["succeeded", "succeeded"]
+    assert [e["step"]["status"] for e in events if e["kind"] == "step_finished"] == [
+        "succeeded",
+        "succeeded",
+    ]
 
 
 def test_websocket_events_are_sent_uncompressed_even_to_a_client_offering_deflate(
-        serve: Serve) -> None:
+    serve: Serve,
+) -> None:
     """Browsers offer permessage-deflate; accepting it would make the server compress every
     event once per client (and each client inflate it), the fan-out cost growing with the
     audience. The server declines it: an event costs every client the same frame."""
@@ -75,8 +90,10 @@ def test_websocket_events_are_sent_uncompressed_even_to_a_client_offering_deflat
 
 def test_websocket_without_token_is_refused(serve: Serve) -> None:
     server = serve(make_agent(), token=TOKEN)
-    with pytest.raises(Exception, match="403|1008|rejected"), \
-            websockets_sync.connect(_ws_url(server)) as ws:
+    with (
+        pytest.raises(Exception, match="403|1008|rejected"),
+        websockets_sync.connect(_ws_url(server)) as ws,
+    ):
         ws.recv(timeout=5)
 
 
@@ -100,8 +117,7 @@ def test_sse_streams_events_and_replays_after_reconnect(serve: Serve) -> None:
     assert kinds[0] == "mission_queued" and messages[-1]["mission_id"] == second["mission_id"]
 
 
-def _sse_until(stream: httpx.Response, kind: str, timeout: float = 10.0
-               ) -> list[dict[str, Any]]:
+def _sse_until(stream: httpx.Response, kind: str, timeout: float = 10.0) -> list[dict[str, Any]]:
     messages: list[dict[str, Any]] = []
     deadline = time.monotonic() + timeout
     event_id = ""
@@ -125,8 +141,10 @@ def test_mjpeg_passes_jpeg_frames_through_unchanged(serve: Serve) -> None:
     frames = [tiny_jpeg(32 + i, 24) for i in range(3)]
     agent.update_camera_image(frames[0])
     received: list[bytes] = []
-    with httpx.Client(base_url=server.url, timeout=10) as client, \
-            client.stream("GET", "/api/camera/stream?fps=30") as stream:
+    with (
+        httpx.Client(base_url=server.url, timeout=10) as client,
+        client.stream("GET", "/api/camera/stream?fps=30") as stream,
+    ):
         assert stream.headers["content-type"].startswith("multipart/x-mixed-replace")
         buffer, sent = b"", 1
         for chunk in stream.iter_bytes():
@@ -144,8 +162,13 @@ def _parts(buffer: bytes) -> list[bytes]:
     parts = []
     for chunk in buffer.split(b"--shadowhound-frame\r\n")[1:]:
         head, _, rest = chunk.partition(b"\r\n\r\n")
-        length = int(next(line.split(b":")[1] for line in head.split(b"\r\n")
-                          if line.lower().startswith(b"content-length")))
+        length = int(
+            next(
+                line.split(b":")[1]
+                for line in head.split(b"\r\n")
+                if line.lower().startswith(b"content-length")
+            )
+        )
         if len(rest) >= length:
             parts.append(rest[:length])
     return parts

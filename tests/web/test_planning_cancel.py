@@ -27,10 +27,18 @@ def srv() -> Iterator[ScriptedLLM]:
 
 
 def llm_agent(srv: ScriptedLLM, data_dir: Path):  # noqa: ANN201 - a RobotAgent
-    return make_agent(backend="llamacpp",
-                      llm={"base_url": srv.url, "model": "test-model", "timeout": 30,
-                           "max_retries": 2, "check_on_start": False, "hybrid": False},
-                      memory={"enabled": True, "data_dir": str(data_dir)})
+    return make_agent(
+        backend="llamacpp",
+        llm={
+            "base_url": srv.url,
+            "model": "test-model",
+            "timeout": 30,
+            "max_retries": 2,
+            "check_on_start": False,
+            "hybrid": False,
+        },
+        memory={"enabled": True, "data_dir": str(data_dir)},
+    )
 
 
 def test_cancel_on_the_web_ends_planning_and_the_queue_moves_on(serve: Serve, srv, tmp_path):

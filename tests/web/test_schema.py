@@ -29,8 +29,13 @@ if os.environ.get("CI"):  # CI must run this test, so a missing tool is a failur
 else:
     pytest.importorskip("schemathesis", reason="schemathesis (dev extra) is not installed")
 
-CHECKS = ("not_a_server_error", "status_code_conformance", "content_type_conformance",
-          "response_schema_conformance", "negative_data_rejection")
+CHECKS = (
+    "not_a_server_error",
+    "status_code_conformance",
+    "content_type_conformance",
+    "response_schema_conformance",
+    "negative_data_rejection",
+)
 # Endless streams (MJPEG, server-sent events): a request never ends, so no answer to check.
 STREAMS = ("/api/camera/stream", "/api/events")
 
@@ -39,15 +44,34 @@ def schemathesis_run(url: str, tmp_path: Path, max_examples: int) -> dict[str, A
     """Run the schemathesis CLI on `url`; its JSON report (with exit_code and output added)."""
     cli = shutil.which("schemathesis", path=str(Path(sys.executable).parent)) or "schemathesis"
     report = tmp_path / "report.json"
-    command = [cli, "run", f"{url}/openapi.json", "--checks", ",".join(CHECKS),
-               "--max-examples", str(max_examples), "--phases", "examples,coverage,fuzzing",
-               "--request-timeout", "5", "--no-color", "--suppress-health-check", "all",
-               "--seed", "1", "--report", "json", "--report-json-path", str(report)]
+    command = [
+        cli,
+        "run",
+        f"{url}/openapi.json",
+        "--checks",
+        ",".join(CHECKS),
+        "--max-examples",
+        str(max_examples),
+        "--phases",
+        "examples,coverage,fuzzing",
+        "--request-timeout",
+        "5",
+        "--no-color",
+        "--suppress-health-check",
+        "all",
+        "--seed",
+        "1",
+        "--report",
+        "json",
+        "--report-json-path",
+        str(report),
+    ]
     for path in STREAMS:
         command += ["--exclude-path", path]
     env = {**os.environ, "SCHEMATHESIS_HOOKS": "", "HOME": str(tmp_path)}
-    done = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env,
-                          cwd=tmp_path)
+    done = subprocess.run(
+        command, capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path
+    )
     found: dict[str, Any] = json.loads(report.read_text()) if report.exists() else {}
     found.update(exit=done.returncode, output=done.stdout[-6000:] + done.stderr[-2000:])
     return found
@@ -62,8 +86,10 @@ def assert_conforms(found: dict[str, Any], operations: int) -> None:
     cases = found["test_cases"]
     assert cases["generated"] >= 10 * operations, cases  # it really exercised every operation
     assert cases["with_failures"] == cases["errored"] == 0, cases
-    print(f"schemathesis: {cases['generated']} cases on {operations} operations in "
-          f"{found['running_time']:.1f} s, 0 failures")
+    print(
+        f"schemathesis: {cases['generated']} cases on {operations} operations in "
+        f"{found['running_time']:.1f} s, 0 failures"
+    )
 
 
 def documented_operations(server: WebServer) -> int:
@@ -72,13 +98,15 @@ def documented_operations(server: WebServer) -> int:
 
 
 def test_every_answer_is_documented_and_bad_requests_are_refused(
-        serve: Callable[..., WebServer], tmp_path: Path) -> None:
+    serve: Callable[..., WebServer], tmp_path: Path
+) -> None:
     server = serve(make_agent())
     assert_conforms(schemathesis_run(server.url, tmp_path, 8), documented_operations(server))
 
 
-def test_a_server_with_a_token_documents_its_401(serve: Callable[..., WebServer],
-                                                  tmp_path: Path) -> None:
+def test_a_server_with_a_token_documents_its_401(
+    serve: Callable[..., WebServer], tmp_path: Path
+) -> None:
     """Without the token every /api/ answer is 401 (health excepted): documented as such."""
     server = serve(make_agent(), token=TOKEN)
     assert_conforms(schemathesis_run(server.url, tmp_path, 3), documented_operations(server))
@@ -106,8 +134,12 @@ def test_the_document_names_each_error_answer_with_its_body() -> None:
 
     # 422 is what the app's handler sends (detail text + problems), never FastAPI's default.
     assert "HTTPValidationError" not in doc["components"]["schemas"]
-    for path, method in [("/api/mission", "post"), ("/api/missions", "get"),
-                         ("/api/camera/latest", "get"), ("/api/events", "get")]:
+    for path, method in [
+        ("/api/mission", "post"),
+        ("/api/missions", "get"),
+        ("/api/camera/latest", "get"),
+        ("/api/events", "get"),
+    ]:
         assert schema(path, method, "422") == ref("ValidationProblem")
     assert "422" not in paths["/api/status"]["get"]["responses"]  # nothing there to validate
     # 413 (bytes) only where a body can be sent; the text limit (characters) is a 422.

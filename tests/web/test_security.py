@@ -26,9 +26,14 @@ def secured(agent: RobotAgent) -> Iterator[TestClient]:
 def test_token_is_required_on_api_and_mutations(secured: TestClient) -> None:
     assert secured.get("/api/health").status_code == 200  # liveness stays open
     assert secured.get("/").status_code == 200  # the page itself, to enter the token
-    for method, path in [("POST", "/api/estop"), ("POST", "/api/mission"),
-                         ("POST", "/api/estop/release"), ("GET", "/api/status"),
-                         ("GET", "/api/missions"), ("GET", "/api/camera/latest")]:
+    for method, path in [
+        ("POST", "/api/estop"),
+        ("POST", "/api/mission"),
+        ("POST", "/api/estop/release"),
+        ("GET", "/api/status"),
+        ("GET", "/api/missions"),
+        ("GET", "/api/camera/latest"),
+    ]:
         reply = secured.request(method, path, json={"command": "stand"})
         assert reply.status_code == 401, (method, path)
         assert reply.headers["www-authenticate"] == "Bearer"
@@ -49,14 +54,16 @@ def test_websocket_needs_the_token(secured: TestClient) -> None:
         pass
     with secured.websocket_connect(f"/ws/status?token={TOKEN}") as ws:
         assert ws.receive_json()["kind"] == "snapshot"
-    with secured.websocket_connect("/ws/status",
-                                   subprotocols=["shadowhound", f"bearer.{TOKEN}"]) as ws:
+    with secured.websocket_connect(
+        "/ws/status", subprotocols=["shadowhound", f"bearer.{TOKEN}"]
+    ) as ws:
         assert ws.accepted_subprotocol == "shadowhound"
         assert ws.receive_json()["kind"] == "snapshot"
 
 
-def test_secrets_never_appear_in_answers(agent: RobotAgent,
-                                         monkeypatch: pytest.MonkeyPatch) -> None:
+def test_secrets_never_appear_in_answers(
+    agent: RobotAgent, monkeypatch: pytest.MonkeyPatch
+) -> None:
     key = "sk-test-secret-value-1234567890"
     monkeypatch.setenv("OPENAI_API_KEY", key)
     app = create_app(agent, token=TOKEN)
@@ -64,8 +71,10 @@ def test_secrets_never_appear_in_answers(agent: RobotAgent,
         # Put both secrets where answers quote the user's own words.
         client.post("/api/mission", json={"command": f"say {key} and {TOKEN}"})
         client.post("/api/chat", json={"text": f"what is {key}?"})
-        texts = [client.get(p).text for p in ("/api/missions", "/api/diagnostics",
-                                              "/api/status", "/openapi.json")]
+        texts = [
+            client.get(p).text
+            for p in ("/api/missions", "/api/diagnostics", "/api/status", "/openapi.json")
+        ]
         texts.append(client.post("/api/mission", json={"command": "x" * 3000, "k": key}).text)
         with client.websocket_connect("/ws/status") as ws:
             texts.append(ws.receive_text())
@@ -80,14 +89,18 @@ def test_foreign_hosts_and_cross_origin_requests_are_refused(client: TestClient)
     assert cross.status_code == 403 and "cross-origin" in cross.json()["detail"]
     same = client.post("/api/estop", headers={"origin": "http://127.0.0.1"})
     assert same.status_code == 200
-    with pytest.raises(WebSocketDisconnect), client.websocket_connect(
-            "/ws/status", headers={"origin": "http://attacker.example"}):
+    with (
+        pytest.raises(WebSocketDisconnect),
+        client.websocket_connect("/ws/status", headers={"origin": "http://attacker.example"}),
+    ):
         pass
 
 
 def test_no_cors_headers_for_other_sites(client: TestClient) -> None:
-    preflight = client.options("/api/mission", headers={
-        "origin": "http://attacker.example", "access-control-request-method": "POST"})
+    preflight = client.options(
+        "/api/mission",
+        headers={"origin": "http://attacker.example", "access-control-request-method": "POST"},
+    )
     assert "access-control-allow-origin" not in preflight.headers
     reply = client.get("/api/status", headers={"origin": "http://attacker.example"})
     assert "access-control-allow-origin" not in reply.headers
@@ -104,9 +117,9 @@ def test_binding_beyond_loopback_needs_a_strong_token() -> None:
     check_binding("0.0.0.0", TOKEN)
 
 
-def test_serve_refuses_with_a_clear_message_and_exit_2(monkeypatch: pytest.MonkeyPatch,
-                                                       capsys: pytest.CaptureFixture[str]
-                                                       ) -> None:
+def test_serve_refuses_with_a_clear_message_and_exit_2(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.delenv("SHADOWHOUND_TOKEN", raising=False)
     assert serve_main(ShadowHoundConfig(), host="0.0.0.0", port=0) == 2
     assert "needs a token" in capsys.readouterr().err
@@ -116,8 +129,7 @@ def test_serve_refuses_with_a_clear_message_and_exit_2(monkeypatch: pytest.Monke
 
     taken = bind("127.0.0.1", 0)
     try:
-        code = serve(ShadowHoundConfig(), "127.0.0.1", taken.getsockname()[1], agent=agent,
-                     out=out)
+        code = serve(ShadowHoundConfig(), "127.0.0.1", taken.getsockname()[1], agent=agent, out=out)
     finally:
         taken.close()
         agent.cleanup()
@@ -134,21 +146,40 @@ _ALLOWED = ("127.0.0.1", "localhost", "[::1]")
 def _host_reference(value: str) -> bool:
     """Accepted without a token iff the value is an allowed name, maybe with a numeric port."""
     for name in _ALLOWED:
-        rest = value.lower()[len(name):] if value.lower().startswith(name) else None
-        if rest is not None and (rest == "" or rest[:1] == ":" and rest[1:].isdigit()
-                                 and len(rest) <= 6 and int(rest[1:] or 0) <= 65535
-                                 or rest == ":"):
+        rest = value.lower()[len(name) :] if value.lower().startswith(name) else None
+        if rest is not None and (
+            rest == ""
+            or rest[:1] == ":"
+            and rest[1:].isdigit()
+            and len(rest) <= 6
+            and int(rest[1:] or 0) <= 65535
+            or rest == ":"
+        ):
             return True
     return False
 
 
-@pytest.mark.parametrize(("host", "allowed"), [
-    ("127.0.0.1", True), ("127.0.0.1:8080", True), ("LOCALHOST:80", True), ("[::1]:8080", True),
-    ("[::1]", True), ("127.0.0.1:8080.evil.example", False), ("localhost:80.evil.example", False),
-    ("127.0.0.1:8080:9090", False), ("127.0.0.1:99999", False), ("127.0.0.1@evil.example", False),
-    ("127.0.0.1.evil.example", False), ("[::1].evil.example", False), ("127.0.0.1 ", True),
-    ("evil.example:127", False), ("", False), ("127.0.0.1:80 evil", False),
-])
+@pytest.mark.parametrize(
+    ("host", "allowed"),
+    [
+        ("127.0.0.1", True),
+        ("127.0.0.1:8080", True),
+        ("LOCALHOST:80", True),
+        ("[::1]:8080", True),
+        ("[::1]", True),
+        ("127.0.0.1:8080.evil.example", False),
+        ("localhost:80.evil.example", False),
+        ("127.0.0.1:8080:9090", False),
+        ("127.0.0.1:99999", False),
+        ("127.0.0.1@evil.example", False),
+        ("127.0.0.1.evil.example", False),
+        ("[::1].evil.example", False),
+        ("127.0.0.1 ", True),
+        ("evil.example:127", False),
+        ("", False),
+        ("127.0.0.1:80 evil", False),
+    ],
+)
 def test_the_host_header_is_parsed_strictly(client: TestClient, host: str, allowed: bool) -> None:
     reply = client.get("/api/status", headers={"host": host})
     assert reply.status_code == (200 if allowed else 400), (host, reply.text)
@@ -164,14 +195,22 @@ def test_host_check_matches_the_rfc_reading_for_any_header(client: TestClient) -
 
     values = st.one_of(
         st.text(alphabet=_HOST_CHARS, max_size=30),
-        st.builds(lambda name, rest: name + rest, st.sampled_from(_ALLOWED),
-                  st.text(alphabet=_HOST_CHARS, max_size=20)),
-        st.builds(lambda name, port: f"{name}:{port}", st.sampled_from(_ALLOWED),
-                  st.integers(0, 70000)),
+        st.builds(
+            lambda name, rest: name + rest,
+            st.sampled_from(_ALLOWED),
+            st.text(alphabet=_HOST_CHARS, max_size=20),
+        ),
+        st.builds(
+            lambda name, port: f"{name}:{port}", st.sampled_from(_ALLOWED), st.integers(0, 70000)
+        ),
     )
 
-    @settings(max_examples=300, deadline=None, database=None,
-              suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @settings(
+        max_examples=300,
+        deadline=None,
+        database=None,
+        suppress_health_check=[HealthCheck.function_scoped_fixture],
+    )
     @given(values)
     def check(value: str) -> None:
         value = value.strip()
@@ -181,8 +220,17 @@ def test_host_check_matches_the_rfc_reading_for_any_header(client: TestClient) -
     check()
 
 
-@pytest.mark.parametrize("host", ["127.attacker.example", "127.0.0.1.nip.io", "127.0.0.1.",
-                                  "localhost.attacker.example", "127.1", "::ffff:127.0.0.1"])
+@pytest.mark.parametrize(
+    "host",
+    [
+        "127.attacker.example",
+        "127.0.0.1.nip.io",
+        "127.0.0.1.",
+        "localhost.attacker.example",
+        "127.1",
+        "::ffff:127.0.0.1",
+    ],
+)
 def test_only_literal_loopback_addresses_count_as_loopback(host: str) -> None:
     # Names are not resolved: what "127.x" resolves to is whoever owns the name.
     with pytest.raises(ServeError, match="needs a token"):
@@ -194,9 +242,9 @@ def test_literal_loopback_addresses_need_no_token(host: str) -> None:
     check_binding(host, None)
 
 
-def test_serve_on_a_127_name_is_refused_without_resolving_it(monkeypatch: pytest.MonkeyPatch,
-                                                            capsys: pytest.CaptureFixture[str]
-                                                            ) -> None:
+def test_serve_on_a_127_name_is_refused_without_resolving_it(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     monkeypatch.delenv("SHADOWHOUND_TOKEN", raising=False)
     # .invalid never resolves (RFC 2606): refused for the missing token, not a failed lookup.
     assert serve_main(ShadowHoundConfig(), host="127.0.0.1.invalid", port=0) == 2

@@ -16,9 +16,11 @@ import pytest
 
 from tests.web.conftest import wait_for
 
-SCRIPT = ("import sys; from shadowhound import load_config; from shadowhound.web import "
-          "serve_main; sys.exit(serve_main(load_config('offline', {'sim': {'time_scale': 0.1}}),"
-          " '127.0.0.1', int(sys.argv[1])))")
+SCRIPT = (
+    "import sys; from shadowhound import load_config; from shadowhound.web import "
+    "serve_main; sys.exit(serve_main(load_config('offline', {'sim': {'time_scale': 0.1}}),"
+    " '127.0.0.1', int(sys.argv[1])))"
+)
 
 
 def _free_port() -> int:
@@ -38,16 +40,20 @@ def _up(url: str) -> bool:
 def test_serve_runs_the_dashboard_and_stops_cleanly(stop: signal.Signals) -> None:
     port = _free_port()
     url = f"http://127.0.0.1:{port}"
-    process = subprocess.Popen([sys.executable, "-c", SCRIPT, str(port)],
-                               stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [sys.executable, "-c", SCRIPT, str(port)], stderr=subprocess.PIPE, text=True
+    )
     try:
         wait_for(lambda: _up(url) or process.poll() is not None, 30, "the server to start")
         assert process.poll() is None, process.stderr.read() if process.stderr else ""
         assert 'id="estop"' in httpx.get(url + "/").text
         mission = httpx.post(url + "/api/mission", json={"command": "turn left 45 degrees"})
         mission_id = mission.json()["mission_id"]
-        wait_for(lambda: httpx.get(f"{url}/api/missions/{mission_id}").json()["status"]
-                 == "succeeded", 20, "the mission to succeed")
+        wait_for(
+            lambda: httpx.get(f"{url}/api/missions/{mission_id}").json()["status"] == "succeeded",
+            20,
+            "the mission to succeed",
+        )
         process.send_signal(stop)
         assert process.wait(15) == 0
         assert process.stderr is not None
@@ -65,20 +71,26 @@ def test_ctrl_c_stops_the_walking_robot_before_the_dashboards_are_disconnected()
     port = _free_port()
     url = f"http://127.0.0.1:{port}"
     real_time = SCRIPT.replace("'time_scale': 0.1", "'time_scale': 1.0")
-    process = subprocess.Popen([sys.executable, "-c", real_time, str(port)],
-                               stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [sys.executable, "-c", real_time, str(port)], stderr=subprocess.PIPE, text=True
+    )
     kinds: list[str] = []
     try:
         wait_for(lambda: _up(url) or process.poll() is not None, 30, "the server to start")
-        with httpx.Client(base_url=url, timeout=30) as client, \
-                client.stream("GET", "/api/events") as stream:
+        with (
+            httpx.Client(base_url=url, timeout=30) as client,
+            client.stream("GET", "/api/events") as stream,
+        ):
             client.post("/api/mission", json={"command": "walk backward 2 meters"})
             lines = stream.iter_lines()
             deadline = time.monotonic() + 30
             for line in lines:
                 assert time.monotonic() < deadline, "the robot never walked"
-                if line.startswith("data: ") and json.loads(line[6:]).get("kind") == "state" \
-                        and json.loads(line[6:])["robot"]["moving"]:
+                if (
+                    line.startswith("data: ")
+                    and json.loads(line[6:]).get("kind") == "state"
+                    and json.loads(line[6:])["robot"]["moving"]
+                ):
                     break
             process.send_signal(signal.SIGINT)
             with contextlib.suppress(httpx.HTTPError):

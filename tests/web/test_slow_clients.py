@@ -43,8 +43,10 @@ class FastReader(threading.Thread):
                 raise
 
     def _read(self) -> None:
-        with httpx.Client(timeout=30) as client, \
-                client.stream("GET", self.url + "/api/events") as stream:
+        with (
+            httpx.Client(timeout=30) as client,
+            client.stream("GET", self.url + "/api/events") as stream,
+        ):
             for line in stream.iter_lines():
                 if line.startswith("data: "):
                     message = json.loads(line[6:])
@@ -64,8 +66,11 @@ def _publish_keeping_pace(feed: Any, reader: FastReader) -> list[int]:
         for _ in range(CHUNK):
             published.append(feed.publish("step", {"pad": PAD})["seq"])
         last = published[-1]
-        wait_for(lambda last=last: reader.seqs and reader.seqs[-1] >= last, 30,
-                 "the fast client to read the chunk")
+        wait_for(
+            lambda last=last: reader.seqs and reader.seqs[-1] >= last,
+            30,
+            "the fast client to read the chunk",
+        )
     return published
 
 
@@ -93,7 +98,8 @@ def _read_all(sock: socket.socket, timeout: float = 60.0) -> bytes:
 
 
 def test_a_slow_sse_client_is_told_and_dropped_while_a_fast_one_gets_everything(
-        serve: Serve) -> None:
+    serve: Serve,
+) -> None:
     server = serve(make_agent())
     feed = server.app.state.web.feed
     fast = FastReader(server.url)
@@ -112,7 +118,7 @@ def test_a_slow_sse_client_is_told_and_dropped_while_a_fast_one_gets_everything(
     steps = [m["seq"] for m in messages if m["kind"] == "step"]
     assert messages[-1]["kind"] == "lagged" and "reconnect" in messages[-1]["detail"]
     assert 0 < len(steps) < EVENTS  # it got a prefix before it fell behind ...
-    assert steps == published[:len(steps)]  # ... in order, none skipped
+    assert steps == published[: len(steps)]  # ... in order, none skipped
     # The fast client lost nothing (state ticks are interleaved; numbers are contiguous).
     assert [s for s in fast.seqs if s in set(published)] == published
     assert fast.seqs == list(range(fast.seqs[0], fast.seqs[-1] + 1))
@@ -125,28 +131,32 @@ def _ws_frames(data: bytes) -> list[tuple[int, bytes]]:
     while at + 2 <= len(data):
         opcode, size, head = data[at] & 0x0F, data[at + 1] & 0x7F, 2
         if size == 126:
-            size, head = int.from_bytes(data[at + 2:at + 4], "big"), 4
+            size, head = int.from_bytes(data[at + 2 : at + 4], "big"), 4
         elif size == 127:
-            size, head = int.from_bytes(data[at + 2:at + 10], "big"), 10
+            size, head = int.from_bytes(data[at + 2 : at + 10], "big"), 10
         if at + head + size > len(data):
             break
-        frames.append((opcode, data[at + head:at + head + size]))
+        frames.append((opcode, data[at + head : at + head + size]))
         at += head + size
     return frames
 
 
 def test_a_slow_websocket_client_is_told_and_closed_while_a_fast_one_gets_everything(
-        serve: Serve) -> None:
+    serve: Serve,
+) -> None:
     server = serve(make_agent())
     feed = server.app.state.web.feed
     fast = FastReader(server.url)
     fast.start()
     assert fast.ready.wait(10)
     key = base64.b64encode(os.urandom(16))
-    slow = _slow_socket(server, b"GET /ws/status HTTP/1.1\r\nHost: 127.0.0.1\r\n"
-                                b"Upgrade: websocket\r\nConnection: Upgrade\r\n"
-                                b"Sec-WebSocket-Key: " + key + b"\r\n"
-                                b"Sec-WebSocket-Version: 13\r\n\r\n")
+    slow = _slow_socket(
+        server,
+        b"GET /ws/status HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+        b"Upgrade: websocket\r\nConnection: Upgrade\r\n"
+        b"Sec-WebSocket-Key: " + key + b"\r\n"
+        b"Sec-WebSocket-Version: 13\r\n\r\n",
+    )
     wait_for(lambda: feed.clients == 2, what="the WebSocket client to subscribe")
     published = _publish_keeping_pace(feed, fast)
     fast.stop.set()
@@ -165,5 +175,5 @@ def test_a_slow_websocket_client_is_told_and_closed_while_a_fast_one_gets_everyt
     assert int.from_bytes(close[:2], "big") == 1013 and b"lagged" in close[2:]
     assert messages[-1]["kind"] == "lagged"
     steps = [m["seq"] for m in messages if m["kind"] == "step"]
-    assert 0 < len(steps) < EVENTS and steps == published[:len(steps)]
+    assert 0 < len(steps) < EVENTS and steps == published[: len(steps)]
     assert [s for s in fast.seqs if s in set(published)] == published

@@ -37,8 +37,7 @@ def pixel_at(image: Any, layout: dict[str, Any], x: float, y: float) -> int:
     return value
 
 
-def test_map_gives_the_grid_layout_and_objects_and_the_png_shows_them(
-        client: TestClient) -> None:
+def test_map_gives_the_grid_layout_and_objects_and_the_png_shows_them(client: TestClient) -> None:
     assert client.get("/api/map").json()["objects"] == []  # nothing seen yet
     # Planning a mission looks around first: what is in view becomes known.
     reply = client.post("/api/mission", json={"command": "stand up", "dry_run": True})
@@ -91,7 +90,8 @@ def test_without_a_map_there_is_no_grid_and_the_image_says_why() -> None:
 
 
 def test_each_mission_announces_its_planned_path_around_the_ball(
-        client: TestClient, agent: RobotAgent) -> None:
+    client: TestClient, agent: RobotAgent
+) -> None:
     seen: list[ev.MissionEvent] = []
     agent.add_listener(lambda e: seen.append(e) if e.kind == ev.PLAN_READY else None)
     result = agent.execute_mission("go to x=4, y=0")
@@ -106,13 +106,26 @@ def test_each_mission_announces_its_planned_path_around_the_ball(
 @settings(max_examples=40, deadline=None)
 @given(st.integers(1, 30), st.integers(1, 30), st.data())
 def test_the_png_is_the_grid_row_for_row_and_the_version_tracks_every_cell(
-        width: int, height: int, data: st.DataObject) -> None:
-    values = data.draw(st.lists(st.sampled_from([UNKNOWN, FREE, 30, 64, 65, OCCUPIED]),
-                                min_size=width * height, max_size=width * height))
-    grid = OccupancyGrid.from_msg({"info": {"width": width, "height": height,
-                                            "resolution": 0.1,
-                                            "origin": {"position": {"x": -1.0, "y": 2.0}}},
-                                   "data": values})
+    width: int, height: int, data: st.DataObject
+) -> None:
+    values = data.draw(
+        st.lists(
+            st.sampled_from([UNKNOWN, FREE, 30, 64, 65, OCCUPIED]),
+            min_size=width * height,
+            max_size=width * height,
+        )
+    )
+    grid = OccupancyGrid.from_msg(
+        {
+            "info": {
+                "width": width,
+                "height": height,
+                "resolution": 0.1,
+                "origin": {"position": {"x": -1.0, "y": 2.0}},
+            },
+            "data": values,
+        }
+    )
     image = decode(grid_png(grid))
     assert image.size == (width, height)
     for i, v in enumerate(values):
@@ -121,11 +134,17 @@ def test_the_png_is_the_grid_row_for_row_and_the_version_tracks_every_cell(
         assert grey == (205 if v == UNKNOWN else 254 - round(v * 2.54))
     version = grid_version(grid)
     i = data.draw(st.integers(0, width * height - 1))
-    changed = OccupancyGrid.from_msg({"info": {"width": width, "height": height,
-                                               "resolution": 0.1, "origin": {"position": {
-                                                   "x": -1.0, "y": 2.0}}},
-                                      "data": [*values[:i], FREE if values[i] else OCCUPIED,
-                                               *values[i + 1:]]})
+    changed = OccupancyGrid.from_msg(
+        {
+            "info": {
+                "width": width,
+                "height": height,
+                "resolution": 0.1,
+                "origin": {"position": {"x": -1.0, "y": 2.0}},
+            },
+            "data": [*values[:i], FREE if values[i] else OCCUPIED, *values[i + 1 :]],
+        }
+    )
     assert grid_version(changed) != version
     moved = OccupancyGrid(width, height, 0.1, Pose2D(-1.0, 2.05, 0.0), bytearray(grid.cells))
     assert grid_version(moved) != version

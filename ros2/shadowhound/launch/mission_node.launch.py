@@ -42,8 +42,9 @@ ARGUMENTS = {
 
 
 def generate_launch_description() -> LaunchDescription:
-    declared = [DeclareLaunchArgument(name, default_value=default)
-                for name, default in ARGUMENTS.items()]
+    declared = [
+        DeclareLaunchArgument(name, default_value=default) for name, default in ARGUMENTS.items()
+    ]
     node = Node(
         package="shadowhound",
         executable="mission_node",

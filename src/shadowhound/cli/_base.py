@@ -20,8 +20,9 @@ ERROR_LABELS = {
 }
 
 
-def report_error(kind: str, message: str, code: int, *, json_out: bool = False,
-                 mission: str | None = None) -> int:
+def report_error(
+    kind: str, message: str, code: int, *, json_out: bool = False, mission: str | None = None
+) -> int:
     """Say on stderr what went wrong; with `json_out` also print the one JSON object on stdout.
     Returns `code`, the exit code.
 
@@ -31,9 +32,17 @@ def report_error(kind: str, message: str, code: int, *, json_out: bool = False,
     label = ERROR_LABELS[kind]
     print(f"shadowhound: {label}: {message}", file=sys.stderr, flush=True)
     if json_out:
-        print_json({"success": False, "status": "error", "mission": mission,
-                    "response": f"{label}: {message}", "error": message, "error_kind": kind,
-                    "exit_code": code})
+        print_json(
+            {
+                "success": False,
+                "status": "error",
+                "mission": mission,
+                "response": f"{label}: {message}",
+                "error": message,
+                "error_kind": kind,
+                "exit_code": code,
+            }
+        )
     return code
 
 

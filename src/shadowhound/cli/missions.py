@@ -36,8 +36,11 @@ def _progress(stream: TextIO) -> ev.Listener:
             ok = step.status is StepStatus.SUCCEEDED
             mark = "ok" if ok else step.status.value.upper()
             detail = step.output if ok else step.error
-            print(f"  [{step.index}] {mark}: {detail} ({step.robot_duration:.1f} s robot "
-                  "time)", file=stream, flush=True)
+            print(
+                f"  [{step.index}] {mark}: {detail} ({step.robot_duration:.1f} s robot time)",
+                file=stream,
+                flush=True,
+            )
         stream.flush()
 
     return show
@@ -51,8 +54,7 @@ def _approver(agent: Any, ask: bool) -> ev.Listener:
             agent.approve(request.request_id)
             return
         print("approval needed: " + "; ".join(request.reasons), file=sys.stderr)
-        print(f"approve within {request.timeout:g} s? [y/N] ", end="", file=sys.stderr,
-              flush=True)
+        print(f"approve within {request.timeout:g} s? [y/N] ", end="", file=sys.stderr, flush=True)
         answer = sys.stdin.readline().strip().lower()
         if answer in ("y", "yes"):
             agent.approve(request.request_id)
@@ -80,11 +82,21 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     result = job.result
     agent.cleanup()
     if job.dropped is not None:  # the worker caught a crash: a bug, not a mission failure
-        return report_error("internal", f"{job.dropped}; the robot was stopped", EXIT_FAILED,
-                            json_out=args.json, mission=args.mission)
+        return report_error(
+            "internal",
+            f"{job.dropped}; the robot was stopped",
+            EXIT_FAILED,
+            json_out=args.json,
+            mission=args.mission,
+        )
     if result is None:
-        return report_error("interrupted", "the robot was stopped", EXIT_INTERRUPTED,
-                            json_out=args.json, mission=args.mission)
+        return report_error(
+            "interrupted",
+            "the robot was stopped",
+            EXIT_INTERRUPTED,
+            json_out=args.json,
+            mission=args.mission,
+        )
     if args.dry_run:
         return _show_dry_run(result, args)
     code = EXIT_INTERRUPTED if interrupted else EXIT_OK if result.success else EXIT_FAILED
@@ -94,9 +106,11 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         st = result.robot
         print(result.response)
         if st is not None:  # None only when the robot could not be read at all
-            print(f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
-                  f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
-                  f"battery={st.battery_text}")
+            print(
+                f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
+                f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
+                f"battery={st.battery_text}"
+            )
     return code
 
 
@@ -157,8 +171,10 @@ def _show_dry_run(result: Any, args: argparse.Namespace) -> int:
 
 # -- chat --------------------------------------------------------------------------------------
 
-_CHAT_HELP = ("Ask a question (where are you? battery? what do you see? what did you do?), or: "
-              "/run MISSION, /status, /skills, /estop, /release, /help, /quit")
+_CHAT_HELP = (
+    "Ask a question (where are you? battery? what do you see? what did you do?), or: "
+    "/run MISSION, /status, /skills, /estop, /release, /help, /quit"
+)
 
 
 def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
@@ -253,12 +269,14 @@ def cmd_eval(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         print(f"shadowhound: {exc}", file=sys.stderr)
         return EXIT_USAGE
     specs = args.backend if isinstance(args.backend, list) else [None]
-    planners = [(spec or settings.backend, _settings(args, spec) if spec else settings)
-                for spec in specs]  # every spec checked before the first case runs
+    planners = [
+        (spec or settings.backend, _settings(args, spec) if spec else settings) for spec in specs
+    ]  # every spec checked before the first case runs
     several = len(planners) > 1
 
     reports = []
     for label, planner_settings in planners:
+
         def show(outcome: Any, label: str = label) -> None:
             if args.json:
                 return
@@ -271,8 +289,10 @@ def cmd_eval(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         card = scorecard(label, outcomes)
         reports.append((card, outcomes))
         if not args.json:
-            print(f"{f'{label}: ' if several else ''}{card.passed}/{card.cases} cases passed "
-                  f"({100 * card.pass_rate:.1f}%)")
+            print(
+                f"{f'{label}: ' if several else ''}{card.passed}/{card.cases} cases passed "
+                f"({100 * card.pass_rate:.1f}%)"
+            )
     if args.json:
         json.dump(_eval_json(reports, several), sys.stdout, indent=2)
         sys.stdout.write("\n")
@@ -284,9 +304,14 @@ def cmd_eval(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
 def _eval_json(reports: list[tuple[Any, list[Any]]], several: bool) -> dict[str, Any]:
     def one(card: Any, outcomes: list[Any]) -> dict[str, Any]:
-        return {"total": card.cases, "passed": card.passed, "failed": card.cases - card.passed,
-                "pass_rate": round(card.pass_rate, 4), "scorecard": card.to_dict(),
-                "cases": [o.to_dict() for o in outcomes]}
+        return {
+            "total": card.cases,
+            "passed": card.passed,
+            "failed": card.cases - card.passed,
+            "pass_rate": round(card.pass_rate, 4),
+            "scorecard": card.to_dict(),
+            "cases": [o.to_dict() for o in outcomes],
+        }
 
     if several:
         return {"planners": [one(card, outcomes) for card, outcomes in reports]}
@@ -295,12 +320,31 @@ def _eval_json(reports: list[tuple[Any, list[Any]]], several: bool) -> dict[str,
 
 def scorecard_table(cards: list[Any]) -> str:
     """One row per planner: pass rate, model calls, tokens, planning latency, invalid plans."""
-    head = ["planner", "passed", "model calls/mission", "planned offline", "prompt tokens",
-            "completion tokens", "planning p50 ms", "planning p95 ms", "invalid plans"]
-    rows = [[c.planner, f"{c.passed}/{c.cases} ({100 * c.pass_rate:.0f}%)",
-             f"{c.calls_per_mission:.2f}", f"{c.offline_planned}/{c.cases}",
-             str(c.prompt_tokens), str(c.completion_tokens), f"{c.latency_p50 * 1e3:.1f}",
-             f"{c.latency_p95 * 1e3:.1f}", str(c.invalid_plans)] for c in cards]
+    head = [
+        "planner",
+        "passed",
+        "model calls/mission",
+        "planned offline",
+        "prompt tokens",
+        "completion tokens",
+        "planning p50 ms",
+        "planning p95 ms",
+        "invalid plans",
+    ]
+    rows = [
+        [
+            c.planner,
+            f"{c.passed}/{c.cases} ({100 * c.pass_rate:.0f}%)",
+            f"{c.calls_per_mission:.2f}",
+            f"{c.offline_planned}/{c.cases}",
+            str(c.prompt_tokens),
+            str(c.completion_tokens),
+            f"{c.latency_p50 * 1e3:.1f}",
+            f"{c.latency_p95 * 1e3:.1f}",
+            str(c.invalid_plans),
+        ]
+        for c in cards
+    ]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     lines += ["| " + " | ".join(row) + " |" for row in rows]
     return "\n".join(lines)

@@ -41,8 +41,12 @@ def _schema_summary(prop: dict[str, Any]) -> str:
     if "enum" in prop or any("enum" in o for o in options):
         enum = prop.get("enum") or next(o["enum"] for o in options if "enum" in o)
         text += " one of " + ", ".join(map(str, enum))
-    for key, sign in (("minimum", ">="), ("exclusiveMinimum", ">"), ("maximum", "<="),
-                      ("exclusiveMaximum", "<")):
+    for key, sign in (
+        ("minimum", ">="),
+        ("exclusiveMinimum", ">"),
+        ("maximum", "<="),
+        ("exclusiveMaximum", "<"),
+    ):
         bound = next((o[key] for o in options if key in o), None)
         if bound is not None:
             text += f" {sign}{bound:g}"
@@ -65,13 +69,17 @@ def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
 
 def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
-    print(f"ok  configuration: profile {settings.profile!r}, backend {settings.backend!r}, "
-          f"robot {settings.robot!r}")
+    print(
+        f"ok  configuration: profile {settings.profile!r}, backend {settings.backend!r}, "
+        f"robot {settings.robot!r}"
+    )
     s = settings.safety
-    print(f"ok  safety limits: {s.max_linear_speed:g} m/s, {s.max_angular_speed:g} rad/s, "
-          f"{s.max_step_distance:g} m per step, geofence {s.geofence_radius:g} m "
-          f"(margin {s.geofence_margin:g} m), risky tricks "
-          f"{'allowed' if s.allow_risky_tricks else 'refused'}")
+    print(
+        f"ok  safety limits: {s.max_linear_speed:g} m/s, {s.max_angular_speed:g} rad/s, "
+        f"{s.max_step_distance:g} m per step, geofence {s.geofence_radius:g} m "
+        f"(margin {s.geofence_margin:g} m), risky tricks "
+        f"{'allowed' if s.allow_risky_tricks else 'refused'}"
+    )
     if settings.backend == "offline":
         print("ok  planner: offline rules (no network, no model)")
     else:
@@ -79,8 +87,10 @@ def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
         for line in LLMBackend(settings.backend, settings.llm).check():
             print(f"ok  {line}")
-        print(f"ok  planning mode {settings.llm.mode!r}, plan format "
-              f"{settings.llm.plan_format!r}, vision {'on' if settings.llm.vision else 'off'}")
+        print(
+            f"ok  planning mode {settings.llm.mode!r}, plan format "
+            f"{settings.llm.plan_format!r}, vision {'on' if settings.llm.vision else 'off'}"
+        )
     if args.go2 or settings.robot == "go2":
         return _doctor_go2(args)
     return EXIT_OK
@@ -91,14 +101,21 @@ def _doctor_go2(args: argparse.Namespace) -> int:
     try:
         from ..ros.go2_doctor import diagnose, observe
     except ImportError as exc:
-        print(f"fail Go2 checks need ROS 2 (rclpy) and go2_interfaces: {exc}\n"
-              "     fix: source ROS 2 and your go2_ros2_sdk workspace, or run "
-              "scripts/build_ros.sh")
+        print(
+            f"fail Go2 checks need ROS 2 (rclpy) and go2_interfaces: {exc}\n"
+            "     fix: source ROS 2 and your go2_ros2_sdk workspace, or run "
+            "scripts/build_ros.sh"
+        )
         return EXIT_FAILED
     print(f"...  watching the Go2 driver's topics for {args.seconds:g} s")
-    findings = diagnose(observe(args.namespace, seconds=args.seconds,
-                                cmd_vel_topic=args.cmd_vel_topic,
-                                battery_topic=args.battery_topic))
+    findings = diagnose(
+        observe(
+            args.namespace,
+            seconds=args.seconds,
+            cmd_vel_topic=args.cmd_vel_topic,
+            battery_topic=args.battery_topic,
+        )
+    )
     for finding in findings:
         print(finding)
     return EXIT_FAILED if any(f.level == "fail" for f in findings) else EXIT_OK
@@ -123,8 +140,10 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         if args.mission_id:
             record = memory.history.get(args.mission_id)
             if record is None:
-                print(f"shadowhound: no mission {args.mission_id!r} in "
-                      f"{memory.history.path}", file=sys.stderr)
+                print(
+                    f"shadowhound: no mission {args.mission_id!r} in {memory.history.path}",
+                    file=sys.stderr,
+                )
                 return EXIT_FAILED
             json.dump(record, sys.stdout, indent=2, default=str)
             sys.stdout.write("\n")
@@ -143,8 +162,9 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         for r in seen:
             when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(r.seen_at))
             o = r.known
-            print(f"  {o.name:<20} x={o.x:7.2f} y={o.y:7.2f}  {when}  "
-                  f"confidence {o.confidence:.2f}")
+            print(
+                f"  {o.name:<20} x={o.x:7.2f} y={o.y:7.2f}  {when}  confidence {o.confidence:.2f}"
+            )
         return EXIT_OK
     finally:
         memory.close()
@@ -161,9 +181,10 @@ def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
                 return EXIT_FAILED
             print(f"forgot {args.forget!r}")
             return EXIT_OK
-        listing = {n: {"x": p.x, "y": p.y, **({} if p.yaw is None else {"yaw": p.yaw}),
-                       "source": p.source}
-                   for n, p in known_places(settings.places, memory.places).items()}
+        listing = {
+            n: {"x": p.x, "y": p.y, **({} if p.yaw is None else {"yaw": p.yaw}), "source": p.source}
+            for n, p in known_places(settings.places, memory.places).items()
+        }
         if args.json:
             json.dump(listing, sys.stdout, indent=2)
             sys.stdout.write("\n")
@@ -182,8 +203,10 @@ def cmd_recall(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         # to search it, so it says what is wrong instead of answering from elsewhere.
         found = [] if memory.recall_problem else memory.search(args.query)
         if memory.recall_problem:
-            print(f"shadowhound: retrieval memory is unavailable: {memory.recall_problem}",
-                  file=sys.stderr)
+            print(
+                f"shadowhound: retrieval memory is unavailable: {memory.recall_problem}",
+                file=sys.stderr,
+            )
             return EXIT_USAGE
         print("\n".join(found) if found else "nothing remembered about that")
         return EXIT_OK
@@ -198,8 +221,11 @@ def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     try:
         from ..web import serve_main
     except ImportError as exc:
-        print(f"shadowhound: the web dashboard needs the 'web' extra "
-              f"(pip install 'shadowhound[web]'): {exc}", file=sys.stderr)
+        print(
+            f"shadowhound: the web dashboard needs the 'web' extra "
+            f"(pip install 'shadowhound[web]'): {exc}",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
     return int(serve_main(settings, args.host, args.port, args.token))
 
@@ -210,8 +236,7 @@ def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 def cmd_mcp(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     from ..mcp import main as mcp_main
 
-    return int(mcp_main(settings, http=args.http, host=args.host, port=args.port,
-                        token=args.token))
+    return int(mcp_main(settings, http=args.http, host=args.host, port=args.port, token=args.token))
 
 
 # -- node ----------------------------------------------------------------------------------------
@@ -221,9 +246,11 @@ def cmd_node(ros_argv: list[str]) -> int:
     try:
         from ..ros.node import main as node_main
     except ImportError as exc:
-        print(f"shadowhound: the ROS 2 node needs rclpy and the shadowhound_interfaces package "
-              f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
-              file=sys.stderr)
+        print(
+            f"shadowhound: the ROS 2 node needs rclpy and the shadowhound_interfaces package "
+            f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
     return node_main(ros_argv)
 
@@ -232,10 +259,10 @@ def cmd_sim_driver(argv: list[str]) -> int:
     try:
         from ..ros.sim_driver import main as driver_main
     except ImportError as exc:
-        print(f"shadowhound: the simulated Go2 driver needs rclpy and the go2_interfaces package "
-              f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
-              file=sys.stderr)
+        print(
+            f"shadowhound: the simulated Go2 driver needs rclpy and the go2_interfaces package "
+            f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
     return driver_main(argv)
-
-

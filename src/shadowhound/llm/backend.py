@@ -62,6 +62,7 @@ def request_hints(backend: str) -> dict[str, Any]:
     """
     return {"cache_prompt": True} if backend == "llamacpp" else {}
 
+
 @dataclass
 class LLMBackend:
     """A chat-completions client for one server and model."""
@@ -94,8 +95,7 @@ class LLMBackend:
                 from openai import OpenAI
             except ImportError as exc:
                 raise BackendUnavailable(
-                    "language-model backends need the 'llm' extra: "
-                    "pip install 'shadowhound[llm]'"
+                    "language-model backends need the 'llm' extra: pip install 'shadowhound[llm]'"
                 ) from exc
             self._client = OpenAI(
                 base_url=self.config.base_url,
@@ -105,8 +105,13 @@ class LLMBackend:
             )
         return self._client
 
-    def complete(self, messages: list[dict[str, Any]], *,
-                 cancelled: threading.Event | None = None, **options: Any) -> Completion:
+    def complete(
+        self,
+        messages: list[dict[str, Any]],
+        *,
+        cancelled: threading.Event | None = None,
+        **options: Any,
+    ) -> Completion:
         """One chat completion. Raises BackendError (never an openai exception).
 
         With `cancelled`, setting the event ends the wait at once with BackendCancelled.
@@ -119,8 +124,7 @@ class LLMBackend:
             **{k: v for k, v in options.items() if v is not None},
         }
         started = time.perf_counter()
-        response = self._call(lambda client: client.chat.completions.create(**request),
-                              cancelled)
+        response = self._call(lambda client: client.chat.completions.create(**request), cancelled)
         seconds = time.perf_counter() - started
         choices = getattr(response, "choices", None) or []
         if not choices or getattr(choices[0], "message", None) is None:
@@ -138,8 +142,7 @@ class LLMBackend:
 
     def embed(self, model: str, texts: list[str]) -> Any:
         """The server's embeddings response for `texts`. Raises BackendError."""
-        return self._call(lambda client: client.embeddings.create(model=model, input=texts),
-                          None)
+        return self._call(lambda client: client.embeddings.create(model=model, input=texts), None)
 
     # -- requests, retries and cancellation ----------------------------------------------------
 
@@ -158,8 +161,12 @@ class LLMBackend:
                 wait = _retry_delay(exc, attempt) if attempt < self.config.max_retries else None
                 if wait is None:
                     raise self._explain(exc) from exc
-                log.info("the language model at %s failed (%s); retrying in %.2f s",
-                         self.where, type(exc).__name__, wait)
+                log.info(
+                    "the language model at %s failed (%s); retrying in %.2f s",
+                    self.where,
+                    type(exc).__name__,
+                    wait,
+                )
                 if (cancelled or threading.Event()).wait(wait):  # a plain sleep without one
                     raise self._cancelled() from exc
                 continue
@@ -169,8 +176,10 @@ class LLMBackend:
         raise AssertionError("unreachable: the last attempt returns or raises")
 
     def _cancelled(self) -> BackendCancelled:
-        return BackendCancelled(f"the request to the language model at {self.where} was "
-                                "abandoned: the mission was cancelled")
+        return BackendCancelled(
+            f"the request to the language model at {self.where} was "
+            "abandoned: the mission was cancelled"
+        )
 
     def _explain(self, exc: Exception) -> BackendError:
         import openai
@@ -178,20 +187,26 @@ class LLMBackend:
         if isinstance(exc, openai.APITimeoutError):
             return BackendError(
                 f"the language model at {self.where} did not answer within "
-                f"{self.config.timeout:g} s (llm.timeout); is the server overloaded?")
+                f"{self.config.timeout:g} s (llm.timeout); is the server overloaded?"
+            )
         if isinstance(exc, openai.APIConnectionError):
             return BackendError(
                 f"cannot reach the language model at {self.where}: {exc.__cause__ or exc}; "
-                "is the server running and the URL right?")
+                "is the server running and the URL right?"
+            )
         if isinstance(exc, openai.APIStatusError):
             return BackendError(
                 f"the language model at {self.where} answered HTTP {exc.status_code}: "
-                f"{_error_text(exc)}", exc.status_code)
+                f"{_error_text(exc)}",
+                exc.status_code,
+            )
         if isinstance(exc, openai.OpenAIError):
             return BackendError(f"the language model at {self.where} failed: {exc}")
         # The client lets a malformed JSON body escape as a ValueError.
-        return BackendError(f"the language model at {self.where} answered something that is "
-                            f"not a chat completion: {exc}")
+        return BackendError(
+            f"the language model at {self.where} answered something that is "
+            f"not a chat completion: {exc}"
+        )
 
     # -- start-up check ------------------------------------------------------------------------
 
@@ -243,15 +258,15 @@ class LLMBackend:
                 f"{self.backend} server or fix llm.base_url (model {self.config.model!r})"
             ) from exc
         except ValueError as exc:
-            raise BackendUnavailable(f"{url} did not answer JSON: is it an OpenAI-compatible "
-                                     f"server? ({exc})") from exc
+            raise BackendUnavailable(
+                f"{url} did not answer JSON: is it an OpenAI-compatible server? ({exc})"
+            ) from exc
         if not isinstance(data, dict):
             raise BackendUnavailable(f"{url} answered {type(data).__name__}, not a JSON object")
         return data
 
 
-def _attempt(request: Callable[[Any], Any], client: Any,
-             cancelled: threading.Event | None) -> Any:
+def _attempt(request: Callable[[Any], Any], client: Any, cancelled: threading.Event | None) -> Any:
     """One request. With a cancel event it runs on its own thread and _ABANDONED is returned as
     soon as the event is set; the abandoned thread ends by itself and its outcome is dropped."""
     if cancelled is None:
@@ -289,15 +304,14 @@ def _retry_delay(exc: Exception, attempt: int) -> float | None:
         headers = exc.response.headers
         should = headers.get("x-should-retry")
         code = exc.status_code
-        if should == "false" or (should != "true" and code not in (408, 409, 429)
-                                 and code < 500):
+        if should == "false" or (should != "true" and code not in (408, 409, 429) and code < 500):
             return None
         after = _retry_after(headers)
         if after is not None:
             return after if after <= _MAX_RETRY_AFTER else None
     elif not isinstance(exc, openai.APIConnectionError):  # includes time-outs
         return None
-    return min(_FIRST_BACKOFF * 2.0 ** attempt, _MAX_BACKOFF) * (1 - 0.25 * random.random())
+    return min(_FIRST_BACKOFF * 2.0**attempt, _MAX_BACKOFF) * (1 - 0.25 * random.random())
 
 
 def _retry_after(headers: Any) -> float | None:

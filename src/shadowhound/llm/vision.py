@@ -23,17 +23,30 @@ def jpeg_data_url(frame: CameraFrame, max_side: int = 512, quality: int = 80) ->
     return "data:image/jpeg;base64," + base64.b64encode(data).decode("ascii")
 
 
-def describe_image(backend: LLMBackend, frame: CameraFrame, question: str, max_side: int = 512,
-                   cancelled: threading.Event | None = None) -> str:
+def describe_image(
+    backend: LLMBackend,
+    frame: CameraFrame,
+    question: str,
+    max_side: int = 512,
+    cancelled: threading.Event | None = None,
+) -> str:
     """Ask the (vision-capable) model about a downscaled JPEG of the frame.
 
     Setting `cancelled` abandons the request at once (the caller checks the event)."""
     try:
         url = jpeg_data_url(frame, max_side)
-        completion = backend.complete([{"role": "user", "content": [
-            {"type": "text", "text": question},
-            {"type": "image_url", "image_url": {"url": url}},
-        ]}], cancelled=cancelled)
+        completion = backend.complete(
+            [
+                {
+                    "role": "user",
+                    "content": [
+                        {"type": "text", "text": question},
+                        {"type": "image_url", "image_url": {"url": url}},
+                    ],
+                }
+            ],
+            cancelled=cancelled,
+        )
     except (BackendError, ValueError) as exc:
         return f"I could not look at the image: {exc}"
     return str(completion.message.get("content") or "").strip() or "(no answer)"

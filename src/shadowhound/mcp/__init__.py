@@ -35,8 +35,14 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def main(settings: ShadowHoundConfig, *, http: bool = False, host: str = "127.0.0.1",
-         port: int = 8765, token: str | None = None) -> int:
+def main(
+    settings: ShadowHoundConfig,
+    *,
+    http: bool = False,
+    host: str = "127.0.0.1",
+    port: int = 8765,
+    token: str | None = None,
+) -> int:
     """`shadowhound mcp`: serve until the client leaves (stdio) or Ctrl-C (HTTP).
 
     `token` defaults to $SHADOWHOUND_TOKEN (HTTP only). Returns 2 with a message on stderr when
@@ -49,8 +55,11 @@ def main(settings: ShadowHoundConfig, *, http: bool = False, host: str = "127.0.
         from .server import McpRobotServer
         from .transport import ServeError, run_stdio, serve_http
     except ModuleNotFoundError as exc:
-        print(f"shadowhound mcp: the MCP server needs the 'mcp' extra ({exc.name} is not "
-              "installed): pip install 'shadowhound[mcp]'", file=sys.stderr)
+        print(
+            f"shadowhound mcp: the MCP server needs the 'mcp' extra ({exc.name} is not "
+            "installed): pip install 'shadowhound[mcp]'",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
     from ..agent import RobotAgent, RobotAgentConfig
     from ..config import ConfigError
@@ -69,9 +78,13 @@ def main(settings: ShadowHoundConfig, *, http: bool = False, host: str = "127.0.
     robot_server = McpRobotServer(agent)
 
     def ready(url: str) -> None:
-        print(f"ShadowHound MCP server on {url} (robot {agent.robot.name}"
-              + (", token required" if token else "") + "); Ctrl-C stops", file=sys.stderr,
-              flush=True)
+        print(
+            f"ShadowHound MCP server on {url} (robot {agent.robot.name}"
+            + (", token required" if token else "")
+            + "); Ctrl-C stops",
+            file=sys.stderr,
+            flush=True,
+        )
 
     try:
         if http:
@@ -99,9 +112,11 @@ def _robot(settings: ShadowHoundConfig) -> Any:
         from ..robot.go2_motion import GO2_MOTION
         from ..robot.go2_ros import Go2RosConfig, Go2RosRobot
     except ImportError as exc:
-        raise ConfigError(f"robot go2 needs rclpy and the go2_interfaces package ('ros' extra; "
-                          f"source your go2_ros2_sdk workspace or run scripts/build_ros.sh): "
-                          f"{exc}") from exc
+        raise ConfigError(
+            f"robot go2 needs rclpy and the go2_interfaces package ('ros' extra; "
+            f"source your go2_ros2_sdk workspace or run scripts/build_ros.sh): "
+            f"{exc}"
+        ) from exc
     from ..robot.base import RobotError
 
     try:

@@ -28,45 +28,75 @@ class ToolSpec:
     read_only: bool = False
 
     def to_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "description": self.description,
-                "inputSchema": self.input_schema}
+        return {
+            "name": self.name,
+            "description": self.description,
+            "inputSchema": self.input_schema,
+        }
 
 
 def _text_schema(limit: int, extra: dict[str, Any] | None = None) -> dict[str, Any]:
-    props: dict[str, Any] = {"text": {"type": "string", "minLength": 1, "maxLength": limit,
-                                      "description": "what the robot should do"}}
+    props: dict[str, Any] = {
+        "text": {
+            "type": "string",
+            "minLength": 1,
+            "maxLength": limit,
+            "description": "what the robot should do",
+        }
+    }
     props.update(extra or {})
-    return {"type": "object", "properties": props, "required": ["text"],
-            "additionalProperties": False}
+    return {
+        "type": "object",
+        "properties": props,
+        "required": ["text"],
+        "additionalProperties": False,
+    }
 
 
 def mission_tools(max_mission_chars: int) -> list[ToolSpec]:
     """The tools that are not skills."""
     return [
-        ToolSpec("run_mission", "Plan a sentence into checked skills and run it on the robot.",
-                 _text_schema(max_mission_chars, {"dry_run": {"type": "boolean",
-                                                              "default": False}})),
-        ToolSpec("plan_mission", "Plan and check only (a dry run): steps, predicted path, "
-                 "refusals. Nothing moves.", _text_schema(max_mission_chars), read_only=True),
-        ToolSpec("get_state", "The robot's pose, posture, battery, e-stop and mission.",
-                 _NO_ARGS, read_only=True),
-        ToolSpec("get_camera_image", "The latest camera image (JPEG).", _NO_ARGS,
-                 read_only=True),
-        ToolSpec("emergency_stop", "Stop the robot now and latch until release_estop.",
-                 _NO_ARGS),
+        ToolSpec(
+            "run_mission",
+            "Plan a sentence into checked skills and run it on the robot.",
+            _text_schema(max_mission_chars, {"dry_run": {"type": "boolean", "default": False}}),
+        ),
+        ToolSpec(
+            "plan_mission",
+            "Plan and check only (a dry run): steps, predicted path, refusals. Nothing moves.",
+            _text_schema(max_mission_chars),
+            read_only=True,
+        ),
+        ToolSpec(
+            "get_state",
+            "The robot's pose, posture, battery, e-stop and mission.",
+            _NO_ARGS,
+            read_only=True,
+        ),
+        ToolSpec("get_camera_image", "The latest camera image (JPEG).", _NO_ARGS, read_only=True),
+        ToolSpec("emergency_stop", "Stop the robot now and latch until release_estop.", _NO_ARGS),
         ToolSpec("release_estop", "Release a latched e-stop.", _NO_ARGS),
         ToolSpec("cancel_mission", "Cancel the running mission; the robot stops.", _NO_ARGS),
-        ToolSpec("history", "Recent missions, newest first.",
-                 {"type": "object", "properties": {"limit": {"type": "integer", "minimum": 1,
-                                                             "maximum": 100, "default": 10}},
-                  "additionalProperties": False}, read_only=True),
+        ToolSpec(
+            "history",
+            "Recent missions, newest first.",
+            {
+                "type": "object",
+                "properties": {
+                    "limit": {"type": "integer", "minimum": 1, "maximum": 100, "default": 10}
+                },
+                "additionalProperties": False,
+            },
+            read_only=True,
+        ),
     ]
 
 
 def skill_tools(registry: SkillRegistry) -> list[ToolSpec]:
     """One tool per skill, named like the planner's function tools (`nav_move`)."""
-    return [ToolSpec(s.tool_name, s.description, s.parameters_schema(), skill=s.name)
-            for s in registry]
+    return [
+        ToolSpec(s.tool_name, s.description, s.parameters_schema(), skill=s.name) for s in registry
+    ]
 
 
 def all_tools(registry: SkillRegistry, max_mission_chars: int) -> list[ToolSpec]:

@@ -61,8 +61,13 @@ class McpDesk:
 
     # -- missions ------------------------------------------------------------------------------
 
-    def start_mission(self, text: Any, dry_run: Any = False, on_event: OnEvent | None = None,
-                      on_done: OnDone | None = None) -> MissionJob:
+    def start_mission(
+        self,
+        text: Any,
+        dry_run: Any = False,
+        on_event: OnEvent | None = None,
+        on_done: OnDone | None = None,
+    ) -> MissionJob:
         """Accept a mission now or raise ToolInputError (bad text, busy, e-stop latched).
 
         `on_event` sees the mission's events on the mission thread; `on_done` runs there too,
@@ -71,17 +76,24 @@ class McpDesk:
         text = self._mission_text(text)
         if not isinstance(dry_run, bool):
             raise ToolInputError(f"dry_run must be true or false, got {dry_run!r}")
-        return self._start(MissionJob(text, source="mcp", dry_run=dry_run, on_event=on_event,
-                                      on_done=on_done))
+        return self._start(
+            MissionJob(text, source="mcp", dry_run=dry_run, on_event=on_event, on_done=on_done)
+        )
 
-    def start_skill(self, skill: str, arguments: Any, on_event: OnEvent | None = None,
-                    on_done: OnDone | None = None) -> MissionJob:
+    def start_skill(
+        self,
+        skill: str,
+        arguments: Any,
+        on_event: OnEvent | None = None,
+        on_done: OnDone | None = None,
+    ) -> MissionJob:
         """Accept one skill call as a one-step plan. Raises ToolInputError for bad arguments."""
         if arguments is None:
             arguments = {}
         if not isinstance(arguments, dict):
-            raise ToolInputError(f"{skill}: arguments must be an object, got "
-                                 f"{type(arguments).__name__}")
+            raise ToolInputError(
+                f"{skill}: arguments must be an object, got {type(arguments).__name__}"
+            )
         _check_finite(skill, arguments)
         try:  # early, for a clear answer; run_plan validates again, with the governor
             valid = self.agent.registry.validate(SkillCall(skill, dict(arguments)))
@@ -89,8 +101,15 @@ class McpDesk:
             raise ToolInputError("; ".join(exc.problems)) from exc
         call = SkillCall(valid.name, dict(arguments), label="mcp")  # as given: run_plan checks
         shown = ", ".join(f"{k}={v!r}" for k, v in valid.args_dict().items())
-        return self._start(MissionJob(f"{valid.name}({shown})", source="mcp", calls=[call],
-                                      on_event=on_event, on_done=on_done))
+        return self._start(
+            MissionJob(
+                f"{valid.name}({shown})",
+                source="mcp",
+                calls=[call],
+                on_event=on_event,
+                on_done=on_done,
+            )
+        )
 
     def _start(self, job: MissionJob) -> MissionJob:
         if self.agent.estop_latched and not job.dry_run:
@@ -123,10 +142,13 @@ class McpDesk:
         """Stop the robot at once and latch; waiting missions are dropped."""
         self.agent.estop()  # first: the robot stops before any bookkeeping
         dropped = len(self.worker.drop_queued(ESTOP_DROP_REASON))
-        return {"estop_latched": True, "dropped": dropped,
-                "robot": self.agent.get_robot_status(),  # read after the stop
-                "response": "e-stop latched: the robot is stopped; call release_estop to "
-                            "run missions again"}
+        return {
+            "estop_latched": True,
+            "dropped": dropped,
+            "robot": self.agent.get_robot_status(),  # read after the stop
+            "response": "e-stop latched: the robot is stopped; call release_estop to "
+            "run missions again",
+        }
 
     def release_estop(self) -> dict[str, Any]:
         self.agent.release_estop()
@@ -140,18 +162,25 @@ class McpDesk:
         if job is not None:
             job.cancelled.set()
         self.agent.cancel()
-        return {"cancelled": True, "mission_id": job.mission_id if job else None,
-                "response": "mission cancelled; the robot is stopped"}
+        return {
+            "cancelled": True,
+            "mission_id": job.mission_id if job else None,
+            "response": "mission cancelled; the robot is stopped",
+        }
 
     # -- information -------------------------------------------------------------------------
 
     def state(self) -> dict[str, Any]:
         status = self.agent.get_robot_status()
         current = self.worker.current
-        return {"robot": status, "estop_latched": self.agent.estop_latched,
-                "busy": self.worker.busy,
-                "mission": None if current is None else {"mission_id": current.mission_id,
-                                                         "text": current.command}}
+        return {
+            "robot": status,
+            "estop_latched": self.agent.estop_latched,
+            "busy": self.worker.busy,
+            "mission": None
+            if current is None
+            else {"mission_id": current.mission_id, "text": current.command},
+        }
 
     def camera_image(self, max_side: int = IMAGE_MAX_SIDE) -> CameraImage:
         """The latest camera frame as a downscaled JPEG. Raises ToolInputError without one."""
@@ -165,8 +194,9 @@ class McpDesk:
         except ValueError as exc:
             raise ToolInputError(str(exc)) from exc
         scale = min(1.0, max_side / max(frame.width, frame.height, 1))
-        return CameraImage(data, round(frame.width * scale), round(frame.height * scale),
-                           frame.stamp, frame.source)
+        return CameraImage(
+            data, round(frame.width * scale), round(frame.height * scale), frame.stamp, frame.source
+        )
 
     def history(self, limit: Any = 10) -> list[dict[str, Any]]:
         if isinstance(limit, bool) or not isinstance(limit, int) or not 1 <= limit <= 100:
@@ -180,8 +210,10 @@ class McpDesk:
     def places(self) -> dict[str, dict[str, float]]:
         """Places from the profile, then taught ones (which win)."""
         known = known_places(self.agent.settings.places, self.agent.memory.places)
-        return {n: {"x": p.x, "y": p.y, **({} if p.yaw is None else {"yaw": p.yaw})}
-                for n, p in known.items()}
+        return {
+            n: {"x": p.x, "y": p.y, **({} if p.yaw is None else {"yaw": p.yaw})}
+            for n, p in known.items()
+        }
 
     def close(self) -> None:
         """Stop any mission and, if the worker is the desk's own, end it."""

@@ -32,9 +32,11 @@ from .desk import McpDesk, ToolInputError
 log = logging.getLogger(__name__)
 
 SERVER_NAME = "shadowhound"
-INSTRUCTIONS = ("Drives a quadruped robot. Every motion passes a safety governor; risky ones "
-                "ask the person. Prefer run_mission for whole tasks; call emergency_stop if "
-                "anything looks wrong.")
+INSTRUCTIONS = (
+    "Drives a quadruped robot. Every motion passes a safety governor; risky ones "
+    "ask the person. Prefer run_mission for whole tasks; call emergency_stop if "
+    "anything looks wrong."
+)
 RESOURCES = {
     "shadowhound://skills": ("skills", "The skill catalogue with argument schemas."),
     "shadowhound://places": ("places", "Known places (profile and taught), odom frame."),
@@ -43,8 +45,9 @@ RESOURCES = {
 MISSION_PROMPT = "mission"
 _APPROVE_SCHEMA: dict[str, Any] = {
     "type": "object",
-    "properties": {"approve": {"type": "boolean", "title": "Approve",
-                               "description": "let the robot do this"}},
+    "properties": {
+        "approve": {"type": "boolean", "title": "Approve", "description": "let the robot do this"}
+    },
     "required": ["approve"],
 }
 
@@ -75,10 +78,15 @@ class McpRobotServer:
         self._by_name = {t.name: t for t in self.tools}
         self._waiting: dict[str, _Watch] = {}  # request_state -> a job waiting for approval
         self.server: Server[Any] = Server(
-            SERVER_NAME, version=__version__, instructions=INSTRUCTIONS,
-            on_list_tools=self._list_tools, on_call_tool=self._call_tool,
-            on_list_resources=self._list_resources, on_read_resource=self._read_resource,
-            on_list_prompts=self._list_prompts, on_get_prompt=self._get_prompt,
+            SERVER_NAME,
+            version=__version__,
+            instructions=INSTRUCTIONS,
+            on_list_tools=self._list_tools,
+            on_call_tool=self._call_tool,
+            on_list_resources=self._list_resources,
+            on_read_resource=self._read_resource,
+            on_list_prompts=self._list_prompts,
+            on_get_prompt=self._get_prompt,
         )
 
     def close(self) -> None:
@@ -86,23 +94,31 @@ class McpRobotServer:
 
     # -- tools ---------------------------------------------------------------------------------
 
-    async def _list_tools(self, _ctx: ServerRequestContext[Any],
-                          _params: types.PaginatedRequestParams | None) -> types.ListToolsResult:
+    async def _list_tools(
+        self, _ctx: ServerRequestContext[Any], _params: types.PaginatedRequestParams | None
+    ) -> types.ListToolsResult:
         return types.ListToolsResult(tools=[_tool(t) for t in self.tools])
 
-    async def _call_tool(self, ctx: ServerRequestContext[Any],
-                         params: types.CallToolRequestParams) -> ToolAnswer:
+    async def _call_tool(
+        self, ctx: ServerRequestContext[Any], params: types.CallToolRequestParams
+    ) -> ToolAnswer:
         if params.request_state is not None:
             return await self._resume(ctx, params)
         spec = self._by_name.get(params.name)
         if spec is None:
-            raise MCPError(types.INVALID_PARAMS, f"unknown tool {params.name!r}; call tools/list "
-                           "for the available tools")
+            raise MCPError(
+                types.INVALID_PARAMS,
+                f"unknown tool {params.name!r}; call tools/list for the available tools",
+            )
         args = params.arguments or {}
         try:
             if spec.skill is not None:
-                return await self._run(ctx, lambda on_event, on_done: self.desk.start_skill(
-                    spec.name, args, on_event, on_done))
+                return await self._run(
+                    ctx,
+                    lambda on_event, on_done: self.desk.start_skill(
+                        spec.name, args, on_event, on_done
+                    ),
+                )
             _check_args(spec, args)
             return await self._simple(ctx, spec.name, args)
         except ToolInputError as exc:
@@ -111,25 +127,40 @@ class McpRobotServer:
             log.exception("MCP tool %s failed", params.name)
             return _error(f"internal error in {params.name}: {exc!r}")
 
-    async def _simple(self, ctx: ServerRequestContext[Any], name: str,
-                      args: dict[str, Any]) -> ToolAnswer:
+    async def _simple(
+        self, ctx: ServerRequestContext[Any], name: str, args: dict[str, Any]
+    ) -> ToolAnswer:
         desk = self.desk
         if name == "run_mission":
             dry = args.get("dry_run", False)
-            return await self._run(ctx, lambda on_event, on_done: desk.start_mission(
-                args.get("text"), dry, on_event, on_done))
+            return await self._run(
+                ctx,
+                lambda on_event, on_done: desk.start_mission(
+                    args.get("text"), dry, on_event, on_done
+                ),
+            )
         if name == "plan_mission":
             text = args.get("text")
             return _answer(await asyncio.to_thread(desk.plan, text), ok_key="success")
         if name == "get_camera_image":
             image = await asyncio.to_thread(desk.camera_image)
-            meta = {"width": image.width, "height": image.height, "stamp": image.stamp,
-                    "source": image.source}
-            return types.CallToolResult(content=[
-                types.ImageContent(type="image", data=base64.b64encode(image.data).decode(),
-                                   mime_type="image/jpeg"),
-                types.TextContent(type="text", text=json.dumps(meta))],
-                structured_content=meta)
+            meta = {
+                "width": image.width,
+                "height": image.height,
+                "stamp": image.stamp,
+                "source": image.source,
+            }
+            return types.CallToolResult(
+                content=[
+                    types.ImageContent(
+                        type="image",
+                        data=base64.b64encode(image.data).decode(),
+                        mime_type="image/jpeg",
+                    ),
+                    types.TextContent(type="text", text=json.dumps(meta)),
+                ],
+                structured_content=meta,
+            )
         actions: dict[str, Callable[[], Any]] = {
             "get_state": desk.state,
             "emergency_stop": desk.estop,
@@ -138,8 +169,9 @@ class McpRobotServer:
             "history": lambda: {"missions": desk.history(args.get("limit", 10))},
         }
         # The e-stop runs right here, not on a thread: nothing may queue in front of it.
-        data = actions[name]() if name == "emergency_stop" else \
-            await asyncio.to_thread(actions[name])
+        data = (
+            actions[name]() if name == "emergency_stop" else await asyncio.to_thread(actions[name])
+        )
         return _answer(data)
 
     async def _run(self, ctx: ServerRequestContext[Any], start: _Start) -> ToolAnswer:
@@ -175,8 +207,9 @@ class McpRobotServer:
             return _error(f"the mission did not run: {job.dropped or 'unknown reason'}")
         return _answer(job.result.to_dict(), ok_key="success")
 
-    async def _report(self, ctx: ServerRequestContext[Any], event: ev.MissionEvent,
-                      watch: _Watch) -> None:
+    async def _report(
+        self, ctx: ServerRequestContext[Any], event: ev.MissionEvent, watch: _Watch
+    ) -> None:
         total = watch.total or None
         if isinstance(event, ev.PlanReady):
             watch.total = len(event.plan.steps)
@@ -184,17 +217,21 @@ class McpRobotServer:
         elif isinstance(event, ev.StepStarted):
             step = event.step
             args = ", ".join(f"{k}={v}" for k, v in step.args.items())
-            await ctx.session.report_progress(step.index - 1, total,
-                                              f"[{step.index}] {step.skill}({args})")
+            await ctx.session.report_progress(
+                step.index - 1, total, f"[{step.index}] {step.skill}({args})"
+            )
         elif isinstance(event, ev.StepFinished):
             step = event.step
             ok = step.status is StepStatus.SUCCEEDED
-            await ctx.session.report_progress(step.index, total,
-                                              f"[{step.index}] {step.status.value}: "
-                                              f"{step.output if ok else step.error}")
+            await ctx.session.report_progress(
+                step.index,
+                total,
+                f"[{step.index}] {step.status.value}: {step.output if ok else step.error}",
+            )
 
-    async def _ask_approval(self, ctx: ServerRequestContext[Any], request: dict[str, Any],
-                            watch: _Watch) -> types.InputRequiredResult | None:
+    async def _ask_approval(
+        self, ctx: ServerRequestContext[Any], request: dict[str, Any], watch: _Watch
+    ) -> types.InputRequiredResult | None:
         """Ask the person through the client (elicitation); refuse where it cannot ask.
 
         Over a connection with a back-channel (handshake-era stdio and HTTP sessions) the
@@ -205,39 +242,59 @@ class McpRobotServer:
         request_id = request["request_id"]
         caps = ctx.session.client_capabilities
         if caps is None or caps.elicitation is None:
-            self.agent.reject(request_id, "this MCP client cannot ask a person (it does not "
-                              "support elicitation), so calls that need approval are refused")
+            self.agent.reject(
+                request_id,
+                "this MCP client cannot ask a person (it does not "
+                "support elicitation), so calls that need approval are refused",
+            )
             return None
-        message = ("ShadowHound asks for approval: " + "; ".join(request["reasons"])
-                   + f". Mission: {request['mission']!r}")
+        message = (
+            "ShadowHound asks for approval: "
+            + "; ".join(request["reasons"])
+            + f". Mission: {request['mission']!r}"
+        )
         if not ctx.session.can_send_request:
             state = secrets.token_urlsafe(16)
             watch.request_id = request_id
-            self._waiting = {k: w for k, w in self._waiting.items()
-                             if w.job is not None and not w.job.done.is_set()}
+            self._waiting = {
+                k: w
+                for k, w in self._waiting.items()
+                if w.job is not None and not w.job.done.is_set()
+            }
             self._waiting[state] = watch
-            return types.InputRequiredResult(input_requests={_APPROVAL_KEY: types.ElicitRequest(
-                params=types.ElicitRequestFormParams(message=message,
-                                                     requested_schema=_APPROVE_SCHEMA))},
-                request_state=state)
+            return types.InputRequiredResult(
+                input_requests={
+                    _APPROVAL_KEY: types.ElicitRequest(
+                        params=types.ElicitRequestFormParams(
+                            message=message, requested_schema=_APPROVE_SCHEMA
+                        )
+                    )
+                },
+                request_state=state,
+            )
         try:
             answer = await asyncio.wait_for(
-                ctx.session.elicit_form(message, _APPROVE_SCHEMA,
-                                        related_request_id=ctx.request_id),
-                timeout=request["timeout"])
+                ctx.session.elicit_form(
+                    message, _APPROVE_SCHEMA, related_request_id=ctx.request_id
+                ),
+                timeout=request["timeout"],
+            )
         except (MCPError, asyncio.TimeoutError) as exc:
             self.agent.reject(request_id, f"the client could not ask: {exc}")
             return None
         self._decide(request_id, answer)
         return None
 
-    async def _resume(self, ctx: ServerRequestContext[Any],
-                      params: types.CallToolRequestParams) -> ToolAnswer:
+    async def _resume(
+        self, ctx: ServerRequestContext[Any], params: types.CallToolRequestParams
+    ) -> ToolAnswer:
         """A call made again with the person's answer to `InputRequiredResult`."""
         watch = self._waiting.pop(params.request_state or "", None)
         if watch is None or watch.job is None or watch.job.done.is_set():
-            return _error("no approval is pending for this call (it was answered, timed out "
-                          "or never asked); call the tool again")
+            return _error(
+                "no approval is pending for this call (it was answered, timed out "
+                "or never asked); call the tool again"
+            )
         answer = (params.input_responses or {}).get(_APPROVAL_KEY)
         if not isinstance(answer, types.ElicitResult):
             self.agent.reject(watch.request_id, "the client sent no answer to the approval")
@@ -255,16 +312,19 @@ class McpRobotServer:
 
     # -- resources and the prompt --------------------------------------------------------------
 
-    async def _list_resources(self, _ctx: ServerRequestContext[Any],
-                              _params: types.PaginatedRequestParams | None
-                              ) -> types.ListResourcesResult:
-        return types.ListResourcesResult(resources=[
-            types.Resource(uri=uri, name=name, description=text, mime_type="application/json")
-            for uri, (name, text) in RESOURCES.items()])
+    async def _list_resources(
+        self, _ctx: ServerRequestContext[Any], _params: types.PaginatedRequestParams | None
+    ) -> types.ListResourcesResult:
+        return types.ListResourcesResult(
+            resources=[
+                types.Resource(uri=uri, name=name, description=text, mime_type="application/json")
+                for uri, (name, text) in RESOURCES.items()
+            ]
+        )
 
-    async def _read_resource(self, _ctx: ServerRequestContext[Any],
-                             params: types.ReadResourceRequestParams
-                             ) -> types.ReadResourceResult:
+    async def _read_resource(
+        self, _ctx: ServerRequestContext[Any], params: types.ReadResourceRequestParams
+    ) -> types.ReadResourceResult:
         uri = str(params.uri)
         readers: dict[str, Callable[[], Any]] = {
             "shadowhound://skills": self.agent.get_available_skills,
@@ -272,41 +332,66 @@ class McpRobotServer:
             "shadowhound://missions/last": self.desk.last_mission,
         }
         if uri not in readers:
-            raise MCPError(types.INVALID_PARAMS, f"unknown resource {uri[:200]!r}; known: "
-                           + ", ".join(RESOURCES))
+            raise MCPError(
+                types.INVALID_PARAMS,
+                f"unknown resource {uri[:200]!r}; known: " + ", ".join(RESOURCES),
+            )
         data = await asyncio.to_thread(readers[uri])
-        return types.ReadResourceResult(contents=[types.TextResourceContents(
-            uri=uri, mime_type="application/json", text=json.dumps(data))])
+        return types.ReadResourceResult(
+            contents=[
+                types.TextResourceContents(
+                    uri=uri, mime_type="application/json", text=json.dumps(data)
+                )
+            ]
+        )
 
-    async def _list_prompts(self, _ctx: ServerRequestContext[Any],
-                            _params: types.PaginatedRequestParams | None
-                            ) -> types.ListPromptsResult:
-        return types.ListPromptsResult(prompts=[types.Prompt(
-            name=MISSION_PROMPT, description="Ask the robot to do something, checked first.",
-            arguments=[types.PromptArgument(name="task", required=True,
-                                            description="what the robot should do")])])
+    async def _list_prompts(
+        self, _ctx: ServerRequestContext[Any], _params: types.PaginatedRequestParams | None
+    ) -> types.ListPromptsResult:
+        return types.ListPromptsResult(
+            prompts=[
+                types.Prompt(
+                    name=MISSION_PROMPT,
+                    description="Ask the robot to do something, checked first.",
+                    arguments=[
+                        types.PromptArgument(
+                            name="task", required=True, description="what the robot should do"
+                        )
+                    ],
+                )
+            ]
+        )
 
-    async def _get_prompt(self, _ctx: ServerRequestContext[Any],
-                          params: types.GetPromptRequestParams) -> types.GetPromptResult:
+    async def _get_prompt(
+        self, _ctx: ServerRequestContext[Any], params: types.GetPromptRequestParams
+    ) -> types.GetPromptResult:
         if params.name != MISSION_PROMPT:
-            raise MCPError(types.INVALID_PARAMS, f"unknown prompt {params.name!r}; known: "
-                           f"{MISSION_PROMPT}")
+            raise MCPError(
+                types.INVALID_PARAMS, f"unknown prompt {params.name!r}; known: {MISSION_PROMPT}"
+            )
         task = (params.arguments or {}).get("task", "").strip()
         if not task:
             raise MCPError(types.INVALID_PARAMS, "the mission prompt needs a 'task'")
-        text = (f"Have the robot do this: {task}\n"
-                "First call plan_mission with that sentence and read the plan and any refusals. "
-                "If the plan is right, call run_mission with the same sentence and report what "
-                "happened from its result. If anything looks unsafe, call emergency_stop.")
-        return types.GetPromptResult(messages=[types.PromptMessage(
-            role="user", content=types.TextContent(type="text", text=text))])
+        text = (
+            f"Have the robot do this: {task}\n"
+            "First call plan_mission with that sentence and read the plan and any refusals. "
+            "If the plan is right, call run_mission with the same sentence and report what "
+            "happened from its result. If anything looks unsafe, call emergency_stop."
+        )
+        return types.GetPromptResult(
+            messages=[
+                types.PromptMessage(role="user", content=types.TextContent(type="text", text=text))
+            ]
+        )
 
 
 def _tool(spec: ToolSpec) -> types.Tool:
-    return types.Tool(name=spec.name, description=spec.description,
-                      input_schema=spec.input_schema,
-                      annotations=types.ToolAnnotations(read_only_hint=True)
-                      if spec.read_only else None)
+    return types.Tool(
+        name=spec.name,
+        description=spec.description,
+        input_schema=spec.input_schema,
+        annotations=types.ToolAnnotations(read_only_hint=True) if spec.read_only else None,
+    )
 
 
 def _check_args(spec: ToolSpec, args: Any) -> None:
@@ -316,19 +401,25 @@ def _check_args(spec: ToolSpec, args: Any) -> None:
     props = spec.input_schema.get("properties", {})
     unknown = sorted(set(args) - set(props))
     if unknown:
-        raise ToolInputError(f"{spec.name}: unknown argument(s) {', '.join(unknown)}; allowed: "
-                             + (", ".join(props) or "none"))
+        raise ToolInputError(
+            f"{spec.name}: unknown argument(s) {', '.join(unknown)}; allowed: "
+            + (", ".join(props) or "none")
+        )
     for name in spec.input_schema.get("required", []):
         if name not in args:
             raise ToolInputError(f"{spec.name}: missing required argument {name!r}")
     for name, value in args.items():
         kind = props[name].get("type")
-        ok = {"string": isinstance(value, str),
-              "boolean": isinstance(value, bool),
-              "integer": isinstance(value, int) and not isinstance(value, bool)}.get(kind, True)
+        ok = {
+            "string": isinstance(value, str),
+            "boolean": isinstance(value, bool),
+            "integer": isinstance(value, int) and not isinstance(value, bool),
+        }.get(kind, True)
         if not ok:
-            raise ToolInputError(f"{spec.name}: {name!r} must be a {kind}, got "
-                                 f"{type(value).__name__} {str(value)[:40]!r}")
+            raise ToolInputError(
+                f"{spec.name}: {name!r} must be a {kind}, got "
+                f"{type(value).__name__} {str(value)[:40]!r}"
+            )
 
 
 def _answer(data: Any, ok_key: str | None = None) -> types.CallToolResult:
@@ -336,9 +427,12 @@ def _answer(data: Any, ok_key: str | None = None) -> types.CallToolResult:
     failed = ok_key is not None and not structured.get(ok_key, False)
     return types.CallToolResult(
         content=[types.TextContent(type="text", text=json.dumps(structured))],
-        structured_content=structured, is_error=failed)
+        structured_content=structured,
+        is_error=failed,
+    )
 
 
 def _error(message: str) -> types.CallToolResult:
-    return types.CallToolResult(content=[types.TextContent(type="text", text=message)],
-                                is_error=True)
+    return types.CallToolResult(
+        content=[types.TextContent(type="text", text=message)], is_error=True
+    )

@@ -31,8 +31,7 @@ ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
 MCP_PATH = "/mcp"
 MAX_BODY = 1024 * 1024  # bytes: a tool call is small; a huge one is refused before parsing
 
-__all__ = ["MCP_PATH", "McpGate", "ServeError", "bind", "http_app", "run_stdio",
-           "serve_http"]
+__all__ = ["MCP_PATH", "McpGate", "ServeError", "bind", "http_app", "run_stdio", "serve_http"]
 
 
 async def run_stdio(robot_server: McpRobotServer) -> None:
@@ -57,31 +56,45 @@ class McpGate:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        headers = {k.decode("latin-1").lower(): v.decode("latin-1")
-                   for k, v in scope.get("headers", [])}
+        headers = {
+            k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])
+        }
         problem = self._check(headers)
         if problem is None:
             await self.app(scope, receive, send)
             return
         status, detail = problem
-        body = json.dumps({"jsonrpc": "2.0", "id": None,
-                           "error": {"code": -32600, "message": detail}}).encode()
+        body = json.dumps(
+            {"jsonrpc": "2.0", "id": None, "error": {"code": -32600, "message": detail}}
+        ).encode()
         extra = [(b"www-authenticate", b"Bearer")] if status == 401 else []
-        await send({"type": "http.response.start", "status": status,
-                    "headers": [(b"content-type", b"application/json"),
-                                (b"content-length", str(len(body)).encode()), *extra]})
+        await send(
+            {
+                "type": "http.response.start",
+                "status": status,
+                "headers": [
+                    (b"content-type", b"application/json"),
+                    (b"content-length", str(len(body)).encode()),
+                    *extra,
+                ],
+            }
+        )
         await send({"type": "http.response.body", "body": body})
 
     def _check(self, headers: dict[str, str]) -> tuple[int, str] | None:
         raw_host = headers.get("host", "")
         host = hostname(raw_host)
         if self.token is None and (host is None or host not in self.allowed_hosts):
-            return 421, (f"host {raw_host[:100]!r} is not allowed: without a token the MCP "
-                         "server answers only on loopback names")
+            return 421, (
+                f"host {raw_host[:100]!r} is not allowed: without a token the MCP "
+                "server answers only on loopback names"
+            )
         origin = headers.get("origin")
         if origin is not None and not _same_origin(origin, raw_host):
-            return 403, (f"origin {origin[:100]!r} is not allowed: the MCP server takes no "
-                         "requests from web pages of other origins")
+            return 403, (
+                f"origin {origin[:100]!r} is not allowed: the MCP server takes no "
+                "requests from web pages of other origins"
+            )
         if self.token is None:
             return None
         auth = headers.get("authorization", "")
@@ -94,23 +107,34 @@ class McpGate:
 def _same_origin(origin: str, host: str) -> bool:
     """Whether a request's Origin is the server's own (the scheme http or https)."""
     parts = urlsplit(origin.strip())
-    return parts.scheme.lower() in ("http", "https") and parts.netloc.lower() == host.lower() \
-        and not parts.path and not parts.query
+    return (
+        parts.scheme.lower() in ("http", "https")
+        and parts.netloc.lower() == host.lower()
+        and not parts.path
+        and not parts.query
+    )
 
 
 def http_app(robot_server: McpRobotServer, host: str, token: str | None) -> ASGIApp:
     """The Streamable HTTP app at /mcp behind `McpGate` (which does the Host/Origin checks
     itself, so the SDK's own loopback-only list does not refuse a token-holding client)."""
     app = robot_server.server.streamable_http_app(
-        streamable_http_path=MCP_PATH, max_request_body_size=MAX_BODY, host=host,
-        transport_security=TransportSecuritySettings(enable_dns_rebinding_protection=False))
+        streamable_http_path=MCP_PATH,
+        max_request_body_size=MAX_BODY,
+        host=host,
+        transport_security=TransportSecuritySettings(enable_dns_rebinding_protection=False),
+    )
     allowed = set(LOOPBACK_HOSTS) | ({host.lower()} if host not in ("0.0.0.0", "::") else set())
     return McpGate(app, token, allowed)
 
 
-
-async def serve_http(robot_server: McpRobotServer, host: str, port: int, token: str | None,
-                     on_ready: Callable[[str], None] | None = None) -> None:
+async def serve_http(
+    robot_server: McpRobotServer,
+    host: str,
+    port: int,
+    token: str | None,
+    on_ready: Callable[[str], None] | None = None,
+) -> None:
     """Serve Streamable HTTP until cancelled (Ctrl-C, SIGTERM); then stop the robot.
 
     Raises ServeError before listening when the binding is not allowed.
@@ -119,8 +143,11 @@ async def serve_http(robot_server: McpRobotServer, host: str, port: int, token: 
     sock = bind(host, port)
     app = http_app(robot_server, host, token)
     # No access log: nothing secret is in MCP URLs, but the log would be noise on stderr.
-    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", access_log=False,
-                                           lifespan="on", timeout_graceful_shutdown=2))
+    server = uvicorn.Server(
+        uvicorn.Config(
+            app, log_level="warning", access_log=False, lifespan="on", timeout_graceful_shutdown=2
+        )
+    )
     shown = f"[{host}]" if ":" in host else host
     try:
         async with anyio.create_task_group() as group:

@@ -7,5 +7,11 @@ from .history import MemoryStoreError, MissionHistory
 from .places import KnownPlace, PlaceBook, known_places
 from .recall import RecallStoreError
 
-__all__ = ["KnownPlace", "MemoryStoreError", "MissionHistory", "PlaceBook", "RecallStoreError",
-           "known_places"]
+__all__ = [
+    "KnownPlace",
+    "MemoryStoreError",
+    "MissionHistory",
+    "PlaceBook",
+    "RecallStoreError",
+    "known_places",
+]

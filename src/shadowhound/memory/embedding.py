@@ -28,8 +28,9 @@ def _need(module: str) -> Any:
 def model_dir() -> Path:
     spec = importlib.util.find_spec(_PACKAGE)
     if spec is None or not spec.submodule_search_locations:
-        raise ImportError(f"the MiniLM model package is not installed ({_PACKAGE}): "
-                          f"{_MEMORY_EXTRA}")
+        raise ImportError(
+            f"the MiniLM model package is not installed ({_PACKAGE}): {_MEMORY_EXTRA}"
+        )
     return Path(next(iter(spec.submodule_search_locations))) / "model"
 
 
@@ -58,11 +59,17 @@ class MiniLMEmbedder:
         weights = safetensors_numpy.load_file(str(folder / "model.safetensors"))
         # Dense weights are stored transposed and contiguous once, so every layer is one
         # plain 2-D BLAS call (a stacked (b, n, d) @ W.T is many times slower in NumPy).
-        self.w = {k: np.ascontiguousarray(v.T if k.endswith("dense.weight") or
-                                          k.endswith(("query.weight", "key.weight",
-                                                      "value.weight")) else v,
-                                          dtype=np.float32)
-                  for k, v in weights.items() if not k.endswith("position_ids")}
+        self.w = {
+            k: np.ascontiguousarray(
+                v.T
+                if k.endswith("dense.weight")
+                or k.endswith(("query.weight", "key.weight", "value.weight"))
+                else v,
+                dtype=np.float32,
+            )
+            for k, v in weights.items()
+            if not k.endswith("position_ids")
+        }
 
     def embed(self, texts: list[str]) -> Any:
         with self._one_thread(limits=1, user_api="blas"):
@@ -76,9 +83,11 @@ class MiniLMEmbedder:
         ids = np.array([e.ids for e in batch], dtype=np.int64)
         mask = np.array([e.attention_mask for e in batch], dtype=np.float32)
         types = np.array([e.type_ids for e in batch], dtype=np.int64)
-        x = (w["embeddings.word_embeddings.weight"][ids]
-             + w["embeddings.position_embeddings.weight"][np.arange(ids.shape[1])][None]
-             + w["embeddings.token_type_embeddings.weight"][types])
+        x = (
+            w["embeddings.word_embeddings.weight"][ids]
+            + w["embeddings.position_embeddings.weight"][np.arange(ids.shape[1])][None]
+            + w["embeddings.token_type_embeddings.weight"][types]
+        )
         x = self._norm(x, "embeddings.LayerNorm")
         blocked = (1.0 - mask)[:, None, None, :] * -1e9  # padding takes no attention
         for i in range(self.layers):
@@ -101,8 +110,9 @@ class MiniLMEmbedder:
         scores = np.exp(scores - scores.max(axis=-1, keepdims=True))
         context = (scores / scores.sum(axis=-1, keepdims=True)) @ v
         context = context.transpose(0, 2, 1, 3).reshape(b, n, d)
-        x = self._norm(x + self._dense(context, p + "attention.output.dense"),
-                       p + "attention.output.LayerNorm")
+        x = self._norm(
+            x + self._dense(context, p + "attention.output.dense"), p + "attention.output.LayerNorm"
+        )
         hidden = _gelu(np, self._dense(x, p + "intermediate.dense"))
         return self._norm(x + self._dense(hidden, p + "output.dense"), p + "output.LayerNorm")
 
@@ -114,16 +124,18 @@ class MiniLMEmbedder:
     def _norm(self, x: Any, name: str) -> Any:
         mean = x.mean(axis=-1, keepdims=True)
         var = ((x - mean) ** 2).mean(axis=-1, keepdims=True)
-        return (x - mean) / self._np.sqrt(var + self.eps) * self.w[name + ".weight"] + \
-            self.w[name + ".bias"]
+        return (x - mean) / self._np.sqrt(var + self.eps) * self.w[name + ".weight"] + self.w[
+            name + ".bias"
+        ]
 
 
 def _gelu(np: Any, x: Any) -> Any:
     """Exact GELU, 0.5 x (1 + erf(x / sqrt 2)), with erf to 1.5e-7 (Abramowitz-Stegun 7.1.26)."""
     z = x / math.sqrt(2.0)
     t = 1.0 / (1.0 + 0.3275911 * np.abs(z))
-    poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027
-                                                                         + t * 1.061405429))))
+    poly = t * (
+        0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))
+    )
     erf = np.sign(z) * (1.0 - poly * np.exp(-z * z))
     return 0.5 * x * (1.0 + erf)
 

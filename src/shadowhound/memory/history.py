@@ -73,8 +73,9 @@ class MissionHistory:
         self._backlog: list[tuple[str, tuple[Any, ...]]] = []
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._db = sqlite3.connect(str(self.path), timeout=busy_timeout,
-                                       check_same_thread=False, isolation_level=None)
+            self._db = sqlite3.connect(
+                str(self.path), timeout=busy_timeout, check_same_thread=False, isolation_level=None
+            )
             self._db.execute(f"PRAGMA busy_timeout = {int(busy_timeout * 1000)}")
             self._db.execute("PRAGMA journal_mode = WAL")
             # In WAL mode NORMAL never corrupts the file and survives a crashed process; only a
@@ -86,13 +87,17 @@ class MissionHistory:
                 self._db.execute("ALTER TABLE missions ADD COLUMN owner TEXT")
             self.interrupted, self.not_run = self._mark_ownerless()
             if self.not_run:
-                log.warning("%d mission(s) were waiting in the queue when their process ended; "
-                            "marked not_run", self.not_run)
+                log.warning(
+                    "%d mission(s) were waiting in the queue when their process ended; "
+                    "marked not_run",
+                    self.not_run,
+                )
         except sqlite3.DatabaseError as exc:
             raise MemoryStoreError(_explain(self.path, exc)) from exc
         except OSError as exc:
-            raise MemoryStoreError(f"cannot open the history database {str(self.path)!r}: "
-                                   f"{exc}; check memory.data_dir") from exc
+            raise MemoryStoreError(
+                f"cannot open the history database {str(self.path)!r}: {exc}; check memory.data_dir"
+            ) from exc
 
     def close(self) -> None:
         with self._lock:
@@ -110,10 +115,13 @@ class MissionHistory:
         interrupted = self._db.execute(
             f"UPDATE missions SET status = 'interrupted', success = 0, finished_at = ?, "
             f"response = ? "
-            f"WHERE status = 'running' AND ({dead})", (now, INTERRUPTED, *live)).rowcount
+            f"WHERE status = 'running' AND ({dead})",
+            (now, INTERRUPTED, *live),
+        ).rowcount
         not_run = self._db.execute(
             f"UPDATE missions SET status = 'not_run', success = 0, finished_at = ?, "
-            f"response = ? WHERE status = 'queued' AND ({dead})", (now, NEVER_STARTED, *live)
+            f"response = ? WHERE status = 'queued' AND ({dead})",
+            (now, NEVER_STARTED, *live),
         ).rowcount
         return interrupted, not_run
 
@@ -124,8 +132,12 @@ class MissionHistory:
                 try:
                     self._lease = Lease(self._owners)
                 except OSError as exc:  # the row is still written; others may mark it
-                    log.error("cannot take a lease in %s (%s): missions of this process may "
-                              "be marked interrupted by others", self._owners, exc)
+                    log.error(
+                        "cannot take a lease in %s (%s): missions of this process may "
+                        "be marked interrupted by others",
+                        self._owners,
+                        exc,
+                    )
                     return None
             return self._lease.token
 
@@ -133,24 +145,30 @@ class MissionHistory:
 
     def mission_queued(self, mission_id: str, mission: str, queued_at: float) -> None:
         """An interface accepted the mission; it waits for its turn."""
-        self._write("INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
-                    "VALUES (?, ?, 'queued', ?, ?)", (mission_id, mission, queued_at,
-                                                      self._owner()))
+        self._write(
+            "INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
+            "VALUES (?, ?, 'queued', ?, ?)",
+            (mission_id, mission, queued_at, self._owner()),
+        )
 
     def mission_started(self, mission_id: str, mission: str, started_at: float) -> None:
-        self._write("INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
-                    "VALUES (?, ?, 'running', ?, ?)", (mission_id, mission, started_at,
-                                                       self._owner()))
+        self._write(
+            "INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
+            "VALUES (?, ?, 'running', ?, ?)",
+            (mission_id, mission, started_at, self._owner()),
+        )
 
-    def mission_not_run(self, mission_id: str, mission: str, reason: str,
-                        finished_at: float) -> None:
+    def mission_not_run(
+        self, mission_id: str, mission: str, reason: str, finished_at: float
+    ) -> None:
         """A mission that was accepted but never started (dropped, cancelled, refused)."""
         self._write(
             "INSERT INTO missions (id, mission, status, success, response, started_at, "
             "finished_at) VALUES (?, ?, 'not_run', 0, ?, ?, ?) ON CONFLICT(id) DO UPDATE SET "
             "status = 'not_run', success = 0, response = excluded.response, "
             "finished_at = excluded.finished_at",
-            (mission_id, mission, reason, finished_at, finished_at))
+            (mission_id, mission, reason, finished_at, finished_at),
+        )
 
     def mission_finished(self, record: dict[str, Any], finished_at: float) -> None:
         """Store a finished mission (`MissionResult.to_dict()`), also one that never started."""
@@ -160,9 +178,16 @@ class MissionHistory:
             "status = excluded.status, success = excluded.success, "
             "response = excluded.response, finished_at = excluded.finished_at, "
             "record = excluded.record",
-            (record["mission_id"], record["mission"], record["status"], int(record["success"]),
-             record["response"], finished_at - record["timing"]["total_duration"], finished_at,
-             json.dumps(record, default=str)),
+            (
+                record["mission_id"],
+                record["mission"],
+                record["status"],
+                int(record["success"]),
+                record["response"],
+                finished_at - record["timing"]["total_duration"],
+                finished_at,
+                json.dumps(record, default=str),
+            ),
         )
 
     def prune(self, *, max_age_days: float | None, max_missions: int | None) -> int:
@@ -172,12 +197,15 @@ class MissionHistory:
             try:
                 if max_age_days is not None:
                     cutoff = time.time() - max_age_days * 86400
-                    deleted += self._db.execute("DELETE FROM missions WHERE started_at < ?",
-                                                (cutoff,)).rowcount
+                    deleted += self._db.execute(
+                        "DELETE FROM missions WHERE started_at < ?", (cutoff,)
+                    ).rowcount
                 if max_missions is not None:
                     deleted += self._db.execute(
                         "DELETE FROM missions WHERE id NOT IN (SELECT id FROM missions "
-                        "ORDER BY started_at DESC LIMIT ?)", (max_missions,)).rowcount
+                        "ORDER BY started_at DESC LIMIT ?)",
+                        (max_missions,),
+                    ).rowcount
             except sqlite3.DatabaseError as exc:
                 log.error("pruning the mission history failed: %s", _explain(self.path, exc))
         return deleted
@@ -193,8 +221,11 @@ class MissionHistory:
             try:
                 self._db.execute(sql, params)
             except sqlite3.DatabaseError as exc:
-                log.error("mission history write failed, kept in memory for a retry "
-                          "(%d waiting): %s", len(self._backlog), _explain(self.path, exc))
+                log.error(
+                    "mission history write failed, kept in memory for a retry (%d waiting): %s",
+                    len(self._backlog),
+                    _explain(self.path, exc),
+                )
                 return
             self._backlog.pop(0)
 
@@ -206,31 +237,45 @@ class MissionHistory:
 
     # -- reading ----------------------------------------------------------------------------
 
-    def recent(self, limit: int = 20, offset: int = 0, *,
-               queued: bool = True) -> list[dict[str, Any]]:
+    def recent(
+        self, limit: int = 20, offset: int = 0, *, queued: bool = True
+    ) -> list[dict[str, Any]]:
         """Newest first: id, mission, status, success, response, started_at, finished_at.
 
         `queued=False` leaves out missions still waiting for their turn (`started_at` is then
         when they were accepted)."""
         where = "" if queued else "WHERE status != 'queued' "
-        rows = self._query("SELECT id, mission, status, success, response, started_at, "
-                           f"finished_at FROM missions {where}ORDER BY started_at DESC "
-                           "LIMIT ? OFFSET ?", (limit, offset))
+        rows = self._query(
+            "SELECT id, mission, status, success, response, started_at, "
+            f"finished_at FROM missions {where}ORDER BY started_at DESC "
+            "LIMIT ? OFFSET ?",
+            (limit, offset),
+        )
         keys = ("id", "mission", "status", "success", "response", "started_at", "finished_at")
         return [dict(zip(keys, row, strict=True)) for row in rows]
 
     def get(self, mission_id: str) -> dict[str, Any] | None:
         """The full record of one mission (plan, steps, timing, usage, refusals, robot)."""
-        rows = self._query("SELECT id, mission, status, success, response, started_at, "
-                           "finished_at, record FROM missions WHERE id = ?", (mission_id,))
+        rows = self._query(
+            "SELECT id, mission, status, success, response, started_at, "
+            "finished_at, record FROM missions WHERE id = ?",
+            (mission_id,),
+        )
         if not rows:
             return None
         mission_id, mission, status, success, response, started, finished, record = rows[0]
         # A mission that never finished (queued, running, not run, interrupted) has no record:
         # what the row says is all there is.
-        full = json.loads(record) if record else {
-            "mission_id": mission_id, "mission": mission, "response": response,
-            "success": None if success is None else bool(success)}
+        full = (
+            json.loads(record)
+            if record
+            else {
+                "mission_id": mission_id,
+                "mission": mission,
+                "response": response,
+                "success": None if success is None else bool(success),
+            }
+        )
         full.update(status=status, started_at=started, finished_at=finished)
         return full
 
@@ -247,8 +292,10 @@ class MissionHistory:
     # -- places (same file) -----------------------------------------------------------------
 
     def save_place(self, name: str, x: float, y: float, yaw: float) -> None:
-        self._write("INSERT OR REPLACE INTO places (name, x, y, yaw, created_at) "
-                    "VALUES (?, ?, ?, ?, ?)", (name, x, y, yaw, time.time()))
+        self._write(
+            "INSERT OR REPLACE INTO places (name, x, y, yaw, created_at) VALUES (?, ?, ?, ?, ?)",
+            (name, x, y, yaw, time.time()),
+        )
 
     def delete_place(self, name: str) -> None:
         self._write("DELETE FROM places WHERE name = ?", (name,))
@@ -259,25 +306,37 @@ class MissionHistory:
 
     # -- sightings (same file): the latest of each object seen --------------------------------
 
-    def save_sighting(self, name: str, x: float, y: float, radius: float, confidence: float,
-                      stamp: float) -> None:
-        self._write("INSERT OR REPLACE INTO sightings (name, x, y, radius, confidence, stamp, "
-                    "seen_at) VALUES (?, ?, ?, ?, ?, ?, ?)",
-                    (name, x, y, radius, confidence, stamp, time.time()))
+    def save_sighting(
+        self, name: str, x: float, y: float, radius: float, confidence: float, stamp: float
+    ) -> None:
+        self._write(
+            "INSERT OR REPLACE INTO sightings (name, x, y, radius, confidence, stamp, "
+            "seen_at) VALUES (?, ?, ?, ?, ?, ?, ?)",
+            (name, x, y, radius, confidence, stamp, time.time()),
+        )
 
     def load_sightings(self) -> list[tuple[str, float, float, float, float, float, float]]:
         """(name, x, y, radius, confidence, robot stamp, wall-clock seen_at), by name."""
-        return [tuple(r) for r in self._query(
-            "SELECT name, x, y, radius, confidence, stamp, seen_at FROM sightings "
-            "ORDER BY name", ())]
+        return [
+            tuple(r)
+            for r in self._query(
+                "SELECT name, x, y, radius, confidence, stamp, seen_at FROM sightings "
+                "ORDER BY name",
+                (),
+            )
+        ]
 
 
 def _explain(path: Path, exc: sqlite3.DatabaseError) -> str:
     text = str(exc)
     if "locked" in text or "busy" in text:
-        return (f"the history database {str(path)!r} is locked by another process ({text}); "
-                "wait for it, or give this process its own memory.data_dir")
+        return (
+            f"the history database {str(path)!r} is locked by another process ({text}); "
+            "wait for it, or give this process its own memory.data_dir"
+        )
     if "not a database" in text or "malformed" in text or "corrupt" in text:
-        return (f"the history database {str(path)!r} is corrupt ({text}); move it aside to "
-                "keep it for inspection, and a new one will be created")
+        return (
+            f"the history database {str(path)!r} is corrupt ({text}); move it aside to "
+            "keep it for inspection, and a new one will be created"
+        )
     return f"the history database {str(path)!r} failed: {text}"

@@ -28,7 +28,8 @@ class PlaceBook:
         self._store = store
         self._lock = threading.Lock()
         self._places: dict[str, tuple[float, float, float]] = (
-            store.load_places() if store is not None else {})
+            store.load_places() if store is not None else {}
+        )
 
     @property
     def persistent(self) -> bool:
@@ -71,13 +72,14 @@ class KnownPlace:
         return (self.x, self.y)
 
 
-def known_places(profile: Mapping[str, tuple[float, float]],
-                 book: PlaceBook) -> dict[str, KnownPlace]:
+def known_places(
+    profile: Mapping[str, tuple[float, float]], book: PlaceBook
+) -> dict[str, KnownPlace]:
     """Every place the robot knows: the profile's, then taught ones. A taught place with a
     profile place's name wins (it is listed with the taught ones)."""
     taught = book.all()
-    known = {name: KnownPlace(x, y, "profile") for name, (x, y) in profile.items()
-             if name not in taught}
-    known.update({name: KnownPlace(x, y, "taught", yaw)
-                  for name, (x, y, yaw) in taught.items()})
+    known = {
+        name: KnownPlace(x, y, "profile") for name, (x, y) in profile.items() if name not in taught
+    }
+    known.update({name: KnownPlace(x, y, "taught", yaw) for name, (x, y, yaw) in taught.items()})
     return known

@@ -33,7 +33,8 @@ def _store_error(path: Path, exc: Exception) -> RecallStoreError:
     return RecallStoreError(
         f"the retrieval memory store {str(path)!r} cannot be used ({why}); move it aside to keep "
         "it for inspection (a new one is created at the next start), or set "
-        "memory.enable_rag: false")
+        "memory.enable_rag: false"
+    )
 
 
 class Embedder(Protocol):
@@ -65,8 +66,9 @@ class RecallMemory:
             import chromadb
             from chromadb.config import Settings
         except ImportError as exc:
-            raise ImportError("retrieval memory needs chromadb: "
-                              "pip install 'shadowhound[memory]'") from exc
+            raise ImportError(
+                "retrieval memory needs chromadb: pip install 'shadowhound[memory]'"
+            ) from exc
         self.path = Path(path).expanduser()
         self.embedder = embedder
         self._lock = threading.Lock()
@@ -76,10 +78,12 @@ class RecallMemory:
         # from its Rust core); whatever the kind, the store is unusable and the caller must know.
         try:
             self.path.mkdir(parents=True, exist_ok=True)
-            client = chromadb.PersistentClient(path=str(self.path),
-                                               settings=Settings(anonymized_telemetry=False))
+            client = chromadb.PersistentClient(
+                path=str(self.path), settings=Settings(anonymized_telemetry=False)
+            )
             self._collection = client.get_or_create_collection(
-                name.strip("-"), embedding_function=None, metadata={"hnsw:space": "cosine"})
+                name.strip("-"), embedding_function=None, metadata={"hnsw:space": "cosine"}
+            )
         except Exception as exc:
             raise _store_error(self.path, exc) from exc
 
@@ -94,13 +98,20 @@ class RecallMemory:
     def add_many(self, items: list[tuple[str, str, dict[str, Any]]]) -> list[str]:
         ids = [uuid.uuid4().hex for _ in items]
         vectors = self.embedder.embed([text for text, _, _ in items])
-        metadatas = [{"kind": kind, "created": time.time(),
-                      **{k: v for k, v in meta.items() if isinstance(v, (str, int, float, bool))}}
-                     for _, kind, meta in items]
+        metadatas = [
+            {
+                "kind": kind,
+                "created": time.time(),
+                **{k: v for k, v in meta.items() if isinstance(v, (str, int, float, bool))},
+            }
+            for _, kind, meta in items
+        ]
         with self._lock:
             try:
                 self._collection.add(
-                    ids=ids, documents=[t for t, _, _ in items], embeddings=list(vectors),
+                    ids=ids,
+                    documents=[t for t, _, _ in items],
+                    embeddings=list(vectors),
                     metadatas=metadatas,  # type: ignore[arg-type]
                 )
             except Exception as exc:
@@ -117,9 +128,11 @@ class RecallMemory:
                 if total == 0:
                     return []
                 found = self._collection.query(
-                    query_embeddings=[vector], n_results=min(k, total),
+                    query_embeddings=[vector],
+                    n_results=min(k, total),
                     where={"kind": kind} if kind else None,
-                    include=["documents", "metadatas", "distances"])
+                    include=["documents", "metadatas", "distances"],
+                )
             except Exception as exc:
                 raise _store_error(self.path, exc) from exc
         documents = (found.get("documents") or [[]])[0]

@@ -27,20 +27,57 @@ from .sightings import SightingBook
 
 log = logging.getLogger(__name__)
 _WORD = re.compile(r"[a-z0-9]+")
-_STOPWORDS = frozenset((
-    "a", "an", "the", "is", "are", "was", "were", "i", "you", "me", "my", "your", "it", "in",
-    "on", "at", "to", "of", "and", "or", "what", "did", "do", "does", "have", "has", "see",
-    "saw", "seen", "this", "that", "there",
-))
+_STOPWORDS = frozenset(
+    (
+        "a",
+        "an",
+        "the",
+        "is",
+        "are",
+        "was",
+        "were",
+        "i",
+        "you",
+        "me",
+        "my",
+        "your",
+        "it",
+        "in",
+        "on",
+        "at",
+        "to",
+        "of",
+        "and",
+        "or",
+        "what",
+        "did",
+        "do",
+        "does",
+        "have",
+        "has",
+        "see",
+        "saw",
+        "seen",
+        "this",
+        "that",
+        "there",
+    )
+)
 
 
 class AgentMemory:
     """History, places and (optionally) recall for one agent. `skills` (the agent's registry)
     say what of their steps retrieval memory keeps (None: only the missions' summaries)."""
 
-    def __init__(self, settings: ShadowHoundConfig, history: MissionHistory | None = None,
-                 recall: Any = None, recall_problem: str | None = None, *,
-                 skills: SkillBook | None = None) -> None:
+    def __init__(
+        self,
+        settings: ShadowHoundConfig,
+        history: MissionHistory | None = None,
+        recall: Any = None,
+        recall_problem: str | None = None,
+        *,
+        skills: SkillBook | None = None,
+    ) -> None:
         self.settings = settings
         self.skills = skills
         self.history = history
@@ -51,8 +88,9 @@ class AgentMemory:
         self.recall_problem = recall_problem
 
     @classmethod
-    def open(cls, settings: ShadowHoundConfig, backend: Any = None, *,
-             skills: SkillBook | None = None) -> AgentMemory:
+    def open(
+        cls, settings: ShadowHoundConfig, backend: Any = None, *, skills: SkillBook | None = None
+    ) -> AgentMemory:
         """Open what `settings.memory` asks for. Raises ConfigError with what to do."""
         cfg = settings.memory
         if not cfg.enabled and not cfg.enable_rag:
@@ -65,8 +103,10 @@ class AgentMemory:
             except MemoryStoreError as exc:
                 raise ConfigError(str(exc)) from exc
             if history.interrupted:
-                log.warning("%d mission(s) were running when the last process stopped; marked "
-                            "interrupted", history.interrupted)
+                log.warning(
+                    "%d mission(s) were running when the last process stopped; marked interrupted",
+                    history.interrupted,
+                )
             history.prune(max_age_days=cfg.retention_days, max_missions=cfg.max_missions)
         memory = cls(settings, history, skills=skills)
         if cfg.enable_rag:
@@ -85,8 +125,10 @@ class AgentMemory:
 
             if cfg.embedding == "backend":
                 if backend is None or not cfg.embedding_model:
-                    raise ConfigError("memory.embedding: backend needs a language-model backend "
-                                      "and memory.embedding_model")
+                    raise ConfigError(
+                        "memory.embedding: backend needs a language-model backend "
+                        "and memory.embedding_model"
+                    )
                 embedder: Any = BackendEmbedder(backend, cfg.embedding_model)
             else:
                 embedder = MiniLMEmbedder()
@@ -104,10 +146,14 @@ class AgentMemory:
         """For diagnostics: which stores are on, and why retrieval memory is off if it should
         be on."""
         cfg = self.settings.memory
-        recall = "on" if self.recall is not None else \
-            "unavailable" if self.recall_problem else "off"
-        return {"history": "on" if self.history is not None else "off", "recall": recall,
-                "recall_problem": self.recall_problem if cfg.enable_rag else None}
+        recall = (
+            "on" if self.recall is not None else "unavailable" if self.recall_problem else "off"
+        )
+        return {
+            "history": "on" if self.history is not None else "off",
+            "recall": recall,
+            "recall_problem": self.recall_problem if cfg.enable_rag else None,
+        }
 
     def close(self) -> None:
         if self.history is not None:
@@ -208,8 +254,13 @@ class AgentMemory:
             overlap = len(wanted & set(_WORD.findall(text.lower())))
             if overlap:
                 when = time.strftime("%Y-%m-%d %H:%M", time.localtime(row["started_at"]))
-                scored.append((overlap, row["started_at"],
-                               f"[mission, {when}] {row['mission']!r} {row['status']}: "
-                               f"{row['response'] or ''}"))
+                scored.append(
+                    (
+                        overlap,
+                        row["started_at"],
+                        f"[mission, {when}] {row['mission']!r} {row['status']}: "
+                        f"{row['response'] or ''}",
+                    )
+                )
         scored.sort(reverse=True)
         return [line for _, _, line in scored[:k]]

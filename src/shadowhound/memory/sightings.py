@@ -41,18 +41,23 @@ class SightingBook:
         if store is not None:
             for name, x, y, radius, confidence, stamp, seen_at in store.load_sightings():
                 self._seen[name] = Remembered(
-                    KnownObject(name, x, y, radius, confidence, stamp, remembered=True), seen_at)
+                    KnownObject(name, x, y, radius, confidence, stamp, remembered=True), seen_at
+                )
 
     def remember(self, known: KnownObject) -> None:
         now = time.time()
         with self._lock:
             old = self._seen.get(known.name)
-            fresh = (old is not None and now - old.seen_at < _REFRESH
-                     and math.hypot(old.known.x - known.x, old.known.y - known.y) < _MOVED)
+            fresh = (
+                old is not None
+                and now - old.seen_at < _REFRESH
+                and math.hypot(old.known.x - known.x, old.known.y - known.y) < _MOVED
+            )
             self._seen[known.name] = Remembered(known, old.seen_at if fresh and old else now)
         if self._store is not None and not fresh:
-            self._store.save_sighting(known.name, known.x, known.y, known.radius,
-                                      known.confidence, known.stamp)
+            self._store.save_sighting(
+                known.name, known.x, known.y, known.radius, known.confidence, known.stamp
+            )
 
     def all(self) -> list[Remembered]:
         with self._lock:

@@ -112,5 +112,12 @@ def make_planner(settings: ShadowHoundConfig, backend: LLMBackend | None = None)
     return model
 
 
-__all__ = ["FixedPlanner", "Planner", "PlanningContext", "ReplanningPlanner", "StepRunner",
-           "StepwisePlanner", "make_planner"]
+__all__ = [
+    "FixedPlanner",
+    "Planner",
+    "PlanningContext",
+    "ReplanningPlanner",
+    "StepRunner",
+    "StepwisePlanner",
+    "make_planner",
+]

@@ -10,14 +10,19 @@ import re
 
 from shadowhound.plan import SkillCall
 
-_HERE = (r"(?:this|the\s+current|your\s+current|current|our|my)\s+(?:spot|place|location|"
-         r"position|point|pose|room)|where\s+(?:you\s+are|we\s+are|i\s+am)(?:\s+now)?|here")
+_HERE = (
+    r"(?:this|the\s+current|your\s+current|current|our|my)\s+(?:spot|place|location|"
+    r"position|point|pose|room)|where\s+(?:you\s+are|we\s+are|i\s+am)(?:\s+now)?|here"
+)
 _NAME = r"(?:the\s+|a\s+|an\s+|my\s+|our\s+)?(?P<name>[a-z][a-z' -]{0,58}[a-z])"
-REMEMBER_PLACE = [re.compile(p) for p in (
-    rf"^(?:remember|save|mark|store|memori[sz]e|record|tag|label)\s+(?:{_HERE})\s+as\s+{_NAME}$",
-    rf"^(?:call|name)\s+(?:{_HERE})\s+{_NAME}$",
-    rf"^(?:this|here)\s+(?:spot\s+|place\s+|location\s+)?is\s+{_NAME}$",
-)]
+REMEMBER_PLACE = [
+    re.compile(p)
+    for p in (
+        rf"^(?:remember|save|mark|store|memori[sz]e|record|tag|label)\s+(?:{_HERE})\s+as\s+{_NAME}$",
+        rf"^(?:call|name)\s+(?:{_HERE})\s+{_NAME}$",
+        rf"^(?:this|here)\s+(?:spot\s+|place\s+|location\s+)?is\s+{_NAME}$",
+    )
+]
 FORGET_PLACE = re.compile(
     rf"^(?:forget|delete|remove|erase)\s+(?:the\s+)?(?:place|spot|location)?\s*"
     rf"(?:called|named)?\s*{_NAME}$"
@@ -43,7 +48,7 @@ def memory_steps(label: str) -> list[SkillCall] | None:
     text = _FILLER.sub("", _ENDING.sub("", raw))
     if FACT.match(text):
         fact = _ENDING.sub("", " ".join(label.strip().split()))
-        fact = fact[fact.lower().index(" that ") + 6:] if " that " in fact.lower() else fact
+        fact = fact[fact.lower().index(" that ") + 6 :] if " that " in fact.lower() else fact
         return [SkillCall("memory.note", {"text": fact}, label)]
     for pattern in REMEMBER_PLACE:
         if m := pattern.match(text):

@@ -47,12 +47,26 @@ def known_words() -> frozenset[str]:
     """Every word the offline planner reads: its tables, its patterns, numbers and units."""
     modules: list[ModuleType] = [_english, _memory_phrases, _numbers, _phrases]
     # Contractions are gone once a clause is normalised ("don't" is "do not" by then).
-    patterns = {w for m in modules for v in vars(m).values() if v is not _english._CONTRACTION
-                for w in _pattern_words(v)}
+    patterns = {
+        w
+        for m in modules
+        for v in vars(m).values()
+        if v is not _english._CONTRACTION
+        for w in _pattern_words(v)
+    }
     v = _vocabulary
     tables = _table_words(
-        v.DIRECTIONS, v.ADVERBS, v.FILLERS, v.VERBS, v.TRICK_NAMES, v.TRICK_NAMES.values(),
-        v.SHAPE_WORDS, v.WAIT_WORDS, v.THING_WORDS, _numbers.UNITS, _numbers.SPEED_UNITS,
+        v.DIRECTIONS,
+        v.ADVERBS,
+        v.FILLERS,
+        v.VERBS,
+        v.TRICK_NAMES,
+        v.TRICK_NAMES.values(),
+        v.SHAPE_WORDS,
+        v.WAIT_WORDS,
+        v.THING_WORDS,
+        _numbers.UNITS,
+        _numbers.SPEED_UNITS,
         _numbers.NUMWORD.split("|"),
     )
     return frozenset(patterns | tables)
@@ -110,16 +124,14 @@ class Reading:
         found = []
         for combination in itertools.islice(itertools.product(*choices), MAX_READINGS):
             chosen = iter(c for _, c in combination)
-            words = [next(chosen) if w in dict(self.ambiguous) else w
-                     for w in self.text.split()]
+            words = [next(chosen) if w in dict(self.ambiguous) else w for w in self.text.split()]
             found.append((" ".join(words), [*self.fixes, *combination]))
         return found
 
     def problems(self) -> str:
         """The words that stand in the way, for the user: "'rug' is not a word I know". A word
         read as another ("rug" as "run") is named too: the reading did not help."""
-        parts = [f"'{w}' could be {' or '.join(repr(c) for c in cs)}"
-                 for w, cs in self.ambiguous]
+        parts = [f"'{w}' could be {' or '.join(repr(c) for c in cs)}" for w, cs in self.ambiguous]
         order = self.written.split()
         unknown = sorted({w for w, _ in self.fixes} | set(self.unknown), key=order.index)
         if unknown:

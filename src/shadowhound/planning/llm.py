@@ -25,6 +25,7 @@ from .parse import ParsedReply, parse_reply
 
 log = logging.getLogger(__name__)
 
+
 class LLMPlanner:
     """A planner that asks a language model. Build it with the settings of one backend."""
 
@@ -53,8 +54,14 @@ class LLMPlanner:
             reply, raw = self._ask(messages, style, ctx, usage)
             calls, problems = self._checked(reply, ctx)
             if not problems and calls:
-                return Plan(calls, text=text, usage=usage, planner=self.name, planned_by="llm",
-                            notes=[reply.answer] if reply.answer else [])
+                return Plan(
+                    calls,
+                    text=text,
+                    usage=usage,
+                    planner=self.name,
+                    planned_by="llm",
+                    notes=[reply.answer] if reply.answer else [],
+                )
             if not problems:  # no steps: the model says why in words
                 raise PlanningError(reply.answer or "The model proposed no steps.", usage=usage)
             usage.invalid_plans += 1
@@ -62,7 +69,8 @@ class LLMPlanner:
                 messages += [raw, {"role": "user", "content": _repair_request(problems, style)}]
         raise PlanningError(
             "The model's plan was not valid after a repair attempt: " + "; ".join(problems),
-            not_understood=problems, usage=usage,
+            not_understood=problems,
+            usage=usage,
         )
 
     def replan(self, text: str, context: Any, done: list[str], failure: str) -> Plan:
@@ -81,8 +89,9 @@ class LLMPlanner:
             return "json_schema" if self._schema_ok else "plain"
         return fmt if fmt != "json_schema" or self._schema_ok else "plain"
 
-    def _ask(self, messages: list[dict[str, Any]], style: str, ctx: PlanningContext,
-             usage: Usage) -> tuple[ParsedReply, dict[str, Any]]:
+    def _ask(
+        self, messages: list[dict[str, Any]], style: str, ctx: PlanningContext, usage: Usage
+    ) -> tuple[ParsedReply, dict[str, Any]]:
         options: dict[str, Any] = {}
         fmt = self._format()
         if style == "tools":
@@ -90,14 +99,14 @@ class LLMPlanner:
             if self.settings.backend == "openai":
                 options["parallel_tool_calls"] = True
         elif fmt == "json_schema":
-            options["response_format"] = schema.response_format(self.settings.backend,
-                                                                ctx.registry)
+            options["response_format"] = schema.response_format(self.settings.backend, ctx.registry)
         try:
             completion = self._complete(messages, usage, ctx, **options)
         except BackendError as exc:
             # Servers say "not supported" in different ways: 400/422, or a 500 naming the field.
-            rejected = exc.status in (400, 422) or (exc.status == 500 and
-                                                    "response_format" in str(exc))
+            rejected = exc.status in (400, 422) or (
+                exc.status == 500 and "response_format" in str(exc)
+            )
             if not rejected or "response_format" not in options:
                 raise PlanningError(str(exc), usage=usage) from exc
             log.warning("server rejected response_format json_schema; asking without it")
@@ -113,22 +122,25 @@ class LLMPlanner:
             raw["tool_calls"] = message["tool_calls"]
         return parse_reply(message), raw
 
-    def _complete(self, messages: list[dict[str, Any]], usage: Usage, ctx: PlanningContext,
-                  **options: Any) -> Any:
+    def _complete(
+        self, messages: list[dict[str, Any]], usage: Usage, ctx: PlanningContext, **options: Any
+    ) -> Any:
         if ctx.cancelled is not None and ctx.cancelled.is_set():
             raise PlanningError("mission cancelled before the model was asked", usage=usage)
         hints = request_hints(self.settings.backend)
         try:  # a cancel ends the wait at once (BackendCancelled) and nothing more is sent
-            completion = self.backend.complete(messages, cancelled=ctx.cancelled, **options,
-                                               extra_body=hints or None)
+            completion = self.backend.complete(
+                messages, cancelled=ctx.cancelled, **options, extra_body=hints or None
+            )
         except BackendError:
             usage.round_trips += 1  # a failed request is still a round trip
             raise
         usage.add(completion.usage)
         return completion
 
-    def _checked(self, reply: ParsedReply, ctx: PlanningContext) -> tuple[list[SkillCall],
-                                                                        list[str]]:
+    def _checked(
+        self, reply: ParsedReply, ctx: PlanningContext
+    ) -> tuple[list[SkillCall], list[str]]:
         """Validate every proposed call; canonical names and parsed arguments on success."""
         problems = list(reply.problems)
         calls = []
@@ -148,8 +160,13 @@ class LLMPlanner:
 
     def _system(self, ctx: PlanningContext, style: str) -> str:
         return prompts.system_prompt(
-            ctx.registry, style=style, state=ctx.state, places=ctx.places, history=ctx.history,
-            history_size=self.settings.agent.conversation_history_size, memories=ctx.memories,
+            ctx.registry,
+            style=style,
+            state=ctx.state,
+            places=ctx.places,
+            history=ctx.history,
+            history_size=self.settings.agent.conversation_history_size,
+            memories=ctx.memories,
             objects=ctx.objects,
         )
 
@@ -164,16 +181,24 @@ def _context(context: Any) -> PlanningContext:
 
 def _repair_request(problems: list[str], style: str) -> str:
     how = "Call the tools again" if style in ("tools", "react") else "Reply with the JSON plan"
-    return ("Your plan cannot be used: " + "; ".join(problems) +
-            f". {how}, corrected, and nothing else.")
+    return (
+        "Your plan cannot be used: "
+        + "; ".join(problems)
+        + f". {how}, corrected, and nothing else."
+    )
 
 
 def _assistant_turn(message: dict[str, Any], reply: ParsedReply) -> dict[str, Any]:
     if reply.used_tools:
-        return {"role": "assistant", "content": message.get("content") or "",
-                "tool_calls": message["tool_calls"]}
-    return {"role": "assistant", "content": json.dumps(
-        {"steps": [{"skill": c.skill, "args": c.args} for c in reply.calls]})}
+        return {
+            "role": "assistant",
+            "content": message.get("content") or "",
+            "tool_calls": message["tool_calls"],
+        }
+    return {
+        "role": "assistant",
+        "content": json.dumps({"steps": [{"skill": c.skill, "args": c.args} for c in reply.calls]}),
+    }
 
 
 def _observation(call: SkillCall, call_id: str | None, observation: str) -> dict[str, Any]:
@@ -197,28 +222,40 @@ class ReactPlanner(LLMPlanner):
         executed = 0
         while True:
             if usage.total_tokens >= self.llm.react_token_budget:
-                return (f"Stopped: the token budget of {self.llm.react_token_budget} "
-                        "(llm.react_token_budget) is used up.", usage, False)
+                return (
+                    f"Stopped: the token budget of {self.llm.react_token_budget} "
+                    "(llm.react_token_budget) is used up.",
+                    usage,
+                    False,
+                )
             try:
                 completion = self._complete(messages, usage, ctx, tools=tools)
             except BackendError as exc:
                 raise PlanningError(str(exc), usage=usage) from exc
             reply = parse_reply(completion.message)
             if not reply.calls and completion.finish_reason == "length":
-                return (f"Stopped: the model's answer was cut off at {self.llm.max_tokens} "
-                        "tokens (llm.max_tokens).", usage, False)
+                return (
+                    f"Stopped: the model's answer was cut off at {self.llm.max_tokens} "
+                    "tokens (llm.max_tokens).",
+                    usage,
+                    False,
+                )
             if reply.problems and not reply.calls:
-                messages += [{"role": "assistant", "content": completion.message.get("content")
-                              or ""},
-                             {"role": "user", "content": _repair_request(reply.problems, "react")}]
+                messages += [
+                    {"role": "assistant", "content": completion.message.get("content") or ""},
+                    {"role": "user", "content": _repair_request(reply.problems, "react")},
+                ]
                 continue
             if not reply.calls:
                 return reply.answer or "Done.", usage, True
             messages.append(_assistant_turn(completion.message, reply))
             for call, call_id in zip(reply.calls, reply.call_ids, strict=True):
                 if executed >= self.llm.react_max_steps:
-                    return (f"Stopped after {executed} skill calls (llm.react_max_steps).",
-                            usage, False)
+                    return (
+                        f"Stopped after {executed} skill calls (llm.react_max_steps).",
+                        usage,
+                        False,
+                    )
                 observation = run_step(call)
                 executed += 1
                 messages.append(_observation(call, call_id, observation))

@@ -37,8 +37,9 @@ def parse_reply(message: dict[str, Any]) -> ParsedReply:
     reply = ParsedReply()
     for i, call in enumerate(message.get("tool_calls") or [], start=1):
         function = call.get("function") or {}
-        _add(reply, function.get("name"), function.get("arguments"), f"tool call {i}",
-             call.get("id"))
+        _add(
+            reply, function.get("name"), function.get("arguments"), f"tool call {i}", call.get("id")
+        )
         reply.used_tools = True
     content = message.get("content") or ""
     if isinstance(content, list):  # content parts
@@ -88,8 +89,9 @@ def _interpret(reply: ParsedReply, value: Any) -> None:
         if key in value:
             steps = value[key]
             if not isinstance(steps, list):
-                reply.problems.append(f"'{key}' must be a list of steps, got "
-                                      f"{type(steps).__name__}")
+                reply.problems.append(
+                    f"'{key}' must be a list of steps, got {type(steps).__name__}"
+                )
                 return
             for item in steps:
                 _step(reply, item, f"step {len(reply.calls) + 1}")
@@ -97,21 +99,25 @@ def _interpret(reply: ParsedReply, value: Any) -> None:
     if any(k in value for k in ("skill", "name", "function", "tool")):
         _step(reply, value, f"step {len(reply.calls) + 1}")
     elif not reply.answer:
-        reply.problems.append("the JSON has no 'steps' list; expected "
-                              '{"steps": [{"skill": ..., "args": {...}}]}')
+        reply.problems.append(
+            'the JSON has no \'steps\' list; expected {"steps": [{"skill": ..., "args": {...}}]}'
+        )
 
 
 def _step(reply: ParsedReply, item: Any, where: str) -> None:
     if not isinstance(item, dict):
-        reply.problems.append(f"{where} must be an object with 'skill' and 'args', got "
-                              f"{json.dumps(item)[:80]}")
+        reply.problems.append(
+            f"{where} must be an object with 'skill' and 'args', got {json.dumps(item)[:80]}"
+        )
         return
     function: dict[str, Any] = item["function"] if isinstance(item.get("function"), dict) else {}
     name = item.get("skill") or item.get("name") or item.get("tool") or function.get("name")
     if name is None and isinstance(item.get("function"), str):
         name = item["function"]
-    args = next((item[k] for k in ("args", "arguments", "parameters", "params", "input")
-                 if k in item), function.get("arguments", function.get("parameters", {})))
+    args = next(
+        (item[k] for k in ("args", "arguments", "parameters", "params", "input") if k in item),
+        function.get("arguments", function.get("parameters", {})),
+    )
     _add(reply, name, args, where, None)
 
 
@@ -128,9 +134,9 @@ def _add(reply: ParsedReply, name: Any, args: Any, where: str, call_id: str | No
     if args is None:
         args = {}
     if not isinstance(args, dict):
-        reply.problems.append(f"{where} ({name}): arguments must be an object, got "
-                              f"{json.dumps(args)[:80]}")
+        reply.problems.append(
+            f"{where} ({name}): arguments must be an object, got {json.dumps(args)[:80]}"
+        )
         return
     reply.calls.append(SkillCall(name.strip(), args))
     reply.call_ids.append(call_id)
-

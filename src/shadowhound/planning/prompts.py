@@ -75,11 +75,17 @@ def tools(registry: SkillRegistry) -> list[dict[str, Any]]:
     return [function_tool(s, compact_schema(s)) for s in registry]
 
 
-def function_tool(skill: Skill, parameters: dict[str, Any], strict: bool = False,
-                  ) -> dict[str, Any]:
+def function_tool(
+    skill: Skill,
+    parameters: dict[str, Any],
+    strict: bool = False,
+) -> dict[str, Any]:
     """One skill as an OpenAI-style function tool (`strict` only where the API takes it)."""
-    function: dict[str, Any] = {"name": skill.tool_name, "description": skill.description,
-                                "parameters": parameters}
+    function: dict[str, Any] = {
+        "name": skill.tool_name,
+        "description": skill.description,
+        "parameters": parameters,
+    }
     if strict:
         function["strict"] = True
     return {"type": "function", "function": function}
@@ -103,8 +109,11 @@ def objects_line(objects: dict[str, tuple[float, float]]) -> str:
     """The objects the robot has seen, where (a thing not listed can still be looked for)."""
     if not objects:
         return "Objects seen: none yet."
-    return "Objects seen: " + ", ".join(f"{n} ({x:.1f}, {y:.1f})"
-                                        for n, (x, y) in objects.items()) + "."
+    return (
+        "Objects seen: "
+        + ", ".join(f"{n} ({x:.1f}, {y:.1f})" for n, (x, y) in objects.items())
+        + "."
+    )
 
 
 def history_lines(history: list[str], limit: int) -> str:
@@ -154,8 +163,12 @@ def system_prompt(
     seen, recent missions, memories, the robot's state) comes last, so only that tail is
     evaluated anew.
     """
-    parts = [stable_prefix(registry, style=style),
-             places_line(places or {}), objects_line(objects or {}),
-             history_lines(history or [], history_size), memory_lines(memories or []),
-             state_line(state)]
+    parts = [
+        stable_prefix(registry, style=style),
+        places_line(places or {}),
+        objects_line(objects or {}),
+        history_lines(history or [], history_size),
+        memory_lines(memories or []),
+        state_line(state),
+    ]
     return "\n".join(p for p in parts if p)

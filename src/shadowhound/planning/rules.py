@@ -119,13 +119,19 @@ class RulePlanner:
                 f"I found no request in {text.strip()[:80]!r}. " + CAPABILITIES,
                 not_understood=[text.strip()[:200]],
             )
-        return Plan(steps=steps, text=text, notes=list(dict.fromkeys(notes)), planner=self.name,
-                    planned_by=self.kind)
+        return Plan(
+            steps=steps,
+            text=text,
+            notes=list(dict.fromkeys(notes)),
+            planner=self.name,
+            planned_by=self.kind,
+        )
 
     # ---- one clause ---------------------------------------------------------------------------
 
-    def _forgiving(self, norm: str, label: str, notes: list[str], last_verb: str,
-                   after_steps: bool) -> _Read | None:
+    def _forgiving(
+        self, norm: str, label: str, notes: list[str], last_verb: str, after_steps: bool
+    ) -> _Read | None:
         """`_read`, and if the clause is not understood as written, `_read` again with its
         misspellings read as the planner's own words; the notes say what was read as what.
         Raises NotUnderstood naming the words that stand in the way."""
@@ -154,8 +160,9 @@ class RulePlanner:
             return read
         raise NotUnderstood("; ".join(r for r in (reason, reading.problems()) if r))
 
-    def _read(self, norm: str, label: str, notes: list[str], last_verb: str,
-              after_steps: bool) -> _Read | None:
+    def _read(
+        self, norm: str, label: str, notes: list[str], last_verb: str, after_steps: bool
+    ) -> _Read | None:
         """What a normalised clause asks: (steps, count, how, verb); steps None for "repeat
         all"; None for a clause of fillers only."""
         norm, count, how = phrases.repetition(norm)
@@ -180,10 +187,18 @@ class RulePlanner:
             raise NotUnderstood("I do not plan around 'not'; say what to do instead")
         condition = phrases.CONDITION.search(text)
         if condition:
-            raise NotUnderstood(f"I do not plan around conditions ('{condition[0]}'); say what "
-                                "to do, or ask a language-model planner")
-        for handler in (self._wait, self._posture, self._trick, self._find, self._goto,
-                        self._patrol):
+            raise NotUnderstood(
+                f"I do not plan around conditions ('{condition[0]}'); say what "
+                "to do, or ask a language-model planner"
+            )
+        for handler in (
+            self._wait,
+            self._posture,
+            self._trick,
+            self._find,
+            self._goto,
+            self._patrol,
+        ):
             steps = handler(text, label, notes)
             if steps is not None:
                 return steps, ""
@@ -300,7 +315,7 @@ class RulePlanner:
         return None if place is None else goto(place=place)
 
     def _find(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
-        """"find the blue box", "bring me to the fridge": go to a thing by name (nav.goto
+        """ "find the blue box", "bring me to the fridge": go to a thing by name (nav.goto
         resolves it: a place, an object seen, else one to search for)."""
         m = phrases.FIND.match(text)
         if m is None:

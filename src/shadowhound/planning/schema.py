@@ -79,8 +79,9 @@ def _alternatives(skill: Skill) -> list[tuple[str, ...]]:
 
 
 @functools.lru_cache(maxsize=512)
-def _args_schema(skill: Skill, dialect: Dialect,
-                 alternative: tuple[str, ...] = ()) -> dict[str, Any]:
+def _args_schema(
+    skill: Skill, dialect: Dialect, alternative: tuple[str, ...] = ()
+) -> dict[str, Any]:
     full = skill.parameters_schema()
     required = list(full.get("required", [])) + list(alternative)
     others = {n for a in _alternatives(skill) for n in a} - set(alternative)
@@ -90,13 +91,15 @@ def _args_schema(skill: Skill, dialect: Dialect,
         nullable = len(branches) < len(prop.get("anyOf", [prop]))
         if name in others:
             continue  # it belongs to another alternative: "x" in the step that goes to a place
-        if (dialect == "llamacpp" and name not in required
-                and any(k in branches[0] for k in _RANGES)):
+        if (
+            dialect == "llamacpp"
+            and name not in required
+            and any(k in branches[0] for k in _RANGES)
+        ):
             # The grammar cannot hold a number in its range, and the argument is optional:
             # not offered at all, so the skill's default applies (speed, heading, laps).
             continue
-        base = {k: v for k, v in branches[0].items()
-                if k in ("type", "enum", *_KEEP[dialect])}
+        base = {k: v for k, v in branches[0].items() if k in ("type", "enum", *_KEEP[dialect])}
         if dialect == "openai" and name not in required:
             # Strict mode: every property is required. An optional argument the skill accepts
             # as None may be null; one with another default (nav.patrol's laps) must be given.
@@ -170,10 +173,15 @@ def _strict_parameters(skill: Skill) -> dict[str, Any]:
     merged: dict[str, Any] = {}
     for alternative in alternatives:
         for name, prop in _args_schema(skill, "openai", alternative)["properties"].items():
-            merged.setdefault(name, prop if name not in alternative else
-                              {"anyOf": [prop, {"type": "null"}]})
-    return {"type": "object", "properties": merged, "required": list(merged),
-            "additionalProperties": False}
+            merged.setdefault(
+                name, prop if name not in alternative else {"anyOf": [prop, {"type": "null"}]}
+            )
+    return {
+        "type": "object",
+        "properties": merged,
+        "required": list(merged),
+        "additionalProperties": False,
+    }
 
 
 def strict_tools(registry: SkillRegistry) -> list[dict[str, Any]]:

@@ -95,19 +95,27 @@ class SportMode(IntEnum):
 
 # The posture each mode means. RECOVERY_STAND is a change under way, so it has none.
 MODE_POSTURE: dict[int, Posture] = {
-    SportMode.IDLE: Posture.STANDING, SportMode.BALANCE_STAND: Posture.STANDING,
-    SportMode.POSE: Posture.STANDING, SportMode.LOCOMOTION: Posture.STANDING,
-    SportMode.JOINT_LOCK: Posture.STANDING, SportMode.FRONT_FLIP: Posture.STANDING,
-    SportMode.FRONT_JUMP: Posture.STANDING, SportMode.FRONT_POUNCE: Posture.STANDING,
-    SportMode.LIE_DOWN: Posture.LYING, SportMode.DAMPING: Posture.LYING,
+    SportMode.IDLE: Posture.STANDING,
+    SportMode.BALANCE_STAND: Posture.STANDING,
+    SportMode.POSE: Posture.STANDING,
+    SportMode.LOCOMOTION: Posture.STANDING,
+    SportMode.JOINT_LOCK: Posture.STANDING,
+    SportMode.FRONT_FLIP: Posture.STANDING,
+    SportMode.FRONT_JUMP: Posture.STANDING,
+    SportMode.FRONT_POUNCE: Posture.STANDING,
+    SportMode.LIE_DOWN: Posture.LYING,
+    SportMode.DAMPING: Posture.LYING,
     SportMode.SIT: Posture.SITTING,
 }
 # Modes in which the robot obeys Move (1008); in any other it ignores Moves.
 WALKING_MODES = frozenset({SportMode.BALANCE_STAND, SportMode.LOCOMOTION})
 # Body height (m) of each posture once reached; `go2_states.body_height` moves between them
 # while a posture changes (the mode changes at once, so only the height tells the end).
-BODY_HEIGHT: dict[Posture, float] = {Posture.STANDING: 0.32, Posture.SITTING: 0.20,
-                                     Posture.LYING: 0.08}
+BODY_HEIGHT: dict[Posture, float] = {
+    Posture.STANDING: 0.32,
+    Posture.SITTING: 0.20,
+    Posture.LYING: 0.08,
+}
 BODY_HEIGHT_TOLERANCE = 0.02
 
 
@@ -139,19 +147,53 @@ _STANDING = frozenset({Posture.STANDING})
 POSTURE_CHANGES: dict[int, PostureChange] = {
     c.api_id: c
     for c in (
-        PostureChange(STAND_UP, "StandUp", _ANY, Posture.STANDING, SportMode.JOINT_LOCK,
-                      SportMode.JOINT_LOCK, 1.0),
-        PostureChange(BALANCE_STAND, "BalanceStand", _STANDING, Posture.STANDING,
-                      SportMode.BALANCE_STAND, SportMode.BALANCE_STAND, 0.3),
-        PostureChange(STAND_DOWN, "StandDown", _STANDING, Posture.LYING, SportMode.LIE_DOWN,
-                      SportMode.LIE_DOWN, 1.0),
+        PostureChange(
+            STAND_UP,
+            "StandUp",
+            _ANY,
+            Posture.STANDING,
+            SportMode.JOINT_LOCK,
+            SportMode.JOINT_LOCK,
+            1.0,
+        ),
+        PostureChange(
+            BALANCE_STAND,
+            "BalanceStand",
+            _STANDING,
+            Posture.STANDING,
+            SportMode.BALANCE_STAND,
+            SportMode.BALANCE_STAND,
+            0.3,
+        ),
+        PostureChange(
+            STAND_DOWN,
+            "StandDown",
+            _STANDING,
+            Posture.LYING,
+            SportMode.LIE_DOWN,
+            SportMode.LIE_DOWN,
+            1.0,
+        ),
         PostureChange(SIT, "Sit", _STANDING, Posture.SITTING, SportMode.SIT, SportMode.SIT, 1.0),
-        PostureChange(RISE_SIT, "RiseSit", frozenset({Posture.SITTING}), Posture.STANDING,
-                      SportMode.BALANCE_STAND, SportMode.BALANCE_STAND, 1.0),
-        PostureChange(RECOVERY_STAND, "RecoveryStand", _ANY, Posture.STANDING,
-                      SportMode.RECOVERY_STAND, SportMode.BALANCE_STAND, 1.3),
-        PostureChange(DAMP, "Damp", _ANY, Posture.LYING, SportMode.DAMPING, SportMode.DAMPING,
-                      0.3),
+        PostureChange(
+            RISE_SIT,
+            "RiseSit",
+            frozenset({Posture.SITTING}),
+            Posture.STANDING,
+            SportMode.BALANCE_STAND,
+            SportMode.BALANCE_STAND,
+            1.0,
+        ),
+        PostureChange(
+            RECOVERY_STAND,
+            "RecoveryStand",
+            _ANY,
+            Posture.STANDING,
+            SportMode.RECOVERY_STAND,
+            SportMode.BALANCE_STAND,
+            1.3,
+        ),
+        PostureChange(DAMP, "Damp", _ANY, Posture.LYING, SportMode.DAMPING, SportMode.DAMPING, 0.3),
     )
 }
 

@@ -36,16 +36,26 @@ class Frames:
     body: str = "base_link"
 
 
-def to_sighting(label: str, x: float, y: float, frame: str, confidence: float, radius: float,
-                stamp: float, pose: Pose2D, frames: Frames) -> KnownObject:
+def to_sighting(
+    label: str,
+    x: float,
+    y: float,
+    frame: str,
+    confidence: float,
+    radius: float,
+    stamp: float,
+    pose: Pose2D,
+    frames: Frames,
+) -> KnownObject:
     """One detection as a sighting in the odometry frame. `pose` is the robot's pose in that
     frame (used for body-frame positions); `stamp` is in robot-clock seconds."""
     name = " ".join(str(label).split())
     if not name:
         raise DetectionError("a detection needs a label (what it is, e.g. 'red ball')")
     if len(name) > MAX_LABEL:
-        raise DetectionError(f"label {name[:40]!r}... is {len(name)} characters; at most "
-                             f"{MAX_LABEL} are allowed")
+        raise DetectionError(
+            f"label {name[:40]!r}... is {len(name)} characters; at most {MAX_LABEL} are allowed"
+        )
     if not (math.isfinite(x) and math.isfinite(y)):
         raise DetectionError(f"{name!r}: position must be finite metres, got ({x}, {y})")
     if not (math.isfinite(confidence) and 0.0 <= confidence <= 1.0):
@@ -59,14 +69,17 @@ def to_sighting(label: str, x: float, y: float, frame: str, confidence: float, r
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         wx, wy = pose.x + c * x - s * y, pose.y + s * x + c * y
     else:
-        raise DetectionError(f"{name!r}: frame {frame or '(empty)'!r} is not supported; give "
-                             f"positions in {frames.odom!r} (the odometry frame) or "
-                             f"{frames.body!r} (the robot's body)")
+        raise DetectionError(
+            f"{name!r}: frame {frame or '(empty)'!r} is not supported; give "
+            f"positions in {frames.odom!r} (the odometry frame) or "
+            f"{frames.body!r} (the robot's body)"
+        )
     return KnownObject(name, wx, wy, radius or DEFAULT_RADIUS, confidence, stamp)
 
 
-def sightings_from_msg(msg: Any, pose: Pose2D, frames: Frames, now: float, age: Any
-                       ) -> tuple[list[KnownObject], list[str]]:
+def sightings_from_msg(
+    msg: Any, pose: Pose2D, frames: Frames, now: float, age: Any
+) -> tuple[list[KnownObject], list[str]]:
     """A DetectionArray as sightings, and what was refused. `age(header_stamp)` is how many
     seconds ago a stamp was (0 for a zero stamp); `now` is the robot clock."""
     seen: list[KnownObject] = []
@@ -74,12 +87,23 @@ def sightings_from_msg(msg: Any, pose: Pose2D, frames: Frames, now: float, age: 
     default_frame = str(msg.header.frame_id)
     for d in msg.detections:
         frame = str(d.header.frame_id) or default_frame
-        stamp = d.header.stamp if (d.header.stamp.sec or d.header.stamp.nanosec) \
-            else msg.header.stamp
+        stamp = (
+            d.header.stamp if (d.header.stamp.sec or d.header.stamp.nanosec) else msg.header.stamp
+        )
         try:
-            seen.append(to_sighting(str(d.label), float(d.position.x), float(d.position.y),
-                                    frame, float(d.confidence), float(d.radius),
-                                    now - max(0.0, float(age(stamp))), pose, frames))
+            seen.append(
+                to_sighting(
+                    str(d.label),
+                    float(d.position.x),
+                    float(d.position.y),
+                    frame,
+                    float(d.confidence),
+                    float(d.radius),
+                    now - max(0.0, float(age(stamp))),
+                    pose,
+                    frames,
+                )
+            )
         except DetectionError as exc:
             problems.append(str(exc))
     return seen, problems
@@ -97,7 +121,7 @@ class SightingBoard:
         with self._lock:
             merged = merge_sightings(self._objects, seen)
             if len(merged) > self._limit:  # forget the longest unseen
-                merged = tuple(sorted(merged, key=lambda o: o.stamp)[-self._limit:])
+                merged = tuple(sorted(merged, key=lambda o: o.stamp)[-self._limit :])
             self._objects = merged
 
     def objects(self) -> tuple[KnownObject, ...]:

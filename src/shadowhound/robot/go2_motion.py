@@ -34,8 +34,11 @@ from ..state import normalize_angle
 # Motion control for real odometry, used with robot go2 for every field the profile (or the
 # environment) does not set: the simulator's defaults (2 mm, 0.001 degrees, 20 Hz) are exact
 # only for the exact simulator; odometry over DDS arrives late and noisy.
-GO2_MOTION = {"position_tolerance": 0.02, "yaw_tolerance": math.radians(0.5),
-              "control_rate_hz": 10.0}
+GO2_MOTION = {
+    "position_tolerance": 0.02,
+    "yaw_tolerance": math.radians(0.5),
+    "control_rate_hz": 10.0,
+}
 
 _DT = 0.01  # seconds per model integration step
 _TRACE_SECONDS = 6.0  # model history kept: more than a fit window plus the largest latency
@@ -66,16 +69,18 @@ class _Point:
     wz: float
 
 
-def relative(a: tuple[float, float, float],
-             b: tuple[float, float, float]) -> tuple[float, float, float]:
+def relative(
+    a: tuple[float, float, float], b: tuple[float, float, float]
+) -> tuple[float, float, float]:
     """The motion from pose a to pose b, in a's frame."""
     dx, dy = b[0] - a[0], b[1] - a[1]
     c, s = math.cos(a[2]), math.sin(a[2])
     return dx * c + dy * s, -dx * s + dy * c, normalize_angle(b[2] - a[2])
 
 
-def compose(a: tuple[float, float, float],
-            d: tuple[float, float, float]) -> tuple[float, float, float]:
+def compose(
+    a: tuple[float, float, float], d: tuple[float, float, float]
+) -> tuple[float, float, float]:
     """Pose a moved by d (given in a's frame)."""
     c, s = math.cos(a[2]), math.sin(a[2])
     return a[0] + d[0] * c - d[1] * s, a[1] + d[0] * s + d[1] * c, normalize_angle(a[2] + d[2])
@@ -87,8 +92,14 @@ class MotionTracker:
     `latency` None measures it (starting from `initial_latency`); a number fixes it.
     """
 
-    def __init__(self, *, linear_accel: float = 1.0, angular_accel: float = 3.0,
-                 latency: float | None = None, initial_latency: float = 0.2) -> None:
+    def __init__(
+        self,
+        *,
+        linear_accel: float = 1.0,
+        angular_accel: float = 3.0,
+        latency: float | None = None,
+        initial_latency: float = 0.2,
+    ) -> None:
         self.linear_accel = linear_accel
         self.angular_accel = angular_accel
         self.fixed_latency = latency
@@ -216,8 +227,15 @@ class MotionTracker:
             mvx, mvy, mwz = (p.vx + vx) / 2, (p.vy + vy) / 2, (p.wz + wz) / 2
             mid = p.yaw + mwz * dt / 2
             c, s = math.cos(mid), math.sin(mid)
-            p = _Point(p.t + dt, p.x + (mvx * c - mvy * s) * dt, p.y + (mvx * s + mvy * c) * dt,
-                       p.yaw + mwz * dt, vx, vy, wz)  # yaw unwrapped inside the trace
+            p = _Point(
+                p.t + dt,
+                p.x + (mvx * c - mvy * s) * dt,
+                p.y + (mvx * s + mvy * c) * dt,
+                p.yaw + mwz * dt,
+                vx,
+                vy,
+                wz,
+            )  # yaw unwrapped inside the trace
             self._trace.append(p)
         while len(self._trace) > 2 and self._trace[1].t < t - _TRACE_SECONDS:
             self._trace.popleft()

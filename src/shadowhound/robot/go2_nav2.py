@@ -25,9 +25,11 @@ from rclpy.node import Node
 from .base import RobotError
 from .navigator import NavFeedback, NavReport, NavStatus, nav2_error_words
 
-_ENDED = {GoalStatus.STATUS_SUCCEEDED: NavStatus.SUCCEEDED,
-          GoalStatus.STATUS_ABORTED: NavStatus.FAILED,
-          GoalStatus.STATUS_CANCELED: NavStatus.CANCELED}
+_ENDED = {
+    GoalStatus.STATUS_SUCCEEDED: NavStatus.SUCCEEDED,
+    GoalStatus.STATUS_ABORTED: NavStatus.FAILED,
+    GoalStatus.STATUS_CANCELED: NavStatus.CANCELED,
+}
 
 
 def _seconds(duration: Any) -> float:
@@ -68,8 +70,12 @@ class Nav2Goal:
 
     def on_feedback(self, msg: Any) -> None:
         fb = msg.feedback
-        feedback = NavFeedback(float(fb.distance_remaining), int(fb.number_of_recoveries),
-                               _seconds(fb.navigation_time), _seconds(fb.estimated_time_remaining))
+        feedback = NavFeedback(
+            float(fb.distance_remaining),
+            int(fb.number_of_recoveries),
+            _seconds(fb.navigation_time),
+            _seconds(fb.estimated_time_remaining),
+        )
         with self._lock:
             self._feedback = feedback
 
@@ -112,8 +118,13 @@ class Nav2Navigator:
     """NavigateToPose on `action` (relative to the node's namespace); `call_soon(fn)` runs
     `fn` on the thread that spins `node`."""
 
-    def __init__(self, node: Node, action: str, call_soon: Callable[[Callable[[], Any]], Any],
-                 frame: str = "odom") -> None:
+    def __init__(
+        self,
+        node: Node,
+        action: str,
+        call_soon: Callable[[Callable[[], Any]], Any],
+        frame: str = "odom",
+    ) -> None:
         self._node = node
         self._call_soon = call_soon
         self._client = ActionClient(node, NavigateToPose, action)

@@ -59,10 +59,15 @@ class PostureWatch:
     messages; `timeout` bounds each wait; a report older than `stale` seconds does not count.
     """
 
-    def __init__(self, check_estop: Callable[[str], None], topic: str, timeout: float,
-                 stale: float) -> None:
-        self._check_estop, self.topic, self.timeout, self.stale = (check_estop, topic, timeout,
-                                                                   stale)
+    def __init__(
+        self, check_estop: Callable[[str], None], topic: str, timeout: float, stale: float
+    ) -> None:
+        self._check_estop, self.topic, self.timeout, self.stale = (
+            check_estop,
+            topic,
+            timeout,
+            stale,
+        )
         self._lock = threading.Lock()
         self._report: Report | None = None
 
@@ -100,7 +105,8 @@ class PostureWatch:
                 raise RobotError(
                     f"cannot tell the robot's posture: {self.topic} shows {self._seen()} after "
                     f"{self.timeout:.0f} s; check that go2_ros2_sdk is running and connected "
-                    "(`shadowhound doctor --go2`)")
+                    "(`shadowhound doctor --go2`)"
+                )
             self._check_estop("changing posture")
             time.sleep(_POLL)
 
@@ -109,8 +115,11 @@ class PostureWatch:
         deadline = time.monotonic() + self.timeout
         while True:
             report = self.fresh()
-            if report is not None and report.posture is target and (
-                    not balanced or report.balanced):
+            if (
+                report is not None
+                and report.posture is target
+                and (not balanced or report.balanced)
+            ):
                 return
             self._check_estop(f"waiting for {what}")
             if time.monotonic() > deadline:
@@ -118,7 +127,8 @@ class PostureWatch:
                     f"{what} sent, but the robot did not reach {target.value} within "
                     f"{self.timeout:.0f} s: {self.topic} shows {self._seen()}; check that "
                     "nothing else (the phone app, a joystick) holds the robot and that it has "
-                    "room")
+                    "room"
+                )
             time.sleep(_POLL)
 
     def pause(self, seconds: float, what: str) -> None:

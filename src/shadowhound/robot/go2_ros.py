@@ -70,11 +70,17 @@ from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
 from .go2_world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-_SENSOR = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                     reliability=ReliabilityPolicy.BEST_EFFORT)
+_SENSOR = QoSProfile(
+    depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
+)
 _KEEPALIVE_PERIOD = 0.1  # 10 Hz, as DIMOS streams Twist to the Go2
-_NAME = {go2_api.STAND_UP: "StandUp", go2_api.BALANCE_STAND: "BalanceStand",
-         go2_api.RISE_SIT: "RiseSit", go2_api.SIT: "Sit", go2_api.STAND_DOWN: "StandDown"}
+_NAME = {
+    go2_api.STAND_UP: "StandUp",
+    go2_api.BALANCE_STAND: "BalanceStand",
+    go2_api.RISE_SIT: "RiseSit",
+    go2_api.SIT: "Sit",
+    go2_api.STAND_DOWN: "StandDown",
+}
 
 
 @dataclass(frozen=True)
@@ -114,8 +120,9 @@ class Go2RosConfig:
 class Go2RosRobot:
     """The Robot protocol over go2_ros2_sdk."""
 
-    def __init__(self, config: Go2RosConfig | None = None, *,
-                 context: Context | None = None) -> None:
+    def __init__(
+        self, config: Go2RosConfig | None = None, *, context: Context | None = None
+    ) -> None:
         self.config = c = config or Go2RosConfig()
         self.name = f"go2 ({c.namespace.strip('/')})" if c.namespace.strip("/") else "go2"
         self._own_context = context is None and not rclpy.ok()
@@ -128,8 +135,9 @@ class Go2RosRobot:
         self._lock = threading.Lock()  # state; held briefly, never while publishing
         self._send_lock = threading.Lock()  # orders Twists and StopMoves as they go out
         self._wake = threading.Event()  # stop() and e-stop wake sleeps and waits early
-        self._tracker = MotionTracker(linear_accel=c.linear_accel,
-                                      angular_accel=c.angular_accel, latency=c.odom_latency)
+        self._tracker = MotionTracker(
+            linear_accel=c.linear_accel, angular_accel=c.angular_accel, latency=c.odom_latency
+        )
         self._odom_at: float | None = None  # monotonic receipt of the last odometry
         self._odom_clock = StampClock()  # when each pose was sent, on our clock
         self._travel = (0.0, 0.0)  # distance travelled, angle turned (odometry)
@@ -148,13 +156,19 @@ class Go2RosRobot:
         self._closed = False
         self._started = time.monotonic()
         self._velocity_topic = c.cmd_vel_topic
-        self._postures = PostureWatch(self._check_estop, "", c.command_timeout,
-                                      stale=max(1.0, c.odom_timeout))
+        self._postures = PostureWatch(
+            self._check_estop, "", c.command_timeout, stale=max(1.0, c.odom_timeout)
+        )
         self._rediscover = True  # look up who subscribes at the next velocity command
         # use_global_arguments=False: the mission node's own remappings and parameters
         # (`-r __ns:=...`) must not move the robot's topics; `namespace` does that explicitly.
-        self.node = Node(c.node_name, namespace="/" + c.namespace.strip("/"), context=context,
-                         use_global_arguments=False, start_parameter_services=False)
+        self.node = Node(
+            c.node_name,
+            namespace="/" + c.namespace.strip("/"),
+            context=context,
+            use_global_arguments=False,
+            start_parameter_services=False,
+        )
         try:
             self._build_interfaces()
         except Exception as exc:  # rclpy raises several types for bad names
@@ -163,8 +177,11 @@ class Go2RosRobot:
         self._postures.topic = self.topic(c.state_topic)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
-        self._navigator = Nav2Navigator(self.node, c.nav2_action, self._executor.create_task) \
-            if c.nav2_action else None
+        self._navigator = (
+            Nav2Navigator(self.node, c.nav2_action, self._executor.create_task)
+            if c.nav2_action
+            else None
+        )
         self._thread = threading.Thread(target=self._spin, name="go2-ros", daemon=True)
         self._thread.start()
 
@@ -179,16 +196,23 @@ class Go2RosRobot:
             n.create_subscription(BatteryState, c.battery_topic, self._on_battery, _RELIABLE)
         if c.camera_topic:
             compressed = c.camera_topic.rstrip("/").endswith("compressed")
-            n.create_subscription(CompressedImage if compressed else Image, c.camera_topic,
-                                  self._on_compressed if compressed else self._on_image, _SENSOR)
+            n.create_subscription(
+                CompressedImage if compressed else Image,
+                c.camera_topic,
+                self._on_compressed if compressed else self._on_image,
+                _SENSOR,
+            )
         if c.detections_topic:
             try:
                 from shadowhound_interfaces.msg import DetectionArray
             except ImportError as exc:
-                raise RobotError("detections_topic needs the shadowhound_interfaces package: "
-                                 f"run scripts/build_ros.sh ({exc})") from exc
-            n.create_subscription(DetectionArray, c.detections_topic, self._on_detections,
-                                  _RELIABLE)
+                raise RobotError(
+                    "detections_topic needs the shadowhound_interfaces package: "
+                    f"run scripts/build_ros.sh ({exc})"
+                ) from exc
+            n.create_subscription(
+                DetectionArray, c.detections_topic, self._on_detections, _RELIABLE
+            )
         if c.map_topic:
             n.create_subscription(GridMsg, c.map_topic, self._on_map, MAP_QOS)
         if c.scan_topic:
@@ -238,8 +262,9 @@ class Go2RosRobot:
             self._odom_at = now
             after = self._tracker.latency
             if msg.header.frame_id and msg.child_frame_id:
-                self._frames = Frames(msg.header.frame_id.lstrip("/"),
-                                      msg.child_frame_id.lstrip("/"))
+                self._frames = Frames(
+                    msg.header.frame_id.lstrip("/"), msg.child_frame_id.lstrip("/")
+                )
         if abs(after - before) >= 0.01:
             self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
@@ -260,9 +285,12 @@ class Go2RosRobot:
             odom = self._odom_frame
         frame = msg.header.frame_id
         if frame and frame.lstrip("/") != odom.lstrip("/"):
-            log.warning(f"the map is in frame {frame!r}, poses in {odom!r}: without TF they are "
-                        "taken as one frame (right while odometry has not drifted from the "
-                        "map; see docs/go2-nav2.md)", throttle_duration_sec=60.0)
+            log.warning(
+                f"the map is in frame {frame!r}, poses in {odom!r}: without TF they are "
+                "taken as one frame (right while odometry has not drifted from the "
+                "map; see docs/go2-nav2.md)",
+                throttle_duration_sec=60.0,
+            )
         with self._lock:
             belief = self._map
         if belief is not None:  # the same world model: the objects known stay
@@ -272,8 +300,11 @@ class Go2RosRobot:
             _ = belief.inflated  # inflated once here, off the mission's thread
             with self._lock:
                 self._map = belief
-        log.info(f"map {grid.width} x {grid.height} at {grid.resolution:g} m from "
-                 f"{self.topic(self.config.map_topic)}", throttle_duration_sec=30.0)
+        log.info(
+            f"map {grid.width} x {grid.height} at {grid.resolution:g} m from "
+            f"{self.topic(self.config.map_topic)}",
+            throttle_duration_sec=30.0,
+        )
 
     def _on_scan(self, msg: LaserScan) -> None:
         now = time.monotonic()
@@ -295,11 +326,13 @@ class Go2RosRobot:
 
     def _on_image(self, msg: Image) -> None:
         try:
-            frame = raw_image_frame(msg.data, msg.width, msg.height, msg.encoding, msg.step,
-                                    source="go2")
+            frame = raw_image_frame(
+                msg.data, msg.width, msg.height, msg.encoding, msg.step, source="go2"
+            )
         except ValueError as exc:
-            self.node.get_logger().warning(f"dropped a camera frame: {exc}",
-                                           throttle_duration_sec=5.0)
+            self.node.get_logger().warning(
+                f"dropped a camera frame: {exc}", throttle_duration_sec=5.0
+            )
             return
         self._frame = frame
 
@@ -307,8 +340,9 @@ class Go2RosRobot:
         try:
             self._frame = replace(to_camera_frame(bytes(msg.data)), source="go2")
         except ValueError as exc:
-            self.node.get_logger().warning(f"dropped a camera frame: {exc}",
-                                           throttle_duration_sec=5.0)
+            self.node.get_logger().warning(
+                f"dropped a camera frame: {exc}", throttle_duration_sec=5.0
+            )
 
     def _on_detections(self, msg: object) -> None:
         state = self.last_state()
@@ -320,8 +354,9 @@ class Go2RosRobot:
             sec, nsec = getattr(stamp, "sec", 0), getattr(stamp, "nanosec", 0)
             return clock - (sec + nsec * 1e-9) if (sec or nsec) else 0.0
 
-        seen, problems = sightings_from_msg(msg, Pose2D(state.x, state.y, state.yaw), frames,
-                                            self.now(), age)
+        seen, problems = sightings_from_msg(
+            msg, Pose2D(state.x, state.y, state.yaw), frames, self.now(), age
+        )
         self._sightings.add(seen)
         with self._lock:
             belief = self._map
@@ -332,16 +367,18 @@ class Go2RosRobot:
                 except ValueError as exc:  # checked already; a belief rule the board lacks
                     problems.append(str(exc))
         for problem in problems:
-            self.node.get_logger().warning(f"dropped a detection: {problem}",
-                                           throttle_duration_sec=5.0)
+            self.node.get_logger().warning(
+                f"dropped a detection: {problem}", throttle_duration_sec=5.0
+            )
 
     def known_objects(self) -> tuple[KnownObject, ...]:
         """What the detections topic has reported and what the world model holds (sightings
         the agent made), one per name (the latest), in the odometry frame."""
         with self._lock:
             belief = self._map
-        return merge_sightings(belief.objects if belief is not None else (),
-                               self._sightings.objects())
+        return merge_sightings(
+            belief.objects if belief is not None else (), self._sightings.objects()
+        )
 
     def _keep_alive(self) -> None:
         with self._lock:
@@ -362,7 +399,8 @@ class Go2RosRobot:
                 f"no odometry on {self.topic(self.config.odom_topic)} yet: is go2_ros2_sdk (or "
                 "`shadowhound sim-driver`) running, with the same ROS_DOMAIN_ID and RMW? "
                 "`shadowhound doctor --go2` checks the link",
-                throttle_duration_sec=30.0)
+                throttle_duration_sec=30.0,
+            )
 
     # -- Robot protocol ------------------------------------------------------------------
 
@@ -389,21 +427,36 @@ class Go2RosRobot:
             odom_at, travel, battery = self._odom_at, self._travel, self._battery
             posture, estopped = self._posture, self._estopped
         fresh = odom_at is not None and now - odom_at <= self.config.odom_timeout
-        level = battery[1] if battery and now - battery[0] <= self.config.battery_timeout \
-            else None
-        return RobotState(x=x, y=y, yaw=yaw, vx=vx, vy=vy, wz=wz, posture=posture,
-                          battery=level, distance_travelled=travel[0], angle_turned=travel[1],
-                          stamp=now, estopped=estopped, connected=fresh)
+        level = battery[1] if battery and now - battery[0] <= self.config.battery_timeout else None
+        return RobotState(
+            x=x,
+            y=y,
+            yaw=yaw,
+            vx=vx,
+            vy=vy,
+            wz=wz,
+            posture=posture,
+            battery=level,
+            distance_travelled=travel[0],
+            angle_turned=travel[1],
+            stamp=now,
+            estopped=estopped,
+            connected=fresh,
+        )
 
     def _odometry_problem(self) -> str:
         topic = self.topic(self.config.odom_topic)
         if self._odom_at is None:
             waited = time.monotonic() - self._started
-            return (f"no odometry received on {topic} in {waited:.1f} s: is go2_ros2_sdk "
-                    "running, with the same ROS_DOMAIN_ID and RMW?")
+            return (
+                f"no odometry received on {topic} in {waited:.1f} s: is go2_ros2_sdk "
+                "running, with the same ROS_DOMAIN_ID and RMW?"
+            )
         age = time.monotonic() - self._odom_at
-        return (f"no odometry on {topic} for {age:.1f} s: is go2_ros2_sdk running and the "
-                "robot connected (WebRTC allows one client: close the phone app)?")
+        return (
+            f"no odometry on {topic} for {age:.1f} s: is go2_ros2_sdk running and the "
+            "robot connected (WebRTC allows one client: close the phone app)?"
+        )
 
     def send_velocity(self, vx: float, vy: float, wz: float) -> None:
         """Body-frame velocity; all zero is a stop (StopMove), since the driver drops zero
@@ -420,8 +473,11 @@ class Go2RosRobot:
         c = self.config
         norm = math.hypot(values[0], values[1])
         scale = c.max_linear_speed / norm if norm > c.max_linear_speed else 1.0
-        command = (values[0] * scale, values[1] * scale,
-                   max(-c.max_angular_speed, min(c.max_angular_speed, values[2])))
+        command = (
+            values[0] * scale,
+            values[1] * scale,
+            max(-c.max_angular_speed, min(c.max_angular_speed, values[2])),
+        )
         if not self.last_state().connected:
             raise RobotError(self._odometry_problem() + " Not moving without odometry.")
         with self._lock:
@@ -435,8 +491,7 @@ class Go2RosRobot:
                 self._halted = False
                 # The robot ignores velocity unless standing: predict no motion then.
                 walks = self._posture is Posture.STANDING
-                self._tracker.command(time.monotonic(),
-                                      *(command if walks else (0.0, 0.0, 0.0)))
+                self._tracker.command(time.monotonic(), *(command if walks else (0.0, 0.0, 0.0)))
             self._publish_twist(command, topic)
 
     def stop(self) -> None:
@@ -480,8 +535,11 @@ class Go2RosRobot:
         if Posture.STANDING not in path:  # sitting <-> lying goes through standing
             path = [current, Posture.STANDING, posture]
         # Standing with locked joints (after a StandUp from elsewhere) only needs balancing.
-        steps = [(go2_api.BALANCE_STAND,)] if current is posture else \
-            [STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
+        steps = (
+            [(go2_api.BALANCE_STAND,)]
+            if current is posture
+            else [STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
+        )
         for b, api_ids in zip(path[1:], steps, strict=True):
             for api_id in api_ids:
                 balance = api_id == go2_api.BALANCE_STAND
@@ -499,12 +557,14 @@ class Go2RosRobot:
             raise RobotError(
                 f"{trick} (api id {info.api_id}) runs only on Go2 firmware that has it, in the "
                 "'ai' motion mode; it is off unless enabled (ROS parameter "
-                "go2_firmware_tricks, see docs/go2.md)")
+                "go2_firmware_tricks, see docs/go2.md)"
+            )
         self._check_estop(f"performing {trick}")
         posture = self._postures.current()
         if posture is not Posture.STANDING:
-            raise RobotError(f"cannot perform {trick} while the robot is {posture.value}; "
-                             "stand up first")
+            raise RobotError(
+                f"cannot perform {trick} while the robot is {posture.value}; stand up first"
+            )
         if ai_mode:  # recent firmware runs these only in the "ai" motion mode
             self._request(go2_api.MOTION_SWITCH, {"name": "ai"}, go2_api.MOTION_SWITCHER_TOPIC)
         self._request(info.api_id)
@@ -573,9 +633,14 @@ class Go2RosRobot:
         if self.config.cmd_vel_topic or (chosen and not look):
             return chosen or self.config.cmd_vel_topic
         found = choose_velocity_topic(
-            {name: [(i.node_name, i.topic_type) for i in
-                    self.node.get_subscriptions_info_by_topic(self.topic(name))]
-             for name in VELOCITY_TOPICS})
+            {
+                name: [
+                    (i.node_name, i.topic_type)
+                    for i in self.node.get_subscriptions_info_by_topic(self.topic(name))
+                ]
+                for name in VELOCITY_TOPICS
+            }
+        )
         if found is None:
             return chosen or VELOCITY_TOPICS[-1]  # nothing listens yet: the driver's own
         if found != chosen:
@@ -593,12 +658,22 @@ class Go2RosRobot:
         if self._context.ok():
             self._twist_pubs[topic].publish(msg)
 
-    def _request(self, api_id: int, parameter: dict[str, object] | None = None,
-                 topic: str = go2_api.SPORT_TOPIC) -> None:
+    def _request(
+        self,
+        api_id: int,
+        parameter: dict[str, object] | None = None,
+        topic: str = go2_api.SPORT_TOPIC,
+    ) -> None:
         if self._context.ok():
-            self._request_pub.publish(WebRtcReq(
-                id=0, topic=topic, api_id=api_id,
-                parameter=json.dumps(parameter) if parameter else "", priority=0))
+            self._request_pub.publish(
+                WebRtcReq(
+                    id=0,
+                    topic=topic,
+                    api_id=api_id,
+                    parameter=json.dumps(parameter) if parameter else "",
+                    priority=0,
+                )
+            )
 
     # -- postures ------------------------------------------------------------------------
 

@@ -20,9 +20,12 @@ from ..world.grid import OccupancyGrid
 
 # map_server and slam_toolbox publish `map` reliable and transient-local (a late subscriber
 # still gets the last map), depth 1.
-MAP_QOS = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                     reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+MAP_QOS = QoSProfile(
+    depth=1,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
 
 
 def grid_to_msg(grid: OccupancyGrid, frame_id: str, stamp: Any) -> GridMsg:
@@ -49,13 +52,20 @@ def grid_from_msg(msg: GridMsg) -> OccupancyGrid:
     yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
     data = msg.data
     raw = data.tobytes() if isinstance(data, array.array) else bytes(v & 0xFF for v in data)
-    return OccupancyGrid.from_msg({
-        "info": {"width": int(info.width), "height": int(info.height),
-                 "resolution": _decimal(info.resolution),
-                 "origin": {"position": {"x": o.position.x, "y": o.position.y},
-                            "orientation": {"z": math.sin(yaw / 2.0),
-                                            "w": math.cos(yaw / 2.0)}}},
-        "data": raw})
+    return OccupancyGrid.from_msg(
+        {
+            "info": {
+                "width": int(info.width),
+                "height": int(info.height),
+                "resolution": _decimal(info.resolution),
+                "origin": {
+                    "position": {"x": o.position.x, "y": o.position.y},
+                    "orientation": {"z": math.sin(yaw / 2.0), "w": math.cos(yaw / 2.0)},
+                },
+            },
+            "data": raw,
+        }
+    )
 
 
 def scan_to_msg(scan: Scan, frame_id: str, stamp: Any, scan_time: float) -> LaserScan:
@@ -79,9 +89,15 @@ def scan_from_msg(msg: LaserScan, pose: Pose2D, stamp: float) -> Scan:
     """The core's Scan from a LaserScan taken at `pose` (odom frame: the robot's pose when it
     arrived; the sensor is taken to sit at the body's centre, facing forward). Raises
     ValueError when the message is not a usable scan."""
-    return Scan(tuple(float(r) for r in msg.ranges), _decimal(msg.angle_min),
-                _decimal(msg.angle_increment), _decimal(msg.range_min),
-                _decimal(msg.range_max), pose, stamp)
+    return Scan(
+        tuple(float(r) for r in msg.ranges),
+        _decimal(msg.angle_min),
+        _decimal(msg.angle_increment),
+        _decimal(msg.range_min),
+        _decimal(msg.range_max),
+        pose,
+        stamp,
+    )
 
 
 def _decimal(value: float) -> float:

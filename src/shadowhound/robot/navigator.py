@@ -50,8 +50,7 @@ class NavReport:
 class NavGoal(Protocol):
     """One goal in flight. Both methods are thread-safe and never block for long."""
 
-    def report(self) -> NavReport:
-        ...
+    def report(self) -> NavReport: ...
 
     def cancel(self) -> None:
         """Ask the navigator to cancel this goal (no-op once it has ended)."""

@@ -20,8 +20,14 @@ SCAN_RANGE_MAX = 8.0
 WALL_THICKNESS = 0.1  # metres of wall drawn outside the room on the scene's map
 
 
-def cast_scan(world: World, pose: Pose2D, stamp: float = 0.0, beams: int = SCAN_BEAMS,
-              range_min: float = SCAN_RANGE_MIN, range_max: float = SCAN_RANGE_MAX) -> Scan:
+def cast_scan(
+    world: World,
+    pose: Pose2D,
+    stamp: float = 0.0,
+    beams: int = SCAN_BEAMS,
+    range_min: float = SCAN_RANGE_MIN,
+    range_max: float = SCAN_RANGE_MAX,
+) -> Scan:
     """A full-circle 2D scan from `pose`: beam 0 points straight behind, counter-clockwise.
     Beams with no surface within `range_max` read infinity (as REP-117 asks)."""
     increment = 2 * math.pi / beams
@@ -70,8 +76,9 @@ def scene_grid(world: World, resolution: float = DEFAULT_RESOLUTION) -> Occupanc
     return grid
 
 
-def scene_belief(world: World, robot_radius: float, resolution: float = DEFAULT_RESOLUTION
-                 ) -> Belief:
+def scene_belief(
+    world: World, robot_radius: float, resolution: float = DEFAULT_RESOLUTION
+) -> Belief:
     """Everything about the scene a robot could be told: its map and its named objects."""
     objects = tuple(KnownObject(o.name, o.x, o.y, o.radius) for o in world.objects)
     return Belief(scene_grid(world, resolution), objects, robot_radius, world.bounds)

@@ -114,7 +114,8 @@ class SimRobot:
         self._closed = False
         # Ground truth, kept apart from what get_state reports, for tests and evaluation.
         self._true_path: deque[tuple[float, float, float]] = deque(
-            [(0.0, 0.0, 0.0)], maxlen=self.config.true_path_size)
+            [(0.0, 0.0, 0.0)], maxlen=self.config.true_path_size
+        )
         self._true_path_dropped = 0
         self._true_odometer = 0.0
         self._depth = 0.0  # how far the body overlaps the scene (0 unless reset into it)
@@ -209,15 +210,19 @@ class SimRobot:
         dx = (mvx * c - mvy * si) * dt
         dy = (mvx * si + mvy * c) * dt
         blocked_by = s.blocked_by if not (dx or dy) else ""
-        depth, what = (sensors.penetration(self.world, s.x + dx, s.y + dy, cfg.body_radius)
-                       if cfg.collisions else (0.0, ""))
+        depth, what = (
+            sensors.penetration(self.world, s.x + dx, s.y + dy, cfg.body_radius)
+            if cfg.collisions
+            else (0.0, "")
+        )
         if depth > self._depth + 1e-12:
             # Cut the substep short at contact: the largest fraction that goes no deeper.
             lo, hi = 0.0, 1.0
             for _ in range(30):
                 mid = (lo + hi) / 2
-                d, _ = sensors.penetration(self.world, s.x + dx * mid, s.y + dy * mid,
-                                           cfg.body_radius)
+                d, _ = sensors.penetration(
+                    self.world, s.x + dx * mid, s.y + dy * mid, cfg.body_radius
+                )
                 lo, hi = (mid, hi) if d <= self._depth + 1e-12 else (lo, mid)
             dx, dy = dx * lo, dy * lo
             vx = vy = 0.0
@@ -255,12 +260,23 @@ class SimRobot:
             bearing = math.atan2(obj.y - y, obj.x - x)
         else:  # the nearest wall is the one the body presses on
             x_min, x_max, y_min, y_max = self.world.bounds
-            gaps = {0.0: x_max - x, math.pi: x - x_min, math.pi / 2: y_max - y,
-                    -math.pi / 2: y - y_min}
+            gaps = {
+                0.0: x_max - x,
+                math.pi: x - x_min,
+                math.pi / 2: y_max - y,
+                -math.pi / 2: y - y_min,
+            }
             bearing = min(gaps, key=lambda a: gaps[a])
         side = normalize_angle(bearing - yaw)
-        where = ("ahead" if abs(side) <= math.pi / 4 else "behind" if abs(side) >= 3 * math.pi / 4
-                 else "to the left" if side > 0 else "to the right")
+        where = (
+            "ahead"
+            if abs(side) <= math.pi / 4
+            else "behind"
+            if abs(side) >= 3 * math.pi / 4
+            else "to the left"
+            if side > 0
+            else "to the right"
+        )
         return f"{what} {max(0.0, radius - depth):.2f} m {where}"
 
     # -- Robot protocol ------------------------------------------------------------------
@@ -389,8 +405,7 @@ class SimRobot:
             return None
         if self._belief is None:
             told = sensors.scene_belief(self.map_world, self.config.body_radius)
-            self._belief = Belief(told.grid, (), told.robot_radius, told.room,
-                                  labels=told.objects)
+            self._belief = Belief(told.grid, (), told.robot_radius, told.room, labels=told.objects)
         return self._belief
 
     def navigator(self) -> Navigator | None:
@@ -459,8 +474,9 @@ class SimRobot:
             self._true_path.clear()
             self._true_path_dropped = 0
             self._note_true_point()
-            self._depth = max(0.0, sensors.penetration(self.world, x, y,
-                                                       self.config.body_radius)[0])
+            self._depth = max(
+                0.0, sensors.penetration(self.world, x, y, self.config.body_radius)[0]
+            )
 
     def _settle(self) -> None:
         """Let the body come to rest (bounded) before a posture change."""

@@ -42,12 +42,18 @@ from .sim import SimRobot
 
 Report = Callable[[bool, str], None]  # (accepted, note) once the robot acts on a request
 _TRICKS_BY_ID = {t.api_id: t for t in go2_api.TRICKS.values()}
-_TRICK_MODES = {1030: SportMode.FRONT_FLIP, 1031: SportMode.FRONT_JUMP,
-                1032: SportMode.FRONT_POUNCE}
+_TRICK_MODES = {
+    1030: SportMode.FRONT_FLIP,
+    1031: SportMode.FRONT_JUMP,
+    1032: SportMode.FRONT_POUNCE,
+}
 _log = logging.getLogger(__name__)
 _SETTLE_LIMIT = 10.0  # seconds a posture change waits for the body to come to rest
-_START_MODES = {Posture.STANDING: SportMode.BALANCE_STAND, Posture.SITTING: SportMode.SIT,
-                Posture.LYING: SportMode.LIE_DOWN}
+_START_MODES = {
+    Posture.STANDING: SportMode.BALANCE_STAND,
+    Posture.SITTING: SportMode.SIT,
+    Posture.LYING: SportMode.LIE_DOWN,
+}
 _MODE_SHIFT = 0.3  # share of the posture time a mode change without a posture change takes
 _HEIGHT_MARGIN = 1.25 * BODY_HEIGHT_TOLERANCE  # how far from its end a body height stays
 
@@ -109,8 +115,14 @@ class Truth:
 class SimSportMode:
     """The robot's sport-mode service over `sim` (a real-time SimRobot)."""
 
-    def __init__(self, sim: SimRobot, *, move_timeout: float = 1.0,
-                 posture_seconds: float = 1.5, start: Posture = Posture.STANDING) -> None:
+    def __init__(
+        self,
+        sim: SimRobot,
+        *,
+        move_timeout: float = 1.0,
+        posture_seconds: float = 1.5,
+        start: Posture = Posture.STANDING,
+    ) -> None:
         self.sim = sim
         self.move_timeout = move_timeout
         self.posture_seconds = posture_seconds
@@ -120,15 +132,20 @@ class SimSportMode:
         self._change: _Change | None = None
         self._trick = ""
         self._lapse_at: float | None = None
-        self._counts = {"moves": 0, "moves_ignored": 0, "moves_lapsed": 0, "stop_moves": 0,
-                        "requests": 0}
+        self._counts = {
+            "moves": 0,
+            "moves_ignored": 0,
+            "moves_lapsed": 0,
+            "stop_moves": 0,
+            "requests": 0,
+        }
         self._ai_mode = False
         self._jobs: queue.Queue[tuple[int, Report] | None] = queue.Queue()
         self._closed = False
-        self._threads = [threading.Thread(target=self._run_jobs, name="sport-postures",
-                                          daemon=True),
-                         threading.Thread(target=self._run_lapses, name="sport-lapse",
-                                          daemon=True)]
+        self._threads = [
+            threading.Thread(target=self._run_jobs, name="sport-postures", daemon=True),
+            threading.Thread(target=self._run_lapses, name="sport-lapse", daemon=True),
+        ]
         for thread in self._threads:
             thread.start()
 
@@ -143,8 +160,13 @@ class SimSportMode:
 
     # -- commands --------------------------------------------------------------------------
 
-    def request(self, api_id: int, parameter: Any, topic: str = go2_api.SPORT_TOPIC,
-                report: Report = lambda _ok, _note: None) -> None:
+    def request(
+        self,
+        api_id: int,
+        parameter: Any,
+        topic: str = go2_api.SPORT_TOPIC,
+        report: Report = lambda _ok, _note: None,
+    ) -> None:
         """One sport request as the robot receives it; `report` is called once, when the
         robot acts on it or ignores it (later for queued postures and tricks)."""
         with self._cond:
@@ -169,8 +191,10 @@ class SimSportMode:
                 with self._cond:
                     self._counts["moves"] += 1
                     self._counts["moves_ignored"] += 1
-                report(False, f"ignored: Move needs {{'x','y','z'}} numbers, got {parameter!r} "
-                              f"({exc!r})")
+                report(
+                    False,
+                    f"ignored: Move needs {{'x','y','z'}} numbers, got {parameter!r} ({exc!r})",
+                )
                 return
             note = self.move(x, y, z)
             report(not note, note)
@@ -220,13 +244,23 @@ class SimSportMode:
             self._finish_due_change()
             st = self.sim.get_state()
             return Truth(
-                mono=time.monotonic(), x=st.x, y=st.y, yaw=st.yaw, vx=st.vx, vy=st.vy, wz=st.wz,
-                posture=st.posture, mode=int(self._current_mode(st.is_moving)),
+                mono=time.monotonic(),
+                x=st.x,
+                y=st.y,
+                yaw=st.yaw,
+                vx=st.vx,
+                vy=st.vy,
+                wz=st.wz,
+                posture=st.posture,
+                mode=int(self._current_mode(st.is_moving)),
                 body_height=self._body_height(st.posture),
-                changing=self._change.command.name if self._change else "", trick=self._trick,
-                moving=st.is_moving, ai_mode=self._ai_mode,
+                changing=self._change.command.name if self._change else "",
+                trick=self._trick,
+                moving=st.is_moving,
+                ai_mode=self._ai_mode,
                 battery=st.battery if st.battery is not None else 0.0,
-                **self._counts)
+                **self._counts,
+            )
 
     def _current_mode(self, moving: bool) -> SportMode:
         if self._change is not None:
@@ -283,8 +317,7 @@ class SimSportMode:
         posture = self.sim.get_state().posture
         if posture not in command.needs:
             needs = " or ".join(sorted(p.value for p in command.needs))
-            report(False, f"ignored: {command.name} needs the robot {needs}, it is "
-                          f"{posture.value}")
+            report(False, f"ignored: {command.name} needs the robot {needs}, it is {posture.value}")
             return
         with self._cond:  # no more walking: brake, then change
             self._lapse_at = None

@@ -24,8 +24,7 @@ class CameraIntake:
         self._ready = threading.Event()
         self._closed = False
         self.replaced = 0  # frames replaced by a newer one before they were converted
-        self._thread = threading.Thread(target=self._run, name="shadowhound-camera",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._run, name="shadowhound-camera", daemon=True)
         self._thread.start()
 
     def offer(self, msg: Any) -> None:

@@ -12,8 +12,14 @@ from typing import Any
 
 # diagnostic_msgs/DiagnosticStatus levels
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
-_LEVEL_OF_STATUS = {"idle": OK, "planning": OK, "executing": OK, "succeeded": OK,
-                    "failed": WARN, "stopped": WARN}
+_LEVEL_OF_STATUS = {
+    "idle": OK,
+    "planning": OK,
+    "executing": OK,
+    "succeeded": OK,
+    "failed": WARN,
+    "stopped": WARN,
+}
 
 
 def diagnostic_level(diagnostics: dict[str, Any]) -> int:
@@ -36,17 +42,21 @@ def diagnostic_message(diagnostics: dict[str, Any]) -> str:
         return "e-stop latched"
     status = str(diagnostics.get("status"))
     if status in ("executing", "planning") and diagnostics.get("current_skill"):
-        return (f"{status} {diagnostics['current_skill']} (step {diagnostics.get('step')}/"
-                f"{diagnostics.get('steps')})")
+        return (
+            f"{status} {diagnostics['current_skill']} (step {diagnostics.get('step')}/"
+            f"{diagnostics.get('steps')})"
+        )
     errors = diagnostics.get("errors") or []
     if status in ("failed", "stopped") and errors:
         return f"{status}: {errors[-1]}"
-    return status + ("; battery level unknown (no battery source)"
-                     if _battery_unknown(diagnostics) else "")
+    return status + (
+        "; battery level unknown (no battery source)" if _battery_unknown(diagnostics) else ""
+    )
 
 
-def diagnostic_values(diagnostics: dict[str, Any],
-                      extra: dict[str, Any] | None = None) -> list[tuple[str, str]]:
+def diagnostic_values(
+    diagnostics: dict[str, Any], extra: dict[str, Any] | None = None
+) -> list[tuple[str, str]]:
     """Key-values of the agent's diagnostics as strings (what DiagnosticStatus carries)."""
     robot = diagnostics.get("robot") or {}
     errors = list(diagnostics.get("errors") or [])

@@ -24,17 +24,24 @@ from std_msgs.msg import Empty
 class EstopListener:
     """Calls `on_estop` / `on_release` for messages on the two topics, on its own thread."""
 
-    def __init__(self, name: str, namespace: str, context: Context, qos: QoSProfile, *,
-                 estop_topic: str, release_topic: str, on_estop: Callable[[], None],
-                 on_release: Callable[[], None]) -> None:
-        self.node = Node(name, namespace=namespace, context=context,
-                         start_parameter_services=False)
+    def __init__(
+        self,
+        name: str,
+        namespace: str,
+        context: Context,
+        qos: QoSProfile,
+        *,
+        estop_topic: str,
+        release_topic: str,
+        on_estop: Callable[[], None],
+        on_release: Callable[[], None],
+    ) -> None:
+        self.node = Node(name, namespace=namespace, context=context, start_parameter_services=False)
         self.node.create_subscription(Empty, estop_topic, lambda _msg: on_estop(), qos)
         self.node.create_subscription(Empty, release_topic, lambda _msg: on_release(), qos)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
-        self._thread = threading.Thread(target=self._spin, name="shadowhound-estop",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._spin, name="shadowhound-estop", daemon=True)
         self._thread.start()
 
     def _spin(self) -> None:

@@ -90,47 +90,67 @@ def _name(obs: Observation, key: str) -> str:
 
 
 def _driver(obs: Observation) -> Finding:
-    nodes = sorted({e.node for key in ("odom", "go2_states") for e in obs.publishers.get(key, [])}
-                   | {e.node for e in obs.subscribers.get("webrtc_req", [])})
+    nodes = sorted(
+        {e.node for key in ("odom", "go2_states") for e in obs.publishers.get(key, [])}
+        | {e.node for e in obs.subscribers.get("webrtc_req", [])}
+    )
     if not nodes:
-        return Finding("fail", f"no Go2 driver: nothing publishes {_name(obs, 'odom')} or "
-                               f"{_name(obs, 'go2_states')}, nothing subscribes "
-                               f"{_name(obs, 'webrtc_req')}",
-                       "start go2_ros2_sdk (ros2 launch go2_robot_sdk robot.launch.py) or "
-                       "`shadowhound sim-driver`, in the same ROS_DOMAIN_ID and "
-                       "RMW_IMPLEMENTATION; with several robots give --namespace robot0")
+        return Finding(
+            "fail",
+            f"no Go2 driver: nothing publishes {_name(obs, 'odom')} or "
+            f"{_name(obs, 'go2_states')}, nothing subscribes "
+            f"{_name(obs, 'webrtc_req')}",
+            "start go2_ros2_sdk (ros2 launch go2_robot_sdk robot.launch.py) or "
+            "`shadowhound sim-driver`, in the same ROS_DOMAIN_ID and "
+            "RMW_IMPLEMENTATION; with several robots give --namespace robot0",
+        )
     return Finding("ok", f"driver node(s): {', '.join(nodes)}")
 
 
 def _types(obs: Observation) -> list[Finding]:
     out = []
-    wanted = (("odom", ODOM_TYPE, obs.publishers), ("go2_states", STATE_TYPE, obs.publishers),
-              ("webrtc_req", REQUEST_TYPE, obs.subscribers))
+    wanted = (
+        ("odom", ODOM_TYPE, obs.publishers),
+        ("go2_states", STATE_TYPE, obs.publishers),
+        ("webrtc_req", REQUEST_TYPE, obs.subscribers),
+    )
     for key, kind, side in wanted:
         ends = side.get(key, [])
         wrong = sorted({e.type for e in ends if e.type != kind})
         if wrong:
-            out.append(Finding("fail", f"{_name(obs, key)} has type {', '.join(wrong)}, "
-                                       f"expected {kind}",
-                               "point ShadowHound at the driver's topic (odom_topic, "
-                               "go2_states_topic, webrtc_topic)"))
+            out.append(
+                Finding(
+                    "fail",
+                    f"{_name(obs, key)} has type {', '.join(wrong)}, expected {kind}",
+                    "point ShadowHound at the driver's topic (odom_topic, "
+                    "go2_states_topic, webrtc_topic)",
+                )
+            )
             continue
         local = obs.local_hashes.get(kind, "")
         differ = sorted({e.hash for e in ends if e.hash and local and e.hash != local})
         if differ:
-            out.append(Finding(
-                "fail", f"{_name(obs, key)}: the driver's {kind} (type hash {differ[0]}) is not "
-                        f"the one ShadowHound uses ({local}); DDS drops every sample although "
-                        "the topic looks matched",
-                "source the go2_ros2_sdk workspace the driver runs from before starting "
-                "ShadowHound, or rebuild ShadowHound's copy (scripts/build_ros.sh)"))
+            out.append(
+                Finding(
+                    "fail",
+                    f"{_name(obs, key)}: the driver's {kind} (type hash {differ[0]}) is not "
+                    f"the one ShadowHound uses ({local}); DDS drops every sample although "
+                    "the topic looks matched",
+                    "source the go2_ros2_sdk workspace the driver runs from before starting "
+                    "ShadowHound, or rebuild ShadowHound's copy (scripts/build_ros.sh)",
+                )
+            )
             continue
         upstream = UPSTREAM_HASHES.get(kind)
         if upstream and local and local != upstream:
-            out.append(Finding("warn", f"this build's {kind} (type hash {local}) is not "
-                                       f"go2_ros2_sdk's ({upstream})",
-                               "rebuild go2_interfaces from go2_ros2_sdk's message files "
-                               "(scripts/build_ros.sh)"))
+            out.append(
+                Finding(
+                    "warn",
+                    f"this build's {kind} (type hash {local}) is not go2_ros2_sdk's ({upstream})",
+                    "rebuild go2_interfaces from go2_ros2_sdk's message files "
+                    "(scripts/build_ros.sh)",
+                )
+            )
         elif ends:
             out.append(Finding("ok", f"{_name(obs, key)}: {kind}, type hash matches"))
     return out
@@ -140,33 +160,44 @@ def _odometry(obs: Observation) -> Finding:
     times = obs.odom_receipts
     topic = _name(obs, "odom")
     if not times:
-        return Finding("fail", f"no odometry on {topic} in {obs.seconds:.0f} s",
-                       "check that the driver is connected to the robot (WebRTC allows one "
-                       "client: close the phone app) and that CONN_TYPE=webrtc")
+        return Finding(
+            "fail",
+            f"no odometry on {topic} in {obs.seconds:.0f} s",
+            "check that the driver is connected to the robot (WebRTC allows one "
+            "client: close the phone app) and that CONN_TYPE=webrtc",
+        )
     gaps = sorted(b - a for a, b in zip(times, times[1:], strict=False) if b > a)
     rate = 1.0 / gaps[len(gaps) // 2] if gaps else 0.0  # the median: bursts do not count
     age = obs.ended - times[-1]
     text = f"odometry on {topic}: {rate:.1f} Hz, last {age:.2f} s ago"
     if age > MAX_ODOM_AGE:
-        return Finding("fail", text + " (stopped)",
-                       "odometry stopped: the driver lost the robot or the link is saturated; "
-                       "restart the driver, check Wi-Fi")
+        return Finding(
+            "fail",
+            text + " (stopped)",
+            "odometry stopped: the driver lost the robot or the link is saturated; "
+            "restart the driver, check Wi-Fi",
+        )
     if rate < MIN_ODOM_RATE:
-        return Finding("warn", text + f" (below {MIN_ODOM_RATE:g} Hz)",
-                       "a busy link slows odometry: motion stays accurate but slower to settle")
+        return Finding(
+            "warn",
+            text + f" (below {MIN_ODOM_RATE:g} Hz)",
+            "a busy link slows odometry: motion stays accurate but slower to settle",
+        )
     return Finding("ok", text)
 
 
 def _postures(obs: Observation) -> Finding:
     topic = _name(obs, "go2_states")
     if not obs.states:
-        return Finding("fail", f"no go2_states on {topic}: postures cannot be read",
-                       "check the driver (and the type hash above)")
+        return Finding(
+            "fail",
+            f"no go2_states on {topic}: postures cannot be read",
+            "check the driver (and the type hash above)",
+        )
     mode, height = obs.states[-1]
     posture = go2_api.posture_of(mode, height)
     seen = posture.value if posture else "changing posture"
-    return Finding("ok", f"go2_states on {topic}: mode {mode}, body height {height:.2f} m "
-                         f"({seen})")
+    return Finding("ok", f"go2_states on {topic}: mode {mode}, body height {height:.2f} m ({seen})")
 
 
 def _velocity(obs: Observation) -> Finding:
@@ -174,21 +205,35 @@ def _velocity(obs: Observation) -> Finding:
         key = obs.cmd_vel_topic
         subscribed = [e for e in obs.subscribers.get(key, []) if e.type == TWIST_TYPE]
         if subscribed:
-            return Finding("ok", f"velocity on {_name(obs, key)} (configured) reaches "
-                                 f"{', '.join(sorted({e.node for e in subscribed}))}")
-        return Finding("fail", f"nothing subscribes {_name(obs, key)} (configured cmd_vel_topic)",
-                       "leave cmd_vel_topic empty to follow the launch layout")
+            return Finding(
+                "ok",
+                f"velocity on {_name(obs, key)} (configured) reaches "
+                f"{', '.join(sorted({e.node for e in subscribed}))}",
+            )
+        return Finding(
+            "fail",
+            f"nothing subscribes {_name(obs, key)} (configured cmd_vel_topic)",
+            "leave cmd_vel_topic empty to follow the launch layout",
+        )
     chosen = choose_velocity_topic(
-        {name: [(e.node, e.type) for e in obs.subscribers.get(name, [])]
-         for name in VELOCITY_TOPICS})
+        {
+            name: [(e.node, e.type) for e in obs.subscribers.get(name, [])]
+            for name in VELOCITY_TOPICS
+        }
+    )
     if chosen is None:
         hint = ""
         if obs.namespace and obs.root_cmd_vel_subscribed:
-            hint = (" (twist_mux listens on /cmd_vel, but it is not namespaced: it does not "
-                    f"reach the driver of {obs.namespace})")
-        return Finding("fail", f"nothing subscribes {_name(obs, 'cmd_vel')} or "
-                               f"{_name(obs, 'cmd_vel_out')}: velocity would reach nothing{hint}",
-                       "start the driver (it listens on cmd_vel_out) and check --namespace")
+            hint = (
+                " (twist_mux listens on /cmd_vel, but it is not namespaced: it does not "
+                f"reach the driver of {obs.namespace})"
+            )
+        return Finding(
+            "fail",
+            f"nothing subscribes {_name(obs, 'cmd_vel')} or "
+            f"{_name(obs, 'cmd_vel_out')}: velocity would reach nothing{hint}",
+            "start the driver (it listens on cmd_vel_out) and check --namespace",
+        )
     via = ", ".join(sorted({e.node for e in obs.subscribers.get(chosen, [])}))
     return Finding("ok", f"velocity goes to {_name(obs, chosen)} (subscribed by {via})")
 
@@ -198,22 +243,32 @@ def _battery(obs: Observation) -> Finding:
         topic = _name(obs, "battery")
         if obs.battery_levels:
             return Finding("ok", f"battery from {topic}: {obs.battery_levels[-1]:.0f}%")
-        return Finding("warn", f"no battery level on {topic} (configured battery_topic): the "
-                               "battery is reported unknown",
-                       "publish sensor_msgs/BatteryState there (percentage 0..1)")
-    elsewhere = f" (BatteryState seen on {', '.join(obs.battery_elsewhere)})" \
-        if obs.battery_elsewhere else ""
-    return Finding("warn", "no battery source: the battery is reported unknown and the "
-                           f"battery floor cannot act{elsewhere}",
-                   "go2_ros2_sdk publishes no battery level; set battery_topic to a "
-                   "sensor_msgs/BatteryState topic if you have one")
+        return Finding(
+            "warn",
+            f"no battery level on {topic} (configured battery_topic): the "
+            "battery is reported unknown",
+            "publish sensor_msgs/BatteryState there (percentage 0..1)",
+        )
+    elsewhere = (
+        f" (BatteryState seen on {', '.join(obs.battery_elsewhere)})"
+        if obs.battery_elsewhere
+        else ""
+    )
+    return Finding(
+        "warn",
+        "no battery source: the battery is reported unknown and the "
+        f"battery floor cannot act{elsewhere}",
+        "go2_ros2_sdk publishes no battery level; set battery_topic to a "
+        "sensor_msgs/BatteryState topic if you have one",
+    )
 
 
 # -- watching the graph (rclpy) --------------------------------------------------------------
 
 
-def observe(namespace: str = "", *, seconds: float = 3.0, cmd_vel_topic: str = "",
-            battery_topic: str = "") -> Observation:
+def observe(
+    namespace: str = "", *, seconds: float = 3.0, cmd_vel_topic: str = "", battery_topic: str = ""
+) -> Observation:
     """Watch the driver's topics for `seconds` in a private rclpy context."""
     import rclpy
     from go2_interfaces.msg import Go2State, WebRtcReq
@@ -224,12 +279,21 @@ def observe(namespace: str = "", *, seconds: float = 3.0, cmd_vel_topic: str = "
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import BatteryState
 
-    obs = Observation(namespace=namespace.strip("/"), seconds=seconds,
-                      cmd_vel_topic=cmd_vel_topic, battery_topic=battery_topic)
+    obs = Observation(
+        namespace=namespace.strip("/"),
+        seconds=seconds,
+        cmd_vel_topic=cmd_vel_topic,
+        battery_topic=battery_topic,
+    )
     context = Context()
     rclpy.init(context=context)
-    node = Node("shadowhound_doctor", namespace="/" + obs.namespace, context=context,
-                use_global_arguments=False, start_parameter_services=False)
+    node = Node(
+        "shadowhound_doctor",
+        namespace="/" + obs.namespace,
+        context=context,
+        use_global_arguments=False,
+        start_parameter_services=False,
+    )
     qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
     keys = ["odom", "go2_states", "webrtc_req", *VELOCITY_TOPICS]
     if cmd_vel_topic and cmd_vel_topic not in keys:
@@ -237,8 +301,10 @@ def observe(namespace: str = "", *, seconds: float = 3.0, cmd_vel_topic: str = "
     obs.names = {k: node.resolve_topic_name(k) for k in keys}
     if battery_topic:
         obs.names["battery"] = node.resolve_topic_name(battery_topic)
-    node.create_subscription(Odometry, "odom",
-                             lambda _m: obs.odom_receipts.append(time.monotonic()), qos)
+    node.create_subscription(
+        Odometry, "odom", lambda _m: obs.odom_receipts.append(time.monotonic()), qos
+    )
+
     def on_state(msg: Any) -> None:
         obs.states.append((int(msg.mode), float(msg.body_height)))
 
@@ -266,14 +332,16 @@ def observe(namespace: str = "", *, seconds: float = 3.0, cmd_vel_topic: str = "
         for key, full in obs.names.items():
             obs.publishers[key] = _endpoints(node.get_publishers_info_by_topic(full), me)
             obs.subscribers[key] = _endpoints(node.get_subscriptions_info_by_topic(full), me)
-        own = [*node.get_subscriptions_info_by_topic(obs.names["go2_states"]),
-               *node.get_subscriptions_info_by_topic(obs.names["odom"]),
-               *node.get_publishers_info_by_topic(probe.topic_name)]
-        obs.local_hashes = {i.topic_type: str(i.topic_type_hash) for i in own
-                            if i.node_name == me}
+        own = [
+            *node.get_subscriptions_info_by_topic(obs.names["go2_states"]),
+            *node.get_subscriptions_info_by_topic(obs.names["odom"]),
+            *node.get_publishers_info_by_topic(probe.topic_name),
+        ]
+        obs.local_hashes = {i.topic_type: str(i.topic_type_hash) for i in own if i.node_name == me}
         obs.root_cmd_vel_subscribed = bool(node.get_subscriptions_info_by_topic("/cmd_vel"))
-        obs.battery_elsewhere = sorted(n for n, types in node.get_topic_names_and_types()
-                                       if BATTERY_TYPE in types)
+        obs.battery_elsewhere = sorted(
+            n for n, types in node.get_topic_names_and_types() if BATTERY_TYPE in types
+        )
     finally:
         executor.shutdown(timeout_sec=1.0)
         node.destroy_node()
@@ -282,5 +350,8 @@ def observe(namespace: str = "", *, seconds: float = 3.0, cmd_vel_topic: str = "
 
 
 def _endpoints(infos: Sequence[Any], me: str) -> list[Endpoint]:
-    return [Endpoint(i.node_name, i.topic_type, str(i.topic_type_hash)) for i in infos
-            if i.node_name != me]
+    return [
+        Endpoint(i.node_name, i.topic_type, str(i.topic_type_hash))
+        for i in infos
+        if i.node_name != me
+    ]

@@ -78,8 +78,9 @@ ROBOT_STATUS_HZ = 5.0
 DIAGNOSTICS_NAME = "shadowhound: mission agent"
 
 _COMMANDS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-_CAMERA = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                     reliability=ReliabilityPolicy.BEST_EFFORT)
+_CAMERA = QoSProfile(
+    depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
+)
 _FEEDBACK_EVENTS = (ev.PlanReady, ev.StepStarted, ev.StepFinished)
 
 
@@ -91,8 +92,9 @@ class MissionNode(Node):
     profile or an unavailable backend.
     """
 
-    def __init__(self, agent: RobotAgent | None = None, *, node_name: str = NODE_NAME,
-                 **node_kwargs: Any) -> None:
+    def __init__(
+        self, agent: RobotAgent | None = None, *, node_name: str = NODE_NAME, **node_kwargs: Any
+    ) -> None:
         super().__init__(node_name, **node_kwargs)
         self.settings = parse_parameters(self._declare_parameters())
         self._go2: Go2RosRobot | None = None  # the Go2 this node built (its topics are logged)
@@ -105,8 +107,9 @@ class MissionNode(Node):
         self._frames = {"received": 0, "dropped": 0}
         self._last_frame = ""
         self._last_camera_error = ""
-        self._worker = MissionWorker(agent, on_start=self._on_mission_start,
-                                     on_finish=self._on_mission_finish)
+        self._worker = MissionWorker(
+            agent, on_start=self._on_mission_start, on_finish=self._on_mission_finish
+        )
         self._chat_thread = ThreadPoolExecutor(1, thread_name_prefix="shadowhound-chat")
         self._web: Any = None
         self._build_interfaces()
@@ -120,8 +123,9 @@ class MissionNode(Node):
         known = set(PARAMETERS) | {"use_sim_time"}
         unknown = sorted(set(getattr(self, "_parameter_overrides", {})) - known)
         if unknown:
-            raise ParameterError(f"unknown ROS parameter(s): {', '.join(unknown)}; known: "
-                                 f"{', '.join(PARAMETERS)}")
+            raise ParameterError(
+                f"unknown ROS parameter(s): {', '.join(unknown)}; known: {', '.join(PARAMETERS)}"
+            )
         values = {}
         for name, (default, text) in PARAMETERS.items():
             descriptor = ParameterDescriptor(description=text, dynamic_typing=True)
@@ -134,12 +138,14 @@ class MissionNode(Node):
         try:
             from ..robot.go2_ros import Go2RosConfig, Go2RosRobot
         except ImportError as exc:
-            raise ParameterError(f"robot go2 needs the go2_interfaces package: source your "
-                                 f"go2_ros2_sdk workspace or run scripts/build_ros.sh ({exc})"
-                                 ) from exc
+            raise ParameterError(
+                f"robot go2 needs the go2_interfaces package: source your "
+                f"go2_ros2_sdk workspace or run scripts/build_ros.sh ({exc})"
+            ) from exc
         try:
-            self._go2 = Go2RosRobot(Go2RosConfig(**self.settings.go2_options(),
-                                                 camera_topic=""), context=self.context)
+            self._go2 = Go2RosRobot(
+                Go2RosConfig(**self.settings.go2_options(), camera_topic=""), context=self.context
+            )
         except RobotError as exc:
             raise ParameterError(f"robot go2: {exc}") from exc
         return self._go2
@@ -152,14 +158,21 @@ class MissionNode(Node):
             self._diag_pub = self.create_publisher(DiagnosticArray, s.diagnostics_topic, 10)
             self.create_subscription(String, s.mission_topic, self._on_mission, _COMMANDS)
             self._estop = EstopListener(
-                f"{self.get_name()}_estop", self.get_namespace(), self.context, _COMMANDS,
-                estop_topic=ESTOP_TOPIC, release_topic=ESTOP_RELEASE_TOPIC,
-                on_estop=self._on_estop, on_release=self._on_estop_release)
+                f"{self.get_name()}_estop",
+                self.get_namespace(),
+                self.context,
+                _COMMANDS,
+                estop_topic=ESTOP_TOPIC,
+                release_topic=ESTOP_RELEASE_TOPIC,
+                on_estop=self._on_estop,
+                on_release=self._on_estop_release,
+            )
             # The callback only keeps the newest frame; converting it happens off the executor.
             if s.camera_compressed:
                 self._camera = CameraIntake(self._on_compressed)
-                self.create_subscription(CompressedImage, s.camera_topic, self._camera.offer,
-                                         _CAMERA)
+                self.create_subscription(
+                    CompressedImage, s.camera_topic, self._camera.offer, _CAMERA
+                )
             else:
                 self._camera = CameraIntake(self._on_image)
                 self.create_subscription(Image, s.camera_topic, self._camera.offer, _CAMERA)
@@ -170,9 +183,14 @@ class MissionNode(Node):
         self._rviz = RvizPublisher(self, self.agent)  # planned_path, known_objects (rviz.py)
         self._goals: dict[bytes, MissionJob] = {}
         if ExecuteMission is not None and Chat is not None:
-            self._action = ActionServer(self, ExecuteMission, ACTION_NAME, self._execute_goal,
-                                        goal_callback=self._on_goal,
-                                        cancel_callback=self._on_cancel)
+            self._action = ActionServer(
+                self,
+                ExecuteMission,
+                ACTION_NAME,
+                self._execute_goal,
+                goal_callback=self._on_goal,
+                cancel_callback=self._on_cancel,
+            )
             self.create_service(Chat, CHAT_SERVICE, self._on_chat)
             # Risky plans wait for a person: announced on a topic, decided by a service.
             self._approval_pub = self.create_publisher(String, APPROVAL_TOPIC, _COMMANDS)
@@ -182,23 +200,33 @@ class MissionNode(Node):
 
     def _report_startup(self) -> None:
         s, log = self.settings, self.get_logger()
-        log.info(f"mission agent ready: backend {self.agent.settings.backend} "
-                 f"(profile {self.agent.settings.profile}), robot {self.agent.robot.name}, "
-                 f"missions on {self.resolve_topic_name(s.mission_topic)}, camera "
-                 f"{s.camera_topic} ({'compressed' if s.camera_compressed else 'raw'})")
+        log.info(
+            f"mission agent ready: backend {self.agent.settings.backend} "
+            f"(profile {self.agent.settings.profile}), robot {self.agent.robot.name}, "
+            f"missions on {self.resolve_topic_name(s.mission_topic)}, camera "
+            f"{s.camera_topic} ({'compressed' if s.camera_compressed else 'raw'})"
+        )
         if self._go2 is not None:
             topic = self._go2.topic
-            velocity = topic(s.cmd_vel_topic) if s.cmd_vel_topic else \
-                f"{topic('cmd_vel')} or {topic('cmd_vel_out')} (whichever is subscribed)"
-            battery = topic(s.battery_topic) if s.battery_topic else \
-                "none (battery reported unknown)"
-            log.info(f"Go2 through go2_ros2_sdk: velocity on {velocity}, sport "
-                     f"commands on {topic(s.webrtc_topic)}, odometry from "
-                     f"{topic(s.odom_topic)}, state from {topic(s.go2_states_topic)}, battery "
-                     f"{battery}")
+            velocity = (
+                topic(s.cmd_vel_topic)
+                if s.cmd_vel_topic
+                else f"{topic('cmd_vel')} or {topic('cmd_vel_out')} (whichever is subscribed)"
+            )
+            battery = (
+                topic(s.battery_topic) if s.battery_topic else "none (battery reported unknown)"
+            )
+            log.info(
+                f"Go2 through go2_ros2_sdk: velocity on {velocity}, sport "
+                f"commands on {topic(s.webrtc_topic)}, odometry from "
+                f"{topic(s.odom_topic)}, state from {topic(s.go2_states_topic)}, battery "
+                f"{battery}"
+            )
         if ExecuteMission is None:
-            log.warning("shadowhound_interfaces is not installed: the execute_mission action "
-                        "and the chat service are off (build it with scripts/build_ros.sh)")
+            log.warning(
+                "shadowhound_interfaces is not installed: the execute_mission action "
+                "and the chat service are off (build it with scripts/build_ros.sh)"
+            )
         if self._web is not None:
             log.info(f"web dashboard on {self._web.url}")
 
@@ -209,8 +237,9 @@ class MissionNode(Node):
             from ..web.app import create_app
             from ..web.server import ServeError, WebServer
         except ImportError as exc:
-            raise ParameterError(f"enable_web_ui needs the 'web' extra (pip install "
-                                 f"'shadowhound[web]'): {exc}") from exc
+            raise ParameterError(
+                f"enable_web_ui needs the 'web' extra (pip install 'shadowhound[web]'): {exc}"
+            ) from exc
         app = create_app(self.agent, worker=self._worker)
         self._desk = app.state.web.desk
         try:
@@ -268,9 +297,11 @@ class MissionNode(Node):
         """On the e-stop listener's own thread (see estop_listener.py)."""
         self.agent.estop()
         dropped = self._worker.drop_queued("the e-stop was pressed before it started")
-        self.get_logger().warning(f"E-STOP latched: robot stopped, {len(dropped)} waiting "
-                                  f"mission(s) dropped; publish on {ESTOP_RELEASE_TOPIC} to "
-                                  "release")
+        self.get_logger().warning(
+            f"E-STOP latched: robot stopped, {len(dropped)} waiting "
+            f"mission(s) dropped; publish on {ESTOP_RELEASE_TOPIC} to "
+            "release"
+        )
 
     def _on_estop_release(self) -> None:
         self.agent.release_estop()
@@ -299,9 +330,13 @@ class MissionNode(Node):
         request = goal_handle.request
         key = bytes(goal_handle.goal_id.uuid)
         finished = Future()
-        job = MissionJob(request.command, source="action", dry_run=request.dry_run,
-                         on_event=lambda event: self._send_feedback(goal_handle, event),
-                         on_done=lambda _job: self._resolve(finished, True))
+        job = MissionJob(
+            request.command,
+            source="action",
+            dry_run=request.dry_run,
+            on_event=lambda event: self._send_feedback(goal_handle, event),
+            on_done=lambda _job: self._resolve(finished, True),
+        )
         self._goals[key] = job
         try:
             refused = self._worker.start_now(job)
@@ -333,9 +368,14 @@ class MissionNode(Node):
         progress = self.agent.diagnostics().progress
         step = event.step if isinstance(event, ev.StepStarted | ev.StepFinished) else None
         count = len(event.plan.steps) if isinstance(event, ev.PlanReady) else progress.steps
-        goal_handle.publish_feedback(ExecuteMission.Feedback(
-            current_skill=step.skill if step else "", step_index=step.index if step else 0,
-            step_count=count, progress=progress.progress))
+        goal_handle.publish_feedback(
+            ExecuteMission.Feedback(
+                current_skill=step.skill if step else "",
+                step_index=step.index if step else 0,
+                step_count=count,
+                progress=progress.progress,
+            )
+        )
 
     # -- chat ------------------------------------------------------------------------------
 
@@ -366,9 +406,15 @@ class MissionNode(Node):
         else:
             response.accepted = self.agent.reject(wanted, request.reason.strip())
         verdict = "approved" if request.approve else "rejected"
-        response.message = verdict if response.accepted else (
-            "no plan with that id is waiting for approval" if wanted else
-            "no plan is waiting for approval")
+        response.message = (
+            verdict
+            if response.accepted
+            else (
+                "no plan with that id is waiting for approval"
+                if wanted
+                else "no plan is waiting for approval"
+            )
+        )
         return response
 
     # -- camera ----------------------------------------------------------------------------
@@ -399,8 +445,10 @@ class MissionNode(Node):
     def _drop_frame(self, exc: ValueError) -> None:
         self._frames["dropped"] += 1
         self._last_camera_error = str(exc)
-        self.get_logger().warning(f"dropped a camera frame on {self.settings.camera_topic}: "
-                                  f"{exc}", throttle_duration_sec=5.0)
+        self.get_logger().warning(
+            f"dropped a camera frame on {self.settings.camera_topic}: {exc}",
+            throttle_duration_sec=5.0,
+        )
 
     # -- status out ------------------------------------------------------------------------
 
@@ -410,19 +458,25 @@ class MissionNode(Node):
     def diagnostics_message(self) -> DiagnosticArray:
         """The agent's diagnostics as one DiagnosticStatus (what is published at 1 Hz)."""
         diagnostics = self.agent.diagnostics().to_dict()  # the one conversion, then key-values
-        extra = {"node": self.get_fully_qualified_name(), "robot": self.agent.robot.name,
-                 "camera_frames": self._frames["received"],
-                 "camera_dropped": self._frames["dropped"],
-                 "camera_last_frame": self._last_frame,
-                 "camera_last_error": self._last_camera_error,
-                 "busy": self._worker.busy}
+        extra = {
+            "node": self.get_fully_qualified_name(),
+            "robot": self.agent.robot.name,
+            "camera_frames": self._frames["received"],
+            "camera_dropped": self._frames["dropped"],
+            "camera_last_frame": self._last_frame,
+            "camera_last_error": self._last_camera_error,
+            "busy": self._worker.busy,
+        }
         name = DIAGNOSTICS_NAME
         if self.get_fully_qualified_name() != f"/{NODE_NAME}":  # keep several agents apart
             name += f" ({self.get_fully_qualified_name()})"
         status = DiagnosticStatus(
-            level=bytes([diagnostic_level(diagnostics)]), name=name,
-            message=diagnostic_message(diagnostics), hardware_id=self.agent.robot.name,
-            values=[KeyValue(key=k, value=v) for k, v in diagnostic_values(diagnostics, extra)])
+            level=bytes([diagnostic_level(diagnostics)]),
+            name=name,
+            message=diagnostic_message(diagnostics),
+            hardware_id=self.agent.robot.name,
+            values=[KeyValue(key=k, value=v) for k, v in diagnostic_values(diagnostics, extra)],
+        )
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()
         return array
@@ -445,10 +499,12 @@ def _action_result(job: MissionJob) -> Any:
     result = job.result
     if isinstance(result, MissionResult):
         steps = [s.to_dict() for s in result.steps]
-        return ExecuteMission.Result(success=result.success, response=result.response,
-                                     steps_json=json.dumps(steps))
-    return ExecuteMission.Result(success=False, steps_json="[]",
-                                 response=f"Not run: {job.dropped or 'no result'}.")
+        return ExecuteMission.Result(
+            success=result.success, response=result.response, steps_json=json.dumps(steps)
+        )
+    return ExecuteMission.Result(
+        success=False, steps_json="[]", response=f"Not run: {job.dropped or 'no result'}."
+    )
 
 
 _USAGE = f"""usage: shadowhound node [--ros-args -p NAME:=VALUE ...]
@@ -461,9 +517,15 @@ Exit codes: 0 after Ctrl-C / SIGTERM (the robot is stopped first), 2 for invalid
 
 def main(argv: Sequence[str] | None = None) -> int:
     """`shadowhound node --ros-args -p name:=value ...` (also the `mission_node` script)."""
-    return run_node("shadowhound node", "mission_node", argv, _USAGE, MissionNode,
-                    lambda node: node.shutdown(),  # type: ignore[attr-defined]
-                    "shutting down: cancelling the mission and stopping the robot")
+    return run_node(
+        "shadowhound node",
+        "mission_node",
+        argv,
+        _USAGE,
+        MissionNode,
+        lambda node: node.shutdown(),  # type: ignore[attr-defined]
+        "shutting down: cancelling the mission and stopping the robot",
+    )
 
 
 if __name__ == "__main__":

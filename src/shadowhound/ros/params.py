@@ -20,51 +20,90 @@ NODE_NAME = "shadowhound_mission_agent"
 
 # Name -> (default, help). The default also fixes the expected type.
 PARAMETERS: dict[str, tuple[Any, str]] = {
-    "backend_config": ("offline", "config profile name (offline, openai, ollama, vllm, "
-                                  "llamacpp) or a path to a YAML file"),
-    "robot": ("sim", "sim (simulated Go2 in this process) or go2 (a Go2 through go2_ros2_sdk's "
-                     "topics, or `shadowhound sim-driver`)"),
-    "time_scale": (1.0, "simulated robot: real seconds per simulated second (1 = real time, "
-                        "0 = as fast as possible)"),
+    "backend_config": (
+        "offline",
+        "config profile name (offline, openai, ollama, vllm, llamacpp) or a path to a YAML file",
+    ),
+    "robot": (
+        "sim",
+        "sim (simulated Go2 in this process) or go2 (a Go2 through go2_ros2_sdk's "
+        "topics, or `shadowhound sim-driver`)",
+    ),
+    "time_scale": (
+        1.0,
+        "simulated robot: real seconds per simulated second (1 = real time, "
+        "0 = as fast as possible)",
+    ),
     "camera_topic": ("/camera/image_raw", "camera images the agent looks at"),
-    "camera_type": ("auto", "raw (sensor_msgs/Image), compressed (sensor_msgs/CompressedImage) "
-                            "or auto (compressed when the topic name ends in 'compressed')"),
+    "camera_type": (
+        "auto",
+        "raw (sensor_msgs/Image), compressed (sensor_msgs/CompressedImage) "
+        "or auto (compressed when the topic name ends in 'compressed')",
+    ),
     "mission_topic": ("mission_command", "std_msgs/String missions to run"),
     "status_topic": ("mission_status", "std_msgs/String EXECUTING/COMPLETED/FAILED reports"),
     "robot_status_topic": ("/shadowhound/robot_status", "std_msgs/String JSON robot state, 5 Hz"),
     "diagnostics_topic": ("/shadowhound/diagnostics", "diagnostic_msgs/DiagnosticArray, 1 Hz"),
     "web_interface_port": (8080, "port of the web dashboard (1..65535)"),
     "enable_web_ui": (False, "serve the web dashboard on 127.0.0.1:web_interface_port"),
-    "robot_namespace": ("", "go2: go2_ros2_sdk's robot namespace, e.g. robot0 ('' = none); "
-                            "the Go2 topics below are relative to it"),
-    "cmd_vel_topic": ("", "go2: geometry_msgs/Twist velocity out; '' = discovered: cmd_vel when "
-                          "something (twist_mux) subscribes it, else the driver's cmd_vel_out"),
+    "robot_namespace": (
+        "",
+        "go2: go2_ros2_sdk's robot namespace, e.g. robot0 ('' = none); "
+        "the Go2 topics below are relative to it",
+    ),
+    "cmd_vel_topic": (
+        "",
+        "go2: geometry_msgs/Twist velocity out; '' = discovered: cmd_vel when "
+        "something (twist_mux) subscribes it, else the driver's cmd_vel_out",
+    ),
     "webrtc_topic": ("webrtc_req", "go2: go2_interfaces/WebRtcReq sport commands out"),
     "odom_topic": ("odom", "go2: nav_msgs/Odometry in"),
     "go2_states_topic": ("go2_states", "go2: go2_interfaces/Go2State in"),
-    "odom_timeout": (0.5, "go2: seconds without odometry before a motion step fails "
-                          "(0.05..10)"),
-    "odom_latency": (-1.0, "go2: seconds odometry lags the robot (0..2); -1 = measured at "
-                           "each start from rest"),
-    "battery_topic": ("", "go2: sensor_msgs/BatteryState in ('' = none: the battery level is "
-                          "reported unknown; go2_ros2_sdk publishes none)"),
-    "detections_topic": ("", "go2: shadowhound_interfaces/DetectionArray in, from any detector "
-                             "('' = none); each detection becomes a known object"),
-    "navigation": ("", "nav.goto: auto (Nav2's navigate_to_pose when it answers, else the "
-                       "project's own planner), nav2 (Nav2 required), direct (never Nav2); "
-                       "'' = the profile's (auto unless it says otherwise)"),
-    "map_topic": ("map", "go2: nav_msgs/OccupancyGrid map in (transient local, as map_server "
-                         "and slam_toolbox publish it); '' = no map: paths are straight lines"),
+    "odom_timeout": (0.5, "go2: seconds without odometry before a motion step fails (0.05..10)"),
+    "odom_latency": (
+        -1.0,
+        "go2: seconds odometry lags the robot (0..2); -1 = measured at each start from rest",
+    ),
+    "battery_topic": (
+        "",
+        "go2: sensor_msgs/BatteryState in ('' = none: the battery level is "
+        "reported unknown; go2_ros2_sdk publishes none)",
+    ),
+    "detections_topic": (
+        "",
+        "go2: shadowhound_interfaces/DetectionArray in, from any detector "
+        "('' = none); each detection becomes a known object",
+    ),
+    "navigation": (
+        "",
+        "nav.goto: auto (Nav2's navigate_to_pose when it answers, else the "
+        "project's own planner), nav2 (Nav2 required), direct (never Nav2); "
+        "'' = the profile's (auto unless it says otherwise)",
+    ),
+    "map_topic": (
+        "map",
+        "go2: nav_msgs/OccupancyGrid map in (transient local, as map_server "
+        "and slam_toolbox publish it); '' = no map: paths are straight lines",
+    ),
     "scan_topic": ("scan", "go2: sensor_msgs/LaserScan in ('' = none)"),
     "nav2_action": ("navigate_to_pose", "go2: Nav2's NavigateToPose action ('' = no Nav2)"),
-    "go2_firmware_tricks": (False, "go2: allow the tricks that need firmware support and the "
-                                   "'ai' motion mode (flips, handstand, 1301-1305)"),
+    "go2_firmware_tricks": (
+        False,
+        "go2: allow the tricks that need firmware support and the "
+        "'ai' motion mode (flips, handstand, 1301-1305)",
+    ),
 }
 
 CAMERA_TYPES = ("auto", "raw", "compressed")
 # '' = discovered / none
-_OPTIONAL_TOPICS = ("cmd_vel_topic", "battery_topic", "detections_topic", "map_topic",
-                    "scan_topic", "nav2_action")
+_OPTIONAL_TOPICS = (
+    "cmd_vel_topic",
+    "battery_topic",
+    "detections_topic",
+    "map_topic",
+    "scan_topic",
+    "nav2_action",
+)
 NAVIGATION: tuple[str, ...] = get_args(ShadowHoundConfig.model_fields["navigation"].annotation)
 ROBOTS = ("sim", "go2")
 _TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
@@ -114,21 +153,27 @@ class NodeSettings:
             overrides["navigation"] = self.navigation
         config = load_config(self.backend_config, overrides)
         if self.robot == "go2":
-            unset = {k: v for k, v in GO2_MOTION.items()
-                     if k not in config.motion.model_fields_set}
+            unset = {k: v for k, v in GO2_MOTION.items() if k not in config.motion.model_fields_set}
             config.motion = config.motion.model_copy(update=unset)
         return config
 
     def go2_options(self) -> dict[str, Any]:
         """Keyword arguments for Go2RosConfig."""
-        return {"namespace": self.robot_namespace, "cmd_vel_topic": self.cmd_vel_topic,
-                "webrtc_topic": self.webrtc_topic, "odom_topic": self.odom_topic,
-                "state_topic": self.go2_states_topic, "odom_timeout": self.odom_timeout,
-                "odom_latency": None if self.odom_latency < 0 else self.odom_latency,
-                "battery_topic": self.battery_topic,
-                "detections_topic": self.detections_topic,
-                "firmware_tricks": self.go2_firmware_tricks, "map_topic": self.map_topic,
-                "scan_topic": self.scan_topic, "nav2_action": self.nav2_action}
+        return {
+            "namespace": self.robot_namespace,
+            "cmd_vel_topic": self.cmd_vel_topic,
+            "webrtc_topic": self.webrtc_topic,
+            "odom_topic": self.odom_topic,
+            "state_topic": self.go2_states_topic,
+            "odom_timeout": self.odom_timeout,
+            "odom_latency": None if self.odom_latency < 0 else self.odom_latency,
+            "battery_topic": self.battery_topic,
+            "detections_topic": self.detections_topic,
+            "firmware_tricks": self.go2_firmware_tricks,
+            "map_topic": self.map_topic,
+            "scan_topic": self.scan_topic,
+            "nav2_action": self.nav2_action,
+        }
 
 
 _WANTED = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
@@ -155,31 +200,50 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
         else:
             ok = isinstance(value, str)
         if not ok:
-            problems.append(f"{f.name} must be {_WANTED[type(default)]}, got {_kind(value)} "
-                            f"{value!r}")
+            problems.append(
+                f"{f.name} must be {_WANTED[type(default)]}, got {_kind(value)} {value!r}"
+            )
             continue
         out[f.name] = value
-    unknown_topics = [n for n in ("camera_topic", "mission_topic", "status_topic",
-                                  "robot_status_topic", "diagnostics_topic", "cmd_vel_topic",
-                                  "webrtc_topic", "odom_topic", "go2_states_topic",
-                                  "battery_topic", "detections_topic", "map_topic",
-                                  "scan_topic", "nav2_action")
-                      if n in out and not _TOPIC.match(out[n])
-                      and (out[n] or n not in _OPTIONAL_TOPICS)]
-    problems += [f"{n} {out[n]!r} is not a valid ROS topic name (letters, digits, '_' and "
-                 "'/' separators, not starting with a digit)" for n in unknown_topics]
+    unknown_topics = [
+        n
+        for n in (
+            "camera_topic",
+            "mission_topic",
+            "status_topic",
+            "robot_status_topic",
+            "diagnostics_topic",
+            "cmd_vel_topic",
+            "webrtc_topic",
+            "odom_topic",
+            "go2_states_topic",
+            "battery_topic",
+            "detections_topic",
+            "map_topic",
+            "scan_topic",
+            "nav2_action",
+        )
+        if n in out and not _TOPIC.match(out[n]) and (out[n] or n not in _OPTIONAL_TOPICS)
+    ]
+    problems += [
+        f"{n} {out[n]!r} is not a valid ROS topic name (letters, digits, '_' and "
+        "'/' separators, not starting with a digit)"
+        for n in unknown_topics
+    ]
     if "camera_type" in out and out["camera_type"] not in CAMERA_TYPES:
-        problems.append(f"camera_type must be one of {', '.join(CAMERA_TYPES)}, got "
-                        f"{out['camera_type']!r}")
+        problems.append(
+            f"camera_type must be one of {', '.join(CAMERA_TYPES)}, got {out['camera_type']!r}"
+        )
     if out.get("navigation") and out["navigation"] not in NAVIGATION:
-        problems.append(f"navigation must be one of {', '.join(NAVIGATION)} (or '' for the "
-                        f"profile's), got {out['navigation']!r}")
+        problems.append(
+            f"navigation must be one of {', '.join(NAVIGATION)} (or '' for the "
+            f"profile's), got {out['navigation']!r}"
+        )
     if "robot" in out and out["robot"] not in ROBOTS:
         problems.append(f"robot must be sim or go2, got {out['robot']!r}")
     namespace = out.get("robot_namespace", "")
     if namespace.strip("/") and not _TOPIC.match(namespace.strip("/")):
-        problems.append(f"robot_namespace {namespace!r} is not a valid ROS namespace (e.g. "
-                        "robot0)")
+        problems.append(f"robot_namespace {namespace!r} is not a valid ROS namespace (e.g. robot0)")
     timeout = out.get("odom_timeout")
     if timeout is not None and not (math.isfinite(timeout) and 0.05 <= timeout <= 10):
         problems.append(f"odom_timeout must be a number of seconds in 0.05..10, got {timeout}")
@@ -191,8 +255,10 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
         problems.append(f"web_interface_port must be in 1..65535, got {port}")
     scale = out.get("time_scale")
     if scale is not None and not (math.isfinite(scale) and 0 <= scale <= 100):
-        problems.append(f"time_scale must be a number in 0..100 (1 = real time, 0 = as fast as "
-                        f"possible), got {scale}")
+        problems.append(
+            f"time_scale must be a number in 0..100 (1 = real time, 0 = as fast as "
+            f"possible), got {scale}"
+        )
     if "backend_config" in out and not out["backend_config"].strip():
         problems.append("backend_config must name a profile or a YAML file, got ''")
     if problems:
@@ -202,6 +268,7 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
 
 def describe_parameters() -> str:
     """Help text: every parameter with its default."""
-    lines = [f"  {name} (default {default!r}): {text}"
-             for name, (default, text) in PARAMETERS.items()]
+    lines = [
+        f"  {name} (default {default!r}): {text}" for name, (default, text) in PARAMETERS.items()
+    ]
     return "\n".join(lines)

@@ -22,9 +22,16 @@ from ..errors import ConfigError
 from ..exit_codes import EXIT_OK, EXIT_USAGE
 
 
-def run_node(prog: str, node_name: str, argv: Sequence[str] | None, usage: str,
-             make: Callable[[], Node], close: Callable[[Node], None], goodbye: str,
-             extra_nodes: Callable[[Node], Sequence[Node]] = lambda _node: ()) -> int:
+def run_node(
+    prog: str,
+    node_name: str,
+    argv: Sequence[str] | None,
+    usage: str,
+    make: Callable[[], Node],
+    close: Callable[[Node], None],
+    goodbye: str,
+    extra_nodes: Callable[[Node], Sequence[Node]] = lambda _node: (),
+) -> int:
     """Start the node `make()` builds, spin until a signal, then `close` it and exit 0.
 
     Parameters come as `--ros-args -p NAME:=VALUE`; invalid ones (a ConfigError from `make`)
@@ -41,8 +48,11 @@ def run_node(prog: str, node_name: str, argv: Sequence[str] | None, usage: str,
         print(usage)
         return EXIT_OK
     if extra:
-        print(f"{prog}: unexpected arguments {extra}; give parameters as --ros-args -p "
-              "NAME:=VALUE (see --help)", file=sys.stderr)
+        print(
+            f"{prog}: unexpected arguments {extra}; give parameters as --ros-args -p "
+            "NAME:=VALUE (see --help)",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
     stop = threading.Event()
     try:

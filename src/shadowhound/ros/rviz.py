@@ -70,10 +70,31 @@ def object_markers(objects: Sequence[KnownObject]) -> list[MarkerSpec]:
     for i, o in enumerate(objects):
         diameter = max(0.05, 2 * o.radius)
         alpha = 0.35 + 0.6 * min(1.0, max(0.0, o.confidence))
-        specs.append(MarkerSpec(OBJECTS_NS, i, "cylinder", o.x, o.y, OBJECT_HEIGHT / 2,
-                                (diameter, diameter, OBJECT_HEIGHT), (0.9, 0.49, 0.13, alpha)))
-        specs.append(MarkerSpec(LABELS_NS, i, "text", o.x, o.y, OBJECT_HEIGHT + 0.2,
-                                (0.0, 0.0, 0.2), (1.0, 1.0, 1.0, 1.0), o.name))
+        specs.append(
+            MarkerSpec(
+                OBJECTS_NS,
+                i,
+                "cylinder",
+                o.x,
+                o.y,
+                OBJECT_HEIGHT / 2,
+                (diameter, diameter, OBJECT_HEIGHT),
+                (0.9, 0.49, 0.13, alpha),
+            )
+        )
+        specs.append(
+            MarkerSpec(
+                LABELS_NS,
+                i,
+                "text",
+                o.x,
+                o.y,
+                OBJECT_HEIGHT + 0.2,
+                (0.0, 0.0, 0.2),
+                (1.0, 1.0, 1.0, 1.0),
+                o.name,
+            )
+        )
     return specs
 
 
@@ -83,6 +104,7 @@ def yaw_quaternion(yaw: float) -> tuple[float, float]:
 
 
 # -- messages (need nav_msgs, geometry_msgs, visualization_msgs) ---------------------------
+
 
 def path_message(poses: Sequence[Pose2D], frame_id: str, stamp: Any) -> Any:
     from geometry_msgs.msg import PoseStamped
@@ -126,13 +148,17 @@ def marker_array(specs: Sequence[MarkerSpec], frame_id: str, stamp: Any) -> Any:
 class RvizPublisher:
     """Publishes each mission's planned path and the known objects for `agent` on `node`."""
 
-    def __init__(self, node: Any, agent: Any, *, frame_id: str = DEFAULT_FRAME,
-                 objects_period: float = 1.0) -> None:
+    def __init__(
+        self, node: Any, agent: Any, *, frame_id: str = DEFAULT_FRAME, objects_period: float = 1.0
+    ) -> None:
         from nav_msgs.msg import Path
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-        latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        latched = QoSProfile(
+            depth=1,
+            reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL,
+        )
         self._node, self._agent, self.frame_id = node, agent, frame_id
         self._path_pub = node.create_publisher(Path, PATH_TOPIC, latched)
         self._lock = threading.Lock()
@@ -144,7 +170,8 @@ class RvizPublisher:
         except ImportError:  # an install from before the package was in the ROS list
             node.get_logger().warning(
                 f"visualization_msgs is not installed: no {OBJECTS_TOPIC} markers for RViz "
-                "(pip install ros-jazzy-visualization-msgs, or run scripts/build_ros.sh)")
+                "(pip install ros-jazzy-visualization-msgs, or run scripts/build_ros.sh)"
+            )
             return
         self._objects_pub = node.create_publisher(MarkerArray, OBJECTS_TOPIC, latched)
         self._timer = node.create_timer(objects_period, self.publish_objects)

@@ -53,16 +53,27 @@ class SimDriver(Node):
     """The simulated driver node. `options` override its ROS parameters (names as in
     sim_options.OPTIONS); give `sim` to drive an existing SimRobot (one robot only)."""
 
-    def __init__(self, sim: SimRobot | None = None, *, options: Mapping[str, Any] | None = None,
-                 node_name: str = NODE_NAME, **node_kwargs: Any) -> None:
+    def __init__(
+        self,
+        sim: SimRobot | None = None,
+        *,
+        options: Mapping[str, Any] | None = None,
+        node_name: str = NODE_NAME,
+        **node_kwargs: Any,
+    ) -> None:
         super().__init__(node_name, **node_kwargs)
         self.settings = s = parse_settings({**self._read_parameters(), **(options or {})})
         if sim is not None and s.robots != 1:
             raise ParameterError("a given SimRobot makes one robot; robots must be 1")
-        self.robots = [SimGo2(self, s, f"robot{i}/" if s.robots > 1 else "",
-                              sim or self._new_sim(s)) for i in range(s.robots)]
-        self.relay = TwistMux(s.relay_timeout, context=self.context,
-                              namespace=self.get_namespace()) if s.relay else None
+        self.robots = [
+            SimGo2(self, s, f"robot{i}/" if s.robots > 1 else "", sim or self._new_sim(s))
+            for i in range(s.robots)
+        ]
+        self.relay = (
+            TwistMux(s.relay_timeout, context=self.context, namespace=self.get_namespace())
+            if s.relay
+            else None
+        )
         self.create_timer(0.1, self._forward_requests)  # the driver's 10 Hz request loop
         self.create_timer(1.0 / s.state_rate_hz, self._each("publish_state"))
         self.create_timer(1.0 / s.truth_rate_hz, self._each("publish_truth"))
@@ -82,7 +93,8 @@ class SimDriver(Node):
             + f"; odom {s.odom_rate_hz:g} Hz {s.odom_delay:g} s late, go2_states "
             f"{s.state_rate_hz:g} Hz; battery "
             + ("none" if s.battery is None else f"{s.battery:g}% on {s.battery_topic}")
-            + f"; truth on {first.topic('sim_driver/truth')}")
+            + f"; truth on {first.topic('sim_driver/truth')}"
+        )
 
     @property
     def nodes(self) -> list[Node]:
@@ -113,19 +125,25 @@ class SimDriver(Node):
         super().destroy_node()
 
     def _new_sim(self, s: DriverSettings) -> SimRobot:
-        return SimRobot(SimConfig(time_scale=1.0, battery_drain_idle=s.battery_drain),
-                        name="sim-driver")
+        return SimRobot(
+            SimConfig(time_scale=1.0, battery_drain_idle=s.battery_drain), name="sim-driver"
+        )
 
     def _read_parameters(self) -> dict[str, Any]:
         given = set(getattr(self, "_parameter_overrides", {})) - {"use_sim_time"}
         unknown = sorted(given - set(OPTIONS))
         if unknown:
-            raise ParameterError(f"unknown ROS parameter(s): {', '.join(unknown)}; known: "
-                                 f"{', '.join(OPTIONS)}")
-        declared = {name: self.declare_parameter(
-            name, getattr(DriverSettings(), name),
-            ParameterDescriptor(description=option.help, dynamic_typing=True)).value
-            for name, option in OPTIONS.items()}  # all declared, so `ros2 param` lists them
+            raise ParameterError(
+                f"unknown ROS parameter(s): {', '.join(unknown)}; known: {', '.join(OPTIONS)}"
+            )
+        declared = {
+            name: self.declare_parameter(
+                name,
+                getattr(DriverSettings(), name),
+                ParameterDescriptor(description=option.help, dynamic_typing=True),
+            ).value
+            for name, option in OPTIONS.items()
+        }  # all declared, so `ros2 param` lists them
         return {name: declared[name] for name in given}  # only those set win over defaults
 
     def _each(self, method: str) -> Any:
@@ -159,9 +177,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     own, ros_args = split_argv(sys.argv[1:] if argv is None else argv)
     parser = build_parser(PROG, _DESCRIPTION, _EPILOG)
     options = vars(parser.parse_args(own))  # exits 2 with a message on bad options
-    return run_node(PROG, NODE_NAME, ros_args, parser.format_help(),
-                    lambda: SimDriver(options=options),
-                    _close, "shutting down: the simulated robots stop", extra_nodes=_relay)
+    return run_node(
+        PROG,
+        NODE_NAME,
+        ros_args,
+        parser.format_help(),
+        lambda: SimDriver(options=options),
+        _close,
+        "shutting down: the simulated robots stop",
+        extra_nodes=_relay,
+    )
 
 
 def _close(driver: Node) -> None:

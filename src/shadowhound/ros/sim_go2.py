@@ -42,12 +42,17 @@ if TYPE_CHECKING:
 __all__ = ["Faults", "SimGo2", "Truth"]
 
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-_SENSOR = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
-                     reliability=ReliabilityPolicy.BEST_EFFORT)
-_NAMES = {go2_api.MOVE: "Move", go2_api.STOP_MOVE: "StopMove",
-          **{c.api_id: c.name for c in go2_api.POSTURE_CHANGES.values()},
-          **{t.api_id: t.name for t in go2_api.TRICKS.values()
-             if t.api_id not in go2_api.POSTURE_CHANGES}}
+_SENSOR = QoSProfile(
+    depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
+)
+_NAMES = {
+    go2_api.MOVE: "Move",
+    go2_api.STOP_MOVE: "StopMove",
+    **{c.api_id: c.name for c in go2_api.POSTURE_CHANGES.values()},
+    **{
+        t.api_id: t.name for t in go2_api.TRICKS.values() if t.api_id not in go2_api.POSTURE_CHANGES
+    },
+}
 
 
 @dataclass
@@ -68,14 +73,19 @@ class Faults:
             raise ValueError("a fault message must be a JSON object")
         unknown = set(data) - {"odom", "states", "camera", "delay_ms", "drop_commands"}
         if unknown:
-            raise ValueError(f"unknown fault(s) {sorted(unknown)}; known: odom, states, camera, "
-                             "delay_ms, drop_commands")
+            raise ValueError(
+                f"unknown fault(s) {sorted(unknown)}; known: odom, states, camera, "
+                "delay_ms, drop_commands"
+            )
         flags = {k: data[k] for k in ("odom", "states", "camera", "drop_commands") if k in data}
         if not all(isinstance(v, bool) for v in flags.values()):
             raise ValueError("odom, states, camera and drop_commands take true or false")
         delay = data.get("delay_ms", 0)
-        if isinstance(delay, bool) or not isinstance(delay, (int, float)) \
-                or not 0 <= delay <= 10_000:
+        if (
+            isinstance(delay, bool)
+            or not isinstance(delay, (int, float))
+            or not 0 <= delay <= 10_000
+        ):
             raise ValueError("delay_ms must be a number of milliseconds in 0..10000")
         return cls(**flags, delay=delay / 1000.0)
 
@@ -85,9 +95,12 @@ class SimGo2:
 
     def __init__(self, node: Node, settings: DriverSettings, prefix: str, sim: SimRobot) -> None:
         self.node, self.settings, self.prefix, self.sim = node, settings, prefix, sim
-        self.body = SimSportMode(sim, move_timeout=settings.move_timeout,
-                                 posture_seconds=settings.posture_seconds,
-                                 start=Posture(settings.start_posture))
+        self.body = SimSportMode(
+            sim,
+            move_timeout=settings.move_timeout,
+            posture_seconds=settings.posture_seconds,
+            start=Posture(settings.start_posture),
+        )
         self.faults = Faults()
         self._counts = {"twists": 0, "twists_dropped": 0, "requests_dropped": 0}
         self._pending: deque[tuple[int, Any, str, float]] = deque()  # the 10 Hz queue
@@ -97,33 +110,48 @@ class SimGo2:
         self._closing = threading.Event()
         self._odom_pub = node.create_publisher(Odometry, self.topic("odom"), _RELIABLE)
         self._state_pub = node.create_publisher(Go2State, self.topic("go2_states"), _RELIABLE)
-        self._camera_pub = node.create_publisher(Image, self.topic("camera/image_raw"),
-                                                 _SENSOR) if settings.camera_rate_hz > 0 else None
-        self._truth_pub = node.create_publisher(String, self.topic("sim_driver/truth"),
-                                                _RELIABLE)
-        self._record_pub = node.create_publisher(String, self.topic("sim_driver/requests"),
-                                                 QoSProfile(depth=50))
-        self._battery_pub = node.create_publisher(
-            BatteryState, self.topic(settings.battery_topic), _RELIABLE) \
-            if settings.battery is not None else None
-        self._scan_pub = node.create_publisher(LaserScan, self.topic("scan"), _SENSOR) \
-            if settings.scan_rate_hz > 0 else None
+        self._camera_pub = (
+            node.create_publisher(Image, self.topic("camera/image_raw"), _SENSOR)
+            if settings.camera_rate_hz > 0
+            else None
+        )
+        self._truth_pub = node.create_publisher(String, self.topic("sim_driver/truth"), _RELIABLE)
+        self._record_pub = node.create_publisher(
+            String, self.topic("sim_driver/requests"), QoSProfile(depth=50)
+        )
+        self._battery_pub = (
+            node.create_publisher(BatteryState, self.topic(settings.battery_topic), _RELIABLE)
+            if settings.battery is not None
+            else None
+        )
+        self._scan_pub = (
+            node.create_publisher(LaserScan, self.topic("scan"), _SENSOR)
+            if settings.scan_rate_hz > 0
+            else None
+        )
         if settings.map:  # published once: transient local keeps it for late subscribers
             self._map_pub = node.create_publisher(GridMsg, self.topic("map"), MAP_QOS)
-            self._map_pub.publish(grid_to_msg(sensors.scene_grid(sim.map_world), "odom",
-                                              node.get_clock().now().to_msg()))
-        self.navigator = SimNavigator(node, self.prefix + "navigate_to_pose", self.body,
-                                      self.drive, settings.nav_speed) \
-            if settings.navigate_to_pose else None
+            self._map_pub.publish(
+                grid_to_msg(
+                    sensors.scene_grid(sim.map_world), "odom", node.get_clock().now().to_msg()
+                )
+            )
+        self.navigator = (
+            SimNavigator(
+                node, self.prefix + "navigate_to_pose", self.body, self.drive, settings.nav_speed
+            )
+            if settings.navigate_to_pose
+            else None
+        )
         node.create_subscription(Twist, self.topic("cmd_vel_out"), self._on_twist, _RELIABLE)
-        node.create_subscription(WebRtcReq, self.topic("webrtc_req"), self._on_request,
-                                 _RELIABLE)
-        node.create_subscription(String, self.topic("sim_driver/fault"), self._on_fault,
-                                 _RELIABLE)
-        self._threads = [threading.Thread(target=self._apply_commands, daemon=True,
-                                          name=f"sim-commands-{prefix}"),
-                         threading.Thread(target=self._run_odometry, daemon=True,
-                                          name=f"sim-odometry-{prefix}")]
+        node.create_subscription(WebRtcReq, self.topic("webrtc_req"), self._on_request, _RELIABLE)
+        node.create_subscription(String, self.topic("sim_driver/fault"), self._on_fault, _RELIABLE)
+        self._threads = [
+            threading.Thread(
+                target=self._apply_commands, daemon=True, name=f"sim-commands-{prefix}"
+            ),
+            threading.Thread(target=self._run_odometry, daemon=True, name=f"sim-odometry-{prefix}"),
+        ]
 
     def topic(self, name: str) -> str:
         return self.node.resolve_topic_name(self.prefix + name)
@@ -151,8 +179,7 @@ class SimGo2:
 
     def drive(self, x: float, y: float, z: float) -> None:
         """Velocity from the navigate_to_pose server: as a Twist on cmd_vel_out would come."""
-        self._on_twist(Twist(linear=Vector3(x=float(x), y=float(y)),
-                             angular=Vector3(z=float(z))))
+        self._on_twist(Twist(linear=Vector3(x=float(x), y=float(y)), angular=Vector3(z=float(z))))
 
     def _apply_twist(self, x: float, y: float, z: float) -> None:
         self._counts["twists"] += 1
@@ -175,8 +202,13 @@ class SimGo2:
             parameter = "" if text == "" else json.loads(text)
         except ValueError as exc:  # the driver logs "Invalid JSON" and drops the request
             self._counts["requests_dropped"] += 1
-            self._record(api_id, arrived, None, False, f"dropped by the driver: parameter is "
-                                                       f"not JSON ({exc})")
+            self._record(
+                api_id,
+                arrived,
+                None,
+                False,
+                f"dropped by the driver: parameter is not JSON ({exc})",
+            )
             return
         self._pending.append((api_id, parameter, topic or go2_api.SPORT_TOPIC, arrived))
 
@@ -184,8 +216,9 @@ class SimGo2:
         """The driver's 10 Hz loop: every queued request goes to the robot, in order."""
         while self._pending:
             api_id, parameter, topic, arrived = self._pending.popleft()
-            self.body.request(api_id, parameter, topic,
-                              self._reporter(api_id, arrived, time.monotonic()))
+            self.body.request(
+                api_id, parameter, topic, self._reporter(api_id, arrived, time.monotonic())
+            )
 
     def _reporter(self, api_id: int, arrived: float, sent: float) -> Callable[[bool, str], None]:
         return lambda accepted, note: self._record(api_id, arrived, sent, accepted, note)
@@ -200,15 +233,17 @@ class SimGo2:
 
     def _schedule(self, apply: Callable[[], None]) -> None:
         with self._ready:
-            heapq.heappush(self._commands,
-                           (time.monotonic() + self.faults.delay, next(self._order), apply))
+            heapq.heappush(
+                self._commands, (time.monotonic() + self.faults.delay, next(self._order), apply)
+            )
             self._ready.notify()
 
     def _apply_commands(self) -> None:
         while True:
             with self._ready:
                 while not self._closing.is_set() and (
-                        not self._commands or self._commands[0][0] > time.monotonic()):
+                    not self._commands or self._commands[0][0] > time.monotonic()
+                ):
                     wait = self._commands[0][0] - time.monotonic() if self._commands else None
                     self._ready.wait(wait)
                 if self._closing.is_set():
@@ -216,11 +251,18 @@ class SimGo2:
                 _due, _seq, apply = heapq.heappop(self._commands)
             apply()
 
-    def _record(self, api_id: int, arrived: float, sent: float | None, accepted: bool,
-                note: str) -> None:
-        record = {"api_id": api_id, "name": _NAMES.get(api_id, "unknown"),
-                  "accepted": accepted, "note": note, "mono": arrived, "sent": sent,
-                  "acted": time.monotonic()}
+    def _record(
+        self, api_id: int, arrived: float, sent: float | None, accepted: bool, note: str
+    ) -> None:
+        record = {
+            "api_id": api_id,
+            "name": _NAMES.get(api_id, "unknown"),
+            "accepted": accepted,
+            "note": note,
+            "mono": arrived,
+            "sent": sent,
+            "acted": time.monotonic(),
+        }
         self._record_pub.publish(String(data=json.dumps(record)))
 
     # -- state out -------------------------------------------------------------------------
@@ -260,12 +302,17 @@ class SimGo2:
         t = self.body.truth()
         c, s = math.cos(t.yaw), math.sin(t.yaw)
         standing = t.posture is Posture.STANDING and not t.changing
-        self._state_pub.publish(Go2State(
-            mode=t.mode, progress=self.body.progress,
-            gait_type=1 if t.mode == SportMode.LOCOMOTION else 0,
-            foot_raise_height=0.08 if standing else 0.0,
-            position=[t.x, t.y, t.body_height], body_height=t.body_height,
-            velocity=[t.vx * c - t.vy * s, t.vx * s + t.vy * c, 0.0]))  # odom frame
+        self._state_pub.publish(
+            Go2State(
+                mode=t.mode,
+                progress=self.body.progress,
+                gait_type=1 if t.mode == SportMode.LOCOMOTION else 0,
+                foot_raise_height=0.08 if standing else 0.0,
+                position=[t.x, t.y, t.body_height],
+                body_height=t.body_height,
+                velocity=[t.vx * c - t.vy * s, t.vx * s + t.vy * c, 0.0],
+            )
+        )  # odom frame
 
     def battery_level(self, t: Truth) -> float | None:
         """Percent left: the set start less what the simulator has drained since."""
@@ -276,17 +323,27 @@ class SimGo2:
         level = self.battery_level(self.body.truth())
         if self._battery_pub is None or level is None:
             return
-        msg = BatteryState(percentage=level / 100.0, present=True, voltage=math.nan,
-                           power_supply_status=BatteryState.POWER_SUPPLY_STATUS_DISCHARGING)
+        msg = BatteryState(
+            percentage=level / 100.0,
+            present=True,
+            voltage=math.nan,
+            power_supply_status=BatteryState.POWER_SUPPLY_STATUS_DISCHARGING,
+        )
         msg.header.stamp = self.node.get_clock().now().to_msg()
         self._battery_pub.publish(msg)
 
     def truth_dict(self) -> dict[str, Any]:
         stamp = self.node.get_clock().now().nanoseconds / 1e9
         t = self.body.truth()
-        return {**t.to_dict(), "stamp": stamp, "robot": self.prefix.rstrip("/") or "",
-                "battery": self.battery_level(t), "faults": vars(self.faults), **self._counts,
-                "navigation": self.navigator.truth() if self.navigator else None}
+        return {
+            **t.to_dict(),
+            "stamp": stamp,
+            "robot": self.prefix.rstrip("/") or "",
+            "battery": self.battery_level(t),
+            "faults": vars(self.faults),
+            **self._counts,
+            "navigation": self.navigator.truth() if self.navigator else None,
+        }
 
     def publish_truth(self) -> None:
         if not self._closing.is_set():
@@ -296,18 +353,24 @@ class SimGo2:
         scan = self.sim.get_scan()
         if self._scan_pub is None or self._closing.is_set() or scan is None:
             return
-        msg = scan_to_msg(scan, f"{self.prefix}base_link",
-                          self.node.get_clock().now().to_msg(), 1.0 / self.settings.scan_rate_hz)
+        msg = scan_to_msg(
+            scan,
+            f"{self.prefix}base_link",
+            self.node.get_clock().now().to_msg(),
+            1.0 / self.settings.scan_rate_hz,
+        )
         self._scan_pub.publish(msg)
 
     def publish_camera(self) -> None:
         if not self.faults.camera or self._camera_pub is None:
             return
         s = self.settings
-        msg = Image(width=s.camera_width, height=s.camera_height, encoding="rgb8",
-                    step=3 * s.camera_width)
+        msg = Image(
+            width=s.camera_width, height=s.camera_height, encoding="rgb8", step=3 * s.camera_width
+        )
         msg.header.stamp = self.node.get_clock().now().to_msg()
         msg.header.frame_id = f"{self.prefix}camera_link"
-        msg.data = renderer.render(scene.DEFAULT_WORLD, self.sim.get_state().pose,
-                                   s.camera_width, s.camera_height)
+        msg.data = renderer.render(
+            scene.DEFAULT_WORLD, self.sim.get_state().pose, s.camera_width, s.camera_height
+        )
         self._camera_pub.publish(msg)

@@ -50,23 +50,38 @@ def _duration(seconds: float) -> Duration:
 class SimNavigator:
     """NavigateToPose on `action` for the robot `body` (truth from its simulator)."""
 
-    def __init__(self, parent: Node, action: str, body: SimSportMode,
-                 drive: Callable[[float, float, float], None], speed: float = 0.4) -> None:
+    def __init__(
+        self,
+        parent: Node,
+        action: str,
+        body: SimSportMode,
+        drive: Callable[[float, float, float], None],
+        speed: float = 0.4,
+    ) -> None:
         self.body, self._drive, self.speed = body, drive, speed
         name = f"{parent.get_name()}_{action.strip('/').replace('/', '_')}"
-        self.node = Node(name, namespace=parent.get_namespace(), context=parent.context,
-                         use_global_arguments=False, start_parameter_services=False)
+        self.node = Node(
+            name,
+            namespace=parent.get_namespace(),
+            context=parent.context,
+            use_global_arguments=False,
+            start_parameter_services=False,
+        )
         self._lock = threading.Lock()
         self._active: Any = None  # the goal handle now driving the robot
-        self._stats = {"goals": 0, "succeeded": 0, "aborted": 0, "canceled": 0,
-                       "recoveries": 0}
+        self._stats = {"goals": 0, "succeeded": 0, "aborted": 0, "canceled": 0, "recoveries": 0}
         self._last = ""
         self._belief: Belief | None = None
-        self.server = ActionServer(self.node, NavigateToPose, action, self._execute,
-                                   goal_callback=self._on_goal,
-                                   cancel_callback=lambda _handle: CancelResponse.ACCEPT,
-                                   handle_accepted_callback=self._on_accepted,
-                                   callback_group=ReentrantCallbackGroup())
+        self.server = ActionServer(
+            self.node,
+            NavigateToPose,
+            action,
+            self._execute,
+            goal_callback=self._on_goal,
+            cancel_callback=lambda _handle: CancelResponse.ACCEPT,
+            handle_accepted_callback=self._on_accepted,
+            callback_group=ReentrantCallbackGroup(),
+        )
         self.action = self.node.resolve_topic_name(action)
         self._executor = MultiThreadedExecutor(num_threads=3, context=parent.context)
         self._executor.add_node(self.node)
@@ -119,8 +134,13 @@ class SimNavigator:
         pose = handle.request.pose
         frame = pose.header.frame_id.lstrip("/")
         if frame not in FRAMES and not frame.endswith("/odom"):
-            return self._end(handle, result, "aborted", TF_ERROR,
-                             f"unknown frame {frame!r}: the simulator knows odom and map")
+            return self._end(
+                handle,
+                result,
+                "aborted",
+                TF_ERROR,
+                f"unknown frame {frame!r}: the simulator knows odom and map",
+            )
         q = pose.pose.orientation
         yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
         goal = (float(pose.pose.position.x), float(pose.pose.position.y))
@@ -139,8 +159,9 @@ class SimNavigator:
             if self._closed.is_set():  # the driver shuts down: the robot stops
                 return self._end(handle, result, "aborted", 0, "the simulated driver stopped")
             if preempted or not handle.is_active:
-                return self._end(handle, result, "aborted", 0, "preempted by a newer goal",
-                                 stop=False)
+                return self._end(
+                    handle, result, "aborted", 0, "preempted by a newer goal", stop=False
+                )
             t = self.body.truth()
             here = Pose2D(t.x, t.y, t.yaw)
             command = follower.command(here)
@@ -153,9 +174,13 @@ class SimNavigator:
             elif time.monotonic() - best_at > STALL_SECONDS:
                 if recoveries == MAX_RECOVERIES:
                     self.body.stop_move()
-                    return self._end(handle, result, "aborted", FAILED_TO_MAKE_PROGRESS,
-                                     f"no progress for {STALL_SECONDS:g} s after "
-                                     f"{recoveries} recoveries")
+                    return self._end(
+                        handle,
+                        result,
+                        "aborted",
+                        FAILED_TO_MAKE_PROGRESS,
+                        f"no progress for {STALL_SECONDS:g} s after {recoveries} recoveries",
+                    )
                 recoveries += 1
                 with self._lock:
                     self._stats["recoveries"] += 1
@@ -173,8 +198,7 @@ class SimNavigator:
             feedback = NavigateToPose.Feedback()
             feedback.current_pose.header.frame_id = "odom"
             feedback.current_pose.header.stamp = self.node.get_clock().now().to_msg()
-            feedback.current_pose.pose.position.x, feedback.current_pose.pose.position.y = \
-                t.x, t.y
+            feedback.current_pose.pose.position.x, feedback.current_pose.pose.position.y = t.x, t.y
             feedback.current_pose.pose.orientation.z = math.sin(t.yaw / 2.0)
             feedback.current_pose.pose.orientation.w = math.cos(t.yaw / 2.0)
             feedback.navigation_time = _duration(time.monotonic() - started)
@@ -184,8 +208,9 @@ class SimNavigator:
             handle.publish_feedback(feedback)
             time.sleep(PERIOD)
 
-    def _plan(self, handle: Any, result: Any, goal: tuple[float, float],
-              yaw: float) -> PathFollower | None:
+    def _plan(
+        self, handle: Any, result: Any, goal: tuple[float, float], yaw: float
+    ) -> PathFollower | None:
         t = self.body.truth()
         try:
             path = plan_route(self._belief_now(), (t.x, t.y), goal)
@@ -197,8 +222,15 @@ class SimNavigator:
         points[-1] = goal
         return PathFollower(points, yaw, speed=self.speed)
 
-    def _end(self, handle: Any, result: Any, how: str, code: int = 0, message: str = "",
-             stop: bool = True) -> Any:
+    def _end(
+        self,
+        handle: Any,
+        result: Any,
+        how: str,
+        code: int = 0,
+        message: str = "",
+        stop: bool = True,
+    ) -> Any:
         result.error_code, result.error_msg = code, message
         with self._lock:
             self._stats[how] += 1
@@ -206,8 +238,9 @@ class SimNavigator:
             if self._active is handle:
                 self._active = None
         if handle.is_active:
-            {"succeeded": handle.succeed, "aborted": handle.abort,
-             "canceled": handle.canceled}[how]()
+            {"succeeded": handle.succeed, "aborted": handle.abort, "canceled": handle.canceled}[
+                how
+            ]()
         if stop and how != "succeeded":
             self.body.stop_move()
         return result

@@ -57,45 +57,94 @@ class Option:
 
 
 OPTIONS: dict[str, Option] = {
-    "robots": Option(int, "robots to simulate; 2 or more name every topic robot{i}/..., as "
-                          "go2_ros2_sdk does with several ROBOT_IPs", 1, 8, "N"),
-    "start_posture": Option(str, "posture the robots start in (lying: mode LieDown, sitting: "
-                                 "Sit, standing: BalanceStand)", metavar="POSTURE",
-                            choices=("standing", "sitting", "lying")),
-    "relay": Option(bool, "a twist_mux-like relay (node 'twist_mux', not namespaced) from "
-                          "cmd_vel (priority 5) and cmd_vel_joy (10) to cmd_vel_out, as "
-                          "go2_ros2_sdk's launch starts with teleop; --no-relay: the driver "
-                          "hears cmd_vel_out only"),
-    "relay_timeout": Option(float, "seconds a relay input stays active after its last "
-                                   "message (twist_mux's timeout)", 0.05, 5, "SECONDS"),
-    "move_timeout": Option(float, "seconds the robot keeps executing a Move that is not "
-                                  "renewed (firmware behaviour)", 0.1, 5, "SECONDS"),
+    "robots": Option(
+        int,
+        "robots to simulate; 2 or more name every topic robot{i}/..., as "
+        "go2_ros2_sdk does with several ROBOT_IPs",
+        1,
+        8,
+        "N",
+    ),
+    "start_posture": Option(
+        str,
+        "posture the robots start in (lying: mode LieDown, sitting: Sit, standing: BalanceStand)",
+        metavar="POSTURE",
+        choices=("standing", "sitting", "lying"),
+    ),
+    "relay": Option(
+        bool,
+        "a twist_mux-like relay (node 'twist_mux', not namespaced) from "
+        "cmd_vel (priority 5) and cmd_vel_joy (10) to cmd_vel_out, as "
+        "go2_ros2_sdk's launch starts with teleop; --no-relay: the driver "
+        "hears cmd_vel_out only",
+    ),
+    "relay_timeout": Option(
+        float,
+        "seconds a relay input stays active after its last message (twist_mux's timeout)",
+        0.05,
+        5,
+        "SECONDS",
+    ),
+    "move_timeout": Option(
+        float,
+        "seconds the robot keeps executing a Move that is not renewed (firmware behaviour)",
+        0.1,
+        5,
+        "SECONDS",
+    ),
     "odom_rate_hz": Option(float, "odom publishing rate", 1, 200, "HZ"),
-    "odom_delay": Option(float, "seconds odom lags the truth: each odom carries the true "
-                                "pose of this long ago (stamped when published)", 0, 5,
-                         "SECONDS"),
+    "odom_delay": Option(
+        float,
+        "seconds odom lags the truth: each odom carries the true "
+        "pose of this long ago (stamped when published)",
+        0,
+        5,
+        "SECONDS",
+    ),
     "state_rate_hz": Option(float, "go2_states publishing rate", 1, 100, "HZ"),
-    "posture_seconds": Option(float, "seconds a posture change (StandUp, StandDown, Sit, "
-                                     "RiseSit) takes; BalanceStand and Damp take 0.3 of it, "
-                                     "RecoveryStand 1.3", 0, 10, "SECONDS"),
-    "battery": Option(float, "publish sensor_msgs/BatteryState starting at this charge "
-                             "(go2_ros2_sdk publishes none)", 0, 100, "PERCENT"),
-    "battery_topic": Option(str, "topic of the battery state (relative, per robot)",
-                            metavar="TOPIC"),
-    "battery_drain": Option(float, "percent of charge used per second while on", 0, 10,
-                            "PERCENT"),
-    "truth_rate_hz": Option(float, "rate of the ground truth on sim_driver/truth", 1, 200,
-                            "HZ"),
+    "posture_seconds": Option(
+        float,
+        "seconds a posture change (StandUp, StandDown, Sit, "
+        "RiseSit) takes; BalanceStand and Damp take 0.3 of it, "
+        "RecoveryStand 1.3",
+        0,
+        10,
+        "SECONDS",
+    ),
+    "battery": Option(
+        float,
+        "publish sensor_msgs/BatteryState starting at this charge (go2_ros2_sdk publishes none)",
+        0,
+        100,
+        "PERCENT",
+    ),
+    "battery_topic": Option(
+        str, "topic of the battery state (relative, per robot)", metavar="TOPIC"
+    ),
+    "battery_drain": Option(float, "percent of charge used per second while on", 0, 10, "PERCENT"),
+    "truth_rate_hz": Option(float, "rate of the ground truth on sim_driver/truth", 1, 200, "HZ"),
     "camera_rate_hz": Option(float, "camera/image_raw rate (0 = no camera)", 0, 30, "HZ"),
     "camera_width": Option(int, "camera image width in pixels", 16, 640, "PIXELS"),
     "camera_height": Option(int, "camera image height in pixels", 12, 480, "PIXELS"),
-    "scan_rate_hz": Option(float, "scan (sensor_msgs/LaserScan, 360 beams, 0.1-8 m, from the "
-                                  "simulator's ray casting) rate (0 = no scan)", 0, 50, "HZ"),
-    "map": Option(bool, "publish the scene's nav_msgs/OccupancyGrid on map (5 cm cells, frame "
-                        "odom, transient local as map_server does)"),
-    "navigate_to_pose": Option(bool, "serve Nav2's NavigateToPose action on navigate_to_pose "
-                                     "with the project's planner and path follower; "
-                                     "--no-navigate-to-pose: as a Go2 without Nav2"),
+    "scan_rate_hz": Option(
+        float,
+        "scan (sensor_msgs/LaserScan, 360 beams, 0.1-8 m, from the "
+        "simulator's ray casting) rate (0 = no scan)",
+        0,
+        50,
+        "HZ",
+    ),
+    "map": Option(
+        bool,
+        "publish the scene's nav_msgs/OccupancyGrid on map (5 cm cells, frame "
+        "odom, transient local as map_server does)",
+    ),
+    "navigate_to_pose": Option(
+        bool,
+        "serve Nav2's NavigateToPose action on navigate_to_pose "
+        "with the project's planner and path follower; "
+        "--no-navigate-to-pose: as a Go2 without Nav2",
+    ),
     "nav_speed": Option(float, "m/s the navigate_to_pose server walks at", 0.05, 1.0, "M/S"),
 }
 DEFAULTS = DriverSettings()
@@ -106,8 +155,9 @@ def parse_settings(values: Mapping[str, Any]) -> DriverSettings:
     """Check raw values (missing ones take their defaults); raises ParameterError listing
     every problem at once, each with what is allowed."""
     unknown = sorted(set(values) - set(OPTIONS))
-    problems = [f"unknown setting(s) {', '.join(unknown)}; known: {', '.join(OPTIONS)}"] \
-        if unknown else []
+    problems = (
+        [f"unknown setting(s) {', '.join(unknown)}; known: {', '.join(OPTIONS)}"] if unknown else []
+    )
     out: dict[str, Any] = {}
     for f in fields(DriverSettings):
         option, value = OPTIONS[f.name], values.get(f.name, getattr(DEFAULTS, f.name))
@@ -123,14 +173,15 @@ def parse_settings(values: Mapping[str, Any]) -> DriverSettings:
         else:
             ok = isinstance(value, str)
         if not ok:
-            problems.append(f"{f.name} must be {_WANTED[option.kind]}, got "
-                            f"{type(value).__name__} {value!r}")
-        elif option.kind in (int, float) and not (math.isfinite(value)
-                                                  and option.low <= value <= option.high):
+            problems.append(
+                f"{f.name} must be {_WANTED[option.kind]}, got {type(value).__name__} {value!r}"
+            )
+        elif option.kind in (int, float) and not (
+            math.isfinite(value) and option.low <= value <= option.high
+        ):
             problems.append(f"{f.name} must be in {option.low:g}..{option.high:g}, got {value}")
         elif option.choices and value not in option.choices:
-            problems.append(f"{f.name} must be one of {', '.join(option.choices)}, got "
-                            f"{value!r}")
+            problems.append(f"{f.name} must be one of {', '.join(option.choices)}, got {value!r}")
         elif option.kind is str and not option.choices and not _TOPIC.match(value):
             problems.append(f"{f.name} {value!r} is not a valid ROS topic name")
         else:
@@ -147,20 +198,34 @@ def _flag(name: str) -> str:
 def build_parser(prog: str, description: str, epilog: str) -> argparse.ArgumentParser:
     """The command line: one option per setting (argument_default SUPPRESS, so only options
     given on the command line override the ROS parameters)."""
-    parser = argparse.ArgumentParser(prog=prog, description=description, epilog=epilog,
-                                     argument_default=argparse.SUPPRESS,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog=prog,
+        description=description,
+        epilog=epilog,
+        argument_default=argparse.SUPPRESS,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     for name, option in OPTIONS.items():
         default = getattr(DEFAULTS, name)
         if option.kind is bool:
-            parser.add_argument(_flag(name), dest=name, action=argparse.BooleanOptionalAction,
-                                help=f"{option.help} (default: {'on' if default else 'off'})")
+            parser.add_argument(
+                _flag(name),
+                dest=name,
+                action=argparse.BooleanOptionalAction,
+                help=f"{option.help} (default: {'on' if default else 'off'})",
+            )
             continue
-        shown = "none" if default is None else f"{default:g}" if isinstance(default, float) \
-            else default
-        parser.add_argument(_flag(name), dest=name, type=option.kind, metavar=option.metavar,
-                            choices=option.choices or None,
-                            help=f"{option.help} (default: {shown})")
+        shown = (
+            "none" if default is None else f"{default:g}" if isinstance(default, float) else default
+        )
+        parser.add_argument(
+            _flag(name),
+            dest=name,
+            type=option.kind,
+            metavar=option.metavar,
+            choices=option.choices or None,
+            help=f"{option.help} (default: {shown})",
+        )
     return parser
 
 

@@ -33,8 +33,11 @@ class MuxInput:
 def forwards(inputs: list[MuxInput], source: MuxInput, now: float) -> bool:
     """Whether a message just received on `source` goes out: no other input of higher
     priority has spoken within its timeout."""
-    return not any(i.priority > source.priority and now - i.last <= i.timeout
-                   for i in inputs if i is not source)
+    return not any(
+        i.priority > source.priority and now - i.last <= i.timeout
+        for i in inputs
+        if i is not source
+    )
 
 
 class TwistMux(Node):
@@ -53,4 +56,5 @@ class TwistMux(Node):
             source.last = now
             if forwards(self.inputs, source, now):
                 self._out.publish(msg)
+
         return on_twist

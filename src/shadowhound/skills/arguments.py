@@ -99,8 +99,14 @@ def _numeric(annotation: object) -> bool:
 
 def argument_kind(info: FieldInfo) -> units.Kind | None:
     """The kind of quantity a skill argument is, or None (a count, text, a name)."""
-    return next((m.func.kind for m in info.metadata
-                 if isinstance(m, BeforeValidator) and isinstance(m.func, _Quantity)), None)
+    return next(
+        (
+            m.func.kind
+            for m in info.metadata
+            if isinstance(m, BeforeValidator) and isinstance(m.func, _Quantity)
+        ),
+        None,
+    )
 
 
 def is_numeric(info: FieldInfo) -> bool:

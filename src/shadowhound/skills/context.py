@@ -135,8 +135,9 @@ class SkillContext:
         if vx or vy or wz:
             lx, ly, lw = self._last_command
             dx, dy = _cap_vector(vx - lx, vy - ly, s.max_linear_accel * self.period)
-            dw = max(-s.max_angular_accel * self.period,
-                     min(s.max_angular_accel * self.period, wz - lw))
+            dw = max(
+                -s.max_angular_accel * self.period, min(s.max_angular_accel * self.period, wz - lw)
+            )
             vx, vy, wz = lx + dx, ly + dy, lw + dw
         self.check()
         self._last_command = (vx, vy, wz)

@@ -15,8 +15,9 @@ _NAME = r"^[^\W\d_][\w' -]*$"
 
 
 class PlaceArgs(SkillArgs):
-    name: str = Field(min_length=1, max_length=60, pattern=_NAME,
-                      description="place name, e.g. kitchen")
+    name: str = Field(
+        min_length=1, max_length=60, pattern=_NAME, description="place name, e.g. kitchen"
+    )
 
 
 class NoteArgs(SkillArgs):
@@ -69,10 +70,15 @@ def _predict_forget(pose: Pose2D, a: PlaceArgs, env: PlanEnv) -> list[Pose2D]:
 
 def _list(ctx: SkillContext, _a: NoArgs) -> str:
     known = known_places(ctx.config.places, _memory(ctx).places)
-    parts = [f"{n} ({p.x:.2f}, {p.y:.2f}{', taught' if p.source == 'taught' else ''})"
-             for n, p in known.items()]
-    return "Known places: " + ", ".join([*parts, "start (where a mission begins)",
-                                         "home (0, 0)"]) + "."
+    parts = [
+        f"{n} ({p.x:.2f}, {p.y:.2f}{', taught' if p.source == 'taught' else ''})"
+        for n, p in known.items()
+    ]
+    return (
+        "Known places: "
+        + ", ".join([*parts, "start (where a mission begins)", "home (0, 0)"])
+        + "."
+    )
 
 
 def _note(ctx: SkillContext, a: NoteArgs) -> str:
@@ -81,8 +87,10 @@ def _note(ctx: SkillContext, a: NoteArgs) -> str:
     if recall is None and memory.recall_problem:
         raise SkillError(f"retrieval memory is off for this run: {memory.recall_problem}")
     if recall is None:
-        raise SkillError("retrieval memory is off: set memory.enable_rag: true (and install "
-                         "the 'memory' extra) to teach me facts")
+        raise SkillError(
+            "retrieval memory is off: set memory.enable_rag: true (and install "
+            "the 'memory' extra) to teach me facts"
+        )
     st = ctx.robot.get_state()
     try:
         recall.add(a.text, "fact", x=st.x, y=st.y)
@@ -100,14 +108,38 @@ def _recall(ctx: SkillContext, a: RecallArgs) -> str:
 
 
 SKILLS = (
-    Skill("places.remember", "Remember the robot's current position under a name.",
-          PlaceArgs, _remember, timeout=5.0, predict=_predict_remember),
-    Skill("places.forget", "Forget a taught place.", PlaceArgs, _forget, timeout=5.0,
-          predict=_predict_forget),
-    Skill("places.list", "List the places the robot knows.", NoArgs, _list, timeout=5.0,
-          reports=True),
-    Skill("memory.note", "Remember a fact the user teaches (needs retrieval memory).",
-          NoteArgs, _note, timeout=30.0),
-    Skill("memory.recall", "Recall past missions, facts and observations about a topic.",
-          RecallArgs, _recall, timeout=30.0, reports=True),
+    Skill(
+        "places.remember",
+        "Remember the robot's current position under a name.",
+        PlaceArgs,
+        _remember,
+        timeout=5.0,
+        predict=_predict_remember,
+    ),
+    Skill(
+        "places.forget",
+        "Forget a taught place.",
+        PlaceArgs,
+        _forget,
+        timeout=5.0,
+        predict=_predict_forget,
+    ),
+    Skill(
+        "places.list", "List the places the robot knows.", NoArgs, _list, timeout=5.0, reports=True
+    ),
+    Skill(
+        "memory.note",
+        "Remember a fact the user teaches (needs retrieval memory).",
+        NoteArgs,
+        _note,
+        timeout=30.0,
+    ),
+    Skill(
+        "memory.recall",
+        "Recall past missions, facts and observations about a topic.",
+        RecallArgs,
+        _recall,
+        timeout=30.0,
+        reports=True,
+    ),
 )

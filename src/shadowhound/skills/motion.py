@@ -85,8 +85,9 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
             # yaw_error.
             bx, by = ex / error * v, ey / error * v
             cy, sy = math.cos(yaw_error), math.sin(yaw_error)
-            ctx.drive(bx * cy - by * sy, bx * sy + by * cy,
-                      _profile(yaw_error, 0.5, 2.0, ctx.period))
+            ctx.drive(
+                bx * cy - by * sy, bx * sy + by * cy, _profile(yaw_error, 0.5, 2.0, ctx.period)
+            )
             ctx.on_progress(min(1.0, 1.0 - error / goal) if goal else 1.0)
             ctx.tick()
         settle(ctx)
@@ -147,8 +148,13 @@ def go_to(ctx: SkillContext, x: float, y: float, linear: float, angular: float) 
     return drive_local(ctx, dx * c + dy * s, -dx * s + dy * c, linear)
 
 
-def follow(ctx: SkillContext, points: list[tuple[float, float]], linear: float,
-           angular: float, done: float = 0.0) -> float:
+def follow(
+    ctx: SkillContext,
+    points: list[tuple[float, float]],
+    linear: float,
+    angular: float,
+    done: float = 0.0,
+) -> float:
     """Walk the straight legs through `points` (odom frame): at each, face the next point, then
     walk to it. Progress is the distance along the path (after `done` metres already walked
     of the route) over its whole length. Returns metres covered."""

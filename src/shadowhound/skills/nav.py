@@ -62,17 +62,16 @@ class RotateArgs(SkillArgs):
 
 class GotoArgs(SkillArgs):
     # The targets `_target` accepts, in JSON Schema: plan schemas offer each as its own step.
-    model_config = ConfigDict(json_schema_extra={"oneOf": [{"required": ["x", "y"]},
-                                                           {"required": ["place"]}]})
+    model_config = ConfigDict(
+        json_schema_extra={"oneOf": [{"required": ["x", "y"]}, {"required": ["place"]}]}
+    )
 
-    x: OptionalLength = Field(
-        None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom"
-    )
-    y: OptionalLength = Field(
-        None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom"
-    )
+    x: OptionalLength = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
+    y: OptionalLength = Field(None, ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres, odom")
     place: str | None = Field(
-        None, min_length=1, max_length=100,
+        None,
+        min_length=1,
+        max_length=100,
         description="a place ('start', 'home') or an object",
     )
     heading_degrees: OptionalAngle = Field(
@@ -204,8 +203,12 @@ def walk(ctx: SkillContext, goal: tuple[float, float], linear: float, angular: f
     raise AssertionError("unreachable")  # the loop returns or raises
 
 
-def _check_new_path(ctx: SkillContext, pose: Pose2D, points: list[tuple[float, float]],
-                    lead: str = "re-planned, but the new path is refused") -> None:
+def _check_new_path(
+    ctx: SkillContext,
+    pose: Pose2D,
+    points: list[tuple[float, float]],
+    lead: str = "re-planned, but the new path is refused",
+) -> None:
     poses = _predict_walk_points(pose, points, ctx.env)
     problems = paths.path_problems(ctx.config.safety, pose, poses, ctx.env, "the new path")
     if problems:
@@ -219,8 +222,13 @@ def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     if target is not None and target.point is None:
         return _approach(ctx, a, target, linear, angular)
     x, y = _goto_target(a, ctx.env)
-    _walk_to(ctx, (x, y), lambda: _predict_goto(ctx.robot.get_state().pose, a, ctx.env)[-1].yaw,
-             linear, angular)
+    _walk_to(
+        ctx,
+        (x, y),
+        lambda: _predict_goto(ctx.robot.get_state().pose, a, ctx.env)[-1].yaw,
+        linear,
+        angular,
+    )
     _final_heading(ctx, a)
     objects.sight_in_view(ctx)
     st = ctx.robot.get_state()
@@ -229,8 +237,13 @@ def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     return f"reached {where} at x={st.x:.2f} m, y={st.y:.2f} m"
 
 
-def _walk_to(ctx: SkillContext, goal: tuple[float, float], yaw: Callable[[], float],
-             linear: float, angular: float) -> None:
+def _walk_to(
+    ctx: SkillContext,
+    goal: tuple[float, float],
+    yaw: Callable[[], float],
+    linear: float,
+    angular: float,
+) -> None:
     """Walk to `goal`: through the robot's Nav2 when `navigation` chooses it (it plans and
     drives, we watch, cancel and finish facing `yaw()`), else the project's own planned path."""
     navigator = navigate.choose(ctx)
@@ -248,8 +261,9 @@ def _final_heading(ctx: SkillContext, a: GotoArgs) -> None:
         motion.rotate(ctx, turn, _angular(ctx, None))
 
 
-def _approach(ctx: SkillContext, a: GotoArgs, target: objects.Target, linear: float,
-              angular: float) -> str:
+def _approach(
+    ctx: SkillContext, a: GotoArgs, target: objects.Target, linear: float, angular: float
+) -> str:
     """Walk to an object's standoff and face it; search for it first when not seen yet."""
     found = target.known
     if found is None:
@@ -261,25 +275,37 @@ def _approach(ctx: SkillContext, a: GotoArgs, target: objects.Target, linear: fl
         raise SkillError(str(exc)) from exc
     # After a search (in this step or an earlier one of the mission) the plan check saw no
     # path: the governor checks the approach now, as it does every re-planned path.
-    _check_new_path(ctx, pose, route(ctx.env, pose, (spot.x, spot.y)),
-                    f"the path to {found.the_name} is refused")
-    _walk_to(ctx, (spot.x, spot.y), lambda: math.atan2(found.y - spot.y, found.x - spot.x),
-             linear, angular)
+    _check_new_path(
+        ctx,
+        pose,
+        route(ctx.env, pose, (spot.x, spot.y)),
+        f"the path to {found.the_name} is refused",
+    )
+    _walk_to(
+        ctx,
+        (spot.x, spot.y),
+        lambda: math.atan2(found.y - spot.y, found.x - spot.x),
+        linear,
+        angular,
+    )
     if a.heading_degrees is None:
         objects.face(ctx, found, angular)
     _final_heading(ctx, a)
     objects.sight_in_view(ctx)
     now = objects.find(ctx.env.belief, found.name)
     if now is not None and now.remembered:  # it was not seen again on the way or on arrival
-        ctx.notes.append(f"{found.the_name} was remembered from an earlier mission and is not "
-                         "in view now")
+        ctx.notes.append(
+            f"{found.the_name} was remembered from an earlier mission and is not in view now"
+        )
     st = ctx.robot.get_state()
     gap = math.hypot(found.x - st.x, found.y - st.y) - found.radius
-    return (f"reached {found.the_name} (seen at {found.x:.2f}, {found.y:.2f}): standing "
-            f"{gap:.2f} m from it at x={st.x:.2f} m, y={st.y:.2f} m, facing it"
-            if a.heading_degrees is None else
-            f"reached {found.the_name}: standing {gap:.2f} m from it at x={st.x:.2f} m, "
-            f"y={st.y:.2f} m")
+    return (
+        f"reached {found.the_name} (seen at {found.x:.2f}, {found.y:.2f}): standing "
+        f"{gap:.2f} m from it at x={st.x:.2f} m, y={st.y:.2f} m, facing it"
+        if a.heading_degrees is None
+        else f"reached {found.the_name}: standing {gap:.2f} m from it at x={st.x:.2f} m, "
+        f"y={st.y:.2f} m"
+    )
 
 
 def _arrive(pose: Pose2D, x: float, y: float, env: PlanEnv) -> Pose2D:
@@ -294,8 +320,9 @@ def _predict_walk(pose: Pose2D, goal: tuple[float, float], env: PlanEnv) -> list
     return _predict_walk_points(pose, route(env, pose, goal), env)
 
 
-def _predict_walk_points(pose: Pose2D, points: list[tuple[float, float]], env: PlanEnv
-                         ) -> list[Pose2D]:
+def _predict_walk_points(
+    pose: Pose2D, points: list[tuple[float, float]], env: PlanEnv
+) -> list[Pose2D]:
     poses: list[Pose2D] = []
     for x, y in points:
         poses.append(_arrive(poses[-1] if poses else pose, x, y, env))
@@ -327,9 +354,11 @@ def _goto_timeout(a: GotoArgs, env: PlanEnv) -> float:
     m = env.config.motion
     # A name may be an object to look for first: the search has its own time on top.
     searching = env.config.search.max_seconds if a.place and env.belief is not None else 0.0
-    return motion.straight_timeout(reach, _linear(env, a.speed), m.linear_accel) + detours * 2 * (
-        motion.rotate_timeout(2 * math.pi, _angular(env, None), m.angular_accel)
-    ) + searching
+    return (
+        motion.straight_timeout(reach, _linear(env, a.speed), m.linear_accel)
+        + detours * 2 * (motion.rotate_timeout(2 * math.pi, _angular(env, None), m.angular_accel))
+        + searching
+    )
 
 
 # -- nav.patrol ------------------------------------------------------------------------------
@@ -367,8 +396,7 @@ def _patrol_timeout(a: PatrolArgs, env: PlanEnv) -> float:
 
 def _say_goto(a: GotoArgs) -> str:
     if a.place is not None:
-        return {"start": "return to the start", "home": "go home"}.get(a.place,
-                                                                      f"go to {a.place}")
+        return {"start": "return to the start", "home": "go home"}.get(a.place, f"go to {a.place}")
     if a.x is None or a.y is None:  # only as proposed, unchecked (GotoArgs._target refuses it)
         return "go to a point"
     return f"go to ({_n(a.x)}, {_n(a.y)})"
@@ -392,8 +420,9 @@ SKILLS = (
         timeout=_straight_timeout,
         moves=True,
         predict=lambda p, a, env: [_offset(p, a.distance, 0.0)],
-        phrase=lambda a: f"move {'forward' if a.distance >= 0 else 'backward'} "
-                         f"{_n(abs(a.distance))} m",
+        phrase=lambda a: (
+            f"move {'forward' if a.distance >= 0 else 'backward'} {_n(abs(a.distance))} m"
+        ),
     ),
     Skill(
         "nav.strafe",
@@ -403,8 +432,7 @@ SKILLS = (
         timeout=_straight_timeout,
         moves=True,
         predict=lambda p, a, env: [_offset(p, 0.0, a.distance)],
-        phrase=lambda a: f"step {'left' if a.distance >= 0 else 'right'} "
-                         f"{_n(abs(a.distance))} m",
+        phrase=lambda a: f"step {'left' if a.distance >= 0 else 'right'} {_n(abs(a.distance))} m",
     ),
     Skill(
         "nav.rotate",
@@ -416,8 +444,9 @@ SKILLS = (
         predict=lambda p, a, env: [
             Pose2D(p.x, p.y, normalize_angle(p.yaw + math.radians(a.degrees)))
         ],
-        phrase=lambda a: f"turn {'left' if a.degrees >= 0 else 'right'} "
-                         f"{_n(abs(a.degrees))} degrees",
+        phrase=lambda a: (
+            f"turn {'left' if a.degrees >= 0 else 'right'} {_n(abs(a.degrees))} degrees"
+        ),
     ),
     Skill(
         "nav.goto",
@@ -441,6 +470,13 @@ SKILLS = (
         predict=_predict_patrol,
         phrase=lambda a: f"patrol {a.laps} lap{'s' if a.laps != 1 else ''}",
     ),
-    Skill("nav.stop", "Stop moving and stand still.", NoArgs, _run_stop, timeout=5.0,
-          low_battery=True, phrase=lambda a: "stop"),
+    Skill(
+        "nav.stop",
+        "Stop moving and stand still.",
+        NoArgs,
+        _run_stop,
+        timeout=5.0,
+        low_battery=True,
+        phrase=lambda a: "stop",
+    ),
 )

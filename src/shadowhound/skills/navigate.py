@@ -41,23 +41,33 @@ def choose(ctx: SkillContext) -> Navigator | None:
     navigator = ctx.robot.navigator()
     if navigator is None:
         if mode == "nav2":
-            raise SkillError(f"navigation is 'nav2', but the robot {ctx.robot.name!r} has no "
-                             "Nav2 navigator (only a Go2 on ROS 2 has one); set navigation: "
-                             "auto or direct")
+            raise SkillError(
+                f"navigation is 'nav2', but the robot {ctx.robot.name!r} has no "
+                "Nav2 navigator (only a Go2 on ROS 2 has one); set navigation: "
+                "auto or direct"
+            )
         return None
     if navigator.ready(REQUIRED_WAIT if mode == "nav2" else AUTO_WAIT):
         return navigator
     if mode == "nav2":
-        raise SkillError(f"navigation is 'nav2', but {navigator.name} did not answer in "
-                         f"{REQUIRED_WAIT:g} s: launch Nav2 (docs/go2-nav2.md), or set "
-                         "navigation: auto (the project's own planner when Nav2 is absent) "
-                         "or direct")
+        raise SkillError(
+            f"navigation is 'nav2', but {navigator.name} did not answer in "
+            f"{REQUIRED_WAIT:g} s: launch Nav2 (docs/go2-nav2.md), or set "
+            "navigation: auto (the project's own planner when Nav2 is absent) "
+            "or direct"
+        )
     ctx.notes.append(f"{navigator.name} did not answer: walked the project's own path")
     return None
 
 
-def navigate(ctx: SkillContext, navigator: Navigator, goal: tuple[float, float], yaw: float,
-             linear: float, angular: float) -> float:
+def navigate(
+    ctx: SkillContext,
+    navigator: Navigator,
+    goal: tuple[float, float],
+    yaw: float,
+    linear: float,
+    angular: float,
+) -> float:
     """Walk to `goal` (facing `yaw` at the end) through `navigator`. Returns metres covered.
     Raises SkillError in words when the navigator fails or cancels the goal itself."""
     before = ctx.robot.get_state().distance_travelled
@@ -78,22 +88,27 @@ def navigate(ctx: SkillContext, navigator: Navigator, goal: tuple[float, float],
                 if first:
                     ctx.on_progress(max(0.0, min(1.0, 1.0 - fb.distance_remaining / first)))
             if report.status is NavStatus.PENDING and ctx.robot.now() - sent > ACCEPT_WAIT:
-                raise SkillError(f"{navigator.name} did not accept or reject the goal in "
-                                 f"{ACCEPT_WAIT:g} s")
+                raise SkillError(
+                    f"{navigator.name} did not accept or reject the goal in {ACCEPT_WAIT:g} s"
+                )
             if report.status is NavStatus.SUCCEEDED:
                 break
             if report.status is NavStatus.FAILED:
                 raise SkillError(f"{navigator.name}: {report.message}")
             if report.status is NavStatus.CANCELED:
-                raise SkillError(f"{navigator.name} cancelled the goal"
-                                 + (f": {report.message}" if report.message else ""))
+                raise SkillError(
+                    f"{navigator.name} cancelled the goal"
+                    + (f": {report.message}" if report.message else "")
+                )
             ctx.tick()  # raises on cancel, e-stop (cancelled) and time-out
     except BaseException:
         handle.cancel()
         raise
     if recoveries:
-        ctx.notes.append(f"{navigator.name} ran {recoveries} recovery behaviour"
-                         + ("s" if recoveries != 1 else ""))
+        ctx.notes.append(
+            f"{navigator.name} ran {recoveries} recovery behaviour"
+            + ("s" if recoveries != 1 else "")
+        )
     ctx.robot.stop()  # Nav2's last zero Twist is dropped by go2_ros2_sdk: StopMove ends it
     motion.settle(ctx)
     _finish(ctx, goal, yaw, linear, angular)
@@ -114,13 +129,16 @@ def _check_speed(ctx: SkillContext, name: str, poses: deque[tuple[float, float, 
     speed = math.hypot(st.x - x0, st.y - y0) / (now - t0)
     limit = ctx.config.safety.max_linear_speed
     if speed > limit * SPEED_SLACK:
-        raise SkillError(f"{name} drove at {speed:.2f} m/s, above the {limit:g} m/s limit "
-                         "(safety.max_linear_speed): goal cancelled; lower Nav2's controller "
-                         "speed to the limit")
+        raise SkillError(
+            f"{name} drove at {speed:.2f} m/s, above the {limit:g} m/s limit "
+            "(safety.max_linear_speed): goal cancelled; lower Nav2's controller "
+            "speed to the limit"
+        )
 
 
-def _finish(ctx: SkillContext, goal: tuple[float, float], yaw: float, linear: float,
-            angular: float) -> None:
+def _finish(
+    ctx: SkillContext, goal: tuple[float, float], yaw: float, linear: float, angular: float
+) -> None:
     """Close what Nav2's goal tolerance left: a short straight step (sideways if need be, no
     turn first), then the heading."""
     st = ctx.robot.get_state()

@@ -50,8 +50,9 @@ def resolve(env: PlanEnv, name: str) -> Target:
             return Target(name, known=known)
         several = _ending_with(belief, name)
         if len(several) > 1:
-            raise PlanProblem(f"{name!r} could be " + " or ".join(o.the_name for o in several)
-                              + ": say which") from exc
+            raise PlanProblem(
+                f"{name!r} could be " + " or ".join(o.the_name for o in several) + ": say which"
+            ) from exc
         near = _misspelt(name, [*env.places, *(o.name for o in _objects(belief))])
         if near is not None:
             return resolve(env, near)
@@ -91,8 +92,10 @@ def _misspelt(name: str, names: list[str]) -> str | None:
         words = candidate.lower().split()
         if len(words) != len(key) or words == key:
             continue
-        if all(a[0] == b[0] and typos.distance(a, b, typos.limit(b)) <= typos.limit(b)
-               for a, b in zip(key, words, strict=True)):
+        if all(
+            a[0] == b[0] and typos.distance(a, b, typos.limit(b)) <= typos.limit(b)
+            for a, b in zip(key, words, strict=True)
+        ):
             found.add(candidate)
     return found.pop() if len(found) == 1 else None
 
@@ -120,8 +123,7 @@ def sight_in_view(ctx: SkillContext) -> list[KnownObject]:
     return record_view(ctx.robot, ctx.env.belief, ctx.memory)
 
 
-def record_view(robot: Robot, belief: Belief | None, memory: object = None
-                ) -> list[KnownObject]:
+def record_view(robot: Robot, belief: Belief | None, memory: object = None) -> list[KnownObject]:
     """`sight_in_view` for callers without a SkillContext (the agent, before planning)."""
     if belief is None:
         return []
@@ -133,8 +135,11 @@ def record_view(robot: Robot, belief: Belief | None, memory: object = None
     seen = []
     for s in frame.sightings:
         a = pose.yaw + math.radians(s.bearing_deg)
-        seen.append(belief.sight(s.name, pose.x + s.distance * math.cos(a),
-                                 pose.y + s.distance * math.sin(a), stamp))
+        seen.append(
+            belief.sight(
+                s.name, pose.x + s.distance * math.cos(a), pose.y + s.distance * math.sin(a), stamp
+            )
+        )
     book = getattr(memory, "sightings", None)
     if book is not None:
         for obj in seen:
@@ -203,16 +208,27 @@ def search(ctx: SkillContext, name: str, linear: float, angular: float) -> Known
             found = _look_around(ctx, name, angular)
             coverage.look((pose.x, pose.y))
             if found is not None:
-                ctx.notes.append(f"found {found.the_name} at ({found.x:.2f}, {found.y:.2f}) "
-                                 f"after {len(coverage.looked_from)} look(s) and "
-                                 f"{walked:.1f} m of search")
+                ctx.notes.append(
+                    f"found {found.the_name} at ({found.x:.2f}, {found.y:.2f}) "
+                    f"after {len(coverage.looked_from)} look(s) and "
+                    f"{walked:.1f} m of search"
+                )
                 return found
             pose = robot.get_state().pose
-            view = _next_view(coverage, ctx, pose, max_walk - walked,
-                              deadline - robot.now() - turn, linear, angular)
+            view = _next_view(
+                coverage,
+                ctx,
+                pose,
+                max_walk - walked,
+                deadline - robot.now() - turn,
+                linear,
+                angular,
+            )
             if view is None:
-                why = ("no unexplored free space is left within reach inside the geofence "
-                       "and the search budget")
+                why = (
+                    "no unexplored free space is left within reach inside the geofence "
+                    "and the search budget"
+                )
                 break
             before = robot.get_state().distance_travelled
             try:
@@ -230,7 +246,8 @@ def search(ctx: SkillContext, name: str, linear: float, angular: float) -> Known
         f"did not find {_the(name)}: looked around from {places}, walked {walked:.1f} m in "
         f"{robot.now() - start.stamp:.0f} s; {why} (budget {cfg.max_seconds:g} s, "
         f"{max_walk:g} m: search.max_seconds, search.max_distance). Objects seen: "
-        f"{seen_list(belief)}")
+        f"{seen_list(belief)}"
+    )
 
 
 def inside_fences(limits: SafetyConfig, p: tuple[float, float]) -> bool:
@@ -241,24 +258,30 @@ def inside_fences(limits: SafetyConfig, p: tuple[float, float]) -> bool:
     return all(f.clearance(p) >= limits.geofence_margin for f in fences)
 
 
-def _next_view(coverage: Coverage, ctx: SkillContext, pose: Pose2D,
-               max_walk: float, seconds: float, linear: float, angular: float
-               ) -> Viewpoint | None:
+def _next_view(
+    coverage: Coverage,
+    ctx: SkillContext,
+    pose: Pose2D,
+    max_walk: float,
+    seconds: float,
+    linear: float,
+    angular: float,
+) -> Viewpoint | None:
     """The next viewpoint whose path fits the time left and passes the governor's rules."""
     m = ctx.config.motion
     safety = ctx.config.safety
     tried: set[tuple[float, float]] = set()
     for _ in range(4):  # a viewpoint the governor refuses is skipped, then the next best
         view = coverage.next_viewpoint(
-            (pose.x, pose.y),
-            lambda p: p not in tried and inside_fences(safety, p),
-            max_walk)
+            (pose.x, pose.y), lambda p: p not in tried and inside_fences(safety, p), max_walk
+        )
         if view is None:
             return None
         tried.add(view.point)
         corners = len(view.path.waypoints) - 1
-        needs = (motion.straight_timeout(view.path.length, linear, m.linear_accel)
-                 + corners * motion.rotate_timeout(math.pi, angular, m.angular_accel))
+        needs = motion.straight_timeout(
+            view.path.length, linear, m.linear_accel
+        ) + corners * motion.rotate_timeout(math.pi, angular, m.angular_accel)
         if needs > seconds:
             coverage.seen.update(coverage.visible_from(view.point))  # out of time's reach
             continue

@@ -17,8 +17,9 @@ from ..world import check_leg
 from .context import PlanEnv
 
 
-def path_problems(lim: SafetyConfig, pose: Pose2D, poses: list[Pose2D], env: PlanEnv, what: str
-              ) -> list[str]:
+def path_problems(
+    lim: SafetyConfig, pose: Pose2D, poses: list[Pose2D], env: PlanEnv, what: str
+) -> list[str]:
     """Why the straight legs from `pose` through `poses` may not be walked: the step limit
     (per straight leg), the geofences and, with a map, anything in the way. Skills that
     re-plan on the way (nav.goto) check their new path here too."""
@@ -36,16 +37,26 @@ def path_problems(lim: SafetyConfig, pose: Pose2D, poses: list[Pose2D], env: Pla
     reasons += _in_the_way(what, pose, poses, env)
     return reasons
 
+
 def _outside_fence(lim: SafetyConfig, pose: Pose2D, poses: list[Pose2D]) -> str:
     """Why the path from `pose` through `poses` breaks a geofence ("" when it does not).
     The robot's body is a circle of safety.geofence_margin around its centre."""
     margin = lim.geofence_margin
-    fences: list[tuple[geofence.Fence, str, str]] = [(
-        geofence.CircleFence(lim.geofence_radius), f"the geofence of {lim.geofence_radius:g} m",
-        "around the origin (safety.geofence_radius)")]
+    fences: list[tuple[geofence.Fence, str, str]] = [
+        (
+            geofence.CircleFence(lim.geofence_radius),
+            f"the geofence of {lim.geofence_radius:g} m",
+            "around the origin (safety.geofence_radius)",
+        )
+    ]
     if lim.geofence_polygon:
-        fences.append((geofence.PolygonFence(lim.geofence_polygon), "the geofence polygon",
-                       "(safety.geofence_polygon)"))
+        fences.append(
+            (
+                geofence.PolygonFence(lim.geofence_polygon),
+                "the geofence polygon",
+                "(safety.geofence_polygon)",
+            )
+        )
     previous = pose
     for p in poses:
         a, b = (previous.x, previous.y), (p.x, p.y)
@@ -72,8 +83,13 @@ def _in_the_way(what: str, pose: Pose2D, poses: list[Pose2D], env: PlanEnv) -> l
     return []
 
 
-def _fence_message(breach: geofence.Breach, a: tuple[float, float], b: tuple[float, float],
-                   fence: tuple[str, str], margin: float) -> str:
+def _fence_message(
+    breach: geofence.Breach,
+    a: tuple[float, float],
+    b: tuple[float, float],
+    fence: tuple[str, str],
+    margin: float,
+) -> str:
     """Say where the path first breaks the fence, and where its centre leaves it."""
     Kind = geofence.BreachKind
     name, full = fence[0], " ".join(fence)
@@ -84,12 +100,16 @@ def _fence_message(breach: geofence.Breach, a: tuple[float, float], b: tuple[flo
     if breach.kind is Kind.LEAVES:
         return f"{leg} leaves {full} at {_xy(breach.at)}"
     if breach.kind is Kind.STAYS_NEAR:
-        return (f"{leg} starts {breach.start_clearance:.2f} m from the edge of {full}, within "
-                f"the {body}: from there the robot may only turn in place, or walk back to at "
-                f"least {margin:g} m from the edge, but this leg ends closer")
+        return (
+            f"{leg} starts {breach.start_clearance:.2f} m from the edge of {full}, within "
+            f"the {body}: from there the robot may only turn in place, or walk back to at "
+            f"least {margin:g} m from the edge, but this leg ends closer"
+        )
     leaves = f"; its centre leaves {name} at {_xy(breach.exit)}" if breach.exit else ""
-    return (f"{leg} takes the robot's body outside {full} when its centre passes "
-            f"{_xy(breach.at)} ({body}){leaves}")
+    return (
+        f"{leg} takes the robot's body outside {full} when its centre passes "
+        f"{_xy(breach.at)} ({body}){leaves}"
+    )
 
 
 def _xy(p: tuple[float, float]) -> str:

@@ -80,8 +80,10 @@ class Skill:
 
     def __post_init__(self) -> None:
         if self.moves and self.low_battery:  # below the battery floor nothing may walk
-            raise ValueError(f"skill {self.name!r} moves the robot, so it cannot be allowed "
-                             "on a low battery (low_battery=True)")
+            raise ValueError(
+                f"skill {self.name!r} moves the robot, so it cannot be allowed "
+                "on a low battery (low_battery=True)"
+            )
 
     @property
     def tool_name(self) -> str:

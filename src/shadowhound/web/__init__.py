@@ -35,8 +35,9 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def serve_main(settings: ShadowHoundConfig, host: str = "127.0.0.1", port: int = 8080,
-               token: str | None = None) -> int:
+def serve_main(
+    settings: ShadowHoundConfig, host: str = "127.0.0.1", port: int = 8080, token: str | None = None
+) -> int:
     """`shadowhound serve`: run the dashboard until Ctrl-C. Returns the exit code.
 
     `token` defaults to $SHADOWHOUND_TOKEN. Returns 2 (with a message on stderr) when the web
@@ -45,7 +46,10 @@ def serve_main(settings: ShadowHoundConfig, host: str = "127.0.0.1", port: int =
     try:
         from .server import serve
     except ModuleNotFoundError as exc:
-        print(f"shadowhound serve: the web dashboard needs the 'web' extra ({exc.name} is not "
-              "installed): pip install 'shadowhound[web]'", file=sys.stderr)
+        print(
+            f"shadowhound serve: the web dashboard needs the 'web' extra ({exc.name} is not "
+            "installed): pip install 'shadowhound[web]'",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
     return serve(settings, host, port, token or os.environ.get("SHADOWHOUND_TOKEN") or None)

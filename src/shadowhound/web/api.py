@@ -56,49 +56,74 @@ router = APIRouter(prefix="/api")
 # Each route's own error answers; the gate's (400, 401, 403, 413) and 422 are added to the
 # document by openapi.py.
 _NOT_FOUND: dict[int | str, dict[str, Any]] = {
-    404: {"model": Problem, "description": "no such mission or approval"}}
+    404: {"model": Problem, "description": "no such mission or approval"}
+}
 _REFUSED: dict[int | str, dict[str, Any]] = {
     409: {"model": MissionRefused, "description": "the e-stop is latched (dry runs still run)"},
-    429: {"model": MissionRefused, "description": "the queue is full"}}
+    429: {"model": MissionRefused, "description": "the queue is full"},
+}
 _CANCEL: dict[int | str, dict[str, Any]] = {
-    **_NOT_FOUND, 409: {"model": Problem, "description": "the mission has already finished"}}
+    **_NOT_FOUND,
+    409: {"model": Problem, "description": "the mission has already finished"},
+}
 
 
 @router.get("/health", tags=["status"])
 async def health(request: Request) -> dict[str, Any]:
     """Liveness; open even when a token is set (the original answer plus a few keys)."""
     agent = ctx(request).agent
-    return {"status": "healthy", "service": "shadowhound-web", "version": __version__,
-            "estop": agent.estop_latched}
+    return {
+        "status": "healthy",
+        "service": "shadowhound-web",
+        "version": __version__,
+        "estop": agent.estop_latched,
+    }
 
 
-@router.post("/mission", status_code=202, response_model=MissionAccepted, responses=_REFUSED,
-             tags=["missions"])
-async def submit_mission(request: Request, body: MissionRequest
-                         ) -> MissionAccepted | JSONResponse:
+@router.post(
+    "/mission",
+    status_code=202,
+    response_model=MissionAccepted,
+    responses=_REFUSED,
+    tags=["missions"],
+)
+async def submit_mission(request: Request, body: MissionRequest) -> MissionAccepted | JSONResponse:
     """Queue a mission (or a dry run). 202 with its id; follow it on /ws/status or /api/events."""
     web = ctx(request)
-    problem = mission_text_problem(body.command, web.agent.settings.agent.max_mission_chars,
-                                   "the command")
+    problem = mission_text_problem(
+        body.command, web.agent.settings.agent.max_mission_chars, "the command"
+    )
     if problem:
         raise HTTPException(422, problem)
     ahead = web.desk.queued() + (1 if web.desk.worker.busy else 0)
     record, refused = web.desk.submit(body.command, body.dry_run)
     if record is None:
         status = 409 if refused == ESTOP_LATCHED else 429
-        return JSONResponse({"detail": refused, "success": False, "message": f"Refused: "
-                             f"{refused}.", "command": body.command}, status_code=status)
+        return JSONResponse(
+            {
+                "detail": refused,
+                "success": False,
+                "message": f"Refused: {refused}.",
+                "command": body.command,
+            },
+            status_code=status,
+        )
     what = "dry run" if body.dry_run else "mission"
     where = "starts now" if not ahead else f"waits behind {ahead} mission(s)"
-    return MissionAccepted(success=True, message=f"{what} accepted; it {where}",
-                           command=body.command, mission_id=record.id, state=record.state,
-                           dry_run=body.dry_run, queued_ahead=ahead,
-                           url=f"/api/missions/{record.id}")
+    return MissionAccepted(
+        success=True,
+        message=f"{what} accepted; it {where}",
+        command=body.command,
+        mission_id=record.id,
+        state=record.state,
+        dry_run=body.dry_run,
+        queued_ahead=ahead,
+        url=f"/api/missions/{record.id}",
+    )
 
 
 @router.get("/missions", tags=["missions"])
-async def list_missions(request: Request, limit: int = Query(50, ge=1, le=500)
-                        ) -> dict[str, Any]:
+async def list_missions(request: Request, limit: int = Query(50, ge=1, le=500)) -> dict[str, Any]:
     """Recent missions, newest first (web missions, then other interfaces' from the agent)."""
     return {"missions": ctx(request).desk.missions(limit)}
 
@@ -106,8 +131,9 @@ async def list_missions(request: Request, limit: int = Query(50, ge=1, le=500)
 def _record(request: Request, mission_id: str) -> WebMission:
     record = ctx(request).desk.get(mission_id)
     if record is None:
-        raise HTTPException(404, f"no mission {mission_id!r} (the dashboard keeps the last "
-                                 "200 web missions)")
+        raise HTTPException(
+            404, f"no mission {mission_id!r} (the dashboard keeps the last 200 web missions)"
+        )
     return record
 
 
@@ -124,8 +150,9 @@ async def cancel_mission(request: Request, mission_id: str) -> dict[str, Any]:
     if record is None:
         raise HTTPException(404, f"no mission {mission_id!r}")
     if outcome == "finished":
-        raise HTTPException(409, f"mission {mission_id!r} has already finished "
-                                 f"({record.to_dict(False)['status']})")
+        raise HTTPException(
+            409, f"mission {mission_id!r} has already finished ({record.to_dict(False)['status']})"
+        )
     return {"mission_id": record.id, "cancelled": True, "state": record.state}
 
 
@@ -136,18 +163,23 @@ async def estop(request: Request) -> EstopAnswer:
     dropped = stopped_already(request.state)  # the e-stop lane stopped it before routing
     if dropped is None:
         dropped = web.desk.estop()
-    return EstopAnswer(estop=True, dropped=dropped, robot=web.agent.get_robot_status(),
-                       message="e-stop latched: the robot is stopped"
-                               + (f" and {dropped} waiting mission(s) dropped" if dropped
-                                  else "") + "; release it to run missions again")
+    return EstopAnswer(
+        estop=True,
+        dropped=dropped,
+        robot=web.agent.get_robot_status(),
+        message="e-stop latched: the robot is stopped"
+        + (f" and {dropped} waiting mission(s) dropped" if dropped else "")
+        + "; release it to run missions again",
+    )
 
 
 @router.post("/estop/release", response_model=EstopAnswer, tags=["safety"])
 async def release_estop(request: Request) -> EstopAnswer:
     agent = ctx(request).agent
     agent.release_estop()
-    return EstopAnswer(estop=agent.estop_latched, message="e-stop released",
-                       robot=agent.get_robot_status())
+    return EstopAnswer(
+        estop=agent.estop_latched, message="e-stop released", robot=agent.get_robot_status()
+    )
 
 
 @router.get("/approval", tags=["safety"])
@@ -164,8 +196,9 @@ async def approve(request: Request, request_id: str) -> dict[str, Any]:
 
 
 @router.post("/approval/{request_id}/reject", responses=_NOT_FOUND, tags=["safety"])
-async def reject(request: Request, request_id: str,
-                 body: Annotated[RejectRequest | None, Body()] = None) -> dict[str, Any]:
+async def reject(
+    request: Request, request_id: str, body: Annotated[RejectRequest | None, Body()] = None
+) -> dict[str, Any]:
     reason = body.reason if body else ""
     if not ctx(request).agent.reject(request_id, reason or "rejected on the dashboard"):
         raise HTTPException(404, f"no pending approval {request_id!r}")
@@ -194,12 +227,20 @@ def current_status(web: WebContext) -> dict[str, Any]:
     d = web.agent.diagnostics()
     p, running = d.progress, web.desk.running()
     return {
-        "status": p.status.value, "mission_id": p.mission_id, "mission": p.mission,
-        "current_skill": p.skill, "step": p.step, "steps": p.steps,
-        "progress": round(p.progress, 3), "estop": d.estop, "busy": web.desk.worker.busy,
-        "running": running.id if running else None, "queued": web.desk.queued(),
+        "status": p.status.value,
+        "mission_id": p.mission_id,
+        "mission": p.mission,
+        "current_skill": p.skill,
+        "step": p.step,
+        "steps": p.steps,
+        "progress": round(p.progress, 3),
+        "estop": d.estop,
+        "busy": web.desk.worker.busy,
+        "running": running.id if running else None,
+        "queued": web.desk.queued(),
         "pending_approval": d.pending_approval.to_dict() if d.pending_approval else None,
-        "robot": d.robot_dict(), "time": time.time(),
+        "robot": d.robot_dict(),
+        "time": time.time(),
     }
 
 
@@ -209,11 +250,19 @@ async def diagnostics(request: Request) -> dict[str, Any]:
     web = ctx(request)
     d = web.agent.diagnostics().to_dict()
     settings = web.agent.settings
-    d.update(agent_backend=settings.backend, agent_model=settings.llm.model or "offline",
-             robot_mode=d["robot"].get("posture"), last_update=time.time(),
-             web={"clients": web.feed.clients, "busy": web.desk.worker.busy,
-                  "queued": web.desk.queued(), "auth": web.auth,
-                  "approvals_enabled": web.agent.approvals_enabled})
+    d.update(
+        agent_backend=settings.backend,
+        agent_model=settings.llm.model or "offline",
+        robot_mode=d["robot"].get("posture"),
+        last_update=time.time(),
+        web={
+            "clients": web.feed.clients,
+            "busy": web.desk.worker.busy,
+            "queued": web.desk.queued(),
+            "auth": web.auth,
+            "approvals_enabled": web.agent.approvals_enabled,
+        },
+    )
     return d
 
 
@@ -235,27 +284,36 @@ async def world_map(request: Request) -> dict[str, Any]:
     places = known_places(settings.places, agent.memory.places)  # taught ones too
     belief = robot_belief(robot)
     grid = None if belief is None else grid_layout(belief.grid, grid_version(belief.grid))
-    return {"grid": grid, "objects": object_dicts(robot_objects(robot)),
-            "places": {name: list(place.position) for name, place in places.items()},
-            "patrol_route": [list(p) for p in settings.patrol_route],
-            "geofence_radius": settings.safety.geofence_radius,
-            "geofence_polygon": [list(p) for p in settings.safety.geofence_polygon or []],
-            "robot": ctx(request).agent.get_robot_status()}
+    return {
+        "grid": grid,
+        "objects": object_dicts(robot_objects(robot)),
+        "places": {name: list(place.position) for name, place in places.items()},
+        "patrol_route": [list(p) for p in settings.patrol_route],
+        "geofence_radius": settings.safety.geofence_radius,
+        "geofence_polygon": [list(p) for p in settings.safety.geofence_polygon or []],
+        "robot": ctx(request).agent.get_robot_status(),
+    }
 
 
-@router.get("/map/grid.png", tags=["status"], response_class=Response,
-            responses={200: {"content": {"image/png": {}}}, 404: {"model": Problem}})
+@router.get(
+    "/map/grid.png",
+    tags=["status"],
+    response_class=Response,
+    responses={200: {"content": {"image/png": {}}}, 404: {"model": Problem}},
+)
 async def grid_image(request: Request) -> Response:
     """The occupancy grid as a grayscale PNG (free white, occupied black, unknown grey), its
     top row the largest y; place it with /api/map's `grid` layout. Cached by version."""
     belief = robot_belief(ctx(request).agent.robot)
     if belief is None:
-        raise HTTPException(404, "this robot has no map (the simulator with collisions off, or "
-                                 "a robot without a map source)")
+        raise HTTPException(
+            404,
+            "this robot has no map (the simulator with collisions off, or "
+            "a robot without a map source)",
+        )
     version = grid_version(belief.grid)
     etag = f'"{version}"'
     headers = {"ETag": etag, "Cache-Control": "no-cache"}
     if request.headers.get("if-none-match") == etag:
         return Response(status_code=304, headers=headers)
-    return Response(_GRID_IMAGES.png(belief.grid, version), media_type="image/png",
-                    headers=headers)
+    return Response(_GRID_IMAGES.png(belief.grid, version), media_type="image/png", headers=headers)

@@ -37,15 +37,23 @@ log = logging.getLogger(__name__)
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
 # The page loads only its own files; images may be data: or blob: URLs drawn by the script.
-_PAGE_POLICY = ("default-src 'self'; img-src 'self' data: blob:; connect-src 'self'; "
-                "style-src 'self'; script-src 'self'; frame-ancestors 'none'; base-uri 'none'")
+_PAGE_POLICY = (
+    "default-src 'self'; img-src 'self' data: blob:; connect-src 'self'; "
+    "style-src 'self'; script-src 'self'; frame-ancestors 'none'; base-uri 'none'"
+)
 
 
-def create_app(agent: RobotAgent, *, token: str | None = None,
-               worker: MissionWorker | None = None,
-               allowed_hosts: Iterable[str] | None = LOOPBACK_HOSTS,
-               max_body: int = MAX_BODY, approvals: bool = True, state_hz: float = 5.0,
-               secrets: Iterable[str] = ()) -> FastAPI:
+def create_app(
+    agent: RobotAgent,
+    *,
+    token: str | None = None,
+    worker: MissionWorker | None = None,
+    allowed_hosts: Iterable[str] | None = LOOPBACK_HOSTS,
+    max_body: int = MAX_BODY,
+    approvals: bool = True,
+    state_hz: float = 5.0,
+    secrets: Iterable[str] = (),
+) -> FastAPI:
     """The FastAPI app for `agent` (initialized here if it is not yet).
 
     - `token`: required on every /api/ and /ws/ request but `GET /api/health` (see security.py).
@@ -74,10 +82,14 @@ def create_app(agent: RobotAgent, *, token: str | None = None,
                 await ticker
             desk.close()
 
-    app = FastAPI(title="ShadowHound", version=__version__, lifespan=lifespan,
-                  description="Missions, live progress, camera, map and e-stop for a "
-                              "quadruped robot. Mutating requests need `Authorization: Bearer "
-                              "<token>` when the server has a token.")
+    app = FastAPI(
+        title="ShadowHound",
+        version=__version__,
+        lifespan=lifespan,
+        description="Missions, live progress, camera, map and e-stop for a "
+        "quadruped robot. Mutating requests need `Authorization: Bearer "
+        "<token>` when the server has a token.",
+    )
     app.state.web = web
     app.include_router(api.router)
     app.include_router(live.router)
@@ -85,10 +97,12 @@ def create_app(agent: RobotAgent, *, token: str | None = None,
     _add_page(app)
     _add_error_handlers(app)
     app.add_middleware(EstopLane, estop=desk.estop)  # inside the gate: checked, then first
-    app.add_middleware(Gate, token=token, allowed_hosts=allowed_hosts,
-                       max_body=max_body, secrets=hidden)
-    _document(app, token=token is not None, checks_hosts=allowed_hosts is not None,
-              max_body=max_body)
+    app.add_middleware(
+        Gate, token=token, allowed_hosts=allowed_hosts, max_body=max_body, secrets=hidden
+    )
+    _document(
+        app, token=token is not None, checks_hosts=allowed_hosts is not None, max_body=max_body
+    )
     return app
 
 
@@ -107,27 +121,36 @@ def _document(app: FastAPI, **gate: Any) -> None:
 def _add_page(app: FastAPI) -> None:
     @app.get("/", include_in_schema=False)
     async def index() -> FileResponse:
-        return FileResponse(STATIC_DIR / "index.html", headers={
-            "Content-Security-Policy": _PAGE_POLICY, "Cache-Control": "no-cache"})
+        return FileResponse(
+            STATIC_DIR / "index.html",
+            headers={"Content-Security-Policy": _PAGE_POLICY, "Cache-Control": "no-cache"},
+        )
 
 
 def _add_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(RequestValidationError)
     async def invalid(_request: Request, exc: RequestValidationError) -> JSONResponse:
         # Say what was wrong without echoing the input back (it may be large or private).
-        problems = [{"where": ".".join(str(p) for p in e.get("loc", ())), "problem": e["msg"]}
-                    for e in exc.errors()]
+        problems = [
+            {"where": ".".join(str(p) for p in e.get("loc", ())), "problem": e["msg"]}
+            for e in exc.errors()
+        ]
         text = "; ".join(f"{p['where']}: {p['problem']}" for p in problems)
-        return JSONResponse({"detail": f"invalid request: {text}", "problems": problems},
-                            status_code=422)
+        return JSONResponse(
+            {"detail": f"invalid request: {text}", "problems": problems}, status_code=422
+        )
 
     @app.exception_handler(StarletteHTTPException)
     async def http_error(_request: Request, exc: StarletteHTTPException) -> JSONResponse:
-        return JSONResponse({"detail": exc.detail}, status_code=exc.status_code,
-                            headers=getattr(exc, "headers", None))
+        return JSONResponse(
+            {"detail": exc.detail},
+            status_code=exc.status_code,
+            headers=getattr(exc, "headers", None),
+        )
 
     @app.exception_handler(Exception)
     async def crashed(request: Request, exc: Exception) -> JSONResponse:
         log.exception("request %s %s failed", request.method, request.url.path)
-        return JSONResponse({"detail": "internal error; the server log has the details"},
-                            status_code=500)
+        return JSONResponse(
+            {"detail": "internal error; the server log has the details"}, status_code=500
+        )

@@ -69,16 +69,24 @@ class MissionDesk:
     `job_finished` (jobs that are not the desk's are ignored there).
     """
 
-    def __init__(self, agent: RobotAgent, feed: EventFeed, *, worker: MissionWorker | None = None,
-                 max_queue: int = 8, keep: int = 200) -> None:
+    def __init__(
+        self,
+        agent: RobotAgent,
+        feed: EventFeed,
+        *,
+        worker: MissionWorker | None = None,
+        max_queue: int = 8,
+        keep: int = 200,
+    ) -> None:
         self.agent = agent
         self.feed = feed
         self._keep = keep
         self._lock = threading.Lock()
         self._records: OrderedDict[str, WebMission] = OrderedDict()
         self._own_worker = worker is None
-        self.worker = worker or MissionWorker(agent, on_start=self.job_started,
-                                              on_finish=self.job_finished, max_queue=max_queue)
+        self.worker = worker or MissionWorker(
+            agent, on_start=self.job_started, on_finish=self.job_finished, max_queue=max_queue
+        )
         self._unsubscribe = agent.add_listener(self._on_event)
 
     # -- missions --------------------------------------------------------------------------
@@ -111,10 +119,19 @@ class MissionDesk:
         out = [r.to_dict(full=False) for r in reversed(records)]
         for result in reversed(self.agent.history):
             if result.mission_id not in known:  # e.g. a ROS topic mission on the same agent
-                out.append({"mission_id": result.mission_id, "command": result.mission,
-                            "dry_run": result.dry_run, "source": "agent", "state": "finished",
-                            "status": result.status.value, "success": result.success,
-                            "response": result.response, "error": result.error})
+                out.append(
+                    {
+                        "mission_id": result.mission_id,
+                        "command": result.mission,
+                        "dry_run": result.dry_run,
+                        "source": "agent",
+                        "state": "finished",
+                        "status": result.status.value,
+                        "success": result.success,
+                        "response": result.response,
+                        "error": result.error,
+                    }
+                )
         return out[:limit]
 
     def cancel(self, mission_id: str) -> tuple[WebMission | None, str]:
@@ -169,8 +186,10 @@ class MissionDesk:
 
     def _on_event(self, event: MissionEvent) -> None:
         """Runs on the emitting thread (the worker's, or the one that pressed the e-stop)."""
-        self.feed.publish(event.kind, {**event.data, "mission_id": event.mission_id or None,
-                                       "event_time": event.time})  # the JSON edge
+        self.feed.publish(
+            event.kind,
+            {**event.data, "mission_id": event.mission_id or None, "event_time": event.time},
+        )  # the JSON edge
 
     def _trim(self) -> None:
         """Forget the oldest finished records beyond `keep` (persistent history comes later)."""

@@ -28,8 +28,11 @@ class EstopLane:
         self.estop = estop
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] == "http" and scope["method"] == "POST" \
-                and scope.get("path") == ESTOP_PATH:
+        if (
+            scope["type"] == "http"
+            and scope["method"] == "POST"
+            and scope.get("path") == ESTOP_PATH
+        ):
             dropped = self.estop()  # first: the robot stops before anything else runs
             scope.setdefault("state", {})[STATE_KEY] = dropped
         await self.app(scope, receive, send)

@@ -64,8 +64,7 @@ class Subscription:
 
     def deliver(self, message: dict[str, Any]) -> None:
         """Queue a message for this client only (from the client's own loop)."""
-        self._private.append(Packet(None, str(message.get("kind", "")),
-                                    self._feed.encode(message)))
+        self._private.append(Packet(None, str(message.get("kind", "")), self._feed.encode(message)))
         self.wake()
 
     def wake(self) -> bool:
@@ -151,8 +150,9 @@ class EventFeed:
     reconnects can ask for what it missed (SSE `Last-Event-ID`).
     """
 
-    def __init__(self, backlog: int = 200, queue_size: int = 500,
-                 scrub: Callable[[str], str] | None = None) -> None:
+    def __init__(
+        self, backlog: int = 200, queue_size: int = 500, scrub: Callable[[str], str] | None = None
+    ) -> None:
         self._lock = threading.Lock()
         self._seq = 0
         self._ring: deque[Packet] = deque(maxlen=queue_size)
@@ -193,16 +193,20 @@ class EventFeed:
                     self._hubs.pop(hub.loop, None)
         return message
 
-    def subscribe(self, loop: asyncio.AbstractEventLoop, since: int | None = None
-                  ) -> tuple[Subscription, list[Packet]]:
+    def subscribe(
+        self, loop: asyncio.AbstractEventLoop, since: int | None = None
+    ) -> tuple[Subscription, list[Packet]]:
         """A new subscription (from the next message on), and the kept messages after
         sequence number `since`."""
         with self._lock:
             hub = self._hubs.setdefault(loop, _Hub(loop))
             subscription = Subscription(self, hub, self._seq + 1)
             hub.subscribers.append(subscription)
-            missed = [] if since is None else [p for p in self._recent
-                                               if p.seq is not None and p.seq > since]
+            missed = (
+                []
+                if since is None
+                else [p for p in self._recent if p.seq is not None and p.seq > since]
+            )
         return subscription, missed
 
     def unsubscribe(self, subscription: Subscription) -> None:
@@ -227,11 +231,16 @@ class EventFeed:
             return [self._ring[i] for i in range(start, min(len(self._ring), start + limit))], 0
 
     def lag_notice(self, cursor: int, missed: int) -> Packet:
-        message = {"seq": None, "kind": LAGGED, "time": time.time(), "next_seq": cursor,
-                   "missed": missed,
-                   "detail": f"this client fell more than {self.queue_size} events behind and "
-                             "is disconnected; reconnect (SSE: with Last-Event-ID to replay the "
-                             "kept events) and read GET /api/status"}
+        message = {
+            "seq": None,
+            "kind": LAGGED,
+            "time": time.time(),
+            "next_seq": cursor,
+            "missed": missed,
+            "detail": f"this client fell more than {self.queue_size} events behind and "
+            "is disconnected; reconnect (SSE: with Last-Event-ID to replay the "
+            "kept events) and read GET /api/status",
+        }
         return Packet(None, LAGGED, self.encode(message))
 
     def encode(self, message: dict[str, Any]) -> str:

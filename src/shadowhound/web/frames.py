@@ -43,8 +43,10 @@ def to_browser_image(frame: CameraFrame, quality: int = 80) -> tuple[bytes, str]
     except ImportError:
         if frame.encoding == "png":
             return frame.data, "image/png"
-        raise FrameUnavailable(f"a raw {frame.encoding} frame needs Pillow to be shown "
-                               "(pip install 'shadowhound[web]')") from None
+        raise FrameUnavailable(
+            f"a raw {frame.encoding} frame needs Pillow to be shown "
+            "(pip install 'shadowhound[web]')"
+        ) from None
     except ValueError as exc:
         raise FrameUnavailable(str(exc)) from exc
 
@@ -76,18 +78,27 @@ class FrameCache:
             if frame is not self._frame or self._ready is None:
                 data, content_type = to_browser_image(frame)
                 self._frame = frame
-                self._ready = WebFrame(data, content_type, frame.stamp, frame.width,
-                                       frame.height, frame.source)
+                self._ready = WebFrame(
+                    data, content_type, frame.stamp, frame.width, frame.height, frame.source
+                )
             return self._ready
 
 
 def mjpeg_part(frame: WebFrame) -> bytes:
     """One part of a multipart/x-mixed-replace stream."""
-    head = (f"--{BOUNDARY}\r\nContent-Type: {frame.content_type}\r\n"
-            f"Content-Length: {len(frame.data)}\r\nX-Timestamp: {frame.stamp:.6f}\r\n\r\n")
+    head = (
+        f"--{BOUNDARY}\r\nContent-Type: {frame.content_type}\r\n"
+        f"Content-Length: {len(frame.data)}\r\nX-Timestamp: {frame.stamp:.6f}\r\n\r\n"
+    )
     return head.encode("ascii") + frame.data + b"\r\n"
 
 
 def frame_summary(frame: WebFrame) -> dict[str, Any]:
-    return {"content_type": frame.content_type, "bytes": len(frame.data), "width": frame.width,
-            "height": frame.height, "stamp": frame.stamp, "source": frame.source}
+    return {
+        "content_type": frame.content_type,
+        "bytes": len(frame.data),
+        "width": frame.width,
+        "height": frame.height,
+        "stamp": frame.stamp,
+        "source": frame.source,
+    }

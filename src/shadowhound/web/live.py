@@ -28,9 +28,11 @@ LAGGED_CLOSE = 1013  # "try again later": the client fell behind and should reco
 WS_BATCH = 4
 
 
-@router.get("/api/camera/latest", tags=["camera"],
-            responses={200: {"content": {"image/jpeg": {}, "image/png": {}}},
-                       503: {"model": Problem}})
+@router.get(
+    "/api/camera/latest",
+    tags=["camera"],
+    responses={200: {"content": {"image/jpeg": {}, "image/png": {}}}, 503: {"model": Problem}},
+)
 async def camera_latest(request: Request, format: Literal["image", "json"] = "image") -> Any:
     """The latest camera image as JPEG (PNG only without Pillow). `?format=json` (or
     `Accept: application/json`) gives the original ShadowHound answer: base64 in JSON."""
@@ -44,17 +46,29 @@ async def camera_latest(request: Request, format: Literal["image", "json"] = "im
             return {"image": None, "available": False, "reason": str(exc)}
         raise HTTPException(503, str(exc)) from None
     if as_json:
-        return {"image": base64.b64encode(frame.data).decode("ascii"), "available": True,
-                **frame_summary(frame)}
-    return Response(frame.data, media_type=frame.content_type,
-                    headers={**_NO_STORE, "X-Timestamp": f"{frame.stamp:.6f}"})
+        return {
+            "image": base64.b64encode(frame.data).decode("ascii"),
+            "available": True,
+            **frame_summary(frame),
+        }
+    return Response(
+        frame.data,
+        media_type=frame.content_type,
+        headers={**_NO_STORE, "X-Timestamp": f"{frame.stamp:.6f}"},
+    )
 
 
-@router.get("/api/camera/stream", tags=["camera"],
-            responses={200: {"content": {f"multipart/x-mixed-replace; boundary={BOUNDARY}": {}}},
-                       503: {"model": Problem}})
-async def camera_stream(request: Request, fps: float = Query(15.0, gt=0, le=30)
-                        ) -> StreamingResponse:
+@router.get(
+    "/api/camera/stream",
+    tags=["camera"],
+    responses={
+        200: {"content": {f"multipart/x-mixed-replace; boundary={BOUNDARY}": {}}},
+        503: {"model": Problem},
+    },
+)
+async def camera_stream(
+    request: Request, fps: float = Query(15.0, gt=0, le=30)
+) -> StreamingResponse:
     """MJPEG (multipart/x-mixed-replace) at up to `fps` frames a second. JPEG frames from the
     camera pass through unchanged; each new frame is sent once."""
     web = ctx(request)
@@ -62,9 +76,11 @@ async def camera_stream(request: Request, fps: float = Query(15.0, gt=0, le=30)
         web.frames.get()
     except FrameUnavailable as exc:
         raise HTTPException(503, str(exc)) from None
-    return StreamingResponse(_mjpeg(web, 1.0 / fps),
-                             media_type=f"multipart/x-mixed-replace; boundary={BOUNDARY}",
-                             headers=_NO_STORE)
+    return StreamingResponse(
+        _mjpeg(web, 1.0 / fps),
+        media_type=f"multipart/x-mixed-replace; boundary={BOUNDARY}",
+        headers=_NO_STORE,
+    )
 
 
 async def _mjpeg(web: WebContext, interval: float) -> AsyncIterator[bytes]:
@@ -82,10 +98,10 @@ async def _mjpeg(web: WebContext, interval: float) -> AsyncIterator[bytes]:
             await asyncio.sleep(interval / 4)
 
 
-@router.get("/api/events", tags=["live"],
-            responses={200: {"content": {"text/event-stream": {}}}})
-async def events(request: Request, since: int | None = Query(None, ge=0, le=2**53)
-                 ) -> StreamingResponse:
+@router.get("/api/events", tags=["live"], responses={200: {"content": {"text/event-stream": {}}}})
+async def events(
+    request: Request, since: int | None = Query(None, ge=0, le=2**53)
+) -> StreamingResponse:
     """Server-sent events: a `snapshot`, then every event as `id: <seq>` + JSON `data` (the
     kind is inside). Reconnecting with `Last-Event-ID` (or `?since=`) replays what was missed.
     A client more than 500 events behind gets a `lagged` message and the stream ends."""
@@ -94,12 +110,16 @@ async def events(request: Request, since: int | None = Query(None, ge=0, le=2**5
     if since is None and last_id.isdigit():
         since = int(last_id)
     subscription, missed = web.feed.subscribe(asyncio.get_running_loop(), since)
-    return StreamingResponse(_sse(web, subscription, missed), media_type="text/event-stream",
-                             headers={**_NO_STORE, "X-Accel-Buffering": "no"})
+    return StreamingResponse(
+        _sse(web, subscription, missed),
+        media_type="text/event-stream",
+        headers={**_NO_STORE, "X-Accel-Buffering": "no"},
+    )
 
 
-async def _sse(web: WebContext, subscription: Subscription,
-               missed: list[Packet]) -> AsyncIterator[str]:
+async def _sse(
+    web: WebContext, subscription: Subscription, missed: list[Packet]
+) -> AsyncIterator[str]:
     try:
         yield "retry: 2000\n\n"
         yield f"data: {web.feed.encode(_snapshot(web))}\n\n"
@@ -137,8 +157,9 @@ async def ws_status(websocket: WebSocket) -> None:
             for packet in await subscription.next(timeout=5.0, limit=WS_BATCH):
                 await websocket.send_text(packet.text)
         if subscription.lagged:  # told in the last message; the page reconnects
-            await websocket.close(code=LAGGED_CLOSE, reason="lagged: reconnect and read "
-                                                            "/api/status")
+            await websocket.close(
+                code=LAGGED_CLOSE, reason="lagged: reconnect and read /api/status"
+            )
     except (WebSocketDisconnect, RuntimeError, OSError):
         pass  # the client went away while we were sending; nothing to clean but below
     finally:
@@ -168,8 +189,12 @@ def _json_type(text: str) -> Any:
 
 
 def _snapshot(web: WebContext) -> dict[str, Any]:
-    return {"kind": "snapshot", "status": current_status(web),
-            "missions": web.desk.missions(20), "seq": None}
+    return {
+        "kind": "snapshot",
+        "status": current_status(web),
+        "missions": web.desk.missions(20),
+        "seq": None,
+    }
 
 
 async def publish_state(web: WebContext, hz: float) -> None:

@@ -24,16 +24,30 @@ _STRICT = ConfigDict(extra="forbid", strict=True)
 class MissionRequest(BaseModel):
     """`{"command": ...}` as in the original ShadowHound, plus `dry_run`."""
 
-    model_config = ConfigDict(**_STRICT, json_schema_extra={"examples": [
-        {"command": "walk forward 1 meter then turn left 90 degrees"},
-        {"command": "go to x 2 y 1", "dry_run": True}]})
+    model_config = ConfigDict(
+        **_STRICT,
+        json_schema_extra={
+            "examples": [
+                {"command": "walk forward 1 meter then turn left 90 degrees"},
+                {"command": "go to x 2 y 1", "dry_run": True},
+            ]
+        },
+    )
 
-    command: str = Field(..., min_length=1, max_length=MAX_TEXT,
-                         description="what the robot should do, e.g. 'walk forward 1 meter'")
+    command: str = Field(
+        ...,
+        min_length=1,
+        max_length=MAX_TEXT,
+        description="what the robot should do, e.g. 'walk forward 1 meter'",
+    )
     dry_run: bool = Field(False, description="plan and check only; nothing moves")
-    priority: int | None = Field(0, ge=0, le=10,
-                          description="accepted for compatibility with the original API; "
-                                      "missions run in the order they arrive")
+    priority: int | None = Field(
+        0,
+        ge=0,
+        le=10,
+        description="accepted for compatibility with the original API; "
+        "missions run in the order they arrive",
+    )
 
 
 class MissionAccepted(BaseModel):
@@ -50,8 +64,9 @@ class MissionAccepted(BaseModel):
 
 
 class ChatRequest(BaseModel):
-    model_config = ConfigDict(**_STRICT, json_schema_extra={"examples": [
-        {"text": "where are you?"}]})
+    model_config = ConfigDict(
+        **_STRICT, json_schema_extra={"examples": [{"text": "where are you?"}]}
+    )
 
     text: str = Field(..., min_length=1, max_length=MAX_TEXT, description="a question")
 

@@ -24,24 +24,33 @@ _REF = "#/components/schemas/{model}"
 _FASTAPI_422 = ("HTTPValidationError", "ValidationError")
 
 
-def document_answers(schema: dict[str, Any], *, token: bool, checks_hosts: bool,
-                     max_body: int) -> dict[str, Any]:
+def document_answers(
+    schema: dict[str, Any], *, token: bool, checks_hosts: bool, max_body: int
+) -> dict[str, Any]:
     """Add the gate's answers and the real 422 to `schema` (FastAPI's document), in place."""
     gate = {
-        400: (checks_hosts and not token, "the Host header is not a loopback name (without a "
-                                          "token the server answers only on loopback), or is "
-                                          "not a valid host[:port]"),
+        400: (
+            checks_hosts and not token,
+            "the Host header is not a loopback name (without a "
+            "token the server answers only on loopback), or is "
+            "not a valid host[:port]",
+        ),
         401: (token, "a valid token is required: 'Authorization: Bearer <token>'"),
         403: (True, "a cross-origin request: only the dashboard's own page may change things"),
-        413: (True, f"the request body is larger than {max_body} bytes (text fields have their "
-                    f"own limit of {MAX_TEXT} characters: 422)"),
+        413: (
+            True,
+            f"the request body is larger than {max_body} bytes (text fields have their "
+            f"own limit of {MAX_TEXT} characters: 422)",
+        ),
     }
     for path, operations in schema.get("paths", {}).items():
         for method, operation in operations.items():
             answers = operation.setdefault("responses", {})
             if "422" in answers:
-                answers["422"] = _answer(ValidationProblem, "the request does not match the "
-                                         "schema, or a text is over the agent's limit")
+                answers["422"] = _answer(
+                    ValidationProblem,
+                    "the request does not match the schema, or a text is over the agent's limit",
+                )
             changes = method.upper() not in SAFE_METHODS
             for code, (applies, description) in gate.items():
                 if code == 401 and (path in OPEN_PATHS or not path.startswith("/api/")):
@@ -68,8 +77,13 @@ def _drop_unused(schema: dict[str, Any], names: tuple[str, ...]) -> None:
     """Remove the components `names` once nothing refers to them (FastAPI's 422 models)."""
     components = schema.get("components", {}).get("schemas", {})
     for name in names:  # in order: a model that refers to a later one goes first
-        rest = {**schema, "components": {**schema.get("components", {}), "schemas": {
-            k: v for k, v in components.items() if k != name}}}
+        rest = {
+            **schema,
+            "components": {
+                **schema.get("components", {}),
+                "schemas": {k: v for k, v in components.items() if k != name},
+            },
+        }
         if _REF.format(model=name) not in _refs(rest):
             components.pop(name, None)
 

@@ -38,8 +38,11 @@ ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
 WS_PROTOCOL = "shadowhound"
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 OPEN_PATHS = {"/api/health"}
-_HEADERS = [(b"x-content-type-options", b"nosniff"), (b"x-frame-options", b"DENY"),
-            (b"referrer-policy", b"no-referrer")]
+_HEADERS = [
+    (b"x-content-type-options", b"nosniff"),
+    (b"x-frame-options", b"DENY"),
+    (b"referrer-policy", b"no-referrer"),
+]
 
 
 def secret_values(token: str | None, api_key_env: str | None = None) -> list[str]:
@@ -66,8 +69,15 @@ def scrubber(secrets: Iterable[str]) -> Callable[[str], str]:
 class Gate:
     """ASGI middleware applying the checks above to HTTP requests and WebSockets."""
 
-    def __init__(self, app: ASGIApp, *, token: str | None, allowed_hosts: Iterable[str] | None,
-                 max_body: int, secrets: Iterable[str] = ()) -> None:
+    def __init__(
+        self,
+        app: ASGIApp,
+        *,
+        token: str | None,
+        allowed_hosts: Iterable[str] | None,
+        max_body: int,
+        secrets: Iterable[str] = (),
+    ) -> None:
         self.app = app
         self.secrets = [s.encode() for s in secrets if s]
         self.token = token
@@ -78,8 +88,9 @@ class Gate:
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
-        headers = {k.decode("latin-1").lower(): v.decode("latin-1")
-                   for k, v in scope.get("headers", [])}
+        headers = {
+            k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])
+        }
         problem = self._check(scope, headers)
         if problem is not None:
             await self._refuse(scope, receive, send, *problem)
@@ -87,8 +98,9 @@ class Gate:
         if scope["type"] == "http" and scope["method"] not in SAFE_METHODS:
             body = await self._read_body(receive, headers)
             if body is None:
-                await _send_json(send, 413, f"the request body is larger than {self.max_body} "
-                                            "bytes")
+                await _send_json(
+                    send, 413, f"the request body is larger than {self.max_body} bytes"
+                )
                 return
             receive = _replay(body, receive)
         if scope["type"] == "http":
@@ -115,8 +127,7 @@ class Gate:
                 body = b"".join(chunks)
                 for secret in self.secrets:
                     body = body.replace(secret, b"***")
-                start["headers"] = [(k, v) for k, v in start["headers"]
-                                    if k != b"content-length"]
+                start["headers"] = [(k, v) for k, v in start["headers"] if k != b"content-length"]
                 start["headers"].append((b"content-length", str(len(body)).encode()))
                 await send(start)
                 message = {"type": "http.response.body", "body": body}
@@ -126,11 +137,16 @@ class Gate:
 
     def _check(self, scope: Scope, headers: dict[str, str]) -> tuple[int, str] | None:
         host = hostname(headers.get("host", ""))
-        if self.allowed_hosts is not None and self.token is None \
-                and (host is None or host not in self.allowed_hosts):
+        if (
+            self.allowed_hosts is not None
+            and self.token is None
+            and (host is None or host not in self.allowed_hosts)
+        ):
             shown = host if host is not None else headers.get("host", "")[:100]
-            return 400, (f"host {shown!r} is not allowed: without a token the dashboard answers "
-                         "only on loopback names (set a token to serve other hosts)")
+            return 400, (
+                f"host {shown!r} is not allowed: without a token the dashboard answers "
+                "only on loopback names (set a token to serve other hosts)"
+            )
         websocket = scope["type"] == "websocket"
         origin = headers.get("origin")
         if origin is not None and (websocket or scope["method"] not in SAFE_METHODS):
@@ -142,8 +158,10 @@ class Gate:
             return None
         if self._token_ok(scope, headers, websocket):
             return None
-        return 401, ("a valid token is required: send 'Authorization: Bearer <token>' "
-                     "(GET requests and WebSockets may use ?token=<token>)")
+        return 401, (
+            "a valid token is required: send 'Authorization: Bearer <token>' "
+            "(GET requests and WebSockets may use ?token=<token>)"
+        )
 
     def _token_ok(self, scope: Scope, headers: dict[str, str], websocket: bool) -> bool:
         assert self.token is not None
@@ -155,8 +173,11 @@ class Gate:
             query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
             offered += query.get("token", [])[:1]
         if websocket:
-            offered += [p[len("bearer."):] for p in scope.get("subprotocols", [])
-                        if p.startswith("bearer.")][:1]
+            offered += [
+                p[len("bearer.") :]
+                for p in scope.get("subprotocols", [])
+                if p.startswith("bearer.")
+            ][:1]
         expected = self.token.encode()
         return any(hmac.compare_digest(o.encode(), expected) for o in offered)
 
@@ -177,8 +198,9 @@ class Gate:
             if not message.get("more_body", False):
                 return messages
 
-    async def _refuse(self, scope: Scope, receive: Receive, send: Send, status: int,
-                      detail: str) -> None:
+    async def _refuse(
+        self, scope: Scope, receive: Receive, send: Send, status: int, detail: str
+    ) -> None:
         if scope["type"] == "websocket":
             await receive()  # websocket.connect
             await send({"type": "websocket.close", "code": 1008, "reason": detail[:120]})
@@ -196,10 +218,19 @@ def _replay(messages: list[Message], receive: Receive) -> Receive:
     return replay
 
 
-async def _send_json(send: Send, status: int, detail: str,
-                     headers: list[tuple[bytes, bytes]] | None = None) -> None:
+async def _send_json(
+    send: Send, status: int, detail: str, headers: list[tuple[bytes, bytes]] | None = None
+) -> None:
     body = json.dumps({"detail": detail}).encode()
-    await send({"type": "http.response.start", "status": status,
-                "headers": [(b"content-type", b"application/json"),
-                            (b"content-length", str(len(body)).encode()), *(headers or [])]})
+    await send(
+        {
+            "type": "http.response.start",
+            "status": status,
+            "headers": [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(body)).encode()),
+                *(headers or []),
+            ],
+        }
+    )
     await send({"type": "http.response.body", "body": body})

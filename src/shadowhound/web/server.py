@@ -20,8 +20,15 @@ from ..exit_codes import EXIT_OK, EXIT_USAGE
 from ..serving import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, ServeError, bind, check_binding
 from .app import create_app
 
-__all__ = ["MIN_TOKEN_CHARS", "ServeError", "WebServer", "bind", "check_binding", "hosts_for",
-           "serve"]
+__all__ = [
+    "MIN_TOKEN_CHARS",
+    "ServeError",
+    "WebServer",
+    "bind",
+    "check_binding",
+    "hosts_for",
+    "serve",
+]
 
 log = logging.getLogger(__name__)
 
@@ -36,9 +43,15 @@ def _config(app: FastAPI, log_level: str) -> uvicorn.Config:
     # No permessage-deflate: with it every event is compressed once per WebSocket client (a
     # compressor each), which made the fan-out to 200 clients cost the server half as much
     # again as to 200 event-stream clients; the events are small JSON on a local network.
-    return uvicorn.Config(app, log_level=log_level, access_log=False, lifespan="on",
-                          timeout_graceful_shutdown=2, ws_ping_interval=20,
-                          ws_per_message_deflate=False)
+    return uvicorn.Config(
+        app,
+        log_level=log_level,
+        access_log=False,
+        lifespan="on",
+        timeout_graceful_shutdown=2,
+        ws_ping_interval=20,
+        ws_per_message_deflate=False,
+    )
 
 
 class _StopFirst(uvicorn.Server):
@@ -54,8 +67,7 @@ class _StopFirst(uvicorn.Server):
         self._asked = threading.Event()
         self._stop = stop
         self._done = False
-        threading.Thread(target=self._stop_when_asked, name="shadowhound-stop",
-                         daemon=True).start()
+        threading.Thread(target=self._stop_when_asked, name="shadowhound-stop", daemon=True).start()
 
     def _stop_when_asked(self) -> None:
         self._asked.wait()
@@ -75,8 +87,9 @@ class _StopFirst(uvicorn.Server):
 class WebServer:
     """Runs an app in a background thread: `start()` returns once it accepts connections."""
 
-    def __init__(self, app: FastAPI, host: str = "127.0.0.1", port: int = 0,
-                 log_level: str = "warning") -> None:
+    def __init__(
+        self, app: FastAPI, host: str = "127.0.0.1", port: int = 0, log_level: str = "warning"
+    ) -> None:
         self.app = app
         self._sock = bind(host, port)
         self.host, self.port = self._sock.getsockname()[:2]
@@ -106,10 +119,17 @@ class WebServer:
         self._server.run(sockets=[self._sock])
 
 
-def serve(settings: ShadowHoundConfig, host: str = "127.0.0.1", port: int = 8080,
-          token: str | None = None, *, agent: RobotAgent | None = None,
-          allowed_hosts: Iterable[str] | None = None, log_level: str = "warning",
-          out: Any = None) -> int:
+def serve(
+    settings: ShadowHoundConfig,
+    host: str = "127.0.0.1",
+    port: int = 8080,
+    token: str | None = None,
+    *,
+    agent: RobotAgent | None = None,
+    allowed_hosts: Iterable[str] | None = None,
+    log_level: str = "warning",
+    out: Any = None,
+) -> int:
     """Run the dashboard until Ctrl-C or SIGTERM. Returns an exit code (0 after a stop, 2 when
     it cannot start).
 
@@ -130,12 +150,20 @@ def serve(settings: ShadowHoundConfig, host: str = "127.0.0.1", port: int = 8080
     except (ServeError, ConfigError) as exc:
         print(f"shadowhound serve: {exc}", file=out)
         return EXIT_USAGE
-    app = create_app(agent, token=token,
-                     allowed_hosts=hosts_for(host) if allowed_hosts is None else allowed_hosts)
+    app = create_app(
+        agent,
+        token=token,
+        allowed_hosts=hosts_for(host) if allowed_hosts is None else allowed_hosts,
+    )
     shown = f"[{host}]" if ":" in host else host
-    print(f"ShadowHound dashboard on http://{shown}:{sock.getsockname()[1]}/ (robot "
-          f"{agent.robot.name}, backend {agent.settings.backend}"
-          + (", token required" if token else "") + "); Ctrl-C stops", file=out, flush=True)
+    print(
+        f"ShadowHound dashboard on http://{shown}:{sock.getsockname()[1]}/ (robot "
+        f"{agent.robot.name}, backend {agent.settings.backend}"
+        + (", token required" if token else "")
+        + "); Ctrl-C stops",
+        file=out,
+        flush=True,
+    )
     # uvicorn shuts down gracefully on SIGINT/SIGTERM and then raises the signal again with
     # the previous handlers; make SIGTERM an exception too so the robot is always released.
     main = threading.current_thread() is threading.main_thread()

@@ -19,8 +19,9 @@ from ..world.objects import KnownObject
 
 _UNKNOWN_GREY = 205  # map_server's unknown
 # cell byte (0..100 occupancy, 255 unknown; anything else is treated as occupied) -> grey level
-_GREYS = bytes(254 - round(v * 2.54) if v <= 100 else (_UNKNOWN_GREY if v == 255 else 0)
-               for v in range(256))
+_GREYS = bytes(
+    254 - round(v * 2.54) if v <= 100 else (_UNKNOWN_GREY if v == 255 else 0) for v in range(256)
+)
 
 
 def grid_version(grid: OccupancyGrid) -> str:
@@ -35,33 +36,51 @@ def grid_png(grid: OccupancyGrid) -> bytes:
     in the grid's own frame), so the image is the map seen from above."""
     grey = bytes(grid.cells).translate(_GREYS)
     w = grid.width
-    rows = b"".join(b"\x00" + grey[r * w:(r + 1) * w] for r in range(grid.height - 1, -1, -1))
-    return b"".join([
-        b"\x89PNG\r\n\x1a\n",
-        _chunk(b"IHDR", struct.pack(">IIBBBBB", w, grid.height, 8, 0, 0, 0, 0)),
-        _chunk(b"IDAT", zlib.compress(rows, 6)),
-        _chunk(b"IEND", b""),
-    ])
+    rows = b"".join(b"\x00" + grey[r * w : (r + 1) * w] for r in range(grid.height - 1, -1, -1))
+    return b"".join(
+        [
+            b"\x89PNG\r\n\x1a\n",
+            _chunk(b"IHDR", struct.pack(">IIBBBBB", w, grid.height, 8, 0, 0, 0, 0)),
+            _chunk(b"IDAT", zlib.compress(rows, 6)),
+            _chunk(b"IEND", b""),
+        ]
+    )
 
 
 def _chunk(kind: bytes, data: bytes) -> bytes:
-    return (struct.pack(">I", len(data)) + kind + data
-            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+    return (
+        struct.pack(">I", len(data))
+        + kind
+        + data
+        + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    )
 
 
 def grid_layout(grid: OccupancyGrid, version: str) -> dict[str, Any]:
     """Where the PNG goes: cell (0, 0)'s outer corner at `origin`, `resolution` m per pixel."""
     o = grid.origin
-    return {"version": version, "width": grid.width, "height": grid.height,
-            "resolution": grid.resolution,
-            "origin": {"x": round(o.x, 4), "y": round(o.y, 4), "yaw": round(o.yaw, 6)},
-            "url": f"/api/map/grid.png?v={version}"}
+    return {
+        "version": version,
+        "width": grid.width,
+        "height": grid.height,
+        "resolution": grid.resolution,
+        "origin": {"x": round(o.x, 4), "y": round(o.y, 4), "yaw": round(o.yaw, 6)},
+        "url": f"/api/map/grid.png?v={version}",
+    }
 
 
 def object_dicts(objects: tuple[KnownObject, ...]) -> list[dict[str, Any]]:
-    return [{"name": o.name, "x": round(o.x, 3), "y": round(o.y, 3),
-             "radius": round(o.radius, 3), "confidence": round(o.confidence, 3),
-             "stamp": round(o.stamp, 3)} for o in objects]
+    return [
+        {
+            "name": o.name,
+            "x": round(o.x, 3),
+            "y": round(o.y, 3),
+            "radius": round(o.radius, 3),
+            "confidence": round(o.confidence, 3),
+            "stamp": round(o.stamp, 3),
+        }
+        for o in objects
+    ]
 
 
 class GridImages:

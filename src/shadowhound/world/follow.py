@@ -38,7 +38,7 @@ class PathFollower:
     def remaining(self, pose: Pose2D) -> float:
         """Metres left along the path from `pose`."""
         here, total = (pose.x, pose.y), 0.0
-        for point in self.points[self._next:]:
+        for point in self.points[self._next :]:
             total += math.dist(here, point)
             here = point
         return total
@@ -46,8 +46,10 @@ class PathFollower:
     def command(self, pose: Pose2D) -> tuple[float, float, float] | None:
         """Body-frame (vx, vy, wz) for this tick, or None when the goal pose is reached."""
         last = len(self.points) - 1
-        while self._next < last and math.dist((pose.x, pose.y),
-                                              self.points[self._next]) <= self.pass_radius:
+        while (
+            self._next < last
+            and math.dist((pose.x, pose.y), self.points[self._next]) <= self.pass_radius
+        ):
             self._next += 1
         tx, ty = self.points[self._next]
         distance = math.hypot(tx - pose.x, ty - pose.y)

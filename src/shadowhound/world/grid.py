@@ -50,11 +50,14 @@ class OccupancyGrid:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.width, int) and isinstance(self.height, int)):
-            raise GridError(f"width and height must be integers, got {self.width!r}, "
-                            f"{self.height!r}")
+            raise GridError(
+                f"width and height must be integers, got {self.width!r}, {self.height!r}"
+            )
         if self.width <= 0 or self.height <= 0 or self.width * self.height > MAX_CELLS:
-            raise GridError(f"grid size must be positive and at most {MAX_CELLS} cells, got "
-                            f"{self.width} x {self.height}")
+            raise GridError(
+                f"grid size must be positive and at most {MAX_CELLS} cells, got "
+                f"{self.width} x {self.height}"
+            )
         if not (math.isfinite(self.resolution) and self.resolution > 0):
             raise GridError(f"resolution must be > 0 metres per cell, got {self.resolution}")
         if not all(math.isfinite(v) for v in (self.origin.x, self.origin.y, self.origin.yaw)):
@@ -81,15 +84,18 @@ class OccupancyGrid:
     ) -> OccupancyGrid:
         """A grid covering the axis-aligned rectangle, every cell set to `value`."""
         if not (x_min < x_max and y_min < y_max):
-            raise GridError(f"need x_min < x_max and y_min < y_max, got "
-                            f"{(x_min, x_max, y_min, y_max)}")
+            raise GridError(
+                f"need x_min < x_max and y_min < y_max, got {(x_min, x_max, y_min, y_max)}"
+            )
         if not (math.isfinite(resolution) and resolution > 0):
             raise GridError(f"resolution must be > 0 metres per cell, got {resolution}")
         width = max(1, math.ceil((x_max - x_min) / resolution - 1e-9))
         height = max(1, math.ceil((y_max - y_min) / resolution - 1e-9))
         if width * height > MAX_CELLS:
-            raise GridError(f"a {width} x {height} grid is more than {MAX_CELLS} cells; "
-                            "use a coarser resolution or a smaller area")
+            raise GridError(
+                f"a {width} x {height} grid is more than {MAX_CELLS} cells; "
+                "use a coarser resolution or a smaller area"
+            )
         grid = cls(width, height, resolution, Pose2D(x_min, y_min, 0.0))
         grid.cells[:] = bytes([_byte(value)]) * (width * height)
         return grid
@@ -104,8 +110,12 @@ class OccupancyGrid:
             pos = info["origin"]["position"]
             ori = info["origin"].get("orientation", {"z": 0.0, "w": 1.0})
             yaw = 2.0 * math.atan2(float(ori.get("z", 0.0)), float(ori.get("w", 1.0)))
-            grid = cls(int(info["width"]), int(info["height"]), float(info["resolution"]),
-                       Pose2D(float(pos["x"]), float(pos["y"]), yaw))
+            grid = cls(
+                int(info["width"]),
+                int(info["height"]),
+                float(info["resolution"]),
+                Pose2D(float(pos["x"]), float(pos["y"]), yaw),
+            )
         except (KeyError, TypeError, AttributeError) as exc:
             raise GridError(f"not a nav_msgs/OccupancyGrid mapping: missing or bad {exc}") from exc
         grid.cells[:] = _cells_from_int8(data, grid.width * grid.height)
@@ -132,8 +142,9 @@ class OccupancyGrid:
         return [v - 256 if v > 127 else v for v in self.cells]
 
     def copy(self) -> OccupancyGrid:
-        return OccupancyGrid(self.width, self.height, self.resolution, self.origin,
-                             bytearray(self.cells))
+        return OccupancyGrid(
+            self.width, self.height, self.resolution, self.origin, bytearray(self.cells)
+        )
 
     # -- geometry ---------------------------------------------------------------------------
 
@@ -153,8 +164,10 @@ class OccupancyGrid:
     def center_of(self, cell: Cell) -> tuple[float, float]:
         """The map-frame centre of a cell."""
         gx, gy = (cell.col + 0.5) * self.resolution, (cell.row + 0.5) * self.resolution
-        return (self.origin.x + gx * self._cos - gy * self._sin,
-                self.origin.y + gx * self._sin + gy * self._cos)
+        return (
+            self.origin.x + gx * self._cos - gy * self._sin,
+            self.origin.y + gx * self._sin + gy * self._cos,
+        )
 
     def contains(self, cell: Cell) -> bool:
         return 0 <= cell.col < self.width and 0 <= cell.row < self.height
@@ -196,8 +209,7 @@ class OccupancyGrid:
 
     # -- drawing known shapes ---------------------------------------------------------------
 
-    def fill_rect(self, x_min: float, x_max: float, y_min: float, y_max: float,
-                  value: int) -> None:
+    def fill_rect(self, x_min: float, x_max: float, y_min: float, y_max: float, value: int) -> None:
         """Set every cell that overlaps the axis-aligned rectangle (origin yaw must be 0)."""
         self._require_axis_aligned()
         c0, r0 = self._floor_cell(x_min, y_min)

@@ -73,8 +73,7 @@ def inflate(
             # Inside a vertical stack of obstacle cells (cells right above and below the whole
             # run) only the run's own row needs widening: rows beyond the stack get wider
             # stamps from the stack's end rows, which are nearer to them.
-            interior = bool(above) and bool(below) and 0 not in above[a:b] \
-                and 0 not in below[a:b]
+            interior = bool(above) and bool(below) and 0 not in above[a:b] and 0 not in below[a:b]
             for dr, half in (centre,) if interior else kernel:
                 r = row + dr
                 if 0 <= r < h:

@@ -78,8 +78,15 @@ class Belief:
         with self._lock:
             self.grid, self._inflated = grid, inflated
 
-    def sight(self, name: str, x: float, y: float, stamp: float, confidence: float = 1.0,
-              radius: float | None = None) -> KnownObject:
+    def sight(
+        self,
+        name: str,
+        x: float,
+        y: float,
+        stamp: float,
+        confidence: float = 1.0,
+        radius: float | None = None,
+    ) -> KnownObject:
         """Remember that `name` was seen at (x, y) (map/odom frame, metres) at `stamp` (robot
         clock seconds) with `confidence` in [0, 1]. Replaces an older sighting of the same name;
         an older stamp than the one known is ignored. `radius` None: estimated from the map
@@ -122,8 +129,11 @@ class Belief:
     def name_at(self, x: float, y: float) -> str:
         """What the obstacle at (x, y) is, as a sentence says it."""
         tolerance = 2 * self.grid.resolution
-        near = [o for o in (*self.objects, *self.labels)
-                if math.hypot(o.x - x, o.y - y) <= o.radius + tolerance]
+        near = [
+            o
+            for o in (*self.objects, *self.labels)
+            if math.hypot(o.x - x, o.y - y) <= o.radius + tolerance
+        ]
         if near:
             best = min(near, key=lambda o: math.hypot(o.x - x, o.y - y) - o.radius)
             return best.the_name
@@ -140,8 +150,9 @@ def object_key(name: str) -> str:
     return key[4:] if key.startswith("the ") else key
 
 
-def merge_sightings(known: Iterable[KnownObject], seen: Iterable[KnownObject]
-                    ) -> tuple[KnownObject, ...]:
+def merge_sightings(
+    known: Iterable[KnownObject], seen: Iterable[KnownObject]
+) -> tuple[KnownObject, ...]:
     """`known` updated with new sightings (from any source: simulator, detector): a sighting
     replaces the known object of the same name unless that one was seen later; new names are
     appended in the order seen. One object per name: the latest sighting is where it is."""
@@ -160,6 +171,7 @@ _MAX_SIZE = 1.5
 def _extent_on_map(grid: OccupancyGrid, x: float, y: float) -> float:
     """How far the occupied cells around (x, y) reach (in 8 directions, up to 1.5 m): the
     radius of what stands there as the map shows it. 0.25 m when the map shows nothing."""
+
     def occupied(px: float, py: float) -> bool:
         cell = grid.cell_of(px, py)
         return grid.contains(cell) and grid.value(cell) >= OCCUPIED_THRESHOLD

@@ -191,10 +191,17 @@ class _JumpGrid:
         """(dx, dy) to search from `cur`, pruned by the direction it was reached from."""
         b, pw = self.blocked, self.pw
         if par < 0:
-            out = [(dx, dy) for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1))
-                   if not b[cur + dx + dy * pw]]
-            out += [(dx, dy) for dx in (1, -1) for dy in (1, -1)
-                    if not (b[cur + dx + dy * pw] or b[cur + dx] or b[cur + dy * pw])]
+            out = [
+                (dx, dy)
+                for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1))
+                if not b[cur + dx + dy * pw]
+            ]
+            out += [
+                (dx, dy)
+                for dx in (1, -1)
+                for dy in (1, -1)
+                if not (b[cur + dx + dy * pw] or b[cur + dx] or b[cur + dy * pw])
+            ]
             return out
         pr, pc = divmod(par, pw)
         cr, cc = divmod(cur, pw)
@@ -245,8 +252,11 @@ class _JumpGrid:
             while True:
                 if b[i]:
                     return -1
-                if i == self.goal or self._straight(i + dx, dx, 0) >= 0 \
-                        or self._straight(i + dy * pw, 0, dy) >= 0:
+                if (
+                    i == self.goal
+                    or self._straight(i + dx, dx, 0) >= 0
+                    or self._straight(i + dy * pw, 0, dy) >= 0
+                ):
                     return i
                 if b[i + dx] or b[i + dy * pw]:
                     return -1
@@ -308,9 +318,13 @@ def _escape(inflated: InflatedGrid, start: Cell) -> Cell:
             return cell
         for dc, dr in ((1, 0), (-1, 0), (0, 1), (0, -1)):
             nxt = Cell(cell.col + dc, cell.row + dr)
-            if (nxt in seen or not grid.contains(nxt) or abs(nxt.col - start.col) > limit
-                    or abs(nxt.row - start.row) > limit
-                    or grid.value(nxt) >= OCCUPIED_THRESHOLD):
+            if (
+                nxt in seen
+                or not grid.contains(nxt)
+                or abs(nxt.col - start.col) > limit
+                or abs(nxt.row - start.row) > limit
+                or grid.value(nxt) >= OCCUPIED_THRESHOLD
+            ):
                 continue
             seen.add(nxt)
             queue.append(nxt)

@@ -20,6 +20,7 @@ def plan_route(belief: Belief, start: tuple[float, float], goal: tuple[float, fl
         if what == "unmapped space":
             raise PlanError(f"{where} is in unmapped space")
         owner = f"{what}'s" if what != "an obstacle" else "an obstacle's"
-        raise PlanError(f"{where} is inside {owner} clearance ({belief.robot_radius:.2f} m "
-                        "kept for the body)")
+        raise PlanError(
+            f"{where} is inside {owner} clearance ({belief.robot_radius:.2f} m kept for the body)"
+        )
     return plan_path(inflated, start, goal)

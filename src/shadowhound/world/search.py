@@ -48,9 +48,9 @@ class Coverage:
         rows = max(1, math.ceil((max(ys) - self._y0) / spot))
         self.spots: list[Point] = [
             (self._x0 + (i + 0.5) * spot, self._y0 + (j + 0.5) * spot)
-            for j in range(rows) for i in range(cols)
-            if grid.contains(grid.cell_of(self._x0 + (i + 0.5) * spot,
-                                          self._y0 + (j + 0.5) * spot))
+            for j in range(rows)
+            for i in range(cols)
+            if grid.contains(grid.cell_of(self._x0 + (i + 0.5) * spot, self._y0 + (j + 0.5) * spot))
         ]
         self.seen: set[Point] = set()
         self.looked_from: list[Point] = []
@@ -62,8 +62,11 @@ class Coverage:
     def visible_from(self, p: Point, among: list[Point] | None = None) -> list[Point]:
         """The spots (of `among`, default all) a look-around from `p` sees."""
         r = self.view_range
-        return [s for s in (self.spots if among is None else among)
-                if math.dist(p, s) <= r and self._ray_reaches(p, s)]
+        return [
+            s
+            for s in (self.spots if among is None else among)
+            if math.dist(p, s) <= r and self._ray_reaches(p, s)
+        ]
 
     def look(self, p: Point) -> int:
         """Record a look-around from `p`; returns how many spots were new."""
@@ -72,8 +75,9 @@ class Coverage:
         self.seen.update(new)
         return len(new)
 
-    def next_viewpoint(self, start: Point, allowed: Callable[[Point], bool], max_path: float
-                       ) -> Viewpoint | None:
+    def next_viewpoint(
+        self, start: Point, allowed: Callable[[Point], bool], max_path: float
+    ) -> Viewpoint | None:
         """The best next place to look from: free on the inflated map, `allowed` (inside the
         geofence), reachable by a path of at most `max_path` metres, seeing unseen spots. None
         when no such place is left."""
@@ -129,7 +133,6 @@ class Coverage:
             if grid.contains(cell) and grid.value(cell) >= OCCUPIED_THRESHOLD:
                 return False
         return True
-
 
 
 def _corners(grid: OccupancyGrid) -> list[Cell]:
