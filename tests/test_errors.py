@@ -96,7 +96,7 @@ def test_every_class_of_the_tree_derives_from_the_root_and_is_exported() -> None
         ("shadowhound.planning._errors", "NotUnderstood"),
         ("shadowhound.cli", "UsageError"),
         ("shadowhound.ros.params", "ParameterError"),
-        ("shadowhound.web.security", "ServeError"),
+        ("shadowhound.serving", "ServeError"),
         ("shadowhound.web.frames", "FrameUnavailable"),
         ("shadowhound.mcp.desk", "ToolInputError"),
     ],

@@ -11,8 +11,8 @@ Importing this package loads no ROS, web, vector-store or model library.
 from __future__ import annotations
 
 from .agent import MissionExecutor, MissionExecutorConfig, RobotAgent, RobotAgentConfig
-from .config import ConfigError, ShadowHoundConfig, load_config
-from .errors import ShadowHoundError
+from .config import ShadowHoundConfig, load_config
+from .errors import ConfigError, ShadowHoundError
 from .events import MissionEvent
 from .plan import Plan, PlanningError, SkillCall, Usage
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing

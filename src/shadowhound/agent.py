@@ -21,10 +21,11 @@ from . import events as ev
 from .approval import ApprovalDesk
 from .camera import to_camera_frame
 from .checking import new_mission_id
-from .config import ConfigError, ShadowHoundConfig
+from .config import ShadowHoundConfig
 from .conversation import Chat, ChatContext, ModelChat, answer_offline
-from .crew import Crew, StopSignal, Vision
+from .crew import Crew, StopSignal, vision_for
 from .diagnostics import Diagnostics, MissionTracker
+from .errors import ConfigError
 from .memory.places import known_places
 from .memory.service import AgentMemory
 from .mission import MissionRun
@@ -33,7 +34,7 @@ from .planning import FixedPlanner, Planner, make_planner
 from .result import MissionResult
 from .robot.base import Robot, RobotError
 from .safety import Governor, Watchdog
-from .skills import MissionCancelled, SkillRegistry, default_registry
+from .skills import SkillRegistry, default_registry
 from .state import CameraFrame, RobotState
 
 if TYPE_CHECKING:
@@ -126,7 +127,7 @@ class RobotAgent:
             self._history,
             self._planner.kind,
             self.latest_frame,
-            self._vision(),
+            vision_for(self._backend, self.settings, self._stop),
             self._arm_watchdog,
             self._known_places,
             self.recent_summaries,
@@ -368,23 +369,6 @@ class RobotAgent:
         """The latest camera frame: the one an interface gave, else the robot's own camera."""
         return self._camera_frame or self.robot.get_camera_frame()
 
-    def _vision(self) -> Vision | None:
-        """The model's image describer when it is configured as vision-capable."""
-        backend = self._backend
-        if not self.settings.llm.vision or backend is None:
-            return None
-        from .llm.vision import describe_image
-
-        max_side = self.settings.llm.vision_max_side
-
-        def look(frame: CameraFrame, question: str) -> str:
-            answer = describe_image(backend, frame, question, max_side, self._stop.cancelled)
-            if self._stop.cancelled.is_set():  # the request was abandoned: the step is cancelled
-                raise MissionCancelled(self._stop.reason())
-            return answer
-
-        return look
-
     def _known_places(self) -> dict[str, tuple[float, float]]:
         """The profile's places, then taught ones (which win)."""
         known = known_places(self.settings.places, self._memory.places)
@@ -401,18 +385,7 @@ class RobotAgent:
         rows = self._memory.recent_missions(limit)
         if rows or self._memory.history is not None:
             return rows
-        return [
-            {
-                "id": r.mission_id,
-                "mission": r.mission,
-                "status": r.status.value,
-                "success": r.success,
-                "response": r.response,
-                "started_at": None,
-                "finished_at": None,
-            }
-            for r in reversed(self._history)
-        ][:limit]
+        return [r.history_row() for r in reversed(self._history)][:limit]
 
     def recent_summaries(self) -> list[str]:
         """Oldest first, as one line each, for prompts and chat."""

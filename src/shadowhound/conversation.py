@@ -131,7 +131,7 @@ class ModelChat:
         self._lock = threading.Lock()
 
     def __call__(self, text: str, chat: ChatContext) -> str:
-        from .llm.backend import BackendError
+        from .errors import BackendError
         from .planning import prompts
 
         ctx = chat.planning(text)

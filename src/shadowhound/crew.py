@@ -12,6 +12,8 @@ from . import events as ev
 from .approval import ApprovalDesk
 from .config import ShadowHoundConfig
 from .diagnostics import MissionTracker
+from .errors import MissionCancelled
+from .llm.backend import LLMBackend
 from .memory.service import AgentMemory
 from .planning import Planner, PlanningContext
 from .result import MissionResult
@@ -82,3 +84,23 @@ class Crew:
 
     def note_error(self, text: str) -> None:
         self.tracker.note_error(text)
+
+
+def vision_for(
+    backend: LLMBackend | None, settings: ShadowHoundConfig, stop: StopSignal
+) -> Vision | None:
+    """The model's image describer when it is configured as vision-capable; a cancel or e-stop
+    abandons its request and cancels the step."""
+    if not settings.llm.vision or backend is None:
+        return None
+    from .llm.vision import describe_image
+
+    max_side = settings.llm.vision_max_side
+
+    def look(frame: CameraFrame, question: str) -> str:
+        answer = describe_image(backend, frame, question, max_side, stop.cancelled)
+        if stop.cancelled.is_set():  # the request was abandoned: the step is cancelled
+            raise MissionCancelled(stop.reason())
+        return answer
+
+    return look

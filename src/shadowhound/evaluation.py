@@ -22,8 +22,8 @@ from typing import Any
 import yaml
 
 from .agent import RobotAgent, RobotAgentConfig
-from .config import ConfigError, MemoryConfig, ShadowHoundConfig
-from .errors import CaseFileError
+from .config import MemoryConfig, ShadowHoundConfig
+from .errors import CaseFileError, ConfigError
 from .plan import Usage
 from .robot.scene import World
 from .robot.sensors import penetration

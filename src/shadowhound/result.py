@@ -152,6 +152,18 @@ class MissionResult:
             "usage": self.usage.to_dict(),
         }
 
+    def history_row(self) -> dict[str, Any]:
+        """The row a history listing shows (the database's shape; no times in memory)."""
+        return {
+            "id": self.mission_id,
+            "mission": self.mission,
+            "status": self.status.value,
+            "success": self.success,
+            "response": self.response,
+            "started_at": None,
+            "finished_at": None,
+        }
+
     def summary(self) -> str:
         return f"{self.status.value}: {self.mission!r} -> {self.response}"
 

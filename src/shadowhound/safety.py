@@ -22,9 +22,10 @@ from dataclasses import dataclass, field
 from . import geofence, units
 from .budget import out_of_time
 from .config import SafetyConfig
+from .errors import PlanProblem
 from .skills import SkillRegistry, default_registry, paths
 from .skills.arguments import argument_kind
-from .skills.context import PlanEnv, PlanProblem
+from .skills.context import PlanEnv
 from .skills.registry import ValidatedCall
 from .state import Pose2D, Posture, RobotState, normalize_angle
 

@@ -8,6 +8,7 @@ import math
 import queue
 import sys
 import threading
+from collections.abc import Callable
 from typing import Any, TextIO
 
 from .. import events as ev
@@ -242,7 +243,7 @@ def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
         if job.result is None:
             return f"failed: {job.dropped}"
         return ("ok: " if job.result.success else "failed: ") + job.result.response
-    commands = {
+    commands: dict[str, Callable[[], str]] = {
         "/status": lambda: json.dumps(agent.get_robot_status()),
         "/skills": lambda: ", ".join(s["name"] for s in agent.get_available_skills()),
         "/estop": lambda: (agent.estop(), "e-stop latched; /release to release it")[1],
@@ -260,7 +261,8 @@ def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
 
 def cmd_eval(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     """Run a case file with one planner, or several side by side (`--backend` repeated)."""
-    from ..evaluation import CaseFileError, load_cases, run_cases, scorecard
+    from ..errors import CaseFileError
+    from ..evaluation import load_cases, run_cases, scorecard
     from . import _settings
 
     try:

@@ -6,6 +6,7 @@ Needs the `llm` extra (`pip install shadowhound[llm]`); nothing here is imported
 
 from __future__ import annotations
 
-from .backend import BackendError, BackendUnavailable, Completion, LLMBackend
+from ..errors import BackendError, BackendUnavailable
+from .backend import Completion, LLMBackend
 
 __all__ = ["BackendError", "BackendUnavailable", "Completion", "LLMBackend"]

@@ -7,8 +7,9 @@ import base64
 import threading
 
 from ..camera import encode_jpeg
+from ..errors import BackendError
 from ..state import CameraFrame
-from .backend import BackendError, LLMBackend
+from .backend import LLMBackend
 
 
 def jpeg_data_url(frame: CameraFrame, max_side: int = 512, quality: int = 80) -> str:

@@ -62,7 +62,7 @@ def main(
         )
         return EXIT_USAGE
     from ..agent import RobotAgent, RobotAgentConfig
-    from ..config import ConfigError
+    from ..errors import ConfigError
 
     token = (token or os.environ.get("SHADOWHOUND_TOKEN") or None) if http else None
     try:
@@ -106,7 +106,7 @@ def _robot(settings: ShadowHoundConfig) -> Any:
     for `robot: go2`, with the Go2 motion settings the profile leaves unset (as the node)."""
     if settings.robot != "go2":
         return None
-    from ..config import ConfigError
+    from ..errors import ConfigError
 
     try:
         from ..robot.go2_motion import GO2_MOTION

@@ -4,6 +4,9 @@ Only this package imports the MCP SDK. Every tool call ends in an MCP answer: a 
 result with `isError` (bad arguments, busy, refused by the governor: the message says what
 was wrong and what is allowed), or a protocol error for an unknown tool. A call the client
 abandons (cancelled, or the client went away) stops its mission and the robot.
+
+Long because: the MCP surface is one table of tools, resources and a prompt, each a few lines
+mapping the SDK's request onto one `McpDesk` call; splitting them would scatter that table.
 """
 
 from __future__ import annotations
@@ -24,10 +27,11 @@ from mcp.shared.exceptions import MCPError
 from .. import __version__
 from .. import events as ev
 from ..agent import RobotAgent
+from ..errors import ToolInputError
 from ..result import StepStatus
 from ..worker import MissionJob
 from .catalogue import ToolSpec, all_tools
-from .desk import McpDesk, ToolInputError
+from .desk import McpDesk
 
 log = logging.getLogger(__name__)
 

@@ -20,7 +20,8 @@ import uvicorn
 from mcp.server.stdio import stdio_server
 from mcp.server.transport_security import TransportSecuritySettings
 
-from ..serving import LOOPBACK_HOSTS, ServeError, bind, check_binding, hostname
+from ..errors import ServeError
+from ..serving import LOOPBACK_HOSTS, bind, check_binding, hostname
 from .server import McpRobotServer
 
 Scope = MutableMapping[str, Any]

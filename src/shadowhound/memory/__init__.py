@@ -3,9 +3,9 @@ memory (Chroma with offline MiniLM embeddings, the `memory` extra, imported lazi
 
 from __future__ import annotations
 
-from .history import MemoryStoreError, MissionHistory
+from ..errors import MemoryStoreError, RecallStoreError
+from .history import MissionHistory
 from .places import KnownPlace, PlaceBook, known_places
-from .recall import RecallStoreError
 
 __all__ = [
     "KnownPlace",

@@ -17,12 +17,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..config import ConfigError, ShadowHoundConfig
+from ..config import ShadowHoundConfig
+from ..errors import ConfigError, MemoryStoreError, RecallStoreError
 from ..events import MissionEvent, MissionFinished, MissionStarted, StepFinished
 from ..result import SkillBook, StepStatus
-from .history import MemoryStoreError, MissionHistory
+from .history import MissionHistory
 from .places import PlaceBook
-from .recall import RecallStoreError
 from .sightings import SightingBook
 
 log = logging.getLogger(__name__)

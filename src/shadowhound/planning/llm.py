@@ -17,7 +17,8 @@ import logging
 from typing import Any
 
 from ..config import ShadowHoundConfig
-from ..llm.backend import BackendError, LLMBackend, request_hints
+from ..errors import BackendError
+from ..llm.backend import LLMBackend, request_hints
 from ..plan import Plan, PlanningError, SkillCall, Usage
 from ..skills import SkillValidationError
 from . import PlanningContext, StepRunner, prompts, schema

@@ -27,13 +27,14 @@ from shadowhound.planning._errors import CAPABILITIES, NotUnderstood, describe, 
 from shadowhound.planning._memory_phrases import memory_steps
 from shadowhound.planning._text import canon
 from shadowhound.robot.go2_api import TRICKS
+from shadowhound.units import format_number
 
 __all__ = ["CAPABILITIES", "MAX_CHARS", "MAX_STEPS", "RulePlanner"]
 
 MAX_CHARS = 2000
 MAX_STEPS = 1000  # guards memory against "repeat 1000000 times"; motion limits live elsewhere
 
-_fmt = nums.format_number
+_fmt = format_number
 # What a clause asks: its steps (None: repeat everything so far), repeat count, how, its verb.
 _Read = tuple[list[SkillCall] | None, int, str, str]
 

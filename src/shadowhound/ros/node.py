@@ -43,6 +43,7 @@ from std_msgs.msg import String
 from .. import events as ev
 from ..agent import RobotAgent, RobotAgentConfig
 from ..camera import raw_image_frame, to_camera_frame
+from ..errors import ParameterError
 from ..result import MissionResult
 from ..robot.base import RobotError
 from ..worker import MissionJob, MissionWorker
@@ -55,7 +56,7 @@ from .convert import (
     shorten,
 )
 from .estop_listener import EstopListener
-from .params import NODE_NAME, PARAMETERS, ParameterError, describe_parameters, parse_parameters
+from .params import NODE_NAME, PARAMETERS, describe_parameters, parse_parameters
 from .process import run_node
 from .rviz import RvizPublisher
 

@@ -36,8 +36,8 @@ from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
 
 from ..config import SimConfig
+from ..errors import ParameterError
 from ..robot.sim import SimRobot
-from .params import ParameterError
 from .process import run_node
 from .sim_go2 import Faults, SimGo2, Truth
 from .sim_options import OPTIONS, DriverSettings, build_parser, parse_settings, split_argv

@@ -6,6 +6,7 @@ its `Skill` everything the rest of the house needs to know of it, so a new skill
 
 from __future__ import annotations
 
+from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout, SkillValidationError
 from . import body, memory, nav, sense
 from .arguments import (
     Angle,
@@ -22,8 +23,8 @@ from .arguments import (
     SkillArgs,
     Speed,
 )
-from .context import MissionCancelled, PlanEnv, PlanProblem, SkillContext, SkillError, SkillTimeout
-from .registry import Skill, SkillRegistry, SkillValidationError, ValidatedCall
+from .context import PlanEnv, SkillContext
+from .registry import Skill, SkillRegistry, ValidatedCall
 
 
 def default_registry() -> SkillRegistry:

@@ -6,11 +6,11 @@ import math
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
 from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout
+from ..memory.service import AgentMemory
 from ..robot.base import Robot
 from ..state import CameraFrame, Pose2D, Posture
 from ..world import Belief, KnownObject
@@ -77,7 +77,7 @@ class SkillContext:
         vision: Callable[[CameraFrame, str], str] | None = None,
         on_progress: Callable[[float], None] = lambda _fraction: None,
         heartbeat: Callable[[bool | None], None] = lambda _moving: None,
-        memory: Any = None,
+        memory: AgentMemory | None = None,
     ) -> None:
         self.robot = robot
         self.env = env

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from pydantic import Field
 
+from ..errors import RecallStoreError, SkillError
 from ..memory.places import known_places, normalize_place
-from ..memory.recall import RecallStoreError
 from ..state import Pose2D
 from .arguments import NoArgs, SkillArgs
-from .context import PlanEnv, SkillContext, SkillError
+from .context import PlanEnv, SkillContext
 from .registry import Skill
 
 _NAME = r"^[^\W\d_][\w' -]*$"

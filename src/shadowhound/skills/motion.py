@@ -13,8 +13,9 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+from ..errors import SkillError
 from ..state import normalize_angle
-from .context import SkillContext, SkillError
+from .context import SkillContext
 
 _SETTLE_SPEED = 0.01
 _SETTLE_SECONDS = 3.0  # longest wait for rest after a stop (odometry may be half a second late)

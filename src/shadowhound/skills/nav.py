@@ -12,6 +12,7 @@ from collections.abc import Callable
 
 from pydantic import ConfigDict, Field, model_validator
 
+from ..errors import PlanProblem, SkillError
 from ..state import Pose2D, normalize_angle
 from ..units import format_number as _n
 from ..world import PlanError, apply_scan, plan_route
@@ -27,7 +28,7 @@ from .arguments import (
     OptionalSpeed,
     SkillArgs,
 )
-from .context import PlanEnv, PlanProblem, SkillContext, SkillError
+from .context import PlanEnv, SkillContext
 from .registry import Skill
 
 # Schema ranges are sanity bounds on the form of a request; the configured safety limits

@@ -18,10 +18,11 @@ from __future__ import annotations
 import math
 from collections import deque
 
+from ..errors import SkillError
 from ..robot.navigator import Navigator, NavStatus
 from ..state import normalize_angle
 from . import motion
-from .context import SkillContext, SkillError
+from .context import SkillContext
 
 # Seconds nav.goto waits for the navigator's server to answer: briefly under `auto` (it falls
 # back at once when there is none), longer when Nav2 is required.

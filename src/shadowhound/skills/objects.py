@@ -15,11 +15,13 @@ from dataclasses import dataclass
 
 from .. import geofence, typos
 from ..config import SafetyConfig
+from ..errors import PlanProblem, SkillError, SkillTimeout
+from ..memory.service import AgentMemory
 from ..robot.base import Robot
 from ..state import Pose2D, normalize_angle
 from ..world import Belief, Coverage, KnownObject, PlanError, Viewpoint, standoff_point
 from . import motion, paths
-from .context import PlanEnv, PlanProblem, SkillContext, SkillError, SkillTimeout
+from .context import PlanEnv, SkillContext
 
 _QUARTER = math.pi / 2
 
@@ -123,7 +125,9 @@ def sight_in_view(ctx: SkillContext) -> list[KnownObject]:
     return record_view(ctx.robot, ctx.env.belief, ctx.memory)
 
 
-def record_view(robot: Robot, belief: Belief | None, memory: object = None) -> list[KnownObject]:
+def record_view(
+    robot: Robot, belief: Belief | None, memory: AgentMemory | None = None
+) -> list[KnownObject]:
     """`sight_in_view` for callers without a SkillContext (the agent, before planning)."""
     if belief is None:
         return []
@@ -140,21 +144,19 @@ def record_view(robot: Robot, belief: Belief | None, memory: object = None) -> l
                 s.name, pose.x + s.distance * math.cos(a), pose.y + s.distance * math.sin(a), stamp
             )
         )
-    book = getattr(memory, "sightings", None)
-    if book is not None:
+    if memory is not None:
         for obj in seen:
-            book.remember(obj)
+            memory.sightings.remember(obj)
     return seen
 
 
-def see_at_start(robot: Robot, belief: Belief | None, memory: object = None) -> None:
+def see_at_start(robot: Robot, belief: Belief | None, memory: AgentMemory | None = None) -> None:
     """Before a mission is planned: what memory holds of earlier sightings, then what is in
     view now, enter the belief."""
     if belief is None:
         return
-    book = getattr(memory, "sightings", None)
-    if book is not None:
-        for remembered in book.all():
+    if memory is not None:
+        for remembered in memory.sightings.all():
             belief.remember(remembered.known)
     record_view(robot, belief, memory)
 

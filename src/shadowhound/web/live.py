@@ -12,9 +12,10 @@ from typing import Any, Literal
 from fastapi import APIRouter, HTTPException, Query, Request, WebSocket, WebSocketDisconnect
 from fastapi.responses import Response, StreamingResponse
 
+from ..errors import FrameUnavailable
 from .api import WebContext, ctx, current_status
 from .feed import Packet, Subscription
-from .frames import BOUNDARY, FrameUnavailable, frame_summary, mjpeg_part
+from .frames import BOUNDARY, frame_summary, mjpeg_part
 from .models import Problem
 from .security import WS_PROTOCOL
 

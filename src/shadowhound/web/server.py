@@ -15,9 +15,10 @@ import uvicorn
 from fastapi import FastAPI
 
 from ..agent import RobotAgent
-from ..config import ConfigError, ShadowHoundConfig
+from ..config import ShadowHoundConfig
+from ..errors import ConfigError, ServeError
 from ..exit_codes import EXIT_OK, EXIT_USAGE
-from ..serving import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, ServeError, bind, check_binding
+from ..serving import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, bind, check_binding
 from .app import create_app
 
 __all__ = [

@@ -4,6 +4,7 @@ Pure Python (standard library only), importable without ROS. The simulator's gro
 lives in `robot/`; this package only holds what the robot has been told or has sensed.
 """
 
+from ..errors import GridError, PlanError
 from .grid import (
     DEFAULT_RESOLUTION,
     FREE,
@@ -11,13 +12,12 @@ from .grid import (
     OCCUPIED_THRESHOLD,
     UNKNOWN,
     Cell,
-    GridError,
     OccupancyGrid,
 )
 from .inflation import DEFAULT_ROBOT_RADIUS, InflatedGrid, inflate
 from .legs import LegCheck, blocker_near, check_leg
 from .objects import Belief, KnownObject, merge_sightings, object_key
-from .planner import Path, PlanError, line_is_clear, plan_path
+from .planner import Path, line_is_clear, plan_path
 from .route import plan_route
 from .scan_update import apply_scan
 from .search import Coverage, Viewpoint

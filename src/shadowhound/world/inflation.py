@@ -13,7 +13,8 @@ import re
 from dataclasses import dataclass
 from functools import lru_cache
 
-from .grid import OCCUPIED_THRESHOLD, Cell, GridError, OccupancyGrid
+from ..errors import GridError
+from .grid import OCCUPIED_THRESHOLD, Cell, OccupancyGrid
 
 DEFAULT_ROBOT_RADIUS = 0.35  # metres: a circle round the Go2's 0.70 m x 0.31 m body
 

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+from ..errors import PlanError
 from .legs import blocker_near
 from .objects import Belief
-from .planner import Path, PlanError, plan_path
+from .planner import Path, plan_path
 
 
 def plan_route(belief: Belief, start: tuple[float, float], goal: tuple[float, float]) -> Path:

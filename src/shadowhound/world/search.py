@@ -13,9 +13,10 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from ..errors import PlanError
 from .grid import OCCUPIED_THRESHOLD, Cell, OccupancyGrid
 from .objects import Belief
-from .planner import Path, PlanError, plan_path
+from .planner import Path, plan_path
 
 Point = tuple[float, float]
 _SEE_INTO = 0.5  # metres a ray may stop short of a spot's centre and still see the spot

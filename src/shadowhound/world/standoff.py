@@ -5,9 +5,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ..errors import PlanError
 from ..state import Pose2D
 from .objects import Belief, KnownObject
-from .planner import Path, PlanError, plan_path
+from .planner import Path, plan_path
 
 DEFAULT_STANDOFF = 0.6  # metres between the object's surface and the robot's centre
 _STEP_DEG = 15
