@@ -309,9 +309,14 @@ def test_the_driver_rejects_bad_parameters_with_exit_code_2() -> None:
 
 
 def test_the_go2_implements_the_whole_robot_protocol(robot: Go2RosRobot) -> None:
-    """A real robot's clock is the wall clock (the watchdog guards it); it has no map yet."""
+    """A real robot's clock is the wall clock (the watchdog guards it); its world model is the
+    driver's map (one object for its life), its known objects what it was told."""
     from shadowhound.robot.base import Robot
+    from shadowhound.world import Belief
 
     assert isinstance(robot, Robot)
-    assert robot.realtime and robot.time_scale == 1.0 and robot.belief() is None
+    assert robot.realtime and robot.time_scale == 1.0
+    belief = robot.belief()
+    assert belief is None or (isinstance(belief, Belief) and robot.belief() is belief)
+    assert robot.known_objects() == ()
     assert robot.last_state().stamp >= 0.0
