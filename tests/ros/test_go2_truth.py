@@ -349,12 +349,10 @@ def test_cancelling_the_mission_action_during_a_walk_sends_stop_move(rig: Rig) -
 
 
 def test_without_a_battery_source_the_battery_is_unknown_everywhere(rig: Rig) -> None:
-    final = rig.agent.run("turn left 5 degrees")
-    assert final.startswith("COMPLETED: ") and "battery level unknown" in final, (
-        final,
-        rig.node.output()[-4000:],
-        rig.truth.now(),
-    )
+    # A mission that needs no motion: what is judged here is the battery, everywhere.
+    final = rig.agent.run("stand up")
+    lags = [line for line in rig.node.output().splitlines() if "odometry lags" in line]
+    assert final.startswith("COMPLETED: ") and "battery level unknown" in final, (final, lags)
     assert rig.agent.robot_state()["battery"] is None
     status, values = rig.agent.diagnostic(rig.agent.diagnostics.mark(), 5.0)
     assert values["battery"] == "unknown" and status.level == bytes([1])  # WARN
