@@ -433,7 +433,7 @@ def test_the_driver_detects_what_its_camera_sees_in_the_odom_frame(client: RosCl
     from shadowhound.config import SimConfig
     from shadowhound.robot.scene import World, WorldObject
     from shadowhound.robot.sim import SimRobot
-    from shadowhound.ros.sim_driver import SimDriver
+    from shadowhound.ros.sim_driver import Faults, SimDriver
 
     world = World(
         objects=(
@@ -470,6 +470,14 @@ def test_the_driver_detects_what_its_camera_sees_in_the_odom_frame(client: RosCl
         period = later.header.stamp.sec + later.header.stamp.nanosec * 1e-9 - first
         assert 0.0 < period < 5.0  # a steady stream, not one message
         assert driver.truth_dict()["detections"] >= 2
+        # The camera fault blinds the detector too; cleared, the detections come back.
+        driver.robots[0].faults = Faults(camera=False)
+        time.sleep(0.2)  # an array already on its way arrives
+        blind, count = inbox.mark(), driver.truth_dict()["detections"]
+        time.sleep(1.5)  # three detector periods
+        assert inbox.since(blind) == [] and driver.truth_dict()["detections"] == count
+        driver.robots[0].faults = Faults()
+        inbox.wait_for(lambda _m: True, TIMEOUT, "detections after the fault", inbox.mark())
     finally:
         for node in driver.nodes:
             client.executor.remove_node(node)
