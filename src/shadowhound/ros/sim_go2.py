@@ -1,6 +1,6 @@
 """One simulated Go2 of `shadowhound sim-driver`: its topics, the driver's rules between them and
 the robot (robot/sim_sport.py), its late odometry, its truth and its injected faults. It is
-also a detector: `detections` carries what its simulated camera sees, from the truth.
+also a detector (sim_detector.py): `detections` carries what its simulated camera sees.
 
 Callbacks only hand commands over: to the command thread (which applies any injected delay),
 and sport requests on to the driver's 10 Hz queue. Odometry has a thread of its own, so each
@@ -34,6 +34,7 @@ from ..robot.go2_world_msgs import MAP_QOS, grid_to_msg, scan_to_msg
 from ..robot.sim import SimRobot
 from ..robot.sim_sport import SimSportMode, Truth
 from ..state import Posture
+from .sim_detector import SimDetector
 from .sim_nav import SimNavigator
 from .sim_options import DriverSettings
 
@@ -130,7 +131,9 @@ class SimGo2:
             if settings.scan_rate_hz > 0
             else None
         )
-        self._detections_pub = self._detections_publisher() if settings.detections else None
+        self.detector = (
+            SimDetector.create(node, self.topic("detections")) if settings.detections else None
+        )
         if settings.map:  # published once: transient local keeps it for late subscribers
             self._map_pub = node.create_publisher(GridMsg, self.topic("map"), MAP_QOS)
             self._map_pub.publish(
@@ -363,40 +366,13 @@ class SimGo2:
         )
         self._scan_pub.publish(msg)
 
-    def _detections_publisher(self) -> Any:
-        # Optional, as for the Go2 robot: the driver runs on without the project's interfaces.
-        try:
-            from shadowhound_interfaces.msg import DetectionArray
-        except ImportError as exc:
-            self.node.get_logger().warning(
-                "no detections: shadowhound_interfaces is not installed (run "
-                f"scripts/build_ros.sh; --no-detections hides this warning): {exc}"
-            )
-            return None
-        return self.node.create_publisher(DetectionArray, self.topic("detections"), _RELIABLE)
-
     def publish_detections(self) -> None:
-        """What the simulated camera sees now (the sightings of `scene.visible_objects`, as
-        the simulator's camera frames carry them), as a detector would report it: each object
-        at its true centre in the odometry frame, with its true radius, confidence 1. An
-        empty array when nothing is in view; none while the camera fault is on."""
-        if self._detections_pub is None or not self.faults.camera or self._closing.is_set():
+        """What the simulated camera sees now, as a detector reports it (sim_detector.py);
+        nothing while the camera fault is on."""
+        if self.detector is None or not self.faults.camera or self._closing.is_set():
             return
-        from shadowhound_interfaces.msg import Detection, DetectionArray
-
-        world = self.sim.world
-        msg = DetectionArray()
-        msg.header.stamp = self.node.get_clock().now().to_msg()
-        msg.header.frame_id = "odom"  # as the driver's odometry names it
-        for seen in scene.visible_objects(world, self.sim.get_state().pose):
-            obj = world.find(seen.name)
-            if obj is None:  # a sighting names an object of this world
-                continue
-            d = Detection(label=obj.name, confidence=1.0, radius=float(obj.radius))
-            d.position.x, d.position.y = float(obj.x), float(obj.y)
-            msg.detections.append(d)
+        self.detector.publish(self.sim.world, self.sim.get_state().pose)
         self._counts["detections"] += 1
-        self._detections_pub.publish(msg)
 
     def publish_camera(self) -> None:
         if not self.faults.camera or self._camera_pub is None:
