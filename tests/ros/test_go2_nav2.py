@@ -38,6 +38,7 @@ GOAL = "go to x=4, y=0"
 BOX_MISSION = "go to the blue box"  # in view from the start pose (38.7 degrees to the left)
 BALL, BALL_RADIUS = (3.0, 0.0), 0.2  # the default scene's red ball
 BOX = DEFAULT_WORLD.find("blue box")
+assert BOX is not None
 BODY = 0.35  # the simulated body's radius
 STANDOFF = 0.6  # metres from the object's surface (search.standoff's default)
 LATCHED = QoSProfile(
@@ -208,17 +209,17 @@ def test_go_to_the_blue_box_through_navigate_to_pose_with_feedback(
     walked = [json.loads(m.data) for m in rig.truth.truth.since(poses)]
     assert touches(walked) == []
     remaining = [m.feedback.distance_remaining for m in feedback.items]
-    assert len(remaining) > 10 and remaining[0] > 2.0 and remaining[-1] < 0.3, remaining[:5]
+    assert len(remaining) > 10 and remaining[0] > 1.8 and remaining[-1] < 0.3, remaining[:5]
     home(rig)
 
 
-def start_walk(rig: Rig, mission: str = BOX_MISSION) -> Any:
-    """Send the mission through the ExecuteMission action; return its goal handle once the
+def start_walk(rig: Rig) -> Any:
+    """Send "go to the blue box" through the ExecuteMission action; return its goal handle once the
     truth shows Nav2's goal driving the robot."""
     from shadowhound_interfaces.action import ExecuteMission
 
     wait_until(lambda: rig.agent.action.server_is_ready(), TIMEOUT, "the action server")
-    sent = rig.agent.action.send_goal_async(ExecuteMission.Goal(command=mission))
+    sent = rig.agent.action.send_goal_async(ExecuteMission.Goal(command=BOX_MISSION))
     handle = wait_until(lambda: sent.done() and sent.result(), TIMEOUT, "the goal accepted")
     assert handle.accepted
     rig.truth.wait(
@@ -227,7 +228,7 @@ def start_walk(rig: Rig, mission: str = BOX_MISSION) -> Any:
     return handle
 
 
-def test_cancelling_the_mission_cancels_the_nav2_goal(rig: Rig) -> None:
+def test_cancelling_the_walk_to_the_blue_box_cancels_the_nav2_goal(rig: Rig) -> None:
     before = navigation(rig.truth.now())
     handle = start_walk(rig)
     handle.cancel_goal_async()
@@ -242,7 +243,9 @@ def test_cancelling_the_mission_cancels_the_nav2_goal(rig: Rig) -> None:
     home(rig)
 
 
-def test_estop_cancels_the_nav2_goal_and_stops_the_robot(client: RosClient, rig: Rig) -> None:
+def test_estop_on_the_way_to_the_blue_box_cancels_the_nav2_goal_and_stops_the_robot(
+    client: RosClient, rig: Rig
+) -> None:
     estop = client.publisher(Empty, "/shadowhound/estop")
     release = client.publisher(Empty, "/shadowhound/estop_release")
     wait_until(lambda: estop.get_subscription_count() > 0, TIMEOUT, "the node's e-stop topic")
