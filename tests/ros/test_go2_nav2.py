@@ -1,11 +1,13 @@
 """nav.goto on a Go2 over DDS, through Nav2's NavigateToPose, judged by the simulated driver's
 ground truth (issue 15).
 
-`shadowhound sim-driver` publishes `scan` and the scene's `map` and serves `navigate_to_pose`
-with the project's planner; `shadowhound node -p robot:=go2` reads the map (so its plan check
-sees the red ball) and sends "go to x=4, y=0" (the red ball stands at x = 3: a detour) as a
-NavigateToPose goal. Feedback, cancel and e-stop are checked, then the same mission with no
-server: the project's own planner under `navigation: auto`, a clear failure under `nav2`.
+`shadowhound sim-driver` publishes `scan`, the scene's `map` and `detections` (what its camera
+sees) and serves `navigate_to_pose` with the project's planner; `shadowhound node -p robot:=go2
+-p detections_topic:=detections` reads the map (so its plan check sees the red ball) and the
+detections (so "the blue box" is a known object), and sends "go to x=4, y=0" (the red ball
+stands at x = 3: a detour) and "go to the blue box" as NavigateToPose goals. Feedback, cancel
+and e-stop are checked, then the same mission with no server: the project's own planner under
+`navigation: auto`, a clear failure under `nav2`.
 
 Skipped without rclpy or the interface packages unless SHADOWHOUND_REQUIRE_ROS=1.
 """
@@ -21,17 +23,27 @@ import pytest
 
 from tests.ros.needs import require
 
-require("rclpy", "shadowhound_interfaces", "go2_interfaces", "nav2_msgs")
+require("rclpy", "shadowhound_interfaces", "go2_interfaces", "nav2_msgs", "visualization_msgs")
 
 from nav2_msgs.action import NavigateToPose  # noqa: E402
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from std_msgs.msg import Empty  # noqa: E402
+from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
+from shadowhound.robot.scene import DEFAULT_WORLD  # noqa: E402
 from tests.ros.rosclient import RosClient, wait_until  # noqa: E402
 from tests.ros.test_go2_truth import TIMEOUT, Rig, start_rig  # noqa: E402
 
 GOAL = "go to x=4, y=0"
+BOX_MISSION = "go to the blue box"  # in view from the start pose (38.7 degrees to the left)
 BALL, BALL_RADIUS = (3.0, 0.0), 0.2  # the default scene's red ball
+BOX = DEFAULT_WORLD.find("blue box")
+assert BOX is not None
 BODY = 0.35  # the simulated body's radius
+STANDOFF = 0.6  # metres from the object's surface (search.standoff's default)
+LATCHED = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 
 
@@ -97,7 +109,8 @@ def test_nav2_driving_faster_than_the_limit_is_cancelled(client: RosClient) -> N
 
 @pytest.fixture(scope="module")
 def rig(client: RosClient) -> Iterator[Rig]:
-    rig, stop = start_rig(client, (), "/nav", "/nav", "nav")
+    # The driver's detections feed the node's world model: objects are known by name.
+    rig, stop = start_rig(client, (), "/nav", "/nav", "nav", "-p", "detections_topic:=detections")
     yield rig
     stop()
 
@@ -106,6 +119,28 @@ def navigation(truth: dict[str, Any]) -> dict[str, Any]:
     nav = truth["navigation"]
     assert nav is not None, "the driver serves navigate_to_pose"
     return dict(nav)
+
+
+def labels(msg: MarkerArray) -> dict[str, tuple[float, float]]:
+    """name -> (x, y) of each object's label marker in the node's known objects."""
+    return {
+        m.text: (m.pose.position.x, m.pose.position.y)
+        for m in msg.markers
+        if m.type == Marker.TEXT_VIEW_FACING
+    }
+
+
+def touches(walked: list[dict[str, Any]]) -> list[str]:
+    """What the body overlapped in the truth walked: every object and wall of the scene."""
+    x_min, x_max, y_min, y_max = DEFAULT_WORLD.bounds
+    hit = set()
+    for t in walked:
+        for o in DEFAULT_WORLD.objects:
+            if math.dist((t["x"], t["y"]), (o.x, o.y)) < o.radius + BODY - 0.01:
+                hit.add(o.name)
+        if not (x_min + BODY <= t["x"] <= x_max - BODY and y_min + BODY <= t["y"] <= y_max - BODY):
+            hit.add("the wall")
+    return sorted(hit)
 
 
 def home(rig: Rig) -> None:
@@ -138,19 +173,53 @@ def test_go_to_a_point_through_navigate_to_pose_with_feedback(client: RosClient,
     walked = [json.loads(m.data) for m in rig.truth.truth.since(poses)]
     clearance = min(math.dist((t["x"], t["y"]), BALL) for t in walked)
     assert clearance >= BALL_RADIUS + BODY - 0.01, clearance
+    assert touches(walked) == []
     # Feedback came all along, the distance remaining falling to the goal.
     remaining = [m.feedback.distance_remaining for m in feedback.items]
     assert len(remaining) > 10 and remaining[0] > 4.0 and remaining[-1] < 0.3, remaining[:5]
     home(rig)
 
 
+def test_go_to_the_blue_box_through_navigate_to_pose_with_feedback(
+    client: RosClient, rig: Rig
+) -> None:
+    # Known by name only from the driver's detections (the map has no names): the node's
+    # known objects for RViz show it at its true centre before the mission is sent.
+    markers = client.subscribe(MarkerArray, "/known_objects", LATCHED)
+    shown = markers.wait_for(
+        lambda m: "blue box" in labels(m), TIMEOUT, "the blue box among the node's known objects"
+    )
+    assert math.dist(labels(shown)["blue box"], (BOX.x, BOX.y)) < 1e-3
+    feedback = client.subscribe(
+        NavigateToPose.Impl.FeedbackMessage, "/nav/navigate_to_pose/_action/feedback"
+    )
+    before = navigation(rig.truth.still())
+    poses = rig.truth.truth.mark()
+    final = rig.agent.run(BOX_MISSION, 90.0)
+    end = rig.truth.still()
+    assert final.startswith("COMPLETED: "), (final, rig.node.output()[-3000:])
+    assert "through Nav2 (/nav/navigate_to_pose)" in final, final
+    nav = navigation(end)
+    assert nav["goals"] == before["goals"] + 1 and nav["succeeded"] == before["succeeded"] + 1
+    # Standing off the box's surface, facing it (the truth).
+    gap = math.dist((end["x"], end["y"]), (BOX.x, BOX.y)) - BOX.radius
+    assert abs(gap - STANDOFF) < 0.10, (gap, end)
+    facing = math.atan2(BOX.y - end["y"], BOX.x - end["x"])
+    assert abs(math.degrees(math.remainder(end["yaw"] - facing, math.tau))) < 10.0, end
+    walked = [json.loads(m.data) for m in rig.truth.truth.since(poses)]
+    assert touches(walked) == []
+    remaining = [m.feedback.distance_remaining for m in feedback.items]
+    assert len(remaining) > 10 and remaining[0] > 1.8 and remaining[-1] < 0.3, remaining[:5]
+    home(rig)
+
+
 def start_walk(rig: Rig) -> Any:
-    """Send the mission through the ExecuteMission action; return its goal handle once the
+    """Send "go to the blue box" through the ExecuteMission action; return its goal handle once the
     truth shows Nav2's goal driving the robot."""
     from shadowhound_interfaces.action import ExecuteMission
 
     wait_until(lambda: rig.agent.action.server_is_ready(), TIMEOUT, "the action server")
-    sent = rig.agent.action.send_goal_async(ExecuteMission.Goal(command=GOAL))
+    sent = rig.agent.action.send_goal_async(ExecuteMission.Goal(command=BOX_MISSION))
     handle = wait_until(lambda: sent.done() and sent.result(), TIMEOUT, "the goal accepted")
     assert handle.accepted
     rig.truth.wait(
@@ -159,21 +228,24 @@ def start_walk(rig: Rig) -> Any:
     return handle
 
 
-def test_cancelling_the_mission_cancels_the_nav2_goal(rig: Rig) -> None:
+def test_cancelling_the_walk_to_the_blue_box_cancels_the_nav2_goal(rig: Rig) -> None:
     before = navigation(rig.truth.now())
     handle = start_walk(rig)
     handle.cancel_goal_async()
     end = rig.truth.wait(lambda t: not navigation(t)["active"], "the goal to end", 5.0)
     assert navigation(end)["canceled"] == before["canceled"] + 1
     still = rig.truth.still()
-    assert math.hypot(still["x"] - 4.0, still["y"]) > 1.0  # stopped on the way, not there
+    gap = math.dist((still["x"], still["y"]), (BOX.x, BOX.y)) - BOX.radius
+    assert gap > STANDOFF + 0.5, still  # stopped on the way, not there
     result = handle.get_result_async()
     wait_until(result.done, TIMEOUT, "the mission's result")
     assert result.result().result.success is False
     home(rig)
 
 
-def test_estop_cancels_the_nav2_goal_and_stops_the_robot(client: RosClient, rig: Rig) -> None:
+def test_estop_on_the_way_to_the_blue_box_cancels_the_nav2_goal_and_stops_the_robot(
+    client: RosClient, rig: Rig
+) -> None:
     estop = client.publisher(Empty, "/shadowhound/estop")
     release = client.publisher(Empty, "/shadowhound/estop_release")
     wait_until(lambda: estop.get_subscription_count() > 0, TIMEOUT, "the node's e-stop topic")

@@ -56,7 +56,10 @@ def remove(client: RosClient, *nodes: Any) -> None:
 
 @pytest.fixture(scope="module")
 def go2(client: RosClient) -> Iterator[MissionNode]:
-    driver = SimDriver(context=client.context, namespace=GO2, options={"odom_delay": 0.05})
+    # The driver's own detections off: this test publishes the only ones.
+    driver = SimDriver(
+        context=client.context, namespace=GO2, options={"odom_delay": 0.05, "detections": False}
+    )
     add(client, *driver.nodes)
     # No map (map_topic ''): detections are known objects all the same.
     robot = Go2RosRobot(

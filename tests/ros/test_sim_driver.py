@@ -321,12 +321,21 @@ def test_battery_state_drains_from_the_level_asked_for(driver: Driver, client: R
     assert abs(driver.truth()["battery"] / 100 - later.percentage) < 0.02
 
 
-def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery(client: RosClient) -> None:
+def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery_or_detections(
+    client: RosClient,
+) -> None:
     process = NodeProcess(
         "-r",
         "__ns:=/bare",
         command="sim-driver",
-        options=("--no-relay", "--camera-rate-hz", "0", "--start-posture", "lying"),
+        options=(
+            "--no-relay",
+            "--camera-rate-hz",
+            "0",
+            "--start-posture",
+            "lying",
+            "--no-detections",
+        ),
     )
     bare = Driver(client, "/bare")
     try:
@@ -334,6 +343,7 @@ def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery(client:
         cmd_vel = client.publisher(Twist, "/bare/cmd_vel")
         names = dict(client.node.get_topic_names_and_types())
         assert "/bare/battery_state" not in names and "/bare/odom" in names
+        assert "/bare/detections" not in names  # --no-detections
         assert cmd_vel.get_subscription_count() == 0
         bare.walk(0.3, 0.5, publisher=cmd_vel)
         after = bare.wait_truth(lambda _t: True, "the truth after Twists on cmd_vel")
@@ -408,6 +418,66 @@ def test_in_process_the_truth_is_one_call_away(client: RosClient) -> None:
             lambda m: json.loads(m.data)["moves"] == 1, TIMEOUT, "the published truth"
         )
         assert json.loads(seen.data).keys() == driver.truth_dict().keys()
+    finally:
+        for node in driver.nodes:
+            client.executor.remove_node(node)
+        driver.close()
+        driver.destroy_node()
+
+
+def test_the_driver_detects_what_its_camera_sees_in_the_odom_frame(client: RosClient) -> None:
+    # The driver as a detector: the objects in view (field of view, occlusion as the
+    # simulator's camera has them), at their true centres in the odometry frame.
+    from shadowhound_interfaces.msg import DetectionArray
+
+    from shadowhound.config import SimConfig
+    from shadowhound.robot.scene import World, WorldObject
+    from shadowhound.robot.sim import SimRobot
+    from shadowhound.ros.sim_driver import Faults, SimDriver
+
+    world = World(
+        objects=(
+            WorldObject("crate", 0.0, 2.0, radius=0.3, height=0.6),
+            WorldObject("lamp", 0.0, 4.0, radius=0.2, height=0.4),  # hidden behind the crate
+            WorldObject("shelf", 0.2, 5.0, radius=0.3, height=2.0),  # tall: seen over it
+            WorldObject("bin", 0.0, -2.0),  # behind the robot
+            WorldObject("stool", 2.0, 0.5),  # 76 degrees to the right: outside the view
+        )
+    )
+    sim = SimRobot(SimConfig(time_scale=1.0), world=world)
+    sim.reset(0.0, 0.0, math.pi / 2)  # facing +y: odometry and body frames differ
+    inbox = client.subscribe(DetectionArray, "/inproc_detect/detections")
+    driver = SimDriver(
+        sim,
+        context=client.context,
+        namespace="/inproc_detect",
+        options={"camera_rate_hz": 0.0, "relay": False, "navigate_to_pose": False},
+    )
+    for node in driver.nodes:
+        client.executor.add_node(node)
+    try:
+        msg = inbox.wait_for(lambda _m: True, TIMEOUT, "detections from the driver")
+        assert msg.header.frame_id == "odom"
+        seen = {d.label: d for d in msg.detections}
+        assert set(seen) == {"crate", "shelf"}, set(seen)
+        for d in msg.detections:
+            true = world.find(d.label)
+            assert true is not None and d.header.frame_id == ""  # the array's frame
+            assert (d.position.x, d.position.y) == (true.x, true.y)
+            assert math.isclose(d.radius, true.radius, rel_tol=1e-6) and d.confidence == 1.0
+        first = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        later = inbox.wait_for(lambda _m: True, TIMEOUT, "the next detections", inbox.mark())
+        period = later.header.stamp.sec + later.header.stamp.nanosec * 1e-9 - first
+        assert 0.0 < period < 5.0  # a steady stream, not one message
+        assert driver.truth_dict()["detections"] >= 2
+        # The camera fault blinds the detector too; cleared, the detections come back.
+        driver.robots[0].faults = Faults(camera=False)
+        time.sleep(0.2)  # an array already on its way arrives
+        blind, count = inbox.mark(), driver.truth_dict()["detections"]
+        time.sleep(1.5)  # three detector periods
+        assert inbox.since(blind) == [] and driver.truth_dict()["detections"] == count
+        driver.robots[0].faults = Faults()
+        inbox.wait_for(lambda _m: True, TIMEOUT, "detections after the fault", inbox.mark())
     finally:
         for node in driver.nodes:
             client.executor.remove_node(node)

@@ -17,6 +17,9 @@ Per robot (names prefixed `robot{i}/` with `--robots 2` or more, as go2_ros2_sdk
 - `scan` (sensor_msgs/LaserScan: 360 beams, 0.1-8 m, `--scan-rate-hz`, from the simulator's ray
   casting, frame base_link) out; `map` (nav_msgs/OccupancyGrid: the scene at 5 cm, frame odom,
   transient local as map_server publishes it) out once;
+- `detections` (shadowhound_interfaces/DetectionArray) out at 2 Hz unless `--no-detections`:
+  the objects the simulated camera sees (field of view and occlusion), at their true centres in
+  frame odom, confidence 1, true radius: a detector for `detections_topic` of the Go2 robot;
 - `navigate_to_pose` (nav2_msgs/action/NavigateToPose) served with the project's planner and
   path follower (ros/sim_nav.py), unless `--no-navigate-to-pose`;
 - `sim_driver/truth` (std_msgs/String JSON) out: the ground truth (true pose, velocity,
@@ -40,7 +43,14 @@ from ..errors import ParameterError
 from ..robot.sim import SimRobot
 from .process import run_node
 from .sim_go2 import Faults, SimGo2, Truth
-from .sim_options import OPTIONS, DriverSettings, build_parser, parse_settings, split_argv
+from .sim_options import (
+    DETECTIONS_RATE_HZ,
+    OPTIONS,
+    DriverSettings,
+    build_parser,
+    parse_settings,
+    split_argv,
+)
 from .twist_mux import TwistMux
 
 __all__ = ["Faults", "SimDriver", "Truth", "main"]
@@ -83,6 +93,8 @@ class SimDriver(Node):
             self.create_timer(1.0, self._each("publish_battery"))
         if s.scan_rate_hz > 0:
             self.create_timer(1.0 / s.scan_rate_hz, self._each("publish_scan"))
+        if s.detections:
+            self.create_timer(1.0 / DETECTIONS_RATE_HZ, self._each("publish_detections"))
         for robot in self.robots:
             robot.start()
         first = self.robots[0]
@@ -160,8 +172,10 @@ it with `shadowhound node --ros-args -p robot:=go2` in another terminal.
 
 Topics per robot (robot{{i}}/ prefix with --robots 2+): cmd_vel_out, webrtc_req in; odom (no
 twist, late by --odom-delay), go2_states, camera/image_raw, battery_state (--battery only)
-out; scan (LaserScan), map (OccupancyGrid, transient local) out; navigate_to_pose (Nav2's
-NavigateToPose action, served with the project's planner; --no-navigate-to-pose: none);
+out; scan (LaserScan), map (OccupancyGrid, transient local) out; detections (DetectionArray,
+{DETECTIONS_RATE_HZ:g} Hz: what the simulated camera sees; --no-detections: none) out;
+navigate_to_pose (Nav2's NavigateToPose action, served with the project's planner;
+--no-navigate-to-pose: none);
 sim_driver/truth (JSON ground truth), sim_driver/requests (JSON per sport request) out;
 sim_driver/fault in. The relay: cmd_vel, cmd_vel_joy in, cmd_vel_out out.
 

@@ -1,5 +1,6 @@
 """One simulated Go2 of `shadowhound sim-driver`: its topics, the driver's rules between them and
-the robot (robot/sim_sport.py), its late odometry, its truth and its injected faults.
+the robot (robot/sim_sport.py), its late odometry, its truth and its injected faults. It is
+also a detector (sim_detector.py): `detections` carries what its simulated camera sees.
 
 Callbacks only hand commands over: to the command thread (which applies any injected delay),
 and sport requests on to the driver's 10 Hz queue. Odometry has a thread of its own, so each
@@ -33,6 +34,7 @@ from ..robot.go2_world_msgs import MAP_QOS, grid_to_msg, scan_to_msg
 from ..robot.sim import SimRobot
 from ..robot.sim_sport import SimSportMode, Truth
 from ..state import Posture
+from .sim_detector import SimDetector
 from .sim_nav import SimNavigator
 from .sim_options import DriverSettings
 
@@ -102,7 +104,7 @@ class SimGo2:
             start=Posture(settings.start_posture),
         )
         self.faults = Faults()
-        self._counts = {"twists": 0, "twists_dropped": 0, "requests_dropped": 0}
+        self._counts = {"twists": 0, "twists_dropped": 0, "requests_dropped": 0, "detections": 0}
         self._pending: deque[tuple[int, Any, str, float]] = deque()  # the 10 Hz queue
         self._commands: list[tuple[float, int, Callable[[], None]]] = []  # (due, seq, apply)
         self._order = itertools.count()
@@ -128,6 +130,9 @@ class SimGo2:
             node.create_publisher(LaserScan, self.topic("scan"), _SENSOR)
             if settings.scan_rate_hz > 0
             else None
+        )
+        self.detector = (
+            SimDetector.create(node, self.topic("detections")) if settings.detections else None
         )
         if settings.map:  # published once: transient local keeps it for late subscribers
             self._map_pub = node.create_publisher(GridMsg, self.topic("map"), MAP_QOS)
@@ -360,6 +365,14 @@ class SimGo2:
             1.0 / self.settings.scan_rate_hz,
         )
         self._scan_pub.publish(msg)
+
+    def publish_detections(self) -> None:
+        """What the simulated camera sees now, as a detector reports it (sim_detector.py);
+        nothing while the camera fault is on."""
+        if self.detector is None or not self.faults.camera or self._closing.is_set():
+            return
+        self.detector.publish(self.sim.world, self.sim.get_state().pose)
+        self._counts["detections"] += 1
 
     def publish_camera(self) -> None:
         if not self.faults.camera or self._camera_pub is None:

@@ -15,6 +15,7 @@ from typing import Any
 
 from ..errors import ParameterError
 
+DETECTIONS_RATE_HZ = 2.0  # the simulated detector's rate: modest, as a camera detector runs
 _TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 
 
@@ -42,6 +43,7 @@ class DriverSettings:
     map: bool = True
     navigate_to_pose: bool = True
     nav_speed: float = 0.4
+    detections: bool = True
 
 
 @dataclass(frozen=True)
@@ -146,6 +148,13 @@ OPTIONS: dict[str, Option] = {
         "--no-navigate-to-pose: as a Go2 without Nav2",
     ),
     "nav_speed": Option(float, "m/s the navigate_to_pose server walks at", 0.05, 1.0, "M/S"),
+    "detections": Option(
+        bool,
+        "act as a detector: publish shadowhound_interfaces/DetectionArray on detections "
+        f"at {DETECTIONS_RATE_HZ:g} Hz, the objects the simulated camera sees (field of "
+        "view, occlusion) at their true centres in odom, confidence 1, true radius; "
+        "--no-detections: none",
+    ),
 }
 DEFAULTS = DriverSettings()
 _WANTED = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
