@@ -27,6 +27,7 @@ LAGGED_CLOSE = 1013  # "try again later": the client fell behind and should reco
 # event stream joins what is waiting into one write), so a backlog goes out a few at a time and
 # one loop turn of the fan-out stays short (feed.py).
 WS_BATCH = 4
+SSE_BATCH = 16  # events joined into one SSE write per wake-up (bounds a client's turn)
 
 
 @router.get(
@@ -127,7 +128,7 @@ async def _sse(
         if missed:
             yield "".join(_sse_event(p) for p in missed)
         while not subscription.lagged:
-            packets = await subscription.next(timeout=15.0)
+            packets = await subscription.next(timeout=15.0, limit=SSE_BATCH)
             if packets:  # one write for all that is waiting
                 yield "".join(_sse_event(p) for p in packets)
             else:
