@@ -34,6 +34,18 @@ class Progress:
     steps: int = 0
     progress: float = 0.0
 
+    def to_dict(self) -> dict[str, Any]:
+        """The mission's progress as the web status and diagnostics report it."""
+        return {
+            "status": self.status.value,
+            "mission_id": self.mission_id,
+            "mission": self.mission,
+            "current_skill": self.skill,
+            "step": self.step,
+            "steps": self.steps,
+            "progress": round(self.progress, 3),
+        }
+
 
 class MissionTracker:
     """Thread-safe progress and the last errors (the same error twice in a row is kept once)."""
@@ -118,15 +130,8 @@ class Diagnostics:
         return self.robot.to_dict()
 
     def to_dict(self) -> dict[str, Any]:
-        p = self.progress
         return {
-            "status": p.status.value,
-            "mission_id": p.mission_id,
-            "mission": p.mission,
-            "current_skill": p.skill,
-            "step": p.step,
-            "steps": p.steps,
-            "progress": round(p.progress, 3),
+            **self.progress.to_dict(),
             "errors": list(self.errors),
             "estop": self.estop,
             "backend": self.backend,

@@ -11,8 +11,11 @@ Standard library only.
 from __future__ import annotations
 
 import ipaddress
+import json
 import re
 import socket
+from collections.abc import Awaitable, Callable
+from typing import Any
 
 from .errors import ServeError
 
@@ -91,3 +94,26 @@ def bind(host: str, port: int) -> socket.socket:
         raise ServeError(f"cannot listen on {host}:{port}: {why}") from exc
     sock.set_inheritable(True)
     return sock
+
+
+async def send_json(
+    send: Callable[[dict[str, Any]], Awaitable[None]],
+    status: int,
+    payload: object,
+    headers: list[tuple[bytes, bytes]] | None = None,
+) -> None:
+    """Answer an ASGI request with `payload` as JSON, before any app sees it (the security
+    gates of the dashboard and the MCP server)."""
+    body = json.dumps(payload).encode()
+    await send(
+        {
+            "type": "http.response.start",
+            "status": status,
+            "headers": [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(body)).encode()),
+                *(headers or []),
+            ],
+        }
+    )
+    await send({"type": "http.response.body", "body": body})

@@ -10,7 +10,6 @@ Either way the robot is stopped when the server ends.
 from __future__ import annotations
 
 import hmac
-import json
 from collections.abc import Awaitable, Callable, MutableMapping
 from typing import Any
 from urllib.parse import urlsplit
@@ -21,7 +20,7 @@ from mcp.server.stdio import stdio_server
 from mcp.server.transport_security import TransportSecuritySettings
 
 from ..errors import ServeError
-from ..serving import LOOPBACK_HOSTS, bind, check_binding, hostname
+from ..serving import LOOPBACK_HOSTS, bind, check_binding, hostname, send_json
 from .server import McpRobotServer
 
 Scope = MutableMapping[str, Any]
@@ -65,22 +64,9 @@ class McpGate:
             await self.app(scope, receive, send)
             return
         status, detail = problem
-        body = json.dumps(
-            {"jsonrpc": "2.0", "id": None, "error": {"code": -32600, "message": detail}}
-        ).encode()
         extra = [(b"www-authenticate", b"Bearer")] if status == 401 else []
-        await send(
-            {
-                "type": "http.response.start",
-                "status": status,
-                "headers": [
-                    (b"content-type", b"application/json"),
-                    (b"content-length", str(len(body)).encode()),
-                    *extra,
-                ],
-            }
-        )
-        await send({"type": "http.response.body", "body": body})
+        error = {"jsonrpc": "2.0", "id": None, "error": {"code": -32600, "message": detail}}
+        await send_json(send, status, error, extra)
 
     def _check(self, headers: dict[str, str]) -> tuple[int, str] | None:
         raw_host = headers.get("host", "")

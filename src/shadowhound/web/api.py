@@ -225,15 +225,9 @@ async def status(request: Request) -> dict[str, Any]:
 
 def current_status(web: WebContext) -> dict[str, Any]:
     d = web.agent.diagnostics()
-    p, running = d.progress, web.desk.running()
+    running = web.desk.running()
     return {
-        "status": p.status.value,
-        "mission_id": p.mission_id,
-        "mission": p.mission,
-        "current_skill": p.skill,
-        "step": p.step,
-        "steps": p.steps,
-        "progress": round(p.progress, 3),
+        **d.progress.to_dict(),
         "estop": d.estop,
         "busy": web.desk.worker.busy,
         "running": running.id if running else None,
