@@ -97,10 +97,15 @@ def rig() -> Iterator[tuple[Agent, Driver]]:
     agent, driver = Agent(client), Driver(client)
     try:
         agent.wait_ready(node)
+        # Every topic the tests read must have delivered once: DDS matches each reader on
+        # its own, so odometry arriving says nothing about the truth or the states.
         wait_until(
-            lambda: driver_process.check_alive() or driver.odom.items,
+            lambda: (
+                driver_process.check_alive()
+                or (driver.odom.items and driver.truth.items and driver.states.items)
+            ),
             TIMEOUT,
-            "odometry from the simulated driver",
+            "odometry, go2_states and the ground truth from the simulated driver",
         )
         wait_until(
             lambda: driver.fault.get_subscription_count() > 0, TIMEOUT, "the driver's fault topic"
