@@ -69,6 +69,11 @@ class Inbox:
     def since(self, mark: int) -> list[Any]:
         return self.items[mark:]
 
+    def latest(self, timeout: float = 10.0, what: str = "a first message") -> Any:
+        """The newest message, waiting for the first one if none has arrived yet (DDS
+        matches each reader on its own: another topic having delivered proves nothing)."""
+        return wait_until(lambda: (self.items or [None])[-1], timeout, what)
+
     def wait_for(
         self, match: Callable[[Any], bool], timeout: float, what: str, mark: int = 0
     ) -> Any:

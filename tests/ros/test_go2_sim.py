@@ -46,7 +46,7 @@ class Driver:
 
     def pose(self) -> tuple[float, float, float]:
         """The true pose (the driver's odometry is late: the truth is the judge)."""
-        t = json.loads(self.truth.items[-1].data)
+        t = json.loads(self.truth.latest().data)
         return t["x"], t["y"], t["yaw"]
 
     def api_ids(self, mark: int = 0) -> list[int]:
@@ -133,7 +133,7 @@ def test_walk_forward_then_turn_left_ends_at_1_0_90_in_the_drivers_odometry(rig)
     final = agent.run("walk forward 1 meter then turn left 90 degrees", 60.0)
     assert final.startswith("COMPLETED: "), final
     wait_until(
-        lambda: not json.loads(driver.truth.items[-1].data)["moving"], 10.0, "the robot to be still"
+        lambda: not json.loads(driver.truth.latest().data)["moving"], 10.0, "the robot to be still"
     )
     x, y, yaw = driver.pose()
     # In the frame where the mission started: 1 m ahead, heading +90 degrees.
@@ -155,7 +155,7 @@ def test_postures_and_a_trick_arrive_with_their_sport_api_ids(rig) -> None:
     assert ids == [1009, 1010, 1005, 1004, 1002, 1016], ids
     records = [json.loads(m.data) for m in driver.requests.since(mark)]
     assert all(r["accepted"] for r in records), records
-    assert driver.states.items[-1].mode != 10  # standing again, not sitting
+    assert driver.states.latest().mode != 10  # standing again, not sitting
 
 
 def test_sitting_ignores_motion_in_the_driver(rig) -> None:
@@ -173,7 +173,7 @@ def test_sitting_ignores_motion_in_the_driver(rig) -> None:
     assert len(driver.odom.since(mark)) >= 50
     x, y, _ = driver.pose()
     assert math.hypot(x - x0, y - y0) < 1e-6
-    assert not json.loads(driver.truth.items[-1].data)["moving"]
+    assert not json.loads(driver.truth.latest().data)["moving"]
     assert agent.run("stand up").startswith("COMPLETED: ")
 
 

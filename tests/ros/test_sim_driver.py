@@ -82,7 +82,7 @@ class Driver:
         wait_until(ready, TIMEOUT, f"the simulated driver's topics under {self.base or '/'}")
 
     def truth(self) -> Truth:
-        return json.loads(self.truths.items[-1].data)
+        return json.loads(self.truths.latest().data)
 
     def truths_since(self, mark: int) -> list[Truth]:
         return [json.loads(m.data) for m in self.truths.since(mark)]
@@ -353,7 +353,7 @@ def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery_or_dete
         arrived = bare.wait_truth(lambda t: t["moves"] >= 1, "Moves from cmd_vel_out", mark)
         assert arrived["moves_ignored"] == arrived["moves"] and not arrived["moving"]
         assert arrived["posture"] == "lying" and arrived["battery"] is None
-        state = bare.states.items[-1]
+        state = bare.states.latest()
         assert go2_api.posture_of(state.mode, state.body_height) is Posture.LYING
     finally:
         assert process.stop(signal.SIGTERM) == 0, process.output()[-2000:]
@@ -372,7 +372,7 @@ def test_several_robots_get_robot_i_names_and_twist_mux_feeds_none_of_them(
     try:
         for robot in robots:
             robot.wait_ready(process)
-        assert robots[0].odom.items[-1].child_frame_id == "robot0/base_link"
+        assert robots[0].odom.latest().child_frame_id == "robot0/base_link"
         names = dict(client.node.get_topic_names_and_types())
         assert "/fleet/odom" not in names and "/fleet/robot1/go2_states" in names
         relayed = client.publisher(Twist, "/fleet/cmd_vel")  # into twist_mux: not namespaced
