@@ -18,6 +18,7 @@ from shadowhound import (
     StepStatus,
     Usage,
 )
+from shadowhound.errors import RobotError
 
 
 def test_documented_usage_of_the_original_names():
@@ -133,6 +134,33 @@ def test_a_failed_step_stops_the_mission_and_the_robot(agent, robot):
     ]
     assert "no progress" in result.response and "The robot is stopped" in result.response
     assert robot.commands[-1].kind == "stop"
+
+
+class _RefusingStop(SimRobot):
+    """A robot whose hard stop takes effect but whose driver then reports an error."""
+
+    def emergency_stop(self) -> None:
+        super().emergency_stop()
+        raise RobotError("the driver did not acknowledge the stop")
+
+
+def test_estop_cancels_the_mission_even_when_the_robots_stop_raises() -> None:
+    robot = _RefusingStop(time_scale=1.0)
+    agent = RobotAgent(RobotAgentConfig(robot=robot))
+    box: dict = {}
+    worker = threading.Thread(
+        target=lambda: box.update(r=agent.execute_mission("walk forward 2 meters"))
+    )
+    worker.start()
+    deadline = time.monotonic() + 5
+    while robot.get_state().vx < 0.2 and time.monotonic() < deadline:
+        time.sleep(0.01)
+    with pytest.raises(RobotError, match="did not acknowledge"):
+        agent.estop()  # the caller hears of the error ...
+    worker.join(5)
+    assert not worker.is_alive()  # ... and the mission ended all the same, latched
+    assert agent.estop_latched and robot.get_state().vx == 0.0
+    assert box["r"].status is MissionStatus.STOPPED and "e-stop" in box["r"].response
 
 
 def test_estop_while_a_mission_runs_in_another_thread():

@@ -244,11 +244,14 @@ class RobotAgent:
             self._robot.stop()
 
     def estop(self) -> None:
-        """Emergency stop: latched until `release_estop()`. Also cancels planning in flight."""
-        self._stop.estop_latched = True
-        self._stop.cancelled.set()
-        if self._robot is not None:
-            self._robot.emergency_stop()
+        """Emergency stop: latched until `release_estop()`. Also cancels planning in flight.
+        The hard stop comes before the cancel wakes the mission's thread to wind down."""
+        self._stop.estop_latched = True  # a flag: no thread wakes on it
+        try:
+            if self._robot is not None:
+                self._robot.emergency_stop()
+        finally:
+            self._stop.cancelled.set()  # even when the robot's stop raised
         self._tracker.note_error("e-stop pressed")
         self._events.emit(ev.EstopChanged(self._tracker.mission_id, True))
 

@@ -5,11 +5,13 @@
 - Beyond loopback it needs a token of at least MIN_TOKEN_CHARS URL-safe characters.
 - `hostname` reads a Host header strictly, for the servers' DNS-rebinding checks.
 - `bind` makes the listening socket (TCP_NODELAY-ready), or says why it cannot.
+- `settle_heap` keeps the garbage collector's full passes short in a long-running server.
 Standard library only.
 """
 
 from __future__ import annotations
 
+import gc
 import ipaddress
 import json
 import re
@@ -117,3 +119,16 @@ async def send_json(
         }
     )
     await send({"type": "http.response.body", "body": body})
+
+
+def settle_heap() -> None:
+    """Call once a server has started: move what startup built (modules, classes, the app,
+    the robot; some 70,000 objects with FastAPI) out of the garbage collector's reach.
+
+    A full collection walks every tracked object and holds the interpreter meanwhile: about
+    50 ms on this project's 2-core machine, during which no e-stop is answered and no control
+    tick runs. Startup objects live as long as the process, so the collector need not walk
+    them again (`gc.freeze`); with them frozen a full pass takes about 2 ms.
+    """
+    gc.collect()
+    gc.freeze()

@@ -103,3 +103,30 @@ def test_ctrl_c_stops_the_walking_robot_before_the_dashboards_are_disconnected()
             process.kill()
             process.wait(5)
     assert "estop" in kinds, kinds
+
+
+def test_serve_takes_its_startup_objects_out_of_the_collectors_full_passes() -> None:
+    """A full collection of an unfrozen server heap holds every thread for about 50 ms here
+    (no e-stop answered, no control tick); serve freezes what startup built (serving.py)."""
+    port = _free_port()
+    report = "import atexit, gc; atexit.register(lambda: print('frozen', gc.get_freeze_count()));"
+    process = subprocess.Popen(
+        [sys.executable, "-c", report + SCRIPT, str(port)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        wait_for(
+            lambda: _up(f"http://127.0.0.1:{port}") or process.poll() is not None,
+            30,
+            "the server to start",
+        )
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=15)
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            process.kill()
+    assert process.returncode == 0, err
+    frozen = int(out.split("frozen ")[1].split()[0])
+    assert frozen > 10_000, out  # modules, classes, the app and the robot

@@ -76,6 +76,9 @@ def main(
         print(f"shadowhound mcp: {exc}", file=sys.stderr)
         return EXIT_USAGE
     robot_server = McpRobotServer(agent)
+    from ..serving import settle_heap
+
+    settle_heap()  # a long-running server: keep full collections short (serving.py)
 
     def ready(url: str) -> None:
         print(

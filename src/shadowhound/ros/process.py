@@ -20,6 +20,7 @@ from rclpy.utilities import remove_ros_args
 
 from ..errors import ConfigError
 from ..exit_codes import EXIT_OK, EXIT_USAGE
+from ..serving import settle_heap
 
 
 def run_node(
@@ -75,6 +76,7 @@ def run_node(
     executor = SingleThreadedExecutor()  # callbacks are short; slow work runs on other threads
     for each in (node, *extra_nodes(node)):
         executor.add_node(each)
+    settle_heap()  # a long-running node: keep full collections short (serving.py)
     spinner = threading.Thread(target=_spin, args=(executor, stop), name="ros-executor")
     spinner.start()
     try:

@@ -18,7 +18,7 @@ from ..agent import RobotAgent
 from ..config import ShadowHoundConfig
 from ..errors import ConfigError, ServeError
 from ..exit_codes import EXIT_OK, EXIT_USAGE
-from ..serving import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, bind, check_binding
+from ..serving import LOOPBACK_HOSTS, MIN_TOKEN_CHARS, bind, check_binding, settle_heap
 from .app import create_app
 
 __all__ = [
@@ -170,6 +170,7 @@ def serve(
     main = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _raise_interrupt) if main else None
     server = _StopFirst(_config(app, log_level), agent.estop)
+    settle_heap()  # a long-running server: keep full collections short (serving.py)
     try:
         server.run(sockets=[sock])
     except KeyboardInterrupt:
