@@ -176,7 +176,7 @@ def bench_estop(runs: int, camera_fps: float = 0.0) -> dict[str, float]:
             rig.agent.release_estop()
             robot.reset()
             mark = len(rig.status)
-            rig.missions.publish(String(data="walk forward 3 meters"))
+            rig.missions.publish(String(data="walk forward 1 meter"))  # clear of the red ball
             wait(lambda: robot.get_state().is_moving, 10, "the robot to move")
             time.sleep(random.uniform(0.0, 0.1))
             robot.stamps.pop("estop", None)
