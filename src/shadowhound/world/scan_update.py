@@ -43,14 +43,18 @@ def apply_scan(grid: OccupancyGrid, scan: Scan) -> int:
     # object's edge), the outline steps in along the farther beam rather than cutting
     # diagonally across space that neither beam crossed.
     n = len(reach)
+    full = _full_circle(scan)
     for i, r in enumerate(reach):
-        nxt = reach[(i + 1) % n] if i + 1 < n or _full_circle(scan) else r
+        # The next beam; after the last one, the first again on a full circle (the pair
+        # across the wrap is as adjacent as any other).
+        j = (i + 1) % n if i + 1 < n or full else i
+        nxt = reach[j]
         vertex(i, r)
         if nxt < r - res:
             vertex(i, nxt)
         elif nxt > r + res:
-            vertex((i + 1) % n if i + 1 < n else i, r)
-    if not _full_circle(scan):
+            vertex(j, r)
+    if not full:
         verts.append((ox, oy))  # a partial scan's free space is a fan from the sensor
     crossings: dict[int, list[float]] = {}
     for (x0, y0), (x1, y1) in zip(verts, verts[1:] + verts[:1], strict=True):
