@@ -12,6 +12,7 @@ const view = {
   estop: false,
   current: null, // web mission id the step list follows
   shown: null, // web mission id the step list was last drawn for
+  finished: new Map(), // the last final records by mission id (they may overtake the POST answer)
   pose: { x: 0, y: 0, yaw: 0 },
   trail: [{ x: 0, y: 0 }],
   predicted: [], // the planned path of the current mission, or of the last dry run
@@ -81,6 +82,9 @@ async function submitMission(dryRun) {
     view.current = reply.data.mission_id;
     // Its events may have overtaken this answer: keep the steps they already drew.
     if (view.shown !== view.current) showCurrent(command + (dryRun ? " (dry run)" : ""), []);
+    // A quick mission (a dry run) may even have finished already.
+    const record = view.finished.get(view.current);
+    if (record) showResult(record);
     say("#mission-msg", reply.data.message, "info");
   } else {
     say("#mission-msg", "Refused: " + detail(reply.data), "error");
@@ -257,6 +261,8 @@ function onEvent(message) {
       refreshWorld(); // a mission may have changed the map or seen objects
       break;
     case "mission_record":
+      view.finished.set(message.mission_id, message);
+      if (view.finished.size > 20) view.finished.delete(view.finished.keys().next().value);
       if (message.mission_id === view.current) showResult(message);
       refreshHistory();
       loadDiagnostics();
