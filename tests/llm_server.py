@@ -72,6 +72,19 @@ class Reply:
     fn: Callable[[dict[str, Any]], Reply] | None = field(default=None, compare=False)
 
 
+def model_settings(srv: Any, **llm: Any) -> dict[str, Any]:
+    """The `llm` section for an agent whose every mission this scripted server plans: no
+    retries, a short timeout, hybrid planning off (the offline planner would answer first)."""
+    return {
+        "base_url": srv.url,
+        "model": "test-model",
+        "max_retries": 0,
+        "timeout": 5,
+        "hybrid": False,
+        **llm,
+    }
+
+
 def text(content: str, *, usage: tuple[int, int] | None = (50, 10)) -> Reply:
     """A normal assistant message. ``usage=None`` omits the ``usage`` field entirely."""
     return Reply(kind="message", content=content, usage=usage)

@@ -29,6 +29,7 @@ from tests.llm_server import (
     drop,
     garbage,
     json_plan,
+    model_settings,
     status,
     text,
     tool_calls,
@@ -47,16 +48,7 @@ def make_agent(srv, robot=None, **llm):
     """An agent whose every mission the model plans (hybrid off: these tests are the model's)."""
     settings = load_config(
         "llamacpp",
-        {
-            "llm": {
-                "base_url": srv.url,
-                "model": "test-model",
-                "max_retries": 0,
-                "timeout": 5,
-                "hybrid": False,
-                **llm,
-            }
-        },
+        {"llm": model_settings(srv, **llm)},
         environ={},
     )
     robot = robot or SimRobot(time_scale=0.0)

@@ -29,7 +29,7 @@ from shadowhound.robot.go2_api import TRICKS
 from shadowhound.robot.scene import World
 from shadowhound.safety import Governor
 from shadowhound.skills import NoArgs, PlanEnv, Skill
-from tests.llm_server import Reply, ScriptedLLM, json_plan, text, tool_calls
+from tests.llm_server import Reply, ScriptedLLM, json_plan, model_settings, text, tool_calls
 from tests.test_geofence import U_FENCE, orthogonal_polygons, ref_clearance
 
 # How far the simulated body may end past a limit through control error alone: each motion
@@ -64,14 +64,7 @@ def make_agent(srv, safety=None, **llm):
     settings = load_config(
         "llamacpp",
         {
-            "llm": {
-                "base_url": srv.url,
-                "model": "test-model",
-                "max_retries": 0,
-                "timeout": 5,
-                "hybrid": False,
-                **llm,
-            },
+            "llm": model_settings(srv, **llm),
             "safety": safety or {},
             "memory": {"enabled": False},
         },

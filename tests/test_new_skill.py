@@ -20,7 +20,7 @@ from shadowhound.safety import Governor
 from shadowhound.skills import PlanEnv, SkillRegistry, default_registry
 from shadowhound.state import Posture, RobotState
 from tests import look_up_skill
-from tests.llm_server import ScriptedLLM, json_plan
+from tests.llm_server import ScriptedLLM, json_plan, model_settings
 from tests.test_memory import needs_rag
 
 
@@ -34,13 +34,7 @@ def make_agent(srv, tmp_path, **memory) -> tuple[RobotAgent, SimRobot]:
     settings = load_config(
         "llamacpp",
         {
-            "llm": {
-                "base_url": srv.url,
-                "model": "m",
-                "max_retries": 0,
-                "timeout": 5,
-                "hybrid": False,
-            },
+            "llm": model_settings(srv, model="m"),
             "memory": {"enabled": True, "data_dir": str(tmp_path), **memory},
         },
         environ={},

@@ -25,7 +25,7 @@ from shadowhound.robot.sim import SimRobot
 from shadowhound.skills import default_registry
 from shadowhound.world import Belief, KnownObject
 
-from .llm_server import ScriptedLLM, json_plan
+from .llm_server import ScriptedLLM, json_plan, model_settings
 
 _NO_PLACES = {"places": {}}  # the profile's "charging dock" place would win over the object
 
@@ -305,13 +305,7 @@ def test_an_llm_planned_mission_gets_the_objects_and_goes_to_one():
         cfg = load_config(
             "llamacpp",
             {
-                "llm": {
-                    "base_url": srv.url,
-                    "model": "test-model",
-                    "max_retries": 0,
-                    "timeout": 5,
-                    "hybrid": False,
-                },
+                "llm": model_settings(srv),
                 **_NO_PLACES,
             },
             environ={},
