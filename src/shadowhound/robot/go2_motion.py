@@ -155,6 +155,35 @@ class MotionTracker:
     def last_sample(self) -> Sample | None:
         return self._samples[-1] if self._samples else None
 
+    @property
+    def commanding(self) -> bool:
+        """Motion is commanded now (the last command was not a stop)."""
+        return any(self._command)
+
+    def idle_since(self, t: float) -> float:
+        """Seconds since the model last moved (0 while it moves or is commanded)."""
+        self._advance(t)
+        for p in reversed(self._trace):
+            if p.vx or p.vy or p.wz:
+                return max(0.0, t - p.t)
+        return math.inf if not any(self._command) else 0.0
+
+    def model_motion(self, t0: float, t1: float) -> tuple[float, float]:
+        """How far (metres, radians) the model moved between what odometry taken at t0 and at
+        t1 should show: the trace between t0 and t1, both less the latency."""
+        self._advance(t1)
+        a = self._trace_at(t0 - self.latency)
+        b = self._trace_at(t1 - self.latency)
+        return math.hypot(b[0] - a[0], b[1] - a[1]), abs(b[2] - a[2])
+
+    def restart(self) -> None:
+        """Forget the odometry samples (not the latency): the next sample starts a new frame,
+        as after a relocalization. What the model predicts from commands stays."""
+        self._samples.clear()
+        self._start = None
+        self._segment = None
+        self._moved = False
+
     def pose(self, t: float) -> tuple[float, float, float]:
         """The pose now: the last odometry pose plus the model's motion since it was taken.
 
