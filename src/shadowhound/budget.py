@@ -6,12 +6,14 @@ after a failed step, each react step, and the re-check just before a step runs. 
 batch of steps would be checked as if the mission had just begun.
 
 What it counts is measured, not predicted: the distance is the robot's own odometer since the
-mission started (a detour or a half-finished step counts as walked), the time is the robot's
+mission started (a detour or a half-finished step counts as walked) or, when larger, the
+distance its steps commanded (odometry can lie; commands cannot), the time is the robot's
 clock since then, and the approvals are the exact calls a person approved.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
@@ -26,14 +28,26 @@ class MissionBudget:
     clock_start: float  # robot clock (Robot.now) when the mission started
     clock: Callable[[], float]  # the robot's clock
     _approved: list[object] = field(default_factory=list)
+    commanded: float = 0.0  # metres the mission's steps commanded (SkillContext.drive)
 
     @classmethod
     def start(cls, state: RobotState, clock: Callable[[], float]) -> MissionBudget:
-        return cls(state.distance_travelled, clock(), clock)
+        odometer = state.distance_travelled
+        return cls(odometer if math.isfinite(odometer) else math.nan, clock(), clock)
+
+    def command(self, metres: float) -> None:
+        """Count metres a step commanded (dead-reckoned from its velocity commands)."""
+        if math.isfinite(metres) and metres > 0:
+            self.commanded += metres
 
     def travelled(self, state: RobotState) -> float:
-        """Metres the robot measurably walked since the mission started."""
-        return max(0.0, state.distance_travelled - self.odometer_start)
+        """Metres the robot walked since the mission started: the larger of what odometry
+        measured and what the steps commanded (odometry may lie; a step cannot walk less than
+        it was told and still count less). Always finite."""
+        measured = state.distance_travelled - self.odometer_start
+        if not math.isfinite(measured):
+            measured = 0.0  # the odometer cannot say: what was commanded still counts
+        return max(0.0, measured, self.commanded)
 
     def elapsed(self) -> float:
         """Seconds on the robot's clock since the mission started (planning and waits too)."""

@@ -86,6 +86,22 @@ class SafetyConfig(_Section):
     outcome_tolerance_deg: float = Field(
         5.0, gt=0, le=180, description="degrees a motion step may end away from its heading"
     )
+    step_travel_margin: float = Field(
+        0.05,
+        ge=0,
+        le=1,
+        description="metres a step may command beyond its planned leg, whatever odometry says",
+    )
+    step_travel_slack: float = Field(
+        0.02,
+        ge=0,
+        le=0.5,
+        description="fraction of a leg (or turn) a step may command beyond it, on top of "
+        "step_travel_margin (step_turn_margin_deg)",
+    )
+    step_turn_margin_deg: float = Field(
+        3.0, ge=0, le=45, description="degrees a step may command beyond its planned turn"
+    )
 
     @field_validator("geofence_polygon", mode="before")
     @classmethod

@@ -12,8 +12,9 @@ from ..config import ShadowHoundConfig
 from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout
 from ..memory.service import AgentMemory
 from ..robot.base import Robot
-from ..state import CameraFrame, Pose2D, Posture
+from ..state import CameraFrame, Pose2D, Posture, RobotState
 from ..world import Belief, KnownObject
+from .bounds import CommandLedger, fences, room_ahead
 
 
 @dataclass
@@ -93,6 +94,9 @@ class SkillContext:
         self.deadline = math.inf
         self._late = ""
         self.notes: list[str] = []
+        self.ledger: CommandLedger | None = None  # the step's commands, from its first one
+        self._needs: Posture | None = None  # the posture the step runs in (ensure_standing)
+        self._start_clearance: list[float] | None = None  # per fence, where the step began
 
     def start_clock(self, timeout: float) -> None:
         """Give the skill `timeout` seconds of robot time, and never past the mission's end."""
@@ -102,19 +106,89 @@ class SkillContext:
         if budget is not None and budget.deadline(limit) < self.deadline:
             self.deadline, self._late = budget.deadline(limit), out_of_time(limit)
 
-    def check(self) -> None:
-        """Raise if the mission was cancelled, the skill ran out of time, or the robot walked
-        past the mission's distance (whatever the plan predicted: a detour, a skill that
-        predicts no path), with `outcome_tolerance` of slack for control error."""
+    def check(self) -> RobotState:
+        """Raise if the mission was cancelled, the skill ran out of time, the robot cannot
+        say where it is (`get_state` raises RobotError: stale or untrusted odometry), it left
+        the posture the step runs in, its body (measured, or where the step's commands put
+        it) is outside a geofence, or it walked past the mission's distance (whatever the plan
+        predicted: a detour, a skill that predicts no path), with `outcome_tolerance` of slack
+        for control error. Returns the state it read."""
         if self._cancelled.is_set():
             raise MissionCancelled("mission cancelled")
         if self.robot.now() > self.deadline:
             raise SkillTimeout(self._late)
+        state = self.robot.get_state()
+        if self._needs is not None and state.posture is not self._needs:
+            self.robot.stop()
+            raise SkillError(
+                f"the robot is {state.posture.value} now, not {self._needs.value} as the step "
+                "needs: it fell, or something else changed its posture; stopped"
+            )
+        self._check_fences(state)
         budget, safety = self.env.budget, self.config.safety
         if budget is not None:
-            walked = budget.travelled(self.robot.get_state())
+            walked = budget.travelled(state)
             if walked > safety.max_mission_distance + safety.outcome_tolerance:
                 raise SkillError(walked_too_far(walked, safety.max_mission_distance))
+        return state
+
+    def _check_fences(self, state: RobotState) -> None:
+        """The body, where odometry puts it and where the commands put it, stays inside every
+        geofence (a step that began within a fence's margin may not come closer to it)."""
+        lim = self.config.safety
+        slack = max(self.config.motion.position_tolerance, 0.02)
+        poses = [("measured", state.pose)]
+        if self.ledger is not None:
+            self.ledger.advance(self.robot.now())
+            poses.append(("commanded", self.ledger.pose))
+        all_fences = fences(lim)
+        if self._start_clearance is None:
+            self._start_clearance = [f.clearance((state.x, state.y)) for f, _n, _w in all_fences]
+        for (fence, name, where), start in zip(all_fences, self._start_clearance, strict=True):
+            need = max(0.0, min(lim.geofence_margin, start)) - slack
+            for which, pose in poses:
+                if fence.clearance((pose.x, pose.y)) < need:
+                    self.robot.stop()
+                    raise SkillError(
+                        f"the robot's body would leave {name} {where}: its {which} position "
+                        f"({pose.x:.2f}, {pose.y:.2f}) keeps less than "
+                        f"{lim.geofence_margin:g} m from the edge; stopped"
+                    )
+
+    def room(self, heading: float, reach: float, state: RobotState) -> tuple[float, str]:
+        """Metres the robot may still go along `heading` (odom frame), looking `reach` ahead:
+        before its body would reach a geofence (from the measured and from the commanded
+        pose: the stricter wins) and within the mission's distance. With why it is so small."""
+        lim, slack = self.config.safety, self.config.motion.position_tolerance
+        room, why = room_ahead(lim, state.pose, heading, reach, slack)
+        if self.ledger is not None:
+            commanded, fence = room_ahead(lim, self.ledger.pose, heading, reach, slack)
+            if commanded < room:
+                room, why = commanded, fence
+        reasons = {why: f"going on would take the robot's body outside {why}"} if why else {}
+        budget = self.env.budget
+        if budget is not None:
+            left = lim.max_mission_distance - budget.travelled(state)
+            if left < room:
+                room, why = max(0.0, left), "mission"
+                reasons[why] = walked_too_far(budget.travelled(state), lim.max_mission_distance)
+        return room, reasons.get(why, "")
+
+    def commanded(self) -> tuple[float, float, float]:
+        """Where the commands of the current leg took the robot from where the leg began:
+        metres along x and y (odom frame), radians turned (signed; see `begin_leg`)."""
+        if self.ledger is None:
+            return 0.0, 0.0, 0.0
+        return self.ledger.offset(self.robot.now())
+
+    def begin_leg(self, state: RobotState) -> None:
+        """A straight leg or a turn starts from `state` (measured at rest): the commanded pose
+        is taken from here, so small differences between commands and motion do not add up
+        over a long path."""
+        if self.ledger is None:
+            self.ledger = CommandLedger(state.pose, self.robot.now())
+        else:
+            self.ledger.begin_leg(self.robot.now(), state.pose)
 
     def tick(self) -> None:
         """Wait one control period, then check cancellation and the time-out."""
@@ -139,13 +213,21 @@ class SkillContext:
                 -s.max_angular_accel * self.period, min(s.max_angular_accel * self.period, wz - lw)
             )
             vx, vy, wz = lx + dx, ly + dy, lw + dw
-        self.check()
+        state = self.check()
         self._last_command = (vx, vy, wz)
+        if self.ledger is None:
+            self.ledger = CommandLedger(state.pose, self.robot.now())
+        walked = self.ledger.set(self.robot.now(), vx, vy, wz)
+        if self.env.budget is not None:
+            self.env.budget.command(walked)
         self.heartbeat(bool(vx or vy or wz))
         self.robot.send_velocity(vx, vy, wz)
 
     def ensure_standing(self) -> None:
+        """Stand up first when allowed (`motion.auto_stand`); from then on the step runs
+        standing: `check` fails it if the robot stops standing (a fall)."""
         posture = self.robot.get_state().posture
+        self._needs = Posture.STANDING
         if posture is Posture.STANDING:
             return
         if not self.config.motion.auto_stand:

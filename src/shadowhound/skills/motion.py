@@ -6,6 +6,11 @@ distance and angle are measured, never assumed from time. Velocity follows a ram
 target without overshoot. Arrival is judged again on the pose at rest (after `settle`), and a
 short approach corrects what late odometry left; a loop fails if the robot makes no progress
 for `stall_timeout`.
+
+Whatever odometry says, a loop also brakes within the bounds of bounds.py: the travel (turn)
+its leg may command in all, the room before the body would reach a geofence (from the measured
+and the commanded pose) and the mission's distance left. A loop that has used them up while
+odometry still shows the goal ahead stops and fails, naming the bound.
 """
 
 from __future__ import annotations
@@ -14,7 +19,8 @@ import math
 from collections.abc import Callable
 
 from ..errors import SkillError
-from ..state import normalize_angle
+from ..state import RobotState, normalize_angle
+from .bounds import leg_allowance, leg_room, turn_allowance, turn_room
 from .context import SkillContext
 
 _SETTLE_SPEED = 0.01
@@ -59,6 +65,9 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
     start = robot.get_state()
     c, s = math.cos(start.yaw), math.sin(start.yaw)
     goal = math.hypot(tx, ty)
+    ctx.begin_leg(start)
+    allowed = leg_allowance(ctx.config.safety, goal)
+    stopped_for_room = False  # the loop stopped for want of room and settled
     for attempt in range(1 + _CORRECTIONS):
         best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
         cap = speed if attempt == 0 else min(speed, m.position_tolerance / _CORRECTION_SECONDS)
@@ -80,7 +89,21 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
                     f"no progress for {m.stall_timeout:.1f} s with {error:.2f} m to go: "
                     "the robot is blocked, stalled or ignoring velocity commands"
                 )
-            v = abs(_profile(error, cap, m.linear_accel, ctx.period))
+            heading = start.yaw + math.atan2(ey, ex)  # where the robot goes, odom frame
+            room, why = ctx.room(heading, error + 0.5, st)
+            ox, oy, _ = ctx.commanded()
+            left = leg_room((ox, oy), heading, allowed)
+            if left < room:
+                room, why = left, _disagree(math.hypot(ox, oy), goal, allowed, goal - error)
+            if room < m.position_tolerance and error >= m.position_tolerance:
+                if not stopped_for_room:  # judge at rest: late odometry may only now catch up
+                    stopped_for_room = True
+                    settle(ctx)
+                    continue
+                robot.stop()
+                raise SkillError(f"stopped {error:.2f} m short of the goal: {why}")
+            stopped_for_room = False
+            v = abs(_profile(min(error, room), cap, m.linear_accel, ctx.period))
             yaw_error = normalize_angle(start.yaw - st.yaw)
             # Body-frame command toward the goal; the start frame and the body differ by
             # yaw_error.
@@ -92,9 +115,7 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
             ctx.on_progress(min(1.0, 1.0 - error / goal) if goal else 1.0)
             ctx.tick()
         settle(ctx)
-        end = robot.get_state()
-        dx, dy = end.x - start.x, end.y - start.y
-        if math.hypot(tx - (dx * c + dy * s), ty - (-dx * s + dy * c)) < m.position_tolerance:
+        if _off(robot.get_state(), start, tx, ty) < m.position_tolerance:
             break  # judged on the pose at rest, not on the one the loop stopped on
     end = robot.get_state()
     return math.hypot(end.x - start.x, end.y - start.y)
@@ -104,8 +125,12 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
     """Turn in place by `angle` radians (+ counter-clockwise). Returns the measured turn."""
     robot = ctx.robot
     m = ctx.config.motion
-    last_yaw = robot.get_state().yaw
+    first = robot.get_state()
+    last_yaw = first.yaw
     turned = 0.0
+    ctx.begin_leg(first)
+    allowed = turn_allowance(ctx.config.safety, angle)
+    stopped_for_room = False  # the loop stopped for want of room and settled
     for attempt in range(1 + _CORRECTIONS):
         best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
         cap = speed if attempt == 0 else min(speed, m.yaw_tolerance / _CORRECTION_SECONDS)
@@ -124,7 +149,25 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
                     f"no progress for {m.stall_timeout:.1f} s with {math.degrees(error):.0f} "
                     "degrees to go: the robot is blocked, stalled or ignoring velocity commands"
                 )
-            ctx.drive(0.0, 0.0, _profile(error, cap, m.angular_accel, ctx.period))
+            commanded = ctx.commanded()[2]
+            left = turn_room(commanded, error, allowed)
+            if left < m.yaw_tolerance and abs(error) >= m.yaw_tolerance:
+                if not stopped_for_room:  # judge at rest: late odometry may only now catch up
+                    stopped_for_room = True
+                    settle(ctx)
+                    continue
+                robot.stop()
+                raise SkillError(
+                    f"stopped {math.degrees(abs(error)):.0f} degrees short of the turn: it was "
+                    f"commanded {math.degrees(abs(commanded)):.0f} degrees for a "
+                    f"{math.degrees(abs(angle)):.0f} degree turn (at most "
+                    f"{math.degrees(allowed):.0f}, safety.step_turn_margin_deg and "
+                    "step_travel_slack), yet odometry does not show it turned: odometry "
+                    "disagrees with the motion (a relocalization, a frozen stream?)"
+                )
+            stopped_for_room = False
+            limit = math.copysign(min(abs(error), left), error)
+            ctx.drive(0.0, 0.0, _profile(limit, cap, m.angular_accel, ctx.period))
             ctx.on_progress(min(1.0, 1.0 - abs(error) / abs(angle)) if angle else 1.0)
             ctx.tick()
         settle(ctx)
@@ -133,6 +176,28 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
             break  # judged on the heading at rest, not on the one the loop stopped on
     yaw = robot.get_state().yaw
     return turned + normalize_angle(yaw - last_yaw)
+
+
+def _disagree(commanded: float, goal: float, allowed: float, measured: float) -> str:
+    """Why a leg stopped when its commands used up what the leg allows: odometry shows the
+    robot short of it (or nowhere near)."""
+    lead = (
+        f"it was commanded {commanded:.2f} m for a {goal:.2f} m leg (at most {allowed:.2f} m: "
+        f"safety.step_travel_margin, step_travel_slack), yet odometry shows {measured:.2f} m"
+    )
+    if measured < 0.25 * commanded:
+        return (
+            f"{lead}: the commands do not reach the robot or it ignores them (is it "
+            "standing? does another controller hold it?), or odometry is frozen"
+        )
+    return f"{lead}: odometry disagrees with the motion (a relocalization, a frozen stream?)"
+
+
+def _off(st: RobotState, start: RobotState, tx: float, ty: float) -> float:
+    """How far `st` is from the goal (tx, ty), given in the body frame at `start`."""
+    c, s = math.cos(start.yaw), math.sin(start.yaw)
+    dx, dy = st.x - start.x, st.y - start.y
+    return math.hypot(tx - (dx * c + dy * s), ty - (-dx * s + dy * c))
 
 
 def go_to(ctx: SkillContext, x: float, y: float, linear: float, angular: float) -> float:
