@@ -227,6 +227,18 @@ class SimSportMode:
             self._lapse_at = None
             self.sim.stop()
 
+    def fall(self) -> None:
+        """The robot falls (fault injection): it brakes as it goes down, lies limp (Damping),
+        and ignores Moves until StandUp (or RecoveryStand) gets it up."""
+        with self._cond:
+            self._lapse_at = None
+            self._change = None
+            self._trick = ""
+            self._mode = SportMode.DAMPING  # from now on Moves are ignored
+            self.sim.stop()
+            self._cond.notify_all()
+        self.sim.set_posture(Posture.LYING, seconds=0.0)  # once the body has come to rest
+
     def _why_not_walking(self) -> str:
         self._finish_due_change()
         if self._change is not None:

@@ -17,7 +17,6 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from geometry_msgs.msg import Twist, Vector3
@@ -35,6 +34,7 @@ from ..robot.sim import SimRobot
 from ..robot.sim_sport import SimSportMode, Truth
 from ..state import Posture
 from .sim_detector import SimDetector
+from .sim_faults import Faults, LyingOdometry
 from .sim_nav import SimNavigator
 from .sim_options import DriverSettings
 
@@ -57,41 +57,6 @@ _NAMES = {
 }
 
 
-@dataclass
-class Faults:
-    """Injected faults (all off by default)."""
-
-    odom: bool = True
-    states: bool = True
-    camera: bool = True
-    delay: float = 0.0  # seconds every command is held back
-    drop_commands: bool = False
-
-    @classmethod
-    def from_json(cls, text: str) -> Faults:
-        """Parse a fault message; raises ValueError naming what is wrong."""
-        data = json.loads(text) if text.strip() else {}
-        if not isinstance(data, dict):
-            raise ValueError("a fault message must be a JSON object")
-        unknown = set(data) - {"odom", "states", "camera", "delay_ms", "drop_commands"}
-        if unknown:
-            raise ValueError(
-                f"unknown fault(s) {sorted(unknown)}; known: odom, states, camera, "
-                "delay_ms, drop_commands"
-            )
-        flags = {k: data[k] for k in ("odom", "states", "camera", "drop_commands") if k in data}
-        if not all(isinstance(v, bool) for v in flags.values()):
-            raise ValueError("odom, states, camera and drop_commands take true or false")
-        delay = data.get("delay_ms", 0)
-        if (
-            isinstance(delay, bool)
-            or not isinstance(delay, (int, float))
-            or not 0 <= delay <= 10_000
-        ):
-            raise ValueError("delay_ms must be a number of milliseconds in 0..10000")
-        return cls(**flags, delay=delay / 1000.0)
-
-
 class SimGo2:
     """One robot's topics on the driver node, with `prefix` ('' or 'robot{i}/')."""
 
@@ -104,6 +69,8 @@ class SimGo2:
             start=Posture(settings.start_posture),
         )
         self.faults = Faults()
+        self._lying = LyingOdometry()  # odometry faults that fire on the way (sim_faults)
+        self._lie_lock = threading.Lock()
         self._counts = {"twists": 0, "twists_dropped": 0, "requests_dropped": 0, "detections": 0}
         self._pending: deque[tuple[int, Any, str, float]] = deque()  # the 10 Hz queue
         self._commands: list[tuple[float, int, Callable[[], None]]] = []  # (due, seq, apply)
@@ -230,11 +197,15 @@ class SimGo2:
 
     def _on_fault(self, msg: String) -> None:
         try:
-            self.faults = Faults.from_json(msg.data)
+            faults = Faults.from_json(msg.data)
         except ValueError as exc:  # json.JSONDecodeError is a ValueError
             self.node.get_logger().warning(f"ignored a fault message {msg.data!r}: {exc}")
             return
-        self.node.get_logger().warning(f"{self.prefix}fault injection now: {self.faults}")
+        t = self.body.truth()
+        with self._lie_lock:
+            self.faults = faults
+            self._lying.arm(faults, (t.x, t.y, t.yaw))
+        self.node.get_logger().warning(f"{self.prefix}fault injection now: {faults}")
 
     def _schedule(self, apply: Callable[[], None]) -> None:
         with self._ready:
@@ -273,32 +244,46 @@ class SimGo2:
     # -- state out -------------------------------------------------------------------------
 
     def _run_odometry(self) -> None:
-        """Take the true pose every period; publish each one `odom_delay` later."""
+        """Take the true pose every period (as the faults show it); publish each one
+        `odom_delay` later."""
         period, delay = 1.0 / self.settings.odom_rate_hz, self.settings.odom_delay
-        due: deque[tuple[float, Truth]] = deque()
+        due: deque[tuple[float, Truth, tuple[float, float, float] | None, float]] = deque()
         next_take = time.monotonic()
         while True:
             now = time.monotonic()
             if now >= next_take:
-                due.append((now + delay, self.body.truth()))
+                truth = self.body.truth()
+                with self._lie_lock:
+                    before = self._lying.fired
+                    shown, shift = self._lying.publish((truth.x, truth.y, truth.yaw))
+                    fall = self._lying.fired and not before and self._lying.faults.fall
+                if fall:
+                    self.body.fall()
+                due.append((now + delay, truth, shown, shift))
                 next_take = max(next_take + period, now)
             while due and due[0][0] <= time.monotonic():
-                truth = due.popleft()[1]
+                _due, truth, shown, shift = due.popleft()
                 if self.faults.odom:
-                    self._publish_odom(truth)
+                    self._publish_odom(truth, shown, shift)
             wake = min(next_take, due[0][0]) if due else next_take
             if self._closing.wait(max(0.0, wake - time.monotonic())):
                 return
 
-    def _publish_odom(self, t: Truth) -> None:
+    def _publish_odom(
+        self, t: Truth, shown: tuple[float, float, float] | None, shift: float
+    ) -> None:
+        """Odometry of the true `t` as the faults show it: `shown` (None: NaN), the stamp
+        `shift` seconds off."""
         msg = Odometry()  # pose only: go2_ros2_sdk never fills the twist
-        msg.header.stamp = self.node.get_clock().now().to_msg()
+        stamp = self.node.get_clock().now().nanoseconds + int(shift * 1e9)
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(max(0, stamp), 1_000_000_000)
         msg.header.frame_id = "odom"
         msg.child_frame_id = f"{self.prefix}base_link"
-        msg.pose.pose.position.x, msg.pose.pose.position.y = t.x, t.y
+        x, y, yaw = shown if shown is not None else (math.nan, math.nan, math.nan)
+        msg.pose.pose.position.x, msg.pose.pose.position.y = x, y
         msg.pose.pose.position.z = t.body_height
-        msg.pose.pose.orientation.z = math.sin(t.yaw / 2.0)
-        msg.pose.pose.orientation.w = math.cos(t.yaw / 2.0)
+        msg.pose.pose.orientation.z = math.sin(yaw / 2.0)
+        msg.pose.pose.orientation.w = math.cos(yaw / 2.0)
         self._odom_pub.publish(msg)
 
     def publish_state(self) -> None:
@@ -345,7 +330,7 @@ class SimGo2:
             "stamp": stamp,
             "robot": self.prefix.rstrip("/") or "",
             "battery": self.battery_level(t),
-            "faults": vars(self.faults),
+            "faults": {**self.faults.to_dict(), "fired": self._lying.fired},
             **self._counts,
             "navigation": self.navigator.truth() if self.navigator else None,
         }
