@@ -112,6 +112,9 @@ class LateRobot:
     def release_estop(self) -> None:
         self.sim.release_estop()
 
+    def watch_estop(self, listener: object) -> None:
+        """No e-stop source of its own."""
+
     def known_objects(self) -> tuple[()]:
         return ()
 

@@ -7,6 +7,9 @@ time; `estop`, `cancel`, `get_diagnostics` and `update_camera_image` are safe fr
 The agent holds what missions share (robot, planner, the one model backend, governor, memory,
 events) and hands each mission to a `MissionRun` (mission.py), each chat question to a chat
 (conversation.py) with a `ChatContext`, and its state to `Diagnostics` (diagnostics.py).
+
+Long because: it is the brain's whole public API in one facade (missions, approvals, control
+from any thread, information); each method is a few lines handing off to the modules above.
 """
 
 from __future__ import annotations
@@ -101,6 +104,7 @@ class RobotAgent:
             from .robot.sim import SimRobot
 
             self._robot = SimRobot(s.sim)
+        self._robot.watch_estop(lambda on: self.estop() if on else self.release_estop())
         if self._backend is None and s.backend != "offline":
             from .llm.backend import LLMBackend
 
@@ -245,7 +249,8 @@ class RobotAgent:
 
     def estop(self) -> None:
         """Emergency stop: latched until `release_estop()`. Also cancels planning in flight.
-        The hard stop comes before the cancel wakes the mission's thread to wind down."""
+        The hard stop comes before the cancel wakes the mission's thread to wind down. The
+        robot's own e-stop source (`Robot.watch_estop`: a ROS topic) calls this too."""
         self._stop.estop_latched = True  # a flag: no thread wakes on it
         try:
             if self._robot is not None:

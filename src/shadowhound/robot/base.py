@@ -8,6 +8,7 @@ is declared here, so nobody probes a robot for what it can do.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from ..errors import RobotError as RobotError
@@ -58,6 +59,12 @@ class Robot(Protocol):
 
     def release_estop(self) -> None:
         """Accept commands again after `emergency_stop`."""
+        ...
+
+    def watch_estop(self, listener: Callable[[bool], None]) -> None:
+        """Call `listener(True)` when the robot's own e-stop source (a ROS topic it listens
+        on, a button) stopped it and latched, `listener(False)` when a person released it
+        there. The agent latches and releases with it. A robot without one never calls."""
         ...
 
     def set_posture(self, posture: Posture) -> None:

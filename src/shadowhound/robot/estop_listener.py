@@ -1,11 +1,11 @@
 """The e-stop listener: `/shadowhound/estop` on a node and thread of its own.
 
-The mission node's executor also takes camera frames (30 a second), publishes diagnostics and
-status, and serves the action and chat; whoever spins it, an e-stop message queued behind that
-work would wait. This listener is a second, tiny node in the same context, spun by its own
-executor on its own thread, with nothing else to do: an e-stop is handled as soon as DDS
-delivers it. The release goes through the same listener, so an e-stop and a release published
-in that order are handled in that order.
+Whoever spins a busy node (the mission node takes camera frames 30 times a second, a Go2 robot
+reads odometry, maps and scans) would queue an e-stop message behind that work. This listener is
+a second, tiny node in the same context, spun by its own executor on its own thread, with
+nothing else to do: an e-stop is handled as soon as DDS delivers it. The release goes through
+the same listener, so an e-stop and a release published in that order are handled in that
+order. The mission node uses it, and so does a Go2 robot wherever it runs (MCP, scripts).
 """
 
 from __future__ import annotations
@@ -19,6 +19,9 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from std_msgs.msg import Empty
+
+ESTOP_TOPIC = "/shadowhound/estop"  # std_msgs/Empty: stop now and latch
+ESTOP_RELEASE_TOPIC = "/shadowhound/estop_release"  # std_msgs/Empty: a person releases it
 
 
 class EstopListener:
@@ -38,7 +41,8 @@ class EstopListener:
     ) -> None:
         self.node = Node(name, namespace=namespace, context=context, start_parameter_services=False)
         self.node.create_subscription(Empty, estop_topic, lambda _msg: on_estop(), qos)
-        self.node.create_subscription(Empty, release_topic, lambda _msg: on_release(), qos)
+        if release_topic:  # '' = released elsewhere only
+            self.node.create_subscription(Empty, release_topic, lambda _msg: on_release(), qos)
         self._executor = SingleThreadedExecutor(context=context)
         self._executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, name="shadowhound-estop", daemon=True)

@@ -164,6 +164,12 @@ class Nav2Navigator:
             raise RobotError(f"cannot send a goal to {self.name}: {exc}") from exc
         return handle
 
+    @property
+    def driving(self) -> bool:
+        """A goal is under way: Nav2's controller, not our commands, moves the robot."""
+        with self._lock:
+            return any(g.running for g in self._goals)
+
     def cancel_all(self) -> None:
         with self._lock:
             goals = list(self._goals)

@@ -3,22 +3,30 @@
 go2_ros2_sdk copies the robot's sport-mode state: `mode` and `body_height` tell the posture
 (through go2_api's one table), while `progress` stays 0 during postures and says nothing about
 their end. So a posture command is done when go2_states shows the posture it leads to (and,
-after BalanceStand, a mode in which the robot walks). No rclpy here: the robot hands in each
-report and a check for the e-stop.
+after BalanceStand, a mode in which the robot walks). A posture counts once every report for
+`SETTLE` seconds shows it: go2_states may flap (a single report of "sitting" 0.07 s into a
+1.5 s Sit is no sitting robot). No rclpy here: the robot hands in each report and a check for
+the e-stop.
 """
 
 from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar
 
 from ..state import Posture
 from . import go2_api
 from .base import RobotError
 
+_T = TypeVar("_T")
 _POLL = 0.02  # seconds between looks at go2_states while a posture runs
+SETTLE = 0.25  # seconds every report must show a posture before it counts
+# Modes of a robot that fell (motors limp, or getting up after a fall): it does not stand.
+FALL_MODES = frozenset({go2_api.SportMode.DAMPING, go2_api.SportMode.RECOVERY_STAND})
 
 # Sport api ids that take the robot from one posture to the next (sitting is left with
 # RiseSit); each is followed by a wait until go2_states shows the posture it leads to.
@@ -70,29 +78,57 @@ class PostureWatch:
         )
         self._lock = threading.Lock()
         self._report: Report | None = None
+        self._reports: deque[Report] = deque(maxlen=64)
+        self.commanded = False  # a posture command or trick of ours is under way
 
     def update(self, mode: int, body_height: float) -> Posture | None:
-        """A go2_states message arrived; returns the posture it shows (None in between)."""
+        """A go2_states message arrived; returns the posture it shows once settled (None in
+        between, or while the reports disagree)."""
         report = Report(time.monotonic(), mode, body_height)
         with self._lock:
             self._report = report
-        return report.posture
+            self._reports.append(report)
+            return self._settled(lambda r: r.posture)
+
+    def fallen(self) -> bool:
+        """The last reports (two or more, over `SETTLE`) show a mode of a fallen robot."""
+        with self._lock:
+            return self._settled(lambda r: r.mode in FALL_MODES) is True
+
+    def _settled(self, view: Callable[[Report], _T]) -> _T | None:
+        """What `view` shows of the latest report, if every report of the last `SETTLE`
+        seconds, and the one before them, show the same (else None). Lock held."""
+        if not self._reports:
+            return None
+        latest = self._reports[-1]
+        seen = view(latest)
+        for report in reversed(self._reports):
+            if view(report) != seen:
+                return None
+            if latest.receipt - report.receipt >= SETTLE:
+                return seen
+        return None
 
     def fresh(self) -> Report | None:
+        """The latest report, if recent and settled (its posture shown for `SETTLE` s)."""
         with self._lock:
             report = self._report
-        return report if report and time.monotonic() - report.receipt <= self.stale else None
+            settled = self._settled(lambda r: (r.posture, r.balanced)) is not None
+        recent = report is not None and time.monotonic() - report.receipt <= self.stale
+        return report if recent and settled else None
 
     def balanced(self) -> bool:
         report = self.fresh()
         return report is not None and report.balanced
 
-    def _seen(self) -> str:
+    def describe(self) -> str:
+        """The latest report in words (for messages)."""
         with self._lock:
             report = self._report
         if report is None:
             return "no messages"
-        return report.describe() if self.fresh() is not None else "no recent messages"
+        recent = time.monotonic() - report.receipt <= self.stale
+        return report.describe() if recent else "no recent messages"
 
     def current(self) -> Posture:
         """The robot's posture, waiting (bounded) for a report that shows one."""
@@ -103,7 +139,7 @@ class PostureWatch:
                 return report.posture
             if time.monotonic() > deadline:
                 raise RobotError(
-                    f"cannot tell the robot's posture: {self.topic} shows {self._seen()} after "
+                    f"cannot tell the robot's posture: {self.topic} shows {self.describe()} after "
                     f"{self.timeout:.0f} s; check that go2_ros2_sdk is running and connected "
                     "(`shadowhound doctor --go2`)"
                 )
@@ -125,7 +161,7 @@ class PostureWatch:
             if time.monotonic() > deadline:
                 raise RobotError(
                     f"{what} sent, but the robot did not reach {target.value} within "
-                    f"{self.timeout:.0f} s: {self.topic} shows {self._seen()}; check that "
+                    f"{self.timeout:.0f} s: {self.topic} shows {self.describe()}; check that "
                     "nothing else (the phone app, a joystick) holds the robot and that it has "
                     "room"
                 )

@@ -39,10 +39,13 @@ lives apart (go2_api: the sport API table, go2_motion: odometry tracking, go2_po
 
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import math
 import threading
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
 
 import rclpy
@@ -57,14 +60,16 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, CompressedImage, Image, LaserScan
 
 from ..camera import raw_image_frame, to_camera_frame
-from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, normalize_angle
+from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan
 from ..world import DEFAULT_ROBOT_RADIUS, Belief, GridError, merge_sightings
 from ..world.objects import KnownObject
 from . import go2_api
 from .base import RobotError
+from .estop_listener import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC, EstopListener
 from .go2_detections import Frames, SightingBoard, sightings_from_msg
-from .go2_motion import MotionTracker, StampClock
+from .go2_motion import MotionTracker
 from .go2_nav2 import Nav2Navigator
+from .go2_odometry import OdometryFault, OdometryIntake, OdometryLimits
 from .go2_posture import STEPS, PostureWatch
 from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
 from .go2_world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
@@ -74,6 +79,8 @@ _SENSOR = QoSProfile(
     depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
 )
 _KEEPALIVE_PERIOD = 0.1  # 10 Hz, as DIMOS streams Twist to the Go2
+_DRIVEN_SETTLE = 2.0  # seconds the body may still move after Nav2, a posture or a trick
+_PUBLISHERS_PERIOD = 0.5  # seconds between looks for a second odometry publisher
 _NAME = {
     go2_api.STAND_UP: "StandUp",
     go2_api.BALANCE_STAND: "BalanceStand",
@@ -115,6 +122,10 @@ class Go2RosConfig:
     nav2_action: str = "navigate_to_pose"  # Nav2's NavigateToPose; '' = no Nav2
     robot_radius: float = DEFAULT_ROBOT_RADIUS  # metres kept from obstacles on the map
     node_name: str = "shadowhound_go2"
+    # ShadowHound's e-stop topics (std_msgs/Empty), absolute; '' = not listened to here (the
+    # mission node listens itself). Wherever else a Go2 runs (MCP, scripts) they stop it.
+    estop_topic: str = ESTOP_TOPIC
+    estop_release_topic: str = ESTOP_RELEASE_TOPIC
 
 
 class Go2RosRobot:
@@ -139,8 +150,14 @@ class Go2RosRobot:
             linear_accel=c.linear_accel, angular_accel=c.angular_accel, latency=c.odom_latency
         )
         self._odom_at: float | None = None  # monotonic receipt of the last odometry
-        self._odom_clock = StampClock()  # when each pose was sent, on our clock
-        self._travel = (0.0, 0.0)  # distance travelled, angle turned (odometry)
+        # Odometry is checked before it is believed (go2_odometry); the odometer is its own.
+        self._intake = OdometryIntake(
+            self._tracker,
+            OdometryLimits(
+                max_speed=c.max_linear_speed + 0.25, max_yaw_rate=c.max_angular_speed + 0.5
+            ),
+        )
+        self._driven_until = 0.0  # Nav2, a posture or a trick may move the body until then
         self._posture = Posture.STANDING  # until go2_states says otherwise
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
@@ -182,6 +199,25 @@ class Go2RosRobot:
             if c.nav2_action
             else None
         )
+        self._estop_listeners: list[Callable[[bool], None]] = []
+        self._estop_node = (
+            EstopListener(
+                f"{c.node_name}_estop",
+                "/",
+                context,
+                _RELIABLE,
+                estop_topic=c.estop_topic,
+                release_topic=c.estop_release_topic,
+                on_estop=self._estop_pressed,
+                on_release=self._estop_released,
+            )
+            if c.estop_topic
+            else None
+        )
+        self._map_ready = threading.Condition()
+        self._map_msg: GridMsg | None = None  # the newest map not read yet
+        self._map_thread = threading.Thread(target=self._run_maps, name="go2-map", daemon=True)
+        self._map_thread.start()
         self._thread = threading.Thread(target=self._spin, name="go2-ros", daemon=True)
         self._thread.start()
 
@@ -219,6 +255,7 @@ class Go2RosRobot:
             n.create_subscription(LaserScan, c.scan_topic, self._on_scan, _SENSOR)
         n.create_timer(_KEEPALIVE_PERIOD, self._keep_alive)
         n.create_timer(5.0, self._warn_without_odometry)
+        n.create_timer(_PUBLISHERS_PERIOD, self._check_publishers)
 
     def _spin(self) -> None:
         try:
@@ -249,32 +286,98 @@ class Go2RosRobot:
         yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
         now = time.monotonic()
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        if self._navigator is not None and self._navigator.driving:
+            self._driven_until = now + _DRIVEN_SETTLE + self.odom_latency
+        elsewhere = now < self._driven_until
         with self._lock:
-            sent = self._odom_clock.local_time(stamp, now)
-            self._odom_frame = msg.header.frame_id or self._odom_frame
-            last = self._tracker.last_sample()
-            if last is not None:
-                step = math.hypot(p.x - last.x, p.y - last.y)
-                turn = abs(normalize_angle(yaw - last.yaw))
-                self._travel = (self._travel[0] + step, self._travel[1] + turn)
             before = self._tracker.latency
-            self._tracker.odometry(sent, p.x, p.y, yaw)
+            fault = self._intake.receive(now, stamp, p.x, p.y, yaw, driven_elsewhere=elsewhere)
             self._odom_at = now
             after = self._tracker.latency
+            self._odom_frame = msg.header.frame_id or self._odom_frame
             if msg.header.frame_id and msg.child_frame_id:
                 self._frames = Frames(
                     msg.header.frame_id.lstrip("/"), msg.child_frame_id.lstrip("/")
                 )
+        if fault is not None:
+            self._odometry_fault(fault)
         if abs(after - before) >= 0.01:
             self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
+    def _odometry_fault(self, fault: OdometryFault) -> None:
+        """Odometry stopped being believable: stop at once if moving; `get_state` raises
+        until it is trusted again, so the step fails naming the fault and no new one starts."""
+        with self._lock:
+            moving = not self._halted
+        if moving:
+            self.stop()
+        self.node.get_logger().warning(
+            f"odometry on {self.topic(self.config.odom_topic)} is not trusted: {fault.message}"
+            + ("; the robot was stopped" if moving else ""),
+            throttle_duration_sec=1.0,
+        )
+
+    def _check_publishers(self) -> None:
+        """Exactly one node may publish odometry: two (two SDKs on one network, go2_ros2_sdk
+        #28) interleave two frames."""
+        topic = self.topic(self.config.odom_topic)
+        try:
+            infos = self.node.get_publishers_info_by_topic(topic)
+        except Exception:  # rclpy raises several types once the context is shutting down
+            return
+        names = sorted({f"{i.node_namespace.rstrip('/')}/{i.node_name}" for i in infos})
+        problem = (
+            f"{len(infos)} publishers of odometry on {topic} ({', '.join(names)}): two SDKs or "
+            "drivers on one network? Only one may publish it (go2_ros2_sdk #28)"
+            if len(infos) > 1
+            else None
+        )
+        with self._lock:
+            fault = self._intake.report("publishers", problem, time.monotonic())
+        if fault is not None:
+            self._odometry_fault(fault)
+
     def _on_state(self, msg: Go2State) -> None:
         posture = self._postures.update(int(msg.mode), float(msg.body_height))
-        if posture is not None:
-            with self._lock:
-                self._posture = posture
+        if self._postures.fallen():
+            posture = Posture.LYING  # limp or getting up after a fall: it does not stand
+        if posture is None:
+            return
+        with self._lock:
+            was, self._posture = self._posture, posture
+            moving = not self._halted
+        if was is Posture.STANDING and posture is not was and not self._postures.commanded:
+            # Nobody here asked for it: a fall, or the remote. Moves would be ignored or worse;
+            # stop now (the running step then fails on the posture, SkillContext.check).
+            if moving:
+                self.stop()
+            self.node.get_logger().warning(
+                f"{self.topic(self.config.state_topic)} shows the robot {posture.value} "
+                f"({self._postures.describe()}) without a command from ShadowHound: a fall?"
+                + (" The robot was stopped." if moving else "")
+            )
 
     def _on_map(self, msg: GridMsg) -> None:
+        """Hand the map to the map thread (the newest wins): reading and inflating a large
+        map takes seconds, and this executor thread also reads odometry."""
+        with self._map_ready:
+            self._map_msg = msg
+            self._map_ready.notify()
+
+    def _run_maps(self) -> None:
+        while True:
+            with self._map_ready:
+                while self._map_msg is None and not self._closed:
+                    self._map_ready.wait()
+                if self._closed:
+                    return
+                msg, self._map_msg = self._map_msg, None
+            try:
+                self._take_map(msg)
+            except Exception:  # a bug here must not end map updates for good
+                logging.getLogger(__name__).exception("reading a map failed")
+
+    def _take_map(self, msg: GridMsg) -> None:
         log = self.node.get_logger()
         try:
             grid = grid_from_msg(msg)
@@ -411,11 +514,12 @@ class Go2RosRobot:
         with `connected` False, so reports and plans still work, and `send_velocity` refuses
         to start moving blind."""
         state = self.last_state()
-        if not state.connected:
-            with self._lock:
-                halted = self._halted
-            if not halted:
-                raise RobotError(self._odometry_problem())
+        with self._lock:
+            halted, untrusted = self._halted, self._intake.problem(time.monotonic())
+        if untrusted:
+            raise RobotError(f"odometry is not trusted: {untrusted}")
+        if not state.connected and not halted:
+            raise RobotError(self._odometry_problem())
         return state
 
     def last_state(self) -> RobotState:
@@ -424,7 +528,8 @@ class Go2RosRobot:
         with self._lock:
             x, y, yaw = self._tracker.pose(now)
             vx, vy, wz = self._tracker.velocity(now)
-            odom_at, travel, battery = self._odom_at, self._travel, self._battery
+            odom_at, battery = self._odom_at, self._battery
+            travel = (self._intake.distance, self._intake.turned)
             posture, estopped = self._posture, self._estopped
         fresh = odom_at is not None and now - odom_at <= self.config.odom_timeout
         level = battery[1] if battery and now - battery[0] <= self.config.battery_timeout else None
@@ -481,7 +586,14 @@ class Go2RosRobot:
         if not self.last_state().connected:
             raise RobotError(self._odometry_problem() + " Not moving without odometry.")
         with self._lock:
-            self._rediscover = self._rediscover or self._halted  # starting: look again
+            starting = self._halted
+            self._rediscover = self._rediscover or starting  # starting: look again
+        if starting:
+            self._check_publishers()  # two odometry sources: found before the first step
+        with self._lock:
+            untrusted = self._intake.problem(time.monotonic())
+        if untrusted:
+            raise RobotError(f"odometry is not trusted: {untrusted}. Not moving.")
         topic = self._discover_velocity_topic()
         with self._send_lock:
             with self._lock:
@@ -491,7 +603,7 @@ class Go2RosRobot:
                 self._halted = False
                 # The robot ignores velocity unless standing: predict no motion then.
                 walks = self._posture is Posture.STANDING
-                self._tracker.command(time.monotonic(), *(command if walks else (0.0, 0.0, 0.0)))
+                self._intake.command(time.monotonic(), *(command if walks else (0.0, 0.0, 0.0)))
             self._publish_twist(command, topic)
 
     def stop(self) -> None:
@@ -506,7 +618,7 @@ class Go2RosRobot:
                 self._halted = True
             self._request(go2_api.STOP_MOVE)
         with self._lock:
-            self._tracker.command(now, 0.0, 0.0, 0.0)
+            self._intake.command(now, 0.0, 0.0, 0.0)
         self._wake.set()
 
     def emergency_stop(self) -> None:
@@ -518,6 +630,25 @@ class Go2RosRobot:
     def release_estop(self) -> None:
         with self._lock:
             self._estopped = False
+
+    def watch_estop(self, listener: Callable[[bool], None]) -> None:
+        """Call `listener(True)` after an e-stop on `estop_topic` stopped the robot, and
+        `listener(False)` when a person releases it on `estop_release_topic`."""
+        self._estop_listeners.append(listener)
+
+    def _estop_pressed(self) -> None:
+        """On the e-stop listener's own thread: the hard stop first, then whoever watches."""
+        self.emergency_stop()
+        self.node.get_logger().warning(
+            f"E-STOP on {self.config.estop_topic}: the robot is stopped and latched"
+        )
+        for listener in list(self._estop_listeners):
+            listener(True)
+
+    def _estop_released(self) -> None:
+        self.release_estop()
+        for listener in list(self._estop_listeners):
+            listener(False)
 
     def set_posture(self, posture: Posture) -> None:
         """Go to `posture` through standing, one sport command at a time, each done when
@@ -540,13 +671,14 @@ class Go2RosRobot:
             if current is posture
             else [STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
         )
-        for b, api_ids in zip(path[1:], steps, strict=True):
-            for api_id in api_ids:
-                balance = api_id == go2_api.BALANCE_STAND
-                if balance and self._postures.balanced():
-                    continue  # RiseSit already ends balanced: no redundant command
-                self._request(api_id)
-                self._postures.reach(b, f"{_NAME[api_id]} (api id {api_id})", balance)
+        with self._body_commanded():
+            for b, api_ids in zip(path[1:], steps, strict=True):
+                for api_id in api_ids:
+                    balance = api_id == go2_api.BALANCE_STAND
+                    if balance and self._postures.balanced():
+                        continue  # RiseSit already ends balanced: no redundant command
+                    self._request(api_id)
+                    self._postures.reach(b, f"{_NAME[api_id]} (api id {api_id})", balance)
 
     def perform(self, trick: str) -> None:
         info = go2_api.TRICKS.get(trick)
@@ -565,11 +697,23 @@ class Go2RosRobot:
             raise RobotError(
                 f"cannot perform {trick} while the robot is {posture.value}; stand up first"
             )
-        if ai_mode:  # recent firmware runs these only in the "ai" motion mode
-            self._request(go2_api.MOTION_SWITCH, {"name": "ai"}, go2_api.MOTION_SWITCHER_TOPIC)
-        self._request(info.api_id)
-        self._postures.pause(info.duration, f"{trick} (api id {info.api_id})")
-        self._postures.reach(Posture.STANDING, trick)
+        with self._body_commanded():
+            if ai_mode:  # recent firmware runs these only in the "ai" motion mode
+                self._request(go2_api.MOTION_SWITCH, {"name": "ai"}, go2_api.MOTION_SWITCHER_TOPIC)
+            self._request(info.api_id)
+            self._postures.pause(info.duration, f"{trick} (api id {info.api_id})")
+            self._postures.reach(Posture.STANDING, trick)
+
+    @contextlib.contextmanager
+    def _body_commanded(self) -> Iterator[None]:
+        """A posture command or trick of ours runs: its posture changes are no fall, and the
+        body may move without a velocity command (for a while after, too)."""
+        self._postures.commanded = True
+        try:
+            yield
+        finally:
+            self._postures.commanded = False
+            self._driven_until = time.monotonic() + _DRIVEN_SETTLE
 
     time_scale = 1.0  # a real robot's clock is the wall clock
     realtime = True
@@ -614,7 +758,12 @@ class Go2RosRobot:
         if self._context.ok():
             self.stop()
         self._closed = True
+        with self._map_ready:
+            self._map_ready.notify()
+        if self._estop_node is not None:
+            self._estop_node.close()
         self._thread.join(2.0)
+        self._map_thread.join(2.0)
         self._executor.shutdown(timeout_sec=1.0)
         if self._navigator is not None:
             self._navigator.destroy()

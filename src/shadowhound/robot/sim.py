@@ -32,6 +32,7 @@ import math
 import threading
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -336,6 +337,9 @@ class SimRobot:
         with self._lock:
             self._state = replace(self._state, estopped=False)
             self._record("estop_release", None, True)
+
+    def watch_estop(self, listener: Callable[[bool], None]) -> None:
+        """The simulator has no e-stop source of its own: `listener` is never called."""
 
     def set_posture(self, posture: Posture, seconds: float | None = None) -> None:
         """Change posture, taking the Go2's typical time (or `seconds` for the whole change)."""

@@ -4,7 +4,7 @@ Interfaces (names relative to the node's namespace unless absolute):
 - subscribes `mission_command` (std_msgs/String), the camera (sensor_msgs/Image or
   CompressedImage, best effort, depth 1); `/shadowhound/estop` and `/shadowhound/estop_release`
   (std_msgs/Empty) are taken by a companion node `<name>_estop` on a thread of its own, so no
-  other callback can delay an e-stop (estop_listener.py);
+  other callback can delay an e-stop (robot/estop_listener.py);
 - publishes `mission_status` (std_msgs/String), `/shadowhound/diagnostics`
   (diagnostic_msgs/DiagnosticArray, 1 Hz), `/shadowhound/robot_status` (std_msgs/String JSON,
   5 Hz), and for RViz `planned_path` (nav_msgs/Path) and `known_objects`
@@ -20,7 +20,8 @@ queue, action goals are rejected while a mission runs or waits.
 
 Long because: one node's whole ROS surface (topics, action, service, parameters, status and
 diagnostics publishing) reads as one plain node class, as nav2_simple_commander's does; the
-pure helpers live in their own modules (params, convert, rviz, estop_listener, camera_intake).
+pure helpers live in their own modules (params, convert, rviz, camera_intake; the e-stop
+listener is robot/estop_listener.py).
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ from ..camera import raw_image_frame, to_camera_frame
 from ..errors import ParameterError
 from ..result import MissionResult
 from ..robot.base import RobotError
+from ..robot.estop_listener import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC, EstopListener
 from ..worker import MissionJob, MissionWorker
 from .camera_intake import CameraIntake
 from .convert import (
@@ -55,7 +57,6 @@ from .convert import (
     robot_status_json,
     shorten,
 )
-from .estop_listener import EstopListener
 from .params import NODE_NAME, PARAMETERS, describe_parameters, parse_parameters
 from .process import run_node
 from .rviz import RvizPublisher
@@ -69,8 +70,6 @@ try:  # built by scripts/build_ros.sh (ros2/shadowhound_interfaces)
 except ImportError:  # the node still runs its topics; the action and services are off
     ExecuteMission = Chat = Approve = None
 
-ESTOP_TOPIC = "/shadowhound/estop"
-ESTOP_RELEASE_TOPIC = "/shadowhound/estop_release"
 ACTION_NAME = "execute_mission"
 CHAT_SERVICE = "chat"
 APPROVE_SERVICE = "approve"
@@ -144,8 +143,15 @@ class MissionNode(Node):
                 f"go2_ros2_sdk workspace or run scripts/build_ros.sh ({exc})"
             ) from exc
         try:
+            # The node listens for the e-stop itself (and drops queued missions with it).
             self._go2 = Go2RosRobot(
-                Go2RosConfig(**self.settings.go2_options(), camera_topic=""), context=self.context
+                Go2RosConfig(
+                    **self.settings.go2_options(),
+                    camera_topic="",
+                    estop_topic="",
+                    estop_release_topic="",
+                ),
+                context=self.context,
             )
         except RobotError as exc:
             raise ParameterError(f"robot go2: {exc}") from exc
@@ -295,7 +301,7 @@ class MissionNode(Node):
     # -- e-stop ------------------------------------------------------------------------------
 
     def _on_estop(self) -> None:
-        """On the e-stop listener's own thread (see estop_listener.py)."""
+        """On the e-stop listener's own thread (see robot/estop_listener.py)."""
         self.agent.estop()
         dropped = self._worker.drop_queued("the e-stop was pressed before it started")
         self.get_logger().warning(
