@@ -34,6 +34,27 @@ class Pose2D:
     def distance_to(self, x: float, y: float) -> float:
         return math.hypot(x - self.x, y - self.y)
 
+    def unknown(self) -> str:
+        """What of the pose is not a finite number ("x=nan"), or "" when all of it is."""
+        return not_finite(x=self.x, y=self.y, yaw=self.yaw)
+
+
+def not_finite(**values: object) -> str:
+    """The values that are not finite numbers, as people read them ("x=nan, y=inf"); "" when
+    every one is. Odometry can lie: a position is checked with this wherever it comes in."""
+    return ", ".join(f"{name}={value!r:.20}" for name, value in values.items() if not _real(value))
+
+
+def _real(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def position_unknown(pose: Pose2D) -> str:
+    """Why the robot's pose cannot be used: "the robot's position is unknown (odometry
+    reports x=nan)"; "" when it can."""
+    bad = pose.unknown()
+    return f"the robot's position is unknown (odometry reports {bad})" if bad else ""
+
 
 @dataclass(frozen=True)
 class RobotState:
