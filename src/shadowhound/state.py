@@ -8,6 +8,8 @@ from dataclasses import asdict, dataclass, field
 from enum import Enum
 from typing import Any
 
+from .jsonout import number
+
 
 class Posture(str, Enum):
     """Body posture of a quadruped. Motion is only possible while standing."""
@@ -91,21 +93,22 @@ class RobotState:
         return abs(self.vx) > 1e-3 or abs(self.vy) > 1e-3 or abs(self.wz) > 1e-3
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON form used by the CLI, the web API and diagnostics (rounded for people)."""
+        """The JSON form used by the CLI, the web API and diagnostics (rounded for people).
+        A number the robot reports that is not finite (odometry that lies) is None."""
         return {
-            "x": round(self.x, 4),
-            "y": round(self.y, 4),
-            "yaw": round(self.yaw, 4),
-            "yaw_deg": round(math.degrees(self.yaw), 2),
+            "x": number(self.x, 4),
+            "y": number(self.y, 4),
+            "yaw": number(self.yaw, 4),
+            "yaw_deg": number(math.degrees(self.yaw), 2),
             "posture": self.posture.value,
-            "battery": None if self.battery is None else round(self.battery, 2),
-            "distance_travelled": round(self.distance_travelled, 4),
-            "angle_turned": round(self.angle_turned, 4),
+            "battery": None if self.battery is None else number(self.battery, 2),
+            "distance_travelled": number(self.distance_travelled, 4),
+            "angle_turned": number(self.angle_turned, 4),
             "moving": self.is_moving,
             "estopped": self.estopped,
             "connected": self.connected,
             "blocked_by": self.blocked_by,
-            "stamp": round(self.stamp, 3),
+            "stamp": number(self.stamp, 3),
         }
 
 

@@ -9,6 +9,7 @@ import sys
 import time
 from typing import Any
 
+from .. import jsonout
 from ..config import ShadowHoundConfig
 from ..exit_codes import EXIT_FAILED, EXIT_OK, EXIT_USAGE
 
@@ -20,7 +21,7 @@ def cmd_skills(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
     described = default_registry().describe()
     if args.json:
-        json.dump(described, sys.stdout, indent=2)
+        jsonout.dump(described, sys.stdout, indent=2)
         sys.stdout.write("\n")
         return EXIT_OK
     for skill in described:
@@ -145,12 +146,12 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
                     file=sys.stderr,
                 )
                 return EXIT_FAILED
-            json.dump(record, sys.stdout, indent=2, default=str)
+            jsonout.dump(record, sys.stdout, indent=2, default=str)
             sys.stdout.write("\n")
             return EXIT_OK
         rows = memory.history.recent(max(1, args.limit))
         if args.json:
-            json.dump(rows, sys.stdout, indent=2)
+            jsonout.dump(rows, sys.stdout, indent=2)
             sys.stdout.write("\n")
             return EXIT_OK
         for row in rows:
@@ -186,7 +187,7 @@ def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             for n, p in known_places(settings.places, memory.places).items()
         }
         if args.json:
-            json.dump(listing, sys.stdout, indent=2)
+            jsonout.dump(listing, sys.stdout, indent=2)
             sys.stdout.write("\n")
         else:
             for name, place in listing.items():

@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .. import jsonout
 from ..errors import MemoryStoreError
 from .lease import Lease, live_owners
 
@@ -171,7 +172,8 @@ class MissionHistory:
         )
 
     def mission_finished(self, record: dict[str, Any], finished_at: float) -> None:
-        """Store a finished mission (`MissionResult.to_dict()`), also one that never started."""
+        """Store a finished mission (`MissionResult.to_dict()`), also one that never started.
+        The record is kept as strict JSON (a number that is not finite is null)."""
         self._write(
             "INSERT INTO missions (id, mission, status, success, response, started_at, "
             "finished_at, record) VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT(id) DO UPDATE SET "
@@ -186,7 +188,7 @@ class MissionHistory:
                 record["response"],
                 finished_at - record["timing"]["total_duration"],
                 finished_at,
-                json.dumps(record, default=str),
+                jsonout.dumps(record, default=str),
             ),
         )
 
