@@ -138,6 +138,7 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     memory = _memory(settings)
     assert memory.history is not None
     try:
+        _note_rejected(memory.history)
         if args.mission_id:
             record = memory.history.get(args.mission_id)
             if record is None:
@@ -169,6 +170,17 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         return EXIT_OK
     finally:
         memory.close()
+
+
+def _note_rejected(history: Any) -> None:
+    """One line on stderr when the history has set records aside (see docs/memory.md)."""
+    count = history.rejected_count()
+    if count:
+        print(
+            f"shadowhound: note: {count} record(s) the history database refused are set "
+            f"aside in {history.rejected} (one JSON line each, with the error)",
+            file=sys.stderr,
+        )
 
 
 def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
