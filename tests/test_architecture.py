@@ -43,6 +43,7 @@ BASE = {
     "errors",
     "events",
     "geofence",
+    "jsonout",
     "plan",
     "result",
     "state",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import sqlite3
 import subprocess
@@ -16,6 +17,7 @@ import pytest
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, load_config
 from shadowhound.config import ConfigError
 from shadowhound.memory import MemoryStoreError, MissionHistory
+from tests.strict_json import strict_loads
 
 try:
     import chromadb  # noqa: F401
@@ -130,6 +132,91 @@ def test_a_locked_database_loses_no_record(tmp_path):
     agent.execute_mission("turn left")
     assert agent.memory.history.unsaved == 0
     assert [r["mission"] for r in agent.recent_missions(5)] == ["turn left", "walk forward 1 meter"]
+
+
+def test_a_record_the_database_refuses_for_good_is_set_aside_and_later_ones_land(tmp_path):
+    """A place at x = NaN (SQLite stores NaN as NULL: NOT NULL refuses it) and a time beyond
+    64 bits used to stay at the head of the backlog, and nothing after them was written."""
+    path = tmp_path / "history.db"
+    store = MissionHistory(path)
+    store._db.execute("PRAGMA busy_timeout = 50")
+    blocker = sqlite3.connect(str(path), timeout=0)
+    blocker.execute("BEGIN EXCLUSIVE")  # first the database is locked: every write waits
+    store.mission_started("m1", "walk forward 1 meter", time.time())
+    store.save_place("den", math.nan, 1.0, 0.0)
+    store.mission_queued("m2", "from a clock that lies", 2**70)
+    assert store.unsaved == 3  # kept, in order, for a retry
+    blocker.rollback()
+    blocker.close()
+    store.save_place("desk", 2.0, 1.0, 0.0)  # the retry: the good ones land, the bad go aside
+    assert store.unsaved == 0
+    finished = {
+        "mission_id": "m3",
+        "mission": "stand up",
+        "status": "succeeded",
+        "success": True,
+        "response": "done",
+        "timing": {"total_duration": 1.0},
+        "robot": {"x": math.nan, "yaw": math.inf, "y": 0.5},
+    }
+    store.mission_finished(finished, time.time())
+    store.mission_finished({"mission_id": "m4", "mission": "no status"}, time.time())
+    store.close()
+
+    again = MissionHistory(path)
+    assert sorted(r["id"] for r in again.recent()) == ["m1", "m3"]
+    assert again.load_places() == {"desk": (2.0, 1.0, 0.0)}
+    record = again.get("m3")
+    assert record is not None and record["robot"] == {"x": None, "yaw": None, "y": 0.5}
+    assert strict_loads(again._query("SELECT record FROM missions WHERE id = 'm3'", ())[0][0])
+    lines = [strict_loads(line) for line in again.rejected.read_text().splitlines()]
+    assert again.rejected == tmp_path / "history.rejected.jsonl"
+    assert again.rejected_count() == 3
+    assert [line["what"] for line in lines] == [
+        "place 'den'",
+        "queued mission m2",
+        "finished mission m4",  # a record that cannot be made into a row
+    ]
+    assert lines[0]["error"] == "IntegrityError: NOT NULL constraint failed: places.x"
+    assert lines[0]["params"][:2] == ["den", None]  # strict JSON: the NaN is null
+    assert lines[1]["error"].startswith("OverflowError:") and lines[1]["params"][2] == 2**70
+    assert lines[2]["error"] == "KeyError: 'status'"
+    assert lines[2]["params"] == [{"mission_id": "m4", "mission": "no status"}]
+    again.close()
+    listed = cli(tmp_path, "history")
+    assert listed.returncode == 0 and "walk forward 1 meter" in listed.stdout
+    assert (
+        f"3 record(s) the history database refused are set aside in {again.rejected}"
+        in listed.stderr
+    )
+
+
+def test_records_waiting_at_close_are_written_or_set_aside(tmp_path):
+    path = tmp_path / "history.db"
+    store = MissionHistory(path)
+    store._db.execute("PRAGMA busy_timeout = 50")
+    blocker = sqlite3.connect(str(path), timeout=0)
+    blocker.execute("BEGIN EXCLUSIVE")
+    store.save_place("den", 1.0, math.nan, 0.0)
+    store.mission_started("m1", "turn left", time.time())
+    blocker.rollback()
+    blocker.close()
+    store.close()  # nothing written since the lock: close writes what waits
+    again = MissionHistory(path)
+    assert [r["id"] for r in again.recent()] == ["m1"] and again.load_places() == {}
+    assert again.rejected_count() == 1
+    again.close()
+
+
+def test_a_refused_record_that_cannot_be_set_aside_is_logged_in_full(tmp_path, caplog):
+    store = MissionHistory(tmp_path / "history.db")
+    store.rejected.mkdir()  # the side file cannot be written
+    with caplog.at_level("ERROR"):
+        store.save_place("den", math.nan, 1.0, 0.0)
+        store.save_place("desk", 2.0, 1.0, 0.0)
+    assert store.unsaved == 0 and store.load_places() == {"desk": (2.0, 1.0, 0.0)}
+    assert "cannot be set aside" in caplog.text and '"params": ["den", null' in caplog.text
+    store.close()
 
 
 def test_a_corrupt_database_is_a_clear_error_and_is_kept(tmp_path):

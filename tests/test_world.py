@@ -318,6 +318,29 @@ def test_a_blocked_goal_or_a_walled_off_goal_is_refused_with_the_reason():
         plan_path(inflate(walled, 0.35), (1.0, 1.0), (3.0, 1.0))
 
 
+def test_points_that_are_not_finite_or_far_away_are_refused_not_crashed_on():
+    """Odometry that lies (issue 21): a NaN goal crashed the governor inside cell_of."""
+    from shadowhound.world import plan_route
+
+    belief = scene_belief(DEFAULT_WORLD, 0.35)
+    with pytest.raises(GridError, match=r"not finite \(x=nan\)"):
+        belief.grid.cell_of(math.nan, 0.0)
+    assert not belief.grid.contains(belief.grid.cell_of(1e308, -1e308))  # no overflow
+    for start, goal, said in [
+        ((0.0, 0.0), (math.nan, 1.0), r"the goal is not a point on the map: .*\(x=nan\)"),
+        ((0.0, math.inf), (1.0, 1.0), r"the start is not a point on the map: .*\(y=inf\)"),
+        ((0.0, 0.0), (1e308, 0.0), "outside the map"),
+        ((-1e308, 0.0), (1.0, 0.0), "the start .* is outside the map"),
+    ]:
+        with pytest.raises(PlanError, match=said):
+            plan_path(belief.inflated, start, goal)
+        with pytest.raises(PlanError, match=said):
+            plan_route(belief, start, goal)
+    ball = next(o for o in belief.objects if o.name == "red ball")
+    with pytest.raises(PlanError, match="not finite"):
+        standoff_point(belief, (math.nan, 0.0), ball)
+
+
 def test_a_start_inside_a_clearance_zone_first_backs_out_of_it():
     belief = scene_belief(DEFAULT_WORLD, 0.35)
     # Where the body stopped when it walked into the red ball.

@@ -8,7 +8,6 @@ variable a profile names and are never stored in the model.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Mapping
 from pathlib import Path
@@ -19,17 +18,26 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from .errors import ConfigError
 from .geofence import MAX_VERTICES, polygon_problem
+from .state import not_finite
 
 ENV_PREFIX = "SHADOWHOUND_"
 _PACKAGE_DIR = Path(__file__).resolve().parent
 
 
 def _finite_pair(value: Any) -> tuple[float, float]:
+    """[x, y] in metres: two numbers, both finite (odometry-sized mistakes are refused here)."""
     if not isinstance(value, (list, tuple)) or len(value) != 2:
-        raise ValueError("must be a pair [x, y] in metres")
-    x, y = (float(v) for v in value)
-    if not (math.isfinite(x) and math.isfinite(y)):
-        raise ValueError("must be finite numbers")
+        raise ValueError(f"must be a pair [x, y] in metres, got {value!r:.40}")
+    try:
+        if any(isinstance(v, bool) for v in value):
+            raise TypeError("a boolean is not a number")
+        x, y = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"must be a pair of numbers [x, y] in metres, got {list(value)!r:.40}"
+        ) from None
+    if bad := not_finite(x=x, y=y):
+        raise ValueError(f"must be finite numbers, got {bad}")
     return (x, y)
 
 

@@ -14,6 +14,7 @@ from collections import deque
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
+from .jsonout import number
 from .result import MissionStatus
 
 if TYPE_CHECKING:
@@ -43,7 +44,7 @@ class Progress:
             "current_skill": self.skill,
             "step": self.step,
             "steps": self.steps,
-            "progress": round(self.progress, 3),
+            "progress": number(self.progress, 3),
         }
 
 

@@ -27,6 +27,8 @@ what was wrong and what is allowed or what to do.
     +-- UnitError                    a value is not a quantity of the kind asked (ValueError)
     +-- MemoryStoreError             memory: the history database cannot be used
     |   +-- RecallStoreError         ... the retrieval store cannot be used
+    +-- PlaceError                   memory: a place without a name or a finite position
+    |                                    (ValueError)
     +-- CaseFileError                evaluation: a mission-case file is malformed (ValueError)
     +-- UsageError                   cli: a command line argparse cannot parse
     +-- ServeError                   web/mcp: a server cannot start as asked
@@ -57,6 +59,7 @@ __all__ = [
     "NotUnderstood",
     "ParameterError",
     "PlanError",
+    "PlaceError",
     "PlanProblem",
     "PlanningError",
     "RecallStoreError",
@@ -206,6 +209,10 @@ class MemoryStoreError(ShadowHoundError):
 
 class RecallStoreError(MemoryStoreError):
     """The retrieval store cannot be used. The message names the path and what to do."""
+
+
+class PlaceError(ShadowHoundError, ValueError):
+    """A place cannot be kept: it has no name, or its position is not finite numbers."""
 
 
 class CaseFileError(ShadowHoundError, ValueError):

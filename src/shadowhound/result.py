@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any, Protocol
 
+from .jsonout import number
 from .plan import Plan, Usage
 from .state import Pose2D, RobotState
 
@@ -71,7 +72,7 @@ class StepResult:
             "status": self.status.value,
             "started_at": self.started_at,
             "duration": round(self.duration, 6),
-            "robot_duration": round(self.robot_duration, 3),
+            "robot_duration": number(self.robot_duration, 3),  # the robot's clock
             "output": self.output,
             "error": self.error,
         }
@@ -94,14 +95,14 @@ class Timing:
     def agent_percentage(self) -> float:
         return 100.0 * self.agent_duration / self.total_duration if self.total_duration else 0.0
 
-    def to_dict(self) -> dict[str, float]:
+    def to_dict(self) -> dict[str, float | None]:
         return {
             "agent_duration": round(self.agent_duration, 6),
             "execution_duration": round(self.execution_duration, 6),
             "overhead_duration": round(self.overhead_duration, 6),
             "total_duration": round(self.total_duration, 6),
             "agent_percentage": round(self.agent_percentage, 2),
-            "robot_duration": round(self.robot_duration, 3),
+            "robot_duration": number(self.robot_duration, 3),
         }
 
 
@@ -142,7 +143,7 @@ class MissionResult:
             "planner": self.planner,
             "planned_by": self.plan.planned_by if self.plan else "",
             "predicted_path": [
-                {"x": round(p.x, 4), "y": round(p.y, 4), "yaw": round(p.yaw, 4)}
+                {"x": number(p.x, 4), "y": number(p.y, 4), "yaw": number(p.yaw, 4)}
                 for p in self.predicted_path
             ],
             "plan": self.plan.to_dict() if self.plan else None,

@@ -27,7 +27,7 @@ from .skills import SkillRegistry, default_registry, paths
 from .skills.arguments import argument_kind
 from .skills.context import PlanEnv
 from .skills.registry import ValidatedCall
-from .state import Pose2D, Posture, RobotState, normalize_angle
+from .state import Pose2D, Posture, RobotState, normalize_angle, position_unknown
 
 
 @dataclass(frozen=True)
@@ -234,7 +234,15 @@ class Governor:
         risk = call.skill.why_risky(args)
         if risk and not lim.allow_risky_tricks:
             approval = f"{risk} and needs approval, or safety.allow_risky_tricks: true"
+        if call.skill.moves and (why := position_unknown(pose)):
+            raise PlanProblem(
+                f"{why}: a step that moves the robot cannot be checked against the limits, "
+                "the geofence and the map from there"
+            )
         poses = call.skill.predict(pose, args, env) if call.skill.predict else []
+        lost = next((p.unknown() for p in poses if p.unknown()), "")
+        if lost:
+            raise PlanProblem(f"the step's predicted path has a point that is not finite ({lost})")
         distance = getattr(args, "distance", None)
         what = name if distance is None else f"{name} {distance:g} m"
         reasons += self.path_problems(pose, poses, env, what)

@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import gc
 import ipaddress
-import json
 import re
 import socket
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+from . import jsonout
 from .errors import ServeError
 
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
@@ -105,8 +105,8 @@ async def send_json(
     headers: list[tuple[bytes, bytes]] | None = None,
 ) -> None:
     """Answer an ASGI request with `payload` as JSON, before any app sees it (the security
-    gates of the dashboard and the MCP server)."""
-    body = json.dumps(payload).encode()
+    gates of the dashboard and the MCP server). Strict JSON: see jsonout."""
+    body = jsonout.dumps(payload).encode()
     await send(
         {
             "type": "http.response.start",

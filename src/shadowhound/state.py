@@ -8,6 +8,8 @@ from dataclasses import asdict, dataclass, field
 from enum import Enum
 from typing import Any
 
+from .jsonout import number
+
 
 class Posture(str, Enum):
     """Body posture of a quadruped. Motion is only possible while standing."""
@@ -33,6 +35,27 @@ class Pose2D:
 
     def distance_to(self, x: float, y: float) -> float:
         return math.hypot(x - self.x, y - self.y)
+
+    def unknown(self) -> str:
+        """What of the pose is not a finite number ("x=nan"), or "" when all of it is."""
+        return not_finite(x=self.x, y=self.y, yaw=self.yaw)
+
+
+def not_finite(**values: object) -> str:
+    """The values that are not finite numbers, as people read them ("x=nan, y=inf"); "" when
+    every one is. Odometry can lie: a position is checked with this wherever it comes in."""
+    return ", ".join(f"{name}={value!r:.20}" for name, value in values.items() if not _real(value))
+
+
+def _real(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def position_unknown(pose: Pose2D) -> str:
+    """Why the robot's pose cannot be used: "the robot's position is unknown (odometry
+    reports x=nan)"; "" when it can."""
+    bad = pose.unknown()
+    return f"the robot's position is unknown (odometry reports {bad})" if bad else ""
 
 
 @dataclass(frozen=True)
@@ -70,21 +93,22 @@ class RobotState:
         return abs(self.vx) > 1e-3 or abs(self.vy) > 1e-3 or abs(self.wz) > 1e-3
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON form used by the CLI, the web API and diagnostics (rounded for people)."""
+        """The JSON form used by the CLI, the web API and diagnostics (rounded for people).
+        A number the robot reports that is not finite (odometry that lies) is None."""
         return {
-            "x": round(self.x, 4),
-            "y": round(self.y, 4),
-            "yaw": round(self.yaw, 4),
-            "yaw_deg": round(math.degrees(self.yaw), 2),
+            "x": number(self.x, 4),
+            "y": number(self.y, 4),
+            "yaw": number(self.yaw, 4),
+            "yaw_deg": number(math.degrees(self.yaw), 2),
             "posture": self.posture.value,
-            "battery": None if self.battery is None else round(self.battery, 2),
-            "distance_travelled": round(self.distance_travelled, 4),
-            "angle_turned": round(self.angle_turned, 4),
+            "battery": None if self.battery is None else number(self.battery, 2),
+            "distance_travelled": number(self.distance_travelled, 4),
+            "angle_turned": number(self.angle_turned, 4),
             "moving": self.is_moving,
             "estopped": self.estopped,
             "connected": self.connected,
             "blocked_by": self.blocked_by,
-            "stamp": round(self.stamp, 3),
+            "stamp": number(self.stamp, 3),
         }
 
 

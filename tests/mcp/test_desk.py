@@ -107,3 +107,22 @@ def test_a_skill_tool_runs_exactly_when_its_one_step_plan_passes_the_checks(call
     finally:
         desk.close()
         agent.cleanup()
+
+
+def test_get_state_is_strict_json_when_odometry_lies():
+    """The text of a tool result is JSON for the client's model and tools: a NaN pose is null."""
+    from shadowhound.mcp.server import _answer
+    from tests.lying_odometry import LyingOdometry
+    from tests.strict_json import strict_loads
+
+    agent = RobotAgent(RobotAgentConfig(robot=LyingOdometry(x=math.nan, yaw=-math.inf)))
+    agent.initialize()
+    desk = McpDesk(agent)
+    try:
+        answer = _answer(desk.state())
+    finally:
+        desk.close()
+        agent.cleanup()
+    text = strict_loads(answer.content[0].text)  # type: ignore[union-attr]
+    assert isinstance(text, dict)
+    assert (text["robot"]["x"], text["robot"]["yaw"], text["robot"]["y"]) == (None, None, 0.0)

@@ -5,6 +5,7 @@ No rclpy needed: these run on every interpreter, also where ROS 2 is not install
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 import threading
@@ -156,6 +157,22 @@ def test_diagnostic_values_are_strings_with_the_documented_keys() -> None:
     values = dict(convert.diagnostic_values(broken))
     assert values["memory_recall"] == "unavailable" and "corrupt" in values["memory_problem"]
     assert convert.diagnostic_message({"status": "failed", "errors": ["a", "b"]}) == "failed: b"
+
+
+def test_robot_status_is_strict_json_when_odometry_lies() -> None:
+    """One NaN in the pose made robot_status a message no strict JSON reader takes."""
+    from tests.lying_odometry import LyingOdometry
+    from tests.strict_json import strict_loads
+
+    robot = LyingOdometry(x=math.nan, yaw=math.inf)
+    agent = RobotAgent(RobotAgentConfig(robot=robot))
+    text = convert.robot_status_json(agent.get_robot_status())
+    status = strict_loads(text)
+    assert isinstance(status, dict)
+    assert status["x"] is None and status["yaw"] is None and status["yaw_deg"] is None
+    assert status["y"] == 0.0 and status["posture"] == "standing"
+    values = dict(convert.diagnostic_values(agent.get_diagnostics()))
+    assert (values["pose_x"], values["pose_y"], values["pose_yaw"]) == ("unknown", "0.0", "unknown")
 
 
 def test_shorten_keeps_status_lines_short() -> None:

@@ -133,3 +133,44 @@ def _in_viewport(page: Any, selector: str) -> bool:
         and box["y"] + box["height"] <= size["height"]
         and box["x"] + box["width"] <= size["width"]
     )
+
+
+def test_dashboard_keeps_working_when_odometry_lies(tmp_path: Path) -> None:
+    """The page reads every message with JSON.parse, which refuses NaN: one NaN in the pose
+    used to freeze it. Now the pose is null, the page says so, and missions still show."""
+    import math
+
+    from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig
+    from shadowhound.web import create_app
+    from tests.lying_odometry import LyingOdometry
+
+    sync_playwright = _playwright()
+    agent = RobotAgent(
+        RobotAgentConfig(robot=LyingOdometry(x=math.nan), settings=ShadowHoundConfig())
+    )
+    agent.initialize()
+    server = WebServer(create_app(agent), "127.0.0.1", 0).start()
+    errors: list[str] = []
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch_persistent_context(
+                str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS
+            )
+            try:
+                page = browser.new_page()
+                page.on("pageerror", lambda exc: errors.append(str(exc)))
+                page.set_default_timeout(20_000)
+                page.goto(server.url + "/", wait_until="domcontentloaded")
+                page.wait_for_selector('#conn[data-state="live"]')
+                page.wait_for_selector('#map[data-unknown="true"]', state="attached")
+                assert "position unknown" in page.text_content("#pose")
+                page.fill("#command", "sit down")
+                page.click("#run")
+                page.wait_for_selector('#result[data-kind="ok"]')
+                page.wait_for_selector('#history li[data-status="succeeded"]')
+            finally:
+                browser.close()
+    finally:
+        server.stop()
+        agent.cleanup()
+    assert not errors, errors

@@ -3,10 +3,10 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from typing import Any
 
+from .. import jsonout
 from ..config import ShadowHoundConfig
 
 # Error kinds (`error_kind` of a JSON answer) and how they are named on stderr.
@@ -47,8 +47,8 @@ def report_error(
 
 
 def print_json(answer: dict[str, Any]) -> None:
-    """One JSON object on one line of stdout."""
-    json.dump(answer, sys.stdout, separators=(",", ":"))
+    """One JSON object on one line of stdout (strict JSON: see jsonout)."""
+    jsonout.dump(answer, sys.stdout, separators=(",", ":"))
     sys.stdout.write("\n")
     sys.stdout.flush()
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import queue
 import sys
@@ -12,6 +11,7 @@ from collections.abc import Callable
 from typing import Any, TextIO
 
 from .. import events as ev
+from .. import jsonout
 from ..approval import ApprovalRequest
 from ..config import ShadowHoundConfig
 from ..exit_codes import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
@@ -109,7 +109,7 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         if st is not None:  # None only when the robot could not be read at all
             print(
                 f"robot: x={st.x:.3f} m y={st.y:.3f} m yaw={st.yaw:.4f} rad "
-                f"({st.to_dict()['yaw_deg']} deg) posture={st.posture.value} "
+                f"({round(math.degrees(st.yaw), 2)} deg) posture={st.posture.value} "
                 f"battery={st.battery_text}"
             )
     return code
@@ -244,7 +244,7 @@ def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
             return f"failed: {job.dropped}"
         return ("ok: " if job.result.success else "failed: ") + job.result.response
     commands: dict[str, Callable[[], str]] = {
-        "/status": lambda: json.dumps(agent.get_robot_status()),
+        "/status": lambda: jsonout.dumps(agent.get_robot_status()),
         "/skills": lambda: ", ".join(s["name"] for s in agent.get_available_skills()),
         "/estop": lambda: (agent.estop(), "e-stop latched; /release to release it")[1],
         "/release": lambda: (agent.release_estop(), "e-stop released")[1],
@@ -296,7 +296,7 @@ def cmd_eval(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
                 f"({100 * card.pass_rate:.1f}%)"
             )
     if args.json:
-        json.dump(_eval_json(reports, several), sys.stdout, indent=2)
+        jsonout.dump(_eval_json(reports, several), sys.stdout, indent=2)
         sys.stdout.write("\n")
     elif several:
         print(scorecard_table([card for card, _ in reports]))

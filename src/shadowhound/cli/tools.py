@@ -9,6 +9,7 @@ import sys
 import time
 from typing import Any
 
+from .. import jsonout
 from ..config import ShadowHoundConfig
 from ..exit_codes import EXIT_FAILED, EXIT_OK, EXIT_USAGE
 
@@ -20,7 +21,7 @@ def cmd_skills(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
     described = default_registry().describe()
     if args.json:
-        json.dump(described, sys.stdout, indent=2)
+        jsonout.dump(described, sys.stdout, indent=2)
         sys.stdout.write("\n")
         return EXIT_OK
     for skill in described:
@@ -137,6 +138,7 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     memory = _memory(settings)
     assert memory.history is not None
     try:
+        _note_rejected(memory.history)
         if args.mission_id:
             record = memory.history.get(args.mission_id)
             if record is None:
@@ -145,12 +147,12 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
                     file=sys.stderr,
                 )
                 return EXIT_FAILED
-            json.dump(record, sys.stdout, indent=2, default=str)
+            jsonout.dump(record, sys.stdout, indent=2, default=str)
             sys.stdout.write("\n")
             return EXIT_OK
         rows = memory.history.recent(max(1, args.limit))
         if args.json:
-            json.dump(rows, sys.stdout, indent=2)
+            jsonout.dump(rows, sys.stdout, indent=2)
             sys.stdout.write("\n")
             return EXIT_OK
         for row in rows:
@@ -170,6 +172,17 @@ def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         memory.close()
 
 
+def _note_rejected(history: Any) -> None:
+    """One line on stderr when the history has set records aside (see docs/memory.md)."""
+    count = history.rejected_count()
+    if count:
+        print(
+            f"shadowhound: note: {count} record(s) the history database refused are set "
+            f"aside in {history.rejected} (one JSON line each, with the error)",
+            file=sys.stderr,
+        )
+
+
 def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     from ..memory.places import known_places
 
@@ -186,7 +199,7 @@ def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             for n, p in known_places(settings.places, memory.places).items()
         }
         if args.json:
-            json.dump(listing, sys.stdout, indent=2)
+            jsonout.dump(listing, sys.stdout, indent=2)
             sys.stdout.write("\n")
         else:
             for name, place in listing.items():

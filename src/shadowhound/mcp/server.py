@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import asyncio
 import base64
-import json
 import logging
 import secrets
 from collections.abc import Callable
@@ -24,7 +23,7 @@ import mcp_types as types
 from mcp.server import Server, ServerRequestContext
 from mcp.shared.exceptions import MCPError
 
-from .. import __version__
+from .. import __version__, jsonout
 from .. import events as ev
 from ..agent import RobotAgent
 from ..errors import ToolInputError
@@ -161,7 +160,7 @@ class McpRobotServer:
                         data=base64.b64encode(image.data).decode(),
                         mime_type="image/jpeg",
                     ),
-                    types.TextContent(type="text", text=json.dumps(meta)),
+                    types.TextContent(type="text", text=jsonout.dumps(meta)),
                 ],
                 structured_content=meta,
             )
@@ -344,7 +343,7 @@ class McpRobotServer:
         return types.ReadResourceResult(
             contents=[
                 types.TextResourceContents(
-                    uri=uri, mime_type="application/json", text=json.dumps(data)
+                    uri=uri, mime_type="application/json", text=jsonout.dumps(data)
                 )
             ]
         )
@@ -430,7 +429,7 @@ def _answer(data: Any, ok_key: str | None = None) -> types.CallToolResult:
     structured = data if isinstance(data, dict) else {"value": data}
     failed = ok_key is not None and not structured.get(ok_key, False)
     return types.CallToolResult(
-        content=[types.TextContent(type="text", text=json.dumps(structured))],
+        content=[types.TextContent(type="text", text=jsonout.dumps(structured))],
         structured_content=structured,
         is_error=failed,
     )

@@ -6,9 +6,12 @@ its queue (status `queued`), when it starts (`running`) and when it finishes; on
 accepted but never started is `not_run`, with the reason. Each queued or running row names the
 process that owns it (a lease, see lease.py); when any process opens the file, rows whose owner
 has ended are marked: `running` ones `interrupted`, `queued` ones `not_run`. A live owner's
-missions are never touched by another process. A write that fails (the file is locked past
-the busy time-out, the disk is full) is kept in memory and retried with the next write, so no
-record is lost while the process lives.
+missions are never touched by another process. A write that fails for now (the file is locked
+past the busy time-out, the disk is full) is kept in memory and retried, in order, with the
+next write, so no record is lost while the process lives. A record the database refuses for
+good (a constraint it breaks, a value SQLite cannot hold) is set aside instead, as one line
+of strict JSON with the error in `history.rejected.jsonl` beside the database, so the records
+after it still land (backlog.py).
 """
 
 from __future__ import annotations
@@ -21,7 +24,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from .. import jsonout
 from ..errors import MemoryStoreError
+from .backlog import Backlog, Write
 from .lease import Lease, live_owners
 
 log = logging.getLogger(__name__)
@@ -70,7 +75,8 @@ class MissionHistory:
         self._owners = self.path.with_name(self.path.name + "-owners")  # lease files
         self._lease: Lease | None = None
         self._lock = threading.Lock()
-        self._backlog: list[tuple[str, tuple[Any, ...]]] = []
+        self._backlog = Backlog(self.path.with_suffix(".rejected.jsonl"))
+        self._closed = False
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._db = sqlite3.connect(
@@ -103,6 +109,7 @@ class MissionHistory:
         with self._lock:
             self._flush()
             self._db.close()
+            self._closed = True
             if self._lease is not None:
                 self._lease.release()
                 self._lease = None
@@ -146,6 +153,7 @@ class MissionHistory:
     def mission_queued(self, mission_id: str, mission: str, queued_at: float) -> None:
         """An interface accepted the mission; it waits for its turn."""
         self._write(
+            f"queued mission {mission_id}",
             "INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
             "VALUES (?, ?, 'queued', ?, ?)",
             (mission_id, mission, queued_at, self._owner()),
@@ -153,6 +161,7 @@ class MissionHistory:
 
     def mission_started(self, mission_id: str, mission: str, started_at: float) -> None:
         self._write(
+            f"started mission {mission_id}",
             "INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
             "VALUES (?, ?, 'running', ?, ?)",
             (mission_id, mission, started_at, self._owner()),
@@ -163,6 +172,7 @@ class MissionHistory:
     ) -> None:
         """A mission that was accepted but never started (dropped, cancelled, refused)."""
         self._write(
+            f"mission {mission_id} not run",
             "INSERT INTO missions (id, mission, status, success, response, started_at, "
             "finished_at) VALUES (?, ?, 'not_run', 0, ?, ?, ?) ON CONFLICT(id) DO UPDATE SET "
             "status = 'not_run', success = 0, response = excluded.response, "
@@ -171,23 +181,32 @@ class MissionHistory:
         )
 
     def mission_finished(self, record: dict[str, Any], finished_at: float) -> None:
-        """Store a finished mission (`MissionResult.to_dict()`), also one that never started."""
-        self._write(
-            "INSERT INTO missions (id, mission, status, success, response, started_at, "
-            "finished_at, record) VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT(id) DO UPDATE SET "
-            "status = excluded.status, success = excluded.success, "
-            "response = excluded.response, finished_at = excluded.finished_at, "
-            "record = excluded.record",
-            (
-                record["mission_id"],
+        """Store a finished mission (`MissionResult.to_dict()`), also one that never started.
+        The record is kept as strict JSON (a number that is not finite is null)."""
+        mission_id = record.get("mission_id")
+        try:
+            params = (
+                mission_id,
                 record["mission"],
                 record["status"],
                 int(record["success"]),
                 record["response"],
                 finished_at - record["timing"]["total_duration"],
                 finished_at,
-                json.dumps(record, default=str),
-            ),
+                jsonout.dumps(record, default=str),
+            )
+        except (KeyError, TypeError, ValueError) as exc:  # not a result's record
+            with self._lock:
+                self._backlog.set_aside(Write(f"finished mission {mission_id}", "", (record,)), exc)
+            return
+        self._write(
+            f"finished mission {mission_id}",
+            "INSERT INTO missions (id, mission, status, success, response, started_at, "
+            "finished_at, record) VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT(id) DO UPDATE SET "
+            "status = excluded.status, success = excluded.success, "
+            "response = excluded.response, finished_at = excluded.finished_at, "
+            "record = excluded.record",
+            params,
         )
 
     def prune(self, *, max_age_days: float | None, max_missions: int | None) -> int:
@@ -210,30 +229,38 @@ class MissionHistory:
                 log.error("pruning the mission history failed: %s", _explain(self.path, exc))
         return deleted
 
-    def _write(self, sql: str, params: tuple[Any, ...]) -> None:
+    def _write(self, what: str, sql: str, params: tuple[Any, ...]) -> None:
         with self._lock:
-            self._backlog.append((sql, params))
+            self._backlog.add(Write(what, sql, params))
+            if self._closed:
+                log.error("the %s came after the mission history was closed: not written", what)
             self._flush()
 
     def _flush(self) -> None:
-        while self._backlog:
-            sql, params = self._backlog[0]
-            try:
-                self._db.execute(sql, params)
-            except sqlite3.DatabaseError as exc:
-                log.error(
-                    "mission history write failed, kept in memory for a retry (%d waiting): %s",
-                    len(self._backlog),
-                    _explain(self.path, exc),
-                )
-                return
-            self._backlog.pop(0)
+        if self._closed:
+            return
+        failed = self._backlog.flush(self._db)
+        if failed is not None:
+            log.error(
+                "mission history write failed, kept in memory for a retry (%d waiting): %s",
+                len(self._backlog),
+                _explain(self.path, failed),
+            )
 
     @property
     def unsaved(self) -> int:
-        """Records waiting to be written because the database refused them."""
+        """Records waiting to be written because the database refused them for now."""
         with self._lock:
             return len(self._backlog)
+
+    @property
+    def rejected(self) -> Path:
+        """The side file of records the database refused for good (see backlog.py)."""
+        return self._backlog.rejected
+
+    def rejected_count(self) -> int:
+        """How many records the side file holds. Raises MemoryStoreError when it cannot say."""
+        return self._backlog.rejected_count()
 
     # -- reading ----------------------------------------------------------------------------
 
@@ -293,12 +320,13 @@ class MissionHistory:
 
     def save_place(self, name: str, x: float, y: float, yaw: float) -> None:
         self._write(
+            f"place {name!r}",
             "INSERT OR REPLACE INTO places (name, x, y, yaw, created_at) VALUES (?, ?, ?, ?, ?)",
             (name, x, y, yaw, time.time()),
         )
 
     def delete_place(self, name: str) -> None:
-        self._write("DELETE FROM places WHERE name = ?", (name,))
+        self._write(f"forgetting the place {name!r}", "DELETE FROM places WHERE name = ?", (name,))
 
     def load_places(self) -> dict[str, tuple[float, float, float]]:
         rows = self._query("SELECT name, x, y, yaw FROM places ORDER BY name", ())
@@ -310,6 +338,7 @@ class MissionHistory:
         self, name: str, x: float, y: float, radius: float, confidence: float, stamp: float
     ) -> None:
         self._write(
+            f"sighting of {name!r}",
             "INSERT OR REPLACE INTO sightings (name, x, y, radius, confidence, stamp, "
             "seen_at) VALUES (?, ?, ?, ?, ?, ?, ?)",
             (name, x, y, radius, confidence, stamp, time.time()),

@@ -4,16 +4,25 @@ Places from the profile are fixed; taught places live here, in the history datab
 memory is enabled (so they survive restarts), else for the life of the process.
 `known_places` is the one merge of the two that every reader uses (the agent's plans, the
 places.list skill, the CLI, the MCP server and the web map).
+
+A place's position is finite numbers, wherever it comes from (odometry can lie): `remember`
+refuses any other with a PlaceError, and a row read back from the database that is not is
+skipped, with a warning.
 """
 
 from __future__ import annotations
 
+import logging
 import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
+from ..errors import PlaceError
+from ..state import not_finite
 from .history import MissionHistory
+
+log = logging.getLogger(__name__)
 
 
 def normalize_place(name: str) -> str:
@@ -27,18 +36,35 @@ class PlaceBook:
     def __init__(self, store: MissionHistory | None = None) -> None:
         self._store = store
         self._lock = threading.Lock()
-        self._places: dict[str, tuple[float, float, float]] = (
-            store.load_places() if store is not None else {}
-        )
+        self._places: dict[str, tuple[float, float, float]] = {}
+        for name, (x, y, yaw) in store.load_places().items() if store is not None else ():
+            bad = not_finite(x=x, y=y, yaw=yaw)
+            if bad:
+                log.warning(
+                    "skipped the taught place %r read from the history: its position is not "
+                    "finite (%s); teach it again",
+                    name,
+                    bad,
+                )
+                continue
+            self._places[name] = (x, y, yaw)
 
     @property
     def persistent(self) -> bool:
         return self._store is not None
 
     def remember(self, name: str, x: float, y: float, yaw: float) -> str:
+        """Keep (x, y, yaw) (odom frame) under `name`; returns the key it is kept as. Raises
+        PlaceError for a blank name or a position that is not finite numbers."""
         key = normalize_place(name)
         if not key:
-            raise ValueError("a place needs a name")
+            raise PlaceError("a place needs a name")
+        bad = not_finite(x=x, y=y, yaw=yaw)
+        if bad:
+            raise PlaceError(
+                f"cannot remember the {key} at a position that is not finite ({bad}); "
+                "a place needs finite x, y (metres) and yaw (radians)"
+            )
         with self._lock:
             self._places[key] = (x, y, yaw)
         if self._store is not None:

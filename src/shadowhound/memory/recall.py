@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
+from .. import jsonout
 from ..errors import RecallStoreError
 
 KINDS = ("mission", "fact", "observation")
@@ -102,7 +103,12 @@ class RecallMemory:
             {
                 "kind": kind,
                 "created": time.time(),
-                **{k: v for k, v in meta.items() if isinstance(v, (str, int, float, bool))},
+                # A position that is not finite (odometry that lies) is left out, not stored.
+                **{
+                    k: v
+                    for k, v in jsonout.finite(meta).items()
+                    if isinstance(v, (str, int, float, bool))
+                },
             }
             for _, kind, meta in items
         ]

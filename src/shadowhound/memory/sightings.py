@@ -8,6 +8,7 @@ Belief) is seeded from it, and every new sighting is written back.
 
 from __future__ import annotations
 
+import logging
 import math
 import threading
 import time
@@ -15,6 +16,8 @@ from dataclasses import dataclass
 
 from ..world import KnownObject
 from .history import MissionHistory
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -40,9 +43,12 @@ class SightingBook:
         self._seen: dict[str, Remembered] = {}
         if store is not None:
             for name, x, y, radius, confidence, stamp, seen_at in store.load_sightings():
-                self._seen[name] = Remembered(
-                    KnownObject(name, x, y, radius, confidence, stamp, remembered=True), seen_at
-                )
+                try:
+                    known = KnownObject(name, x, y, radius, confidence, stamp, remembered=True)
+                except (TypeError, ValueError) as exc:  # a row no sighting could have made
+                    log.warning("skipped the sighting of %r read from the history: %s", name, exc)
+                    continue
+                self._seen[name] = Remembered(known, seen_at)
 
     def remember(self, known: KnownObject) -> None:
         now = time.time()

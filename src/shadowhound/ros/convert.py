@@ -7,8 +7,9 @@ CameraFrames in `shadowhound.camera` (`raw_image_frame`), which the Go2 robot al
 
 from __future__ import annotations
 
-import json
 from typing import Any
+
+from .. import jsonout
 
 # diagnostic_msgs/DiagnosticStatus levels
 OK, WARN, ERROR, STALE = 0, 1, 2, 3
@@ -71,9 +72,9 @@ def diagnostic_values(
         "error_count": len(errors),
         "backend": diagnostics.get("backend"),
         "estop": bool(diagnostics.get("estop")),
-        "pose_x": robot.get("x"),
-        "pose_y": robot.get("y"),
-        "pose_yaw": robot.get("yaw"),
+        "pose_x": _known(robot, "x"),
+        "pose_y": _known(robot, "y"),
+        "pose_yaw": _known(robot, "yaw"),
         "battery": "unknown" if _battery_unknown(diagnostics) else robot.get("battery"),
         "posture": robot.get("posture"),
         "moving": robot.get("moving"),
@@ -84,6 +85,12 @@ def diagnostic_values(
     return [(k, _text(v)) for k, v in values.items()]
 
 
+def _known(robot: dict[str, Any], key: str) -> Any:
+    """A number of the robot's state, or "unknown" when the robot reported one that is not
+    finite (RobotState.to_dict makes it None)."""
+    return "unknown" if key in robot and robot[key] is None else robot.get(key)
+
+
 def _text(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
@@ -91,8 +98,9 @@ def _text(value: Any) -> str:
 
 
 def robot_status_json(robot: dict[str, Any]) -> str:
-    """The robot state (RobotState.to_dict) as compact JSON."""
-    return json.dumps(robot, separators=(",", ":"), sort_keys=True)
+    """The robot state (RobotState.to_dict) as compact, strict JSON (a number that is not
+    finite is null)."""
+    return jsonout.dumps(robot, separators=(",", ":"), sort_keys=True)
 
 
 def shorten(text: str, limit: int = 200) -> str:

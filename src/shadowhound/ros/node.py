@@ -26,7 +26,6 @@ listener is robot/estop_listener.py).
 
 from __future__ import annotations
 
-import json
 import sys
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -42,6 +41,7 @@ from sensor_msgs.msg import CompressedImage, Image
 from std_msgs.msg import String
 
 from .. import events as ev
+from .. import jsonout
 from ..agent import RobotAgent, RobotAgentConfig
 from ..camera import raw_image_frame, to_camera_frame
 from ..errors import ParameterError
@@ -404,7 +404,7 @@ class MissionNode(Node):
 
     def _announce_approval(self, event: ev.MissionEvent) -> None:
         if isinstance(event, ev.ApprovalRequired):
-            self._approval_pub.publish(String(data=json.dumps(event.request.to_dict())))
+            self._approval_pub.publish(String(data=jsonout.dumps(event.request.to_dict())))
 
     def _on_approve(self, request: Any, response: Any) -> Any:
         wanted = request.request_id.strip() or None
@@ -507,7 +507,7 @@ def _action_result(job: MissionJob) -> Any:
     if isinstance(result, MissionResult):
         steps = [s.to_dict() for s in result.steps]
         return ExecuteMission.Result(
-            success=result.success, response=result.response, steps_json=json.dumps(steps)
+            success=result.success, response=result.response, steps_json=jsonout.dumps(steps)
         )
     return ExecuteMission.Result(
         success=False, steps_json="[]", response=f"Not run: {job.dropped or 'no result'}."

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from ..errors import RecallStoreError, SkillError
+from ..errors import PlanProblem, RecallStoreError, SkillError
 from ..memory.places import known_places, normalize_place
-from ..state import Pose2D
+from ..state import Pose2D, position_unknown
 from .arguments import NoArgs, SkillArgs
 from .context import PlanEnv, SkillContext
 from .registry import Skill
@@ -34,8 +34,16 @@ def _memory(ctx: SkillContext):  # type: ignore[no-untyped-def]
     return ctx.memory
 
 
+def _unknown_here(pose: Pose2D) -> str:
+    """Why no place can be remembered at `pose` ("" when one can): odometry that lies."""
+    why = position_unknown(pose)
+    return f"{why}: cannot remember a place there" if why else ""
+
+
 def _remember(ctx: SkillContext, a: PlaceArgs) -> str:
     st = ctx.robot.get_state()
+    if why := _unknown_here(st.pose):
+        raise SkillError(why)
     book = _memory(ctx).places
     key = book.remember(a.name, st.x, st.y, st.yaw)
     ctx.env.places[key] = (st.x, st.y)
@@ -44,6 +52,8 @@ def _remember(ctx: SkillContext, a: PlaceArgs) -> str:
 
 
 def _predict_remember(pose: Pose2D, a: PlaceArgs, env: PlanEnv) -> list[Pose2D]:
+    if why := _unknown_here(pose):
+        raise PlanProblem(why)
     env.places[normalize_place(a.name)] = (pose.x, pose.y)  # later steps may go there
     return []
 

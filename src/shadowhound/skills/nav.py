@@ -13,7 +13,7 @@ from collections.abc import Callable
 from pydantic import ConfigDict, Field, model_validator
 
 from ..errors import PlanProblem, SkillError
-from ..state import Pose2D, normalize_angle
+from ..state import Pose2D, normalize_angle, not_finite, position_unknown
 from ..units import format_number as _n
 from ..world import PlanError, apply_scan, plan_route
 from . import motion, navigate, objects, paths
@@ -160,7 +160,14 @@ def _goto_target(a: GotoArgs, env: PlanEnv) -> tuple[float, float]:
 
 def route(env: PlanEnv, start: Pose2D, goal: tuple[float, float]) -> list[tuple[float, float]]:
     """The points a walk from `start` to `goal` passes, the goal last: with a map, the planned
-    collision-free path; without one, the goal alone (a straight line, as before maps)."""
+    collision-free path; without one, the goal alone (a straight line, as before maps).
+    Raises PlanProblem when there is none, also when the start or the goal is not finite."""
+    if why := position_unknown(start):
+        raise PlanProblem(f"{why}: cannot plan a walk from there")
+    if bad := not_finite(x=goal[0], y=goal[1]):
+        raise PlanProblem(
+            f"the goal is not a point the robot can walk to: it is not finite ({bad})"
+        )
     if env.belief is None:
         return [goal]
     try:

@@ -128,13 +128,16 @@ def sight_in_view(ctx: SkillContext) -> list[KnownObject]:
 def record_view(
     robot: Robot, belief: Belief | None, memory: AgentMemory | None = None
 ) -> list[KnownObject]:
-    """`sight_in_view` for callers without a SkillContext (the agent, before planning)."""
+    """`sight_in_view` for callers without a SkillContext (the agent, before planning).
+    Nothing is placed while the robot's own position is not finite numbers."""
     if belief is None:
         return []
     frame = robot.get_camera_frame()
     if frame is None or not frame.sightings:
         return []
     pose = robot.get_state().pose
+    if pose.unknown():  # odometry that lies: where the objects in view are is not known
+        return []
     stamp = robot.now()
     seen = []
     for s in frame.sightings:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, HTTPException, Query, Request
-from fastapi.responses import JSONResponse, Response
+from fastapi.responses import Response
 
 from .. import __version__
 from ..admission import ESTOP_LATCHED, mission_text_problem
@@ -33,6 +33,7 @@ from .models import (
     Problem,
     RejectRequest,
 )
+from .responses import StrictJSON
 from .worldmap import GridImages, grid_layout, grid_version, object_dicts
 
 
@@ -87,7 +88,7 @@ async def health(request: Request) -> dict[str, Any]:
     responses=_REFUSED,
     tags=["missions"],
 )
-async def submit_mission(request: Request, body: MissionRequest) -> MissionAccepted | JSONResponse:
+async def submit_mission(request: Request, body: MissionRequest) -> MissionAccepted | StrictJSON:
     """Queue a mission (or a dry run). 202 with its id; follow it on /ws/status or /api/events."""
     web = ctx(request)
     problem = mission_text_problem(
@@ -99,7 +100,7 @@ async def submit_mission(request: Request, body: MissionRequest) -> MissionAccep
     record, refused = web.desk.submit(body.command, body.dry_run)
     if record is None:
         status = 409 if refused == ESTOP_LATCHED else 429
-        return JSONResponse(
+        return StrictJSON(
             {
                 "detail": refused,
                 "success": False,

@@ -16,7 +16,7 @@ from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import FileResponse, JSONResponse
+from fastapi.responses import FileResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
@@ -31,6 +31,7 @@ from .feed import EventFeed
 from .frames import FrameCache
 from .models import MAX_BODY
 from .openapi import document_answers
+from .responses import StrictJSON
 from .security import Gate, scrubber, secret_values
 
 log = logging.getLogger(__name__)
@@ -86,6 +87,7 @@ def create_app(
         title="ShadowHound",
         version=__version__,
         lifespan=lifespan,
+        default_response_class=StrictJSON,
         description="Missions, live progress, camera, map and e-stop for a "
         "quadruped robot. Mutating requests need `Authorization: Bearer "
         "<token>` when the server has a token.",
@@ -129,28 +131,28 @@ def _add_page(app: FastAPI) -> None:
 
 def _add_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(RequestValidationError)
-    async def invalid(_request: Request, exc: RequestValidationError) -> JSONResponse:
+    async def invalid(_request: Request, exc: RequestValidationError) -> StrictJSON:
         # Say what was wrong without echoing the input back (it may be large or private).
         problems = [
             {"where": ".".join(str(p) for p in e.get("loc", ())), "problem": e["msg"]}
             for e in exc.errors()
         ]
         text = "; ".join(f"{p['where']}: {p['problem']}" for p in problems)
-        return JSONResponse(
+        return StrictJSON(
             {"detail": f"invalid request: {text}", "problems": problems}, status_code=422
         )
 
     @app.exception_handler(StarletteHTTPException)
-    async def http_error(_request: Request, exc: StarletteHTTPException) -> JSONResponse:
-        return JSONResponse(
+    async def http_error(_request: Request, exc: StarletteHTTPException) -> StrictJSON:
+        return StrictJSON(
             {"detail": exc.detail},
             status_code=exc.status_code,
             headers=getattr(exc, "headers", None),
         )
 
     @app.exception_handler(Exception)
-    async def crashed(request: Request, exc: Exception) -> JSONResponse:
+    async def crashed(request: Request, exc: Exception) -> StrictJSON:
         log.exception("request %s %s failed", request.method, request.url.path)
-        return JSONResponse(
+        return StrictJSON(
             {"detail": "internal error; the server log has the details"}, status_code=500
         )

@@ -20,7 +20,6 @@ still behind asks for one), so a backlog is sent a slice at a time too, not all 
 from __future__ import annotations
 
 import asyncio
-import json
 import logging
 import threading
 import time
@@ -28,6 +27,8 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
+
+from .. import jsonout
 
 log = logging.getLogger(__name__)
 
@@ -244,8 +245,9 @@ class EventFeed:
         return Packet(None, LAGGED, self.encode(message))
 
     def encode(self, message: dict[str, Any]) -> str:
-        """JSON text of a message with any secret value masked."""
-        return self._scrub(json.dumps(message, default=str, separators=(",", ":")))
+        """Strict JSON text of a message (a number that is not finite is null: a browser's
+        JSON.parse refuses NaN) with any secret value masked."""
+        return self._scrub(jsonout.dumps(message, default=str, separators=(",", ":")))
 
     def _wake(self, hub: _Hub) -> None:
         """In the hub's loop: something was published; sweep over its waiting clients."""

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import GridError
-from ..state import Pose2D
+from ..state import Pose2D, not_finite
 
 UNKNOWN = -1
 FREE = 0
@@ -28,6 +28,7 @@ DEFAULT_RESOLUTION = 0.05  # metres per cell
 MAX_CELLS = 25_000_000  # 250 m x 250 m at 5 cm: beyond this a map is a mistake, not a house
 
 _UNKNOWN_BYTE = 255
+_FAR = float(2**40)  # cells: beyond any map (MAX_CELLS), yet a whole number a float holds
 
 
 @dataclass(frozen=True)
@@ -157,9 +158,15 @@ class OccupancyGrid:
         return gx, gy
 
     def cell_of(self, x: float, y: float) -> Cell:
-        """The cell holding the point (it may lie outside the grid; see `contains`)."""
+        """The cell holding the point (it may lie outside the grid; see `contains`). Raises
+        GridError for a point that is not finite numbers: no cell holds it."""
+        bad = not_finite(x=x, y=y)
+        if bad:
+            raise GridError(f"no map cell holds a point that is not finite ({bad})")
         gx, gy = self.to_grid_frame(x, y)
-        return Cell(math.floor(gx), math.floor(gy))
+        # A finite point far enough away overflows the grid frame (1e308 m): a cell _FAR
+        # away is as far outside any map as the point's own would be.
+        return Cell(math.floor(_within(gx, _FAR)), math.floor(_within(gy, _FAR)))
 
     def center_of(self, cell: Cell) -> tuple[float, float]:
         """The map-frame centre of a cell."""
@@ -277,3 +284,7 @@ def _cells_from_int8(data: Sequence[int] | bytes | Iterable[int], n: int) -> byt
 
 _VALID = bytes(1 if v <= 100 or v == _UNKNOWN_BYTE else 0 for v in range(256))
 _NORMALISE = bytes(v if v <= 100 else _UNKNOWN_BYTE for v in range(256))
+
+
+def _within(value: float, limit: float) -> float:
+    return max(-limit, min(limit, value))

@@ -22,6 +22,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from ..errors import PlanError
+from ..state import not_finite
 from .grid import OCCUPIED_THRESHOLD, Cell
 from .inflation import InflatedGrid
 
@@ -46,10 +47,18 @@ class Path:
         }
 
 
+def require_finite(start: tuple[float, float], goal: tuple[float, float]) -> None:
+    """Raise PlanError when the start or the goal is not finite numbers: no cell holds it."""
+    for what, (x, y) in (("goal", goal), ("start", start)):
+        if bad := not_finite(x=x, y=y):
+            raise PlanError(f"the {what} is not a point on the map: it is not finite ({bad})")
+
+
 def plan_path(
     inflated: InflatedGrid, start: tuple[float, float], goal: tuple[float, float]
 ) -> Path:
     """The shortest safe path from `start` to `goal` (map-frame points). Raises PlanError."""
+    require_finite(start, goal)
     grid = inflated.grid
     s_cell, g_cell = grid.cell_of(*start), grid.cell_of(*goal)
     if not grid.contains(g_cell):

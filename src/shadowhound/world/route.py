@@ -5,7 +5,7 @@ from __future__ import annotations
 from ..errors import PlanError
 from .legs import blocker_near
 from .objects import Belief
-from .planner import Path, plan_path
+from .planner import Path, plan_path, require_finite
 
 
 def plan_route(belief: Belief, start: tuple[float, float], goal: tuple[float, float]) -> Path:
@@ -14,6 +14,7 @@ def plan_route(belief: Belief, start: tuple[float, float], goal: tuple[float, fl
     inside the blue box's clearance (0.35 m kept for the body)"."""
     inflated = belief.inflated
     grid = belief.grid
+    require_finite(start, goal)
     cell = grid.cell_of(*goal)
     if grid.contains(cell) and inflated.is_blocked(cell):
         what = blocker_near(belief, *goal)

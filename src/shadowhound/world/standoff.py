@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from ..errors import PlanError
 from ..state import Pose2D
 from .objects import Belief, KnownObject
-from .planner import Path, plan_path
+from .planner import Path, plan_path, require_finite
 
 DEFAULT_STANDOFF = 0.6  # metres between the object's surface and the robot's centre
 _STEP_DEG = 15
@@ -32,6 +32,7 @@ def standoff_point(
     starting with the direction towards `start`). Raises PlanError when none is reachable."""
     if not (math.isfinite(gap) and gap > 0):
         raise ValueError(f"standoff gap must be > 0 metres, got {gap}")
+    require_finite(start, (target.x, target.y))
     reach = target.radius + max(gap, belief.robot_radius)
     towards = math.atan2(start[1] - target.y, start[0] - target.x)
     offsets = [0] + [s * k for k in range(_STEP_DEG, 181, _STEP_DEG) for s in (1, -1)]

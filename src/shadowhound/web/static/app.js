@@ -214,6 +214,14 @@ function renderRobot(robot) {
 }
 
 function movePose(robot) {
+  // null: the robot reported a position that is not a number (odometry that lies). The map
+  // keeps the last known pose rather than guess one.
+  if (![robot.x, robot.y, robot.yaw].every(Number.isFinite)) {
+    $("#map").dataset.unknown = "true";
+    $("#pose").textContent = "position unknown: the odometry reports no number";
+    return;
+  }
+  delete $("#map").dataset.unknown;
   view.pose = { x: robot.x, y: robot.y, yaw: robot.yaw };
   const last = view.trail[view.trail.length - 1];
   if (!last || Math.hypot(robot.x - last.x, robot.y - last.y) > 0.01) {
