@@ -2,7 +2,10 @@
 
 `LateRobot` is a SimRobot (the truth, on its own virtual clock) seen only through odometry
 samples that arrive `delay` seconds late at `rate` Hz, read through the Go2 robot's
-MotionTracker: the closed loop gets what a Go2 on go2_ros2_sdk gives it, and nothing more.
+OdometryIntake and MotionTracker: the closed loop gets what a Go2 on go2_ros2_sdk gives it, and
+nothing more. Given `lies` (the sim-driver's fault messages, sim_faults.Faults) the samples
+pass the sim-driver's LyingOdometry on the way, as over DDS; like the Go2 robot, it stops when
+the intake finds a fault and `get_state` raises while odometry is not trusted.
 Over DDS, tests/ros/test_go2_truth.py checks the same with the real driver and processes.
 """
 
@@ -18,8 +21,11 @@ from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import ShadowHoundConfig
-from shadowhound.robot.go2_motion import GO2_MOTION, MotionTracker, StampClock
+from shadowhound.errors import RobotError
+from shadowhound.robot.go2_motion import GO2_MOTION, MotionTracker
+from shadowhound.robot.go2_odometry import OdometryIntake
 from shadowhound.robot.sim import SimRobot
+from shadowhound.ros.sim_faults import Faults, LyingOdometry
 from shadowhound.state import CameraFrame, Posture, RobotState
 
 
@@ -28,15 +34,38 @@ class LateRobot:
 
     name = "late-odometry"
 
-    def __init__(self, rate: float, delay: float) -> None:
-        self.sim = SimRobot(time_scale=0)
-        self.tracker = MotionTracker()
+    def __init__(
+        self,
+        rate: float,
+        delay: float,
+        tracker: MotionTracker | None = None,
+        sim: SimRobot | None = None,
+    ) -> None:
+        self.sim = sim or SimRobot(time_scale=0)
+        self.tracker = tracker or MotionTracker()
+        self.intake = OdometryIntake(self.tracker)
+        self.lying = LyingOdometry()
+        self.faults: list[str] = []  # what the intake found, in order
+        self.truths: list[RobotState] = []  # the truth at each odometry sample's moment
         self.period, self.delay = 1.0 / rate, delay
-        self._pending: deque[tuple[float, tuple[float, float, float]]] = deque()
+        self._pending: deque[tuple[float, tuple[float, float, float] | None, float]] = deque()
         self._next = 0.0
+        self._moving = False
         self.sleep(1.0)
 
+    def lie(self, faults: Faults) -> None:
+        """A fault message reaches the driver now (it fires as `faults` says)."""
+        s = self.sim.get_state()
+        self.lying.arm(faults, (s.x, s.y, s.yaw))
+
     def get_state(self) -> RobotState:
+        now = self.sim.now()
+        untrusted = self.intake.problem(now)
+        if untrusted:
+            raise RobotError(f"odometry is not trusted: {untrusted}")
+        return self.last_state()
+
+    def last_state(self) -> RobotState:
         now = self.sim.now()
         x, y, yaw = self.tracker.pose(now)
         vx, vy, wz = self.tracker.velocity(now)
@@ -49,6 +78,8 @@ class LateRobot:
             wz=wz,
             battery=None,
             posture=self.sim.get_state().posture,
+            distance_travelled=self.intake.distance,
+            angle_turned=self.intake.turned,
             stamp=now,
         )
 
@@ -56,12 +87,18 @@ class LateRobot:
         if not (vx or vy or wz):
             self.stop()
             return
+        untrusted = self.intake.problem(self.sim.now())
+        if untrusted:
+            raise RobotError(f"odometry is not trusted: {untrusted}. Not moving.")
         self.sim.send_velocity(vx, vy, wz)
-        self.tracker.command(self.sim.now(), vx, vy, wz)
+        self._moving = True
+        walks = self.sim.get_state().posture is Posture.STANDING
+        self.intake.command(self.sim.now(), *((vx, vy, wz) if walks else (0.0, 0.0, 0.0)))
 
     def stop(self) -> None:
         self.sim.stop()
-        self.tracker.command(self.sim.now(), 0.0, 0.0, 0.0)
+        self._moving = False
+        self.intake.command(self.sim.now(), 0.0, 0.0, 0.0)
 
     def set_posture(self, posture: Posture) -> None:
         self.sim.set_posture(posture)
@@ -79,11 +116,22 @@ class LateRobot:
             now = self.sim.now()
             while self._next <= now + 1e-9:
                 s = self.sim.get_state()
-                self._pending.append((self._next + self.delay, (s.x, s.y, s.yaw)))
+                self.truths.append(s)
+                fired = self.lying.fired
+                shown, shift = self.lying.publish((s.x, s.y, s.yaw))
+                if self.lying.fired and not fired and self.lying.faults.fall:
+                    self.sim.stop()  # it falls where it is, and lies there
+                    self.sim.set_posture(Posture.LYING, seconds=0.0)
+                self._pending.append((self._next + self.delay, shown, shift))
                 self._next += self.period
             while self._pending and self._pending[0][0] <= now + 1e-9:
-                t, pose = self._pending.popleft()
-                self.tracker.odometry(t, *pose)
+                t, shown, shift = self._pending.popleft()
+                x, y, yaw = shown if shown is not None else (math.nan,) * 3
+                fault = self.intake.receive(t, t + shift, x, y, yaw)
+                if fault is not None:
+                    self.faults.append(fault.kind)
+                    if self._moving:
+                        self.stop()  # as the Go2 robot does
 
     def get_camera_frame(self) -> CameraFrame | None:
         return None
@@ -93,9 +141,6 @@ class LateRobot:
 
     def belief(self) -> None:
         return None
-
-    def last_state(self) -> RobotState:
-        return self.get_state()
 
     @property
     def time_scale(self) -> float:  # its clock is the simulator's
@@ -158,9 +203,7 @@ def test_a_wrong_delay_is_corrected_at_rest_not_reported_as_done() -> None:
     """Odometry later than the robot believes (0.5 s, told 0.2 s, the first guess before any
     measure): the first approach stops off the goal, and a slow approach from rest, with its
     own stall clock, corrects it; the step is judged on the pose at rest."""
-    robot = LateRobot(10.0, 0.5)
-    robot.tracker = MotionTracker(latency=0.2)
-    robot.sleep(1.0)
+    robot = LateRobot(10.0, 0.5, tracker=MotionTracker(latency=0.2))
     settings = ShadowHoundConfig(robot="go2")
     settings.motion = settings.motion.model_copy(update=GO2_MOTION)
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
@@ -180,14 +223,14 @@ def test_the_late_odometry_robot_is_a_whole_robot() -> None:
 class JitteryRobot(LateRobot):
     """LateRobot over a link with jitter: some poses arrive up to `extra` seconds later than
     the rest, in order, each stamped when the driver sent it on a clock `clock_offset` seconds
-    away from ours. The Go2 robot reads them as go2_ros.py does, through a StampClock."""
+    away from ours. The Go2 robot reads them as go2_ros.py does, through its OdometryIntake
+    (a StampClock places them in time): jitter is never taken for a fault."""
 
     def __init__(
         self, rate: float, delay: float, extra: float, seed: int, clock_offset: float
     ) -> None:
         self.rng = random.Random(seed)
         self.extra, self.clock_offset = extra, clock_offset
-        self.stamps = StampClock()
         self._arrival = 0.0
         super().__init__(rate, delay)
 
@@ -205,8 +248,7 @@ class JitteryRobot(LateRobot):
                 self._next += self.period
             while self._pending and self._pending[0][0] <= now + 1e-9:
                 arrival, pose, sent = self._pending.popleft()
-                t = self.stamps.local_time(sent + self.clock_offset, arrival)
-                self.tracker.odometry(t, *pose)
+                assert self.intake.receive(arrival, sent + self.clock_offset, *pose) is None
 
 
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -115,27 +115,52 @@ class CommandLedger:
         return self.travelled - before
 
 
-def leg_allowance(lim: SafetyConfig, metres: float) -> float:
-    """Metres from its start a step may command for a planned straight leg of `metres`."""
-    return abs(metres) * (1.0 + lim.step_travel_slack) + lim.step_travel_margin
+def leg_margin(lim: SafetyConfig, metres: float) -> float:
+    """Metres a step's commands may take the robot off a planned straight leg of `metres`
+    (beyond its end, behind its start or to its side)."""
+    return abs(metres) * lim.step_travel_slack + lim.step_travel_margin
 
 
-def turn_allowance(lim: SafetyConfig, radians: float) -> float:
-    """Radians from its start a step may command for a planned turn of `radians`."""
-    return abs(radians) * (1.0 + lim.step_travel_slack) + math.radians(lim.step_turn_margin_deg)
+def turn_margin(lim: SafetyConfig, radians: float) -> float:
+    """Radians a step's commands may turn beyond a planned turn of `radians` (or back)."""
+    return abs(radians) * lim.step_travel_slack + math.radians(lim.step_turn_margin_deg)
 
 
-def leg_room(offset: tuple[float, float], heading: float, allowed: float) -> float:
-    """Metres the commands may still take the robot along `heading` from `offset` (from the
-    leg's start) and stay within `allowed` of the start: back toward it, more than ahead."""
-    ox, oy = offset
+def leg_room(
+    at: tuple[float, float], heading: float, goal: tuple[float, float], margin: float
+) -> float:
+    """Metres the commands may still take the robot from `at` along `heading` and keep it
+    within `margin` of the planned leg, the segment from (0, 0) (where the leg began) to
+    `goal`: the capsule around it. 0 when `at` is already outside and `heading` does not
+    lead back in."""
     dx, dy = math.cos(heading), math.sin(heading)
-    along = ox * dx + oy * dy
-    rest = allowed * allowed - (ox * ox + oy * oy)
-    return max(0.0, -along + math.sqrt(max(0.0, along * along + rest)))
+
+    def off(s: float) -> float:  # distance from the leg of the point s metres ahead
+        return _to_segment((at[0] + s * dx, at[1] + s * dy), goal) - margin
+
+    if off(0.0) > 0:
+        return 0.0 if off(1e-3) >= off(0.0) else 1e-3  # outside: only a way back may go on
+    # The distance to a segment is convex along a line: one crossing out, found by halving.
+    reach = math.hypot(*goal) + 2 * margin + math.hypot(*at)
+    if off(reach) <= 0:
+        return reach
+    low, high = 0.0, reach
+    for _ in range(40):
+        mid = (low + high) / 2
+        low, high = (mid, high) if off(mid) <= 0 else (low, mid)
+    return low
 
 
-def turn_room(turned: float, direction: float, allowed: float) -> float:
+def turn_room(turned: float, direction: float, planned: float, margin: float) -> float:
     """Radians the commands may still turn toward `direction` (its sign) from `turned` (signed,
-    from the leg's start) and stay within `allowed` of the start."""
-    return max(0.0, allowed - math.copysign(1.0, direction) * turned)
+    from where the turn began) and stay within `margin` of the planned turn (0 to `planned`)."""
+    if direction >= 0:
+        return max(0.0, max(0.0, planned) + margin - turned)
+    return max(0.0, turned - min(0.0, planned) + margin)
+
+
+def _to_segment(p: tuple[float, float], b: tuple[float, float]) -> float:
+    """Distance from p to the segment from the origin to b."""
+    length2 = b[0] * b[0] + b[1] * b[1]
+    t = 0.0 if length2 == 0 else max(0.0, min(1.0, (p[0] * b[0] + p[1] * b[1]) / length2))
+    return math.hypot(p[0] - t * b[0], p[1] - t * b[1])

@@ -159,7 +159,9 @@ class SkillContext:
         """Metres the robot may still go along `heading` (odom frame), looking `reach` ahead:
         before its body would reach a geofence (from the measured and from the commanded
         pose: the stricter wins) and within the mission's distance. With why it is so small."""
-        lim, slack = self.config.safety, self.config.motion.position_tolerance
+        # A goal may lie on the fence's margin (the plan check allows it): leave the loop
+        # enough room to arrive within its tolerance, and barely more.
+        lim, slack = self.config.safety, min(self.config.motion.position_tolerance, 0.005)
         room, why = room_ahead(lim, state.pose, heading, reach, slack)
         if self.ledger is not None:
             commanded, fence = room_ahead(lim, self.ledger.pose, heading, reach, slack)

@@ -20,7 +20,7 @@ from collections.abc import Callable
 
 from ..errors import SkillError
 from ..state import RobotState, normalize_angle
-from .bounds import leg_allowance, leg_room, turn_allowance, turn_room
+from .bounds import leg_margin, leg_room, turn_margin, turn_room
 from .context import SkillContext
 
 _SETTLE_SPEED = 0.01
@@ -66,7 +66,8 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
     c, s = math.cos(start.yaw), math.sin(start.yaw)
     goal = math.hypot(tx, ty)
     ctx.begin_leg(start)
-    allowed = leg_allowance(ctx.config.safety, goal)
+    margin = leg_margin(ctx.config.safety, goal)
+    leg = (tx * c - ty * s, tx * s + ty * c)  # the planned leg, odom frame, from its start
     stopped_for_room = False  # the loop stopped for want of room and settled
     for attempt in range(1 + _CORRECTIONS):
         best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
@@ -92,9 +93,9 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
             heading = start.yaw + math.atan2(ey, ex)  # where the robot goes, odom frame
             room, why = ctx.room(heading, error + 0.5, st)
             ox, oy, _ = ctx.commanded()
-            left = leg_room((ox, oy), heading, allowed)
+            left = leg_room((ox, oy), heading, leg, margin)
             if left < room:
-                room, why = left, _disagree(math.hypot(ox, oy), goal, allowed, goal - error)
+                room, why = left, _disagree(math.hypot(ox, oy), goal, margin, goal - error)
             if room < m.position_tolerance and error >= m.position_tolerance:
                 if not stopped_for_room:  # judge at rest: late odometry may only now catch up
                     stopped_for_room = True
@@ -129,7 +130,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
     last_yaw = first.yaw
     turned = 0.0
     ctx.begin_leg(first)
-    allowed = turn_allowance(ctx.config.safety, angle)
+    margin = turn_margin(ctx.config.safety, angle)
     stopped_for_room = False  # the loop stopped for want of room and settled
     for attempt in range(1 + _CORRECTIONS):
         best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
@@ -150,7 +151,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
                     "degrees to go: the robot is blocked, stalled or ignoring velocity commands"
                 )
             commanded = ctx.commanded()[2]
-            left = turn_room(commanded, error, allowed)
+            left = turn_room(commanded, error, angle, margin)
             if left < m.yaw_tolerance and abs(error) >= m.yaw_tolerance:
                 if not stopped_for_room:  # judge at rest: late odometry may only now catch up
                     stopped_for_room = True
@@ -159,9 +160,9 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
                 robot.stop()
                 raise SkillError(
                     f"stopped {math.degrees(abs(error)):.0f} degrees short of the turn: it was "
-                    f"commanded {math.degrees(abs(commanded)):.0f} degrees for a "
-                    f"{math.degrees(abs(angle)):.0f} degree turn (at most "
-                    f"{math.degrees(allowed):.0f}, safety.step_turn_margin_deg and "
+                    f"commanded {math.degrees(commanded):.0f} degrees for a "
+                    f"{math.degrees(angle):.0f} degree turn (at most "
+                    f"{math.degrees(margin):.0f} beyond it: safety.step_turn_margin_deg, "
                     "step_travel_slack), yet odometry does not show it turned: odometry "
                     "disagrees with the motion (a relocalization, a frozen stream?)"
                 )
@@ -178,12 +179,13 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
     return turned + normalize_angle(yaw - last_yaw)
 
 
-def _disagree(commanded: float, goal: float, allowed: float, measured: float) -> str:
-    """Why a leg stopped when its commands used up what the leg allows: odometry shows the
-    robot short of it (or nowhere near)."""
+def _disagree(commanded: float, goal: float, margin: float, measured: float) -> str:
+    """Why a leg stopped when its commands would take the robot off the planned leg:
+    odometry shows it short of the goal (or nowhere near)."""
     lead = (
-        f"it was commanded {commanded:.2f} m for a {goal:.2f} m leg (at most {allowed:.2f} m: "
-        f"safety.step_travel_margin, step_travel_slack), yet odometry shows {measured:.2f} m"
+        f"its commands took it {commanded:.2f} m for a {goal:.2f} m leg (at most {margin:.2f} "
+        "m off the leg: safety.step_travel_margin, step_travel_slack), yet odometry shows "
+        f"{measured:.2f} m"
     )
     if measured < 0.25 * commanded:
         return (

@@ -1,0 +1,87 @@
+"""PostureWatch: a Go2's posture from go2_states, which may flap (issue 21).
+
+Reports are handed in as the robot's callback would, at the driver's 10 Hz; time is real but
+short (each test feeds a few tenths of a second of reports).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+
+from shadowhound.errors import RobotError
+from shadowhound.robot.go2_api import BODY_HEIGHT, SportMode
+from shadowhound.robot.go2_posture import SETTLE, PostureWatch
+from shadowhound.state import Posture
+
+STANDING = (int(SportMode.BALANCE_STAND), BODY_HEIGHT[Posture.STANDING])
+SITTING = (int(SportMode.SIT), BODY_HEIGHT[Posture.SITTING])
+DAMPING = (int(SportMode.DAMPING), BODY_HEIGHT[Posture.STANDING])
+
+
+def watch() -> PostureWatch:
+    return PostureWatch(lambda _doing: None, "go2_states", timeout=2.0, stale=1.0)
+
+
+def feed(w: PostureWatch, *reports: tuple[int, float], period: float = 0.1) -> object:
+    shown = None
+    for mode, height in reports:
+        shown = w.update(mode, height)
+        time.sleep(period)
+    return shown
+
+
+def test_a_posture_counts_once_every_report_shows_it_for_the_settle_time() -> None:
+    w = watch()
+    assert w.update(*SITTING) is None  # one report is no posture yet
+    assert feed(w, *[SITTING] * int(SETTLE / 0.1 + 2)) is Posture.SITTING
+
+
+def test_a_flapping_report_is_not_a_posture() -> None:
+    """go2_states flapping between sitting and standing never settles as sitting."""
+    w = watch()
+    feed(w, *[STANDING] * 4)
+    assert feed(w, SITTING, STANDING, SITTING, STANDING, SITTING) is None
+    assert w.fresh() is None
+
+
+def test_reach_waits_for_the_posture_to_settle_not_the_first_report() -> None:
+    w = watch()
+    feed(w, *[STANDING] * 4)
+    stop = threading.Event()
+
+    def flapping_then_sitting() -> None:
+        for report in [SITTING, STANDING] * 3 + [SITTING] * 20:
+            if stop.is_set():
+                return
+            w.update(*report)
+            time.sleep(0.05)
+
+    feeder = threading.Thread(target=flapping_then_sitting)
+    began = time.monotonic()
+    feeder.start()
+    try:
+        w.reach(Posture.SITTING, "Sit (api id 1009)")
+    finally:
+        stop.set()
+        feeder.join()
+    assert time.monotonic() - began >= 6 * 0.05 + SETTLE  # after the flapping, and settled
+
+
+def test_a_fall_shows_as_a_settled_fall_mode() -> None:
+    w = watch()
+    feed(w, *[STANDING] * 4)
+    assert not w.fallen()
+    feed(w, DAMPING)
+    assert not w.fallen()  # one report is no fall
+    feed(w, *[DAMPING] * 4)
+    assert w.fallen()
+
+
+def test_reach_fails_clearly_when_the_posture_never_comes() -> None:
+    w = PostureWatch(lambda _doing: None, "/go2_states", timeout=0.3, stale=1.0)
+    feed(w, *[STANDING] * 4, period=0.05)
+    with pytest.raises(RobotError, match="did not reach sitting within 0 s: /go2_states shows"):
+        w.reach(Posture.SITTING, "Sit (api id 1009)")
