@@ -320,3 +320,32 @@ def test_the_go2_implements_the_whole_robot_protocol(robot: Go2RosRobot) -> None
     assert belief is None or (isinstance(belief, Belief) and robot.belief() is belief)
     assert robot.known_objects() == ()
     assert robot.last_state().stamp >= 0.0
+
+
+def test_a_large_map_is_read_off_the_odometry_thread(
+    client: RosClient, driver: SimDriver, robot: Go2RosRobot
+) -> None:
+    """A 2000 x 2000 map takes seconds to read and inflate: odometry keeps arriving meanwhile
+    (it once stalled on the same executor thread, and missions failed "no odometry")."""
+    from shadowhound.robot import sensors
+    from shadowhound.robot.go2_world_msgs import MAP_QOS, grid_to_msg
+    from shadowhound.world import OccupancyGrid
+
+    big = OccupancyGrid(2000, 2000, 0.05, cells=bytearray(2000 * 2000))
+    big.cells[1000 * 2000 + 1000] = 100  # something to inflate
+    maps = client.publisher(type(grid_to_msg(big, "odom", None)), f"{NS}/map", MAP_QOS)
+    wait_until(lambda: maps.get_subscription_count() > 0, 10, "the robot's map subscription")
+    maps.publish(grid_to_msg(big, "odom", client.node.get_clock().now().to_msg()))
+    stale = []
+
+    def read() -> bool:
+        if not robot.last_state().connected:
+            stale.append(robot.last_state().stamp)
+        belief = robot.belief()  # the grid is swapped in once inflated (Belief.replace_grid)
+        return belief is not None and belief.grid.width == 2000
+
+    wait_until(read, 120, "the large map to be read", interval=0.05)
+    assert stale == [], f"odometry went stale {len(stale)} times while the map was read"
+    # Back to the driver's own map for anything after.
+    scene = sensors.scene_grid(driver.robots[0].sim.map_world)
+    maps.publish(grid_to_msg(scene, "odom", client.node.get_clock().now().to_msg()))

@@ -182,7 +182,9 @@ sim_driver/fault in. The relay: cmd_vel, cmd_vel_joy in, cmd_vel_out out.
 Every option is also a ROS parameter with the same name in snake case (--ros-args -p
 odom_delay:=0.5); an option given here wins. -r __ns:=/NS moves every topic, the relay's too."""
 _EPILOG = """faults: publish JSON on sim_driver/fault, e.g. '{"odom": false}', '{"delay_ms": 200}',
-'{"drop_commands": true}'; '{}' clears them.
+'{"drop_commands": true}'; odometry that lies: '{"jump": {"x": -0.5, "y": 0, "yaw_deg": 0}}',
+'{"freeze": true}', '{"nan": 3}', '{"clock_step": -2}', and '{"fall": true}', each firing at once
+or after "after_m" metres / "after_deg" degrees of true motion; '{}' clears them (docs/go2.md).
 exit codes: 0 after Ctrl-C / SIGTERM, 2 for invalid options or parameters."""
 
 
