@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from shadowhound import SimRobot
@@ -56,6 +57,9 @@ class LyingOdometry:
 
     def release_estop(self) -> None:
         self.sim.release_estop()
+
+    def watch_estop(self, listener: Callable[[bool], None]) -> None:
+        self.sim.watch_estop(listener)
 
     def set_posture(self, posture: Posture) -> None:
         self.sim.set_posture(posture)

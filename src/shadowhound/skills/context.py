@@ -109,10 +109,10 @@ class SkillContext:
     def check(self) -> RobotState:
         """Raise if the mission was cancelled, the skill ran out of time, the robot cannot
         say where it is (`get_state` raises RobotError: stale or untrusted odometry), it left
-        the posture the step runs in, its body (measured, or where the step's commands put
-        it) is outside a geofence, or it walked past the mission's distance (whatever the plan
-        predicted: a detour, a skill that predicts no path), with `outcome_tolerance` of slack
-        for control error. Returns the state it read."""
+        the posture the step runs in, a walking step's body (measured, or where the step's
+        commands put it) is outside a geofence, or it walked past the mission's distance
+        (whatever the plan predicted: a detour, a skill that predicts no path), with
+        `outcome_tolerance` of slack for control error. Returns the state it read."""
         if self._cancelled.is_set():
             raise MissionCancelled("mission cancelled")
         if self.robot.now() > self.deadline:
@@ -124,7 +124,8 @@ class SkillContext:
                 f"the robot is {state.posture.value} now, not {self._needs.value} as the step "
                 "needs: it fell, or something else changed its posture; stopped"
             )
-        self._check_fences(state)
+        if self._needs is not None:  # a step that walks (it stood up for it)
+            self._check_fences(state)
         budget, safety = self.env.budget, self.config.safety
         if budget is not None:
             walked = budget.travelled(state)
