@@ -212,3 +212,38 @@ def test_closing_stdin_mid_mission_stops_the_robot(version, progress, tmp_path):
     mission = last_record(client.env)
     assert mission["mission"] == WALK["text"] and mission["status"] == "stopped", mission
     assert mission["robot"]["x"] < 1.0, mission["robot"]
+
+
+def test_a_stdio_client_that_closes_stdout_first_stops_the_robot(tmp_path):
+    """A killed client's pipes close in any order: a write that finds stdout broken stops the
+    mission, and the server ends as when the client leaves (exit 0), not as an error."""
+    env = server_env(SHADOWHOUND_MEMORY__DATA_DIR=str(tmp_path))
+    proc = subprocess.Popen(
+        server_command(time_scale=REAL_TIME),
+        env=env,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        bufsize=1,
+    )
+    assert proc.stdin is not None and proc.stdout is not None and proc.stderr is not None
+    caller = Caller("2025-06-18")
+    for message in (
+        caller.initialize_body(),
+        {"jsonrpc": "2.0", "method": "notifications/initialized"},
+        caller.tool_call("run_mission", WALK, progress=True),
+    ):
+        proc.stdin.write(json.dumps(message) + "\n")
+        proc.stdin.flush()
+    while "nav.move" not in proc.stdout.readline():
+        pass
+    proc.stdout.close()
+    proc.stdin.write(json.dumps(caller.tool_call("get_state", {})) + "\n")  # its answer finds
+    proc.stdin.flush()  # the pipe broken: that alone stops the mission
+    until(lambda: last_record(env).get("status") == "stopped", "the mission to stop")
+    proc.stdin.close()
+    assert proc.wait(WAIT) == 0, proc.stderr.read()[-2000:]
+    assert "Traceback" not in proc.stderr.read()
+    mission = last_record(env)
+    assert mission["status"] == "stopped" and mission["robot"]["x"] < 1.0, mission

@@ -11,6 +11,8 @@ calls whose clients drop their connections and keeps sessions few and short-live
 from __future__ import annotations
 
 import hmac
+import logging
+import sys
 from collections.abc import Callable
 from urllib.parse import urlsplit
 
@@ -24,6 +26,11 @@ from ..serving import LOOPBACK_HOSTS, bind, check_binding, hostname, send_json
 from .limits import SessionLimits
 from .server import McpRobotServer
 from .sessions import ASGIApp, Receive, Scope, Send, Sessions
+
+if sys.version_info < (3, 11):
+    from exceptiongroup import BaseExceptionGroup  # anyio's dependency before Python 3.11
+
+log = logging.getLogger(__name__)
 
 MCP_PATH = "/mcp"
 MAX_BODY = 1024 * 1024  # bytes: a tool call is small; a huge one is refused before parsing
@@ -44,14 +51,26 @@ async def run_stdio(robot_server: McpRobotServer) -> None:
     """Serve one client over stdin/stdout until it closes them; then stop the robot.
 
     The end of stdin ends the SDK's dispatcher, which cancels every call in flight: a call
-    following a mission stops it (`McpRobotServer`), and `close` stops the robot again.
+    following a mission stops it (`McpRobotServer`), and `close` stops the robot again. A
+    client that closes its end of stdout first is gone too: the write that finds the pipe
+    broken ends the server the same way (not as an error).
     """
     server = robot_server.server
     try:
         async with stdio_server() as (read, write):
             await server.run(read, write, server.create_initialization_options())
+    except BaseException as exc:
+        if not _only_broken_pipes(exc):
+            raise
+        log.info("the stdio client closed its end of the pipe")
     finally:
         robot_server.close()
+
+
+def _only_broken_pipes(exc: BaseException) -> bool:
+    if isinstance(exc, BaseExceptionGroup):
+        return all(_only_broken_pipes(e) for e in exc.exceptions)
+    return isinstance(exc, BrokenPipeError)
 
 
 class McpGate:
