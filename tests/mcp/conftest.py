@@ -123,16 +123,17 @@ async def connect(
     *,
     time_scale: float = 0.0,
     url: str | None = None,
+    server_args: tuple[str, ...] = (),
     **client_options: Any,
 ) -> AsyncIterator[Any]:
-    """An SDK `Client` on a new server process (stdio) or on `url` (HTTP)."""
+    """An SDK `Client` on a new server process (stdio, with `server_args`) or on `url` (HTTP)."""
     from mcp import Client
     from mcp.client.stdio import StdioServerParameters
 
     if transport == "stdio":
         target: Any = StdioServerParameters(
             command=sys.executable,
-            args=server_command(time_scale=time_scale)[1:],
+            args=server_command(*server_args, time_scale=time_scale)[1:],
             env=server_env(),
         )
     else:

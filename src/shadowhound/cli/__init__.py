@@ -244,6 +244,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="bearer token HTTP clients must send (default $SHADOWHOUND_TOKEN)",
     )
     mcp.add_argument(
+        "--allow-release-estop",
+        action="store_true",
+        help="offer the release_estop tool; each call asks the person through the client "
+        "(MCP elicitation) and is refused when nobody can be asked or they decline. Without "
+        "it no MCP client can release the e-stop",
+    )
+    mcp.add_argument(
         "--session-idle",
         type=float,
         default=DEFAULT_IDLE_TIMEOUT,

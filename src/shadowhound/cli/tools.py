@@ -243,6 +243,7 @@ def cmd_mcp(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             host=args.host,
             port=args.port,
             token=args.token,
+            allow_release_estop=args.allow_release_estop,
             session_idle=args.session_idle,
             max_sessions=args.max_sessions,
         )
