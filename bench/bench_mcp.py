@@ -14,7 +14,9 @@ official SDK's `Client`.
   governor), each against the same work as a direct Python call in one process
   (`McpDesk.state()`; `start_skill` and waiting for its result).
 - E-stop: the robot walks (real-time clock); 0-0.3 s after the walking step starts, the client
-  calls `emergency_stop`. The server stops the robot before it answers and the answer carries
+  calls `emergency_stop`. (Between runs it calls `release_estop`: the server runs with
+  `--allow-release-estop` and the client's elicitation callback agrees, standing in for the
+  person.) The server stops the robot before it answers and the answer carries
   the state read after the stop (checked: stopped, latched), so call-sent to answer-received is
   an upper bound of call-to-stopped.
 - Size: characters of the compact JSON of the tools/list answer's tools, against the `messages`
@@ -191,8 +193,16 @@ async def estop_runs(client: Any, runs: int) -> list[float]:
         robot = answer.structured_content["robot"]
         assert robot["estopped"] and not robot["moving"], robot
         assert (await mission).structured_content["status"] == "stopped"
-        await client.call_tool("release_estop", {})
+        released = await client.call_tool("release_estop", {})
+        assert not released.is_error, released.content
     return out
+
+
+async def person_agrees(_context: Any, _params: Any) -> Any:
+    """The elicitation callback: the person agrees to release the e-stop."""
+    import mcp_types as types
+
+    return types.ElicitResult(action="accept", content={"release": True})
 
 
 # -- tool list size --------------------------------------------------------------------------
@@ -296,11 +306,14 @@ async def measure(runs: int, stops: int) -> dict[str, Any]:
         out["raw_http"] = raw_http(server.url, runs)
     finally:
         server.stop()
-    async with connect("stdio", time_scale=1.0) as client:
+    release = "--allow-release-estop"
+    async with connect(
+        "stdio", time_scale=1.0, server_args=(release,), elicitation_callback=person_agrees
+    ) as client:
         out["estop_stdio"] = await estop_runs(client, stops)
-    server = HttpServer(time_scale=1.0)
+    server = HttpServer(release, time_scale=1.0)
     try:
-        async with connect("http", url=server.url) as client:
+        async with connect("http", url=server.url, elicitation_callback=person_agrees) as client:
             out["estop_http"] = await estop_runs(client, stops)
     finally:
         server.stop()

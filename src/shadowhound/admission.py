@@ -7,7 +7,7 @@ here, so a limit or a message is changed in one place.
 
 from __future__ import annotations
 
-ESTOP_LATCHED = "the e-stop is latched; release it before running missions"
+ESTOP_LATCHED = "the e-stop is latched; a person must release it before missions run"
 EXAMPLE = "'walk forward 1 meter'"
 
 

@@ -10,6 +10,7 @@ import os
 import re
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import AsyncIterator, Callable, Iterator
 from pathlib import Path
@@ -52,6 +53,26 @@ class HttpServer:
             text=True,
         )
         self.url = self._wait_for_url()
+        # The rest of stderr is read on a thread: the pipe never fills, and tests can wait for
+        # a log line (start the server with "-v" for the INFO ones).
+        self.log: list[str] = []
+        self._logged = threading.Condition()
+        threading.Thread(target=self._read_log, daemon=True).start()
+
+    def _read_log(self) -> None:
+        assert self.proc.stderr is not None
+        for line in self.proc.stderr:
+            with self._logged:
+                self.log.append(line)
+                self._logged.notify_all()
+
+    def wait_for_log(self, text: str, count: int = 1, timeout: float = 30.0) -> None:
+        """Until `count` lines of the server's log contain `text`."""
+        with self._logged:
+            if not self._logged.wait_for(
+                lambda: sum(text in line for line in self.log) >= count, timeout
+            ):
+                raise AssertionError(f"{count} x {text!r} not logged: {''.join(self.log)[-2000:]}")
 
     def _wait_for_url(self) -> str:
         assert self.proc.stderr is not None
@@ -98,15 +119,22 @@ def http_server() -> Iterator[Callable[..., HttpServer]]:
 
 @contextlib.asynccontextmanager
 async def connect(
-    transport: str, *, time_scale: float = 0.0, url: str | None = None, **client_options: Any
+    transport: str,
+    *,
+    time_scale: float = 0.0,
+    url: str | None = None,
+    server_args: tuple[str, ...] = (),
+    **client_options: Any,
 ) -> AsyncIterator[Any]:
-    """An SDK `Client` on a new server process (stdio) or on `url` (HTTP)."""
+    """An SDK `Client` on a new server process (stdio, with `server_args`) or on `url` (HTTP)."""
     from mcp import Client
     from mcp.client.stdio import StdioServerParameters
 
     if transport == "stdio":
         target: Any = StdioServerParameters(
-            command=sys.executable, args=server_command(time_scale=time_scale)[1:], env=server_env()
+            command=sys.executable,
+            args=server_command(*server_args, time_scale=time_scale)[1:],
+            env=server_env(),
         )
     else:
         assert url is not None

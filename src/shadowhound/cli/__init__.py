@@ -16,6 +16,7 @@ from .. import __version__
 from ..config import ShadowHoundConfig, available_profiles, load_config
 from ..errors import BackendUnavailable, ConfigError, MemoryStoreError, UsageError
 from ..exit_codes import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from ..mcp.limits import DEFAULT_IDLE_TIMEOUT, DEFAULT_MAX_SESSIONS
 from ._base import report_error
 from .missions import cmd_chat, cmd_eval, cmd_run
 from .tools import (
@@ -241,6 +242,29 @@ def build_parser() -> argparse.ArgumentParser:
         "--token",
         default=None,
         help="bearer token HTTP clients must send (default $SHADOWHOUND_TOKEN)",
+    )
+    mcp.add_argument(
+        "--allow-release-estop",
+        action="store_true",
+        help="offer the release_estop tool; each call asks the person through the client "
+        "(MCP elicitation) and is refused when nobody can be asked or they decline. Without "
+        "it no MCP client can release the e-stop",
+    )
+    mcp.add_argument(
+        "--session-idle",
+        type=float,
+        default=DEFAULT_IDLE_TIMEOUT,
+        metavar="SECONDS",
+        help="HTTP: close a session after this long without a request in flight (default "
+        f"{DEFAULT_IDLE_TIMEOUT:g}); a session whose client drops its connection closes at once",
+    )
+    mcp.add_argument(
+        "--max-sessions",
+        type=int,
+        default=DEFAULT_MAX_SESSIONS,
+        metavar="N",
+        help=f"HTTP: at most N open sessions (default {DEFAULT_MAX_SESSIONS}); a new one "
+        "closes the least recently used idle session, or is refused (503) while all are busy",
     )
 
     sub.add_parser(

@@ -249,7 +249,18 @@ def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 def cmd_mcp(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     from ..mcp import main as mcp_main
 
-    return int(mcp_main(settings, http=args.http, host=args.host, port=args.port, token=args.token))
+    return int(
+        mcp_main(
+            settings,
+            http=args.http,
+            host=args.host,
+            port=args.port,
+            token=args.token,
+            allow_release_estop=args.allow_release_estop,
+            session_idle=args.session_idle,
+            max_sessions=args.max_sessions,
+        )
+    )
 
 
 # -- node ----------------------------------------------------------------------------------------

@@ -42,12 +42,18 @@ def main(
     host: str = "127.0.0.1",
     port: int = 8765,
     token: str | None = None,
+    allow_release_estop: bool = False,
+    session_idle: float | None = None,
+    max_sessions: int | None = None,
 ) -> int:
     """`shadowhound mcp`: serve until the client leaves (stdio) or Ctrl-C (HTTP).
 
-    `token` defaults to $SHADOWHOUND_TOKEN (HTTP only). Returns 2 with a message on stderr when
-    the extra is missing, the robot cannot be reached or the binding is not allowed. Nothing
-    is printed on stdout: over stdio it belongs to the protocol.
+    `token` defaults to $SHADOWHOUND_TOKEN (HTTP only). `allow_release_estop` offers the
+    `release_estop` tool, which asks the person each time (MCP elicitation). `session_idle`
+    (seconds) and `max_sessions` bound HTTP sessions (default: `SessionLimits`). Returns 2 with
+    a message on stderr when the extra is missing, the robot cannot be reached or an option or
+    the binding is not allowed. Nothing is printed on stdout: over stdio it belongs to the
+    protocol.
     """
     try:
         import anyio
@@ -63,9 +69,14 @@ def main(
         return EXIT_USAGE
     from ..agent import RobotAgent, RobotAgentConfig
     from ..errors import ConfigError
+    from .limits import DEFAULT_IDLE_TIMEOUT, DEFAULT_MAX_SESSIONS, SessionLimits
 
     token = (token or os.environ.get("SHADOWHOUND_TOKEN") or None) if http else None
     try:
+        limits = SessionLimits(
+            DEFAULT_IDLE_TIMEOUT if session_idle is None else session_idle,
+            DEFAULT_MAX_SESSIONS if max_sessions is None else max_sessions,
+        )
         if http:
             from ..serving import check_binding
 
@@ -75,7 +86,7 @@ def main(
     except (ConfigError, ServeError) as exc:
         print(f"shadowhound mcp: {exc}", file=sys.stderr)
         return EXIT_USAGE
-    robot_server = McpRobotServer(agent)
+    robot_server = McpRobotServer(agent, allow_release_estop=allow_release_estop)
     from ..serving import settle_heap
 
     settle_heap()  # a long-running server: keep full collections short (serving.py)
@@ -91,7 +102,7 @@ def main(
 
     try:
         if http:
-            anyio.run(serve_http, robot_server, host, port, token, ready)
+            anyio.run(serve_http, robot_server, host, port, token, ready, limits)
         else:
             anyio.run(run_stdio, robot_server)
     except ServeError as exc:

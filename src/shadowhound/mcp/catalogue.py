@@ -12,6 +12,7 @@ import json
 from dataclasses import dataclass
 from typing import Any
 
+from ..errors import ToolInputError
 from ..skills import SkillRegistry
 
 _NO_ARGS: dict[str, Any] = {"type": "object", "properties": {}, "additionalProperties": False}
@@ -26,6 +27,34 @@ class ToolSpec:
     input_schema: dict[str, Any]
     skill: str | None = None
     read_only: bool = False
+
+    def check_args(self, args: Any) -> None:
+        """The schema's rules for a non-skill tool's arguments, each said in a sentence
+        (skill tools are checked by the registry). Raises ToolInputError."""
+        if not isinstance(args, dict):
+            raise ToolInputError(f"{self.name}: arguments must be an object")
+        props = self.input_schema.get("properties", {})
+        unknown = sorted(set(args) - set(props))
+        if unknown:
+            raise ToolInputError(
+                f"{self.name}: unknown argument(s) {', '.join(unknown)}; allowed: "
+                + (", ".join(props) or "none")
+            )
+        for name in self.input_schema.get("required", []):
+            if name not in args:
+                raise ToolInputError(f"{self.name}: missing required argument {name!r}")
+        for name, value in args.items():
+            kind = props[name].get("type")
+            ok = {
+                "string": isinstance(value, str),
+                "boolean": isinstance(value, bool),
+                "integer": isinstance(value, int) and not isinstance(value, bool),
+            }.get(kind, True)
+            if not ok:
+                raise ToolInputError(
+                    f"{self.name}: {name!r} must be a {kind}, got "
+                    f"{type(value).__name__} {str(value)[:40]!r}"
+                )
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -53,8 +82,16 @@ def _text_schema(limit: int, extra: dict[str, Any] | None = None) -> dict[str, A
     }
 
 
-def mission_tools(max_mission_chars: int) -> list[ToolSpec]:
-    """The tools that are not skills."""
+def mission_tools(max_mission_chars: int, *, release_estop: bool = False) -> list[ToolSpec]:
+    """The tools that are not skills; `release_estop` only when the server offers it (each
+    call asks the person)."""
+    release = [
+        ToolSpec(
+            "release_estop",
+            "Release a latched e-stop, only if the person agrees (asked through the client).",
+            _NO_ARGS,
+        )
+    ]
     return [
         ToolSpec(
             "run_mission",
@@ -74,8 +111,12 @@ def mission_tools(max_mission_chars: int) -> list[ToolSpec]:
             read_only=True,
         ),
         ToolSpec("get_camera_image", "The latest camera image (JPEG).", _NO_ARGS, read_only=True),
-        ToolSpec("emergency_stop", "Stop the robot now and latch until release_estop.", _NO_ARGS),
-        ToolSpec("release_estop", "Release a latched e-stop.", _NO_ARGS),
+        ToolSpec(
+            "emergency_stop",
+            "Stop the robot now; it stays stopped until a person releases the e-stop.",
+            _NO_ARGS,
+        ),
+        *(release if release_estop else []),
         ToolSpec("cancel_mission", "Cancel the running mission; the robot stops.", _NO_ARGS),
         ToolSpec(
             "history",
@@ -99,8 +140,10 @@ def skill_tools(registry: SkillRegistry) -> list[ToolSpec]:
     ]
 
 
-def all_tools(registry: SkillRegistry, max_mission_chars: int) -> list[ToolSpec]:
-    return mission_tools(max_mission_chars) + skill_tools(registry)
+def all_tools(
+    registry: SkillRegistry, max_mission_chars: int, *, release_estop: bool = False
+) -> list[ToolSpec]:
+    return mission_tools(max_mission_chars, release_estop=release_estop) + skill_tools(registry)
 
 
 def list_size(tools: list[ToolSpec]) -> int:

@@ -4,7 +4,9 @@ No MCP SDK here: `server.py` turns tool calls into these methods and their answe
 results. Missions and single skill calls both run on the one mission worker, and only when it
 is idle (`start_now`): a second run is refused with `BUSY`, never queued to start by surprise.
 A skill call is a one-step plan (`RobotAgent.run_plan`), so it passes the same validation, the
-same governor and the same approvals as a planned step.
+same governor and the same approvals as a planned step. Releasing the e-stop is a person's
+decision: the desk does it only when built with `allow_release_estop`, and the server asks the
+person before every release.
 """
 
 from __future__ import annotations
@@ -48,11 +50,19 @@ class McpDesk:
 
     `worker` may be shared with another interface in the same process (the web desk, the ROS
     node); then the one-mission rule holds across all of them. Without one, the desk makes its
-    own (and stops it on `close`).
+    own (and stops it on `close`). `allow_release_estop` lets MCP clients release the e-stop,
+    each time with a person's approval (off: only a person, elsewhere, can release it).
     """
 
-    def __init__(self, agent: RobotAgent, *, worker: MissionWorker | None = None) -> None:
+    def __init__(
+        self,
+        agent: RobotAgent,
+        *,
+        worker: MissionWorker | None = None,
+        allow_release_estop: bool = False,
+    ) -> None:
         self.agent = agent
+        self.allow_release_estop = allow_release_estop
         self._own_worker = worker is None
         self.worker = worker or MissionWorker(agent, on_start=_ignore, on_finish=_ignore)
         # Risky calls ask the person through the client (elicitation); the server answers
@@ -113,7 +123,7 @@ class McpDesk:
 
     def _start(self, job: MissionJob) -> MissionJob:
         if self.agent.estop_latched and not job.dry_run:
-            raise ToolInputError(f"{ESTOP_LATCHED} (the release_estop tool)")
+            raise ToolInputError(ESTOP_LATCHED)
         if self.worker.start_now(job) is not None:  # its only refusal: not idle
             raise ToolInputError(BUSY)
         return job
@@ -146,13 +156,20 @@ class McpDesk:
             "estop_latched": True,
             "dropped": dropped,
             "robot": self.agent.get_robot_status(),  # read after the stop
-            "response": "e-stop latched: the robot is stopped; call release_estop to "
-            "run missions again",
+            "response": "e-stop latched: the robot is stopped and stays stopped until a "
+            "person releases the e-stop",
         }
 
     def release_estop(self) -> dict[str, Any]:
+        """Release the latch: call only with a person's approval (the server asks first).
+        Raises ToolInputError when the desk was not built with `allow_release_estop`."""
+        if not self.allow_release_estop:
+            raise ToolInputError(
+                "the e-stop stays latched: this server lets no MCP client release it; "
+                "a person must release it"
+            )
         self.agent.release_estop()
-        return {"estop_latched": False, "response": "e-stop released"}
+        return {"estop_latched": False, "response": "e-stop released by the person"}
 
     def cancel(self) -> dict[str, Any]:
         """Cancel the running mission (whichever interface started it)."""

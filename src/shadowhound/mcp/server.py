@@ -1,12 +1,12 @@
-"""The MCP server: tools, resources and a prompt over `McpDesk`, on the SDK's low-level Server.
+"""The MCP server: tools over `McpDesk`, on the SDK's low-level Server (the resources and the
+prompt are in `resources.py`; the questions for the person in `person.py`).
 
 Only this package imports the MCP SDK. Every tool call ends in an MCP answer: a result, a
 result with `isError` (bad arguments, busy, refused by the governor: the message says what
 was wrong and what is allowed), or a protocol error for an unknown tool. A call the client
-abandons (cancelled, or the client went away) stops its mission and the robot.
-
-Long because: the MCP surface is one table of tools, resources and a prompt, each a few lines
-mapping the SDK's request onto one `McpDesk` call; splitting them would scatter that table.
+abandons (cancelled, or the client went away) stops its mission and the robot. Releasing the
+e-stop is a person's decision: the `release_estop` tool exists only when the server is built to
+offer it, and then every call asks the person through the client first.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from __future__ import annotations
 import asyncio
 import base64
 import logging
-import secrets
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -29,6 +29,7 @@ from ..agent import RobotAgent
 from ..errors import ToolInputError
 from ..result import StepStatus
 from ..worker import MissionJob
+from . import person, resources
 from .catalogue import ToolSpec, all_tools
 from .desk import McpDesk
 
@@ -38,23 +39,13 @@ SERVER_NAME = "shadowhound"
 INSTRUCTIONS = (
     "Drives a quadruped robot. Every motion passes a safety governor; risky ones "
     "ask the person. Prefer run_mission for whole tasks; call emergency_stop if "
-    "anything looks wrong."
+    "anything looks wrong: the robot then stays stopped until a person releases it."
 )
-RESOURCES = {
-    "shadowhound://skills": ("skills", "The skill catalogue with argument schemas."),
-    "shadowhound://places": ("places", "Known places (profile and taught), odom frame."),
-    "shadowhound://missions/last": ("last-mission", "The last mission's full record."),
-}
-MISSION_PROMPT = "mission"
-_APPROVE_SCHEMA: dict[str, Any] = {
-    "type": "object",
-    "properties": {
-        "approve": {"type": "boolean", "title": "Approve", "description": "let the robot do this"}
-    },
-    "required": ["approve"],
-}
-
-_APPROVAL_KEY = "approval"
+_RELEASE_QUESTION = (
+    "ShadowHound: an MCP client asks to release the e-stop. The robot is stopped now; once "
+    "released, missions can move it again. Release the e-stop?"
+)
+_LATCHED_STAYS = "the e-stop stays latched"
 
 _Start = Callable[[Callable[[ev.MissionEvent], None], Callable[[MissionJob], None]], MissionJob]
 ToolAnswer = types.CallToolResult | types.InputRequiredResult
@@ -70,16 +61,38 @@ class _Watch:
     total: int = 0
     request_id: str = ""
 
+    def pending(self) -> bool:
+        return self.job is not None and not self.job.done.is_set()
+
+
+@dataclass(eq=False)
+class _Release:
+    """A release of the e-stop waiting for the person's answer (until `deadline`, monotonic)."""
+
+    deadline: float
+
+    def pending(self) -> bool:
+        return time.monotonic() < self.deadline
+
 
 class McpRobotServer:
     """Builds the SDK `Server` for one agent. `server` is what a transport runs."""
 
-    def __init__(self, agent: RobotAgent, desk: McpDesk | None = None) -> None:
+    def __init__(
+        self, agent: RobotAgent, desk: McpDesk | None = None, *, allow_release_estop: bool = False
+    ) -> None:
+        """`allow_release_estop` offers the `release_estop` tool (each call asks the person);
+        it builds the desk when none is given. A given desk brings its own setting."""
         self.agent = agent
-        self.desk = desk or McpDesk(agent)
-        self.tools = all_tools(agent.registry, agent.settings.agent.max_mission_chars)
+        self.desk = desk or McpDesk(agent, allow_release_estop=allow_release_estop)
+        self.tools = all_tools(
+            agent.registry,
+            agent.settings.agent.max_mission_chars,
+            release_estop=self.desk.allow_release_estop,
+        )
         self._by_name = {t.name: t for t in self.tools}
-        self._waiting: dict[str, _Watch] = {}  # request_state -> a job waiting for approval
+        # Asked without a back-channel: a job's approval or a release, until the answer comes.
+        self._questions: person.Questions[_Watch | _Release] = person.Questions()
         self.server: Server[Any] = Server(
             SERVER_NAME,
             version=__version__,
@@ -122,7 +135,7 @@ class McpRobotServer:
                         spec.name, args, on_event, on_done
                     ),
                 )
-            _check_args(spec, args)
+            spec.check_args(args)
             return await self._simple(ctx, spec.name, args)
         except ToolInputError as exc:
             return _error(str(exc))
@@ -145,6 +158,8 @@ class McpRobotServer:
         if name == "plan_mission":
             text = args.get("text")
             return _answer(await asyncio.to_thread(desk.plan, text), ok_key="success")
+        if name == "release_estop":
+            return await self._release_estop(ctx)
         if name == "get_camera_image":
             image = await asyncio.to_thread(desk.camera_image)
             meta = {
@@ -167,7 +182,6 @@ class McpRobotServer:
         actions: dict[str, Callable[[], Any]] = {
             "get_state": desk.state,
             "emergency_stop": desk.estop,
-            "release_estop": desk.release_estop,
             "cancel_mission": desk.cancel,
             "history": lambda: {"missions": desk.history(args.get("limit", 10))},
         }
@@ -235,16 +249,11 @@ class McpRobotServer:
     async def _ask_approval(
         self, ctx: ServerRequestContext[Any], request: dict[str, Any], watch: _Watch
     ) -> types.InputRequiredResult | None:
-        """Ask the person through the client (elicitation); refuse where it cannot ask.
-
-        Over a connection with a back-channel (handshake-era stdio and HTTP sessions) the
-        question is sent at once. Without one (the 2026-07-28 protocol) the call answers
-        `InputRequiredResult` and the mission waits for the client to call again with the
-        person's answer (`_resume`), within safety.approval_timeout.
-        """
+        """Ask the person through the client; refuse where it cannot ask (`person.py`). Without
+        a back-channel the call answers `InputRequiredResult` and the mission waits for the
+        client to call again with the answer (`_resume`), within safety.approval_timeout."""
         request_id = request["request_id"]
-        caps = ctx.session.client_capabilities
-        if caps is None or caps.elicitation is None:
+        if not person.can_ask(ctx):
             self.agent.reject(
                 request_id,
                 "this MCP client cannot ask a person (it does not "
@@ -256,32 +265,11 @@ class McpRobotServer:
             + "; ".join(request["reasons"])
             + f". Mission: {request['mission']!r}"
         )
-        if not ctx.session.can_send_request:
-            state = secrets.token_urlsafe(16)
+        if not person.can_ask_now(ctx):
             watch.request_id = request_id
-            self._waiting = {
-                k: w
-                for k, w in self._waiting.items()
-                if w.job is not None and not w.job.done.is_set()
-            }
-            self._waiting[state] = watch
-            return types.InputRequiredResult(
-                input_requests={
-                    _APPROVAL_KEY: types.ElicitRequest(
-                        params=types.ElicitRequestFormParams(
-                            message=message, requested_schema=_APPROVE_SCHEMA
-                        )
-                    )
-                },
-                request_state=state,
-            )
+            return self._questions.ask_later(watch, message, person.APPROVE_SCHEMA)
         try:
-            answer = await asyncio.wait_for(
-                ctx.session.elicit_form(
-                    message, _APPROVE_SCHEMA, related_request_id=ctx.request_id
-                ),
-                timeout=request["timeout"],
-            )
+            answer = await person.ask_now(ctx, message, person.APPROVE_SCHEMA, request["timeout"])
         except (MCPError, asyncio.TimeoutError) as exc:
             self.agent.reject(request_id, f"the client could not ask: {exc}")
             return None
@@ -292,100 +280,75 @@ class McpRobotServer:
         self, ctx: ServerRequestContext[Any], params: types.CallToolRequestParams
     ) -> ToolAnswer:
         """A call made again with the person's answer to `InputRequiredResult`."""
-        watch = self._waiting.pop(params.request_state or "", None)
-        if watch is None or watch.job is None or watch.job.done.is_set():
+        taken = self._questions.take(params)
+        if taken is None:
             return _error(
                 "no approval is pending for this call (it was answered, timed out "
                 "or never asked); call the tool again"
             )
-        answer = (params.input_responses or {}).get(_APPROVAL_KEY)
+        waiting, answer = taken
+        if isinstance(waiting, _Release):
+            return await self._release_if_agreed(answer)
         if not isinstance(answer, types.ElicitResult):
-            self.agent.reject(watch.request_id, "the client sent no answer to the approval")
+            self.agent.reject(waiting.request_id, "the client sent no answer to the approval")
         else:
-            self._decide(watch.request_id, answer)
-        return await self._follow(ctx, watch)
+            self._decide(waiting.request_id, answer)
+        return await self._follow(ctx, waiting)
 
     def _decide(self, request_id: str, answer: types.ElicitResult) -> None:
-        content = answer.content or {}
-        if answer.action == "accept" and content.get("approve") is True:
+        if person.said_yes(answer, "approve"):
             self.agent.approve(request_id)
         else:
             how = "declined" if answer.action != "accept" else "not approved"
             self.agent.reject(request_id, f"{how} by the person (MCP elicitation)")
 
-    # -- resources and the prompt --------------------------------------------------------------
+    # -- the e-stop's release ------------------------------------------------------------------
+
+    async def _release_estop(self, ctx: ServerRequestContext[Any]) -> ToolAnswer:
+        """Release the e-stop only when a person agrees, asked through the client."""
+        if not self.agent.estop_latched:
+            return _answer({"estop_latched": False, "response": "the e-stop is not latched"})
+        if not person.can_ask(ctx):
+            return _error(
+                f"{_LATCHED_STAYS}: only a person may release it, and this MCP client cannot "
+                "ask one (it does not support elicitation)"
+            )
+        timeout = self.agent.settings.safety.approval_timeout
+        if not person.can_ask_now(ctx):
+            release = _Release(time.monotonic() + timeout)
+            return self._questions.ask_later(release, _RELEASE_QUESTION, person.RELEASE_SCHEMA)
+        try:
+            answer = await person.ask_now(ctx, _RELEASE_QUESTION, person.RELEASE_SCHEMA, timeout)
+        except (MCPError, asyncio.TimeoutError) as exc:
+            return _error(f"{_LATCHED_STAYS}: the person could not be asked ({exc!r})")
+        return await self._release_if_agreed(answer)
+
+    async def _release_if_agreed(self, answer: Any) -> ToolAnswer:
+        if not person.said_yes(answer, "release"):
+            return _error(f"{_LATCHED_STAYS}: the person did not agree to release it")
+        return _answer(await asyncio.to_thread(self.desk.release_estop))
+
+    # -- resources and the prompt (resources.py) -----------------------------------------------
 
     async def _list_resources(
         self, _ctx: ServerRequestContext[Any], _params: types.PaginatedRequestParams | None
     ) -> types.ListResourcesResult:
-        return types.ListResourcesResult(
-            resources=[
-                types.Resource(uri=uri, name=name, description=text, mime_type="application/json")
-                for uri, (name, text) in RESOURCES.items()
-            ]
-        )
+        return resources.resource_list()
 
     async def _read_resource(
         self, _ctx: ServerRequestContext[Any], params: types.ReadResourceRequestParams
     ) -> types.ReadResourceResult:
-        uri = str(params.uri)
-        readers: dict[str, Callable[[], Any]] = {
-            "shadowhound://skills": self.agent.get_available_skills,
-            "shadowhound://places": self.desk.places,
-            "shadowhound://missions/last": self.desk.last_mission,
-        }
-        if uri not in readers:
-            raise MCPError(
-                types.INVALID_PARAMS,
-                f"unknown resource {uri[:200]!r}; known: " + ", ".join(RESOURCES),
-            )
-        data = await asyncio.to_thread(readers[uri])
-        return types.ReadResourceResult(
-            contents=[
-                types.TextResourceContents(
-                    uri=uri, mime_type="application/json", text=jsonout.dumps(data)
-                )
-            ]
-        )
+        return await asyncio.to_thread(resources.read_resource, self.desk, str(params.uri))
 
     async def _list_prompts(
         self, _ctx: ServerRequestContext[Any], _params: types.PaginatedRequestParams | None
     ) -> types.ListPromptsResult:
-        return types.ListPromptsResult(
-            prompts=[
-                types.Prompt(
-                    name=MISSION_PROMPT,
-                    description="Ask the robot to do something, checked first.",
-                    arguments=[
-                        types.PromptArgument(
-                            name="task", required=True, description="what the robot should do"
-                        )
-                    ],
-                )
-            ]
-        )
+        return resources.prompt_list()
 
     async def _get_prompt(
         self, _ctx: ServerRequestContext[Any], params: types.GetPromptRequestParams
     ) -> types.GetPromptResult:
-        if params.name != MISSION_PROMPT:
-            raise MCPError(
-                types.INVALID_PARAMS, f"unknown prompt {params.name!r}; known: {MISSION_PROMPT}"
-            )
-        task = (params.arguments or {}).get("task", "").strip()
-        if not task:
-            raise MCPError(types.INVALID_PARAMS, "the mission prompt needs a 'task'")
-        text = (
-            f"Have the robot do this: {task}\n"
-            "First call plan_mission with that sentence and read the plan and any refusals. "
-            "If the plan is right, call run_mission with the same sentence and report what "
-            "happened from its result. If anything looks unsafe, call emergency_stop."
-        )
-        return types.GetPromptResult(
-            messages=[
-                types.PromptMessage(role="user", content=types.TextContent(type="text", text=text))
-            ]
-        )
+        return resources.get_prompt(params.name, params.arguments)
 
 
 def _tool(spec: ToolSpec) -> types.Tool:
@@ -395,34 +358,6 @@ def _tool(spec: ToolSpec) -> types.Tool:
         input_schema=spec.input_schema,
         annotations=types.ToolAnnotations(read_only_hint=True) if spec.read_only else None,
     )
-
-
-def _check_args(spec: ToolSpec, args: Any) -> None:
-    """The schema's rules for the few non-skill tools, each said in a sentence."""
-    if not isinstance(args, dict):
-        raise ToolInputError(f"{spec.name}: arguments must be an object")
-    props = spec.input_schema.get("properties", {})
-    unknown = sorted(set(args) - set(props))
-    if unknown:
-        raise ToolInputError(
-            f"{spec.name}: unknown argument(s) {', '.join(unknown)}; allowed: "
-            + (", ".join(props) or "none")
-        )
-    for name in spec.input_schema.get("required", []):
-        if name not in args:
-            raise ToolInputError(f"{spec.name}: missing required argument {name!r}")
-    for name, value in args.items():
-        kind = props[name].get("type")
-        ok = {
-            "string": isinstance(value, str),
-            "boolean": isinstance(value, bool),
-            "integer": isinstance(value, int) and not isinstance(value, bool),
-        }.get(kind, True)
-        if not ok:
-            raise ToolInputError(
-                f"{spec.name}: {name!r} must be a {kind}, got "
-                f"{type(value).__name__} {str(value)[:40]!r}"
-            )
 
 
 def _answer(data: Any, ok_key: str | None = None) -> types.CallToolResult:

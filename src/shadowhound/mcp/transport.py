@@ -4,14 +4,16 @@ HTTP follows `shadowhound serve`'s rules: it binds loopback unless a token is se
 token every request needs `Authorization: Bearer <token>`; without one only loopback Host
 names are answered (DNS rebinding), and a request with an `Origin` must come from the
 server's own origin (the MCP spec's rule for HTTP servers: a web page may not drive it).
-Either way the robot is stopped when the server ends.
+Either way the robot is stopped when the server ends. Behind the gate, `Sessions` cancels the
+calls whose clients drop their connections and keeps sessions few and short-lived.
 """
 
 from __future__ import annotations
 
 import hmac
-from collections.abc import Awaitable, Callable, MutableMapping
-from typing import Any
+import logging
+import sys
+from collections.abc import Callable
 from urllib.parse import urlsplit
 
 import anyio
@@ -21,27 +23,54 @@ from mcp.server.transport_security import TransportSecuritySettings
 
 from ..errors import ServeError
 from ..serving import LOOPBACK_HOSTS, bind, check_binding, hostname, send_json
+from .limits import SessionLimits
 from .server import McpRobotServer
+from .sessions import ASGIApp, Receive, Scope, Send, Sessions
 
-Scope = MutableMapping[str, Any]
-Receive = Callable[[], Awaitable[MutableMapping[str, Any]]]
-Send = Callable[[MutableMapping[str, Any]], Awaitable[None]]
-ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
+if sys.version_info < (3, 11):
+    from exceptiongroup import BaseExceptionGroup  # anyio's dependency before Python 3.11
+
+log = logging.getLogger(__name__)
 
 MCP_PATH = "/mcp"
 MAX_BODY = 1024 * 1024  # bytes: a tool call is small; a huge one is refused before parsing
 
-__all__ = ["MCP_PATH", "McpGate", "ServeError", "bind", "http_app", "run_stdio", "serve_http"]
+__all__ = [
+    "MCP_PATH",
+    "McpGate",
+    "ServeError",
+    "SessionLimits",
+    "bind",
+    "http_app",
+    "run_stdio",
+    "serve_http",
+]
 
 
 async def run_stdio(robot_server: McpRobotServer) -> None:
-    """Serve one client over stdin/stdout until it closes them; then stop the robot."""
+    """Serve one client over stdin/stdout until it closes them; then stop the robot.
+
+    The end of stdin ends the SDK's dispatcher, which cancels every call in flight: a call
+    following a mission stops it (`McpRobotServer`), and `close` stops the robot again. A
+    client that closes its end of stdout first is gone too: the write that finds the pipe
+    broken ends the server the same way (not as an error).
+    """
     server = robot_server.server
     try:
         async with stdio_server() as (read, write):
             await server.run(read, write, server.create_initialization_options())
+    except BaseException as exc:
+        if not _only_broken_pipes(exc):
+            raise
+        log.info("the stdio client closed its end of the pipe")
     finally:
         robot_server.close()
+
+
+def _only_broken_pipes(exc: BaseException) -> bool:
+    if isinstance(exc, BaseExceptionGroup):
+        return all(_only_broken_pipes(e) for e in exc.exceptions)
+    return isinstance(exc, BrokenPipeError)
 
 
 class McpGate:
@@ -102,17 +131,27 @@ def _same_origin(origin: str, host: str) -> bool:
     )
 
 
-def http_app(robot_server: McpRobotServer, host: str, token: str | None) -> ASGIApp:
-    """The Streamable HTTP app at /mcp behind `McpGate` (which does the Host/Origin checks
-    itself, so the SDK's own loopback-only list does not refuse a token-holding client)."""
+def http_app(
+    robot_server: McpRobotServer,
+    host: str,
+    token: str | None,
+    limits: SessionLimits | None = None,
+) -> ASGIApp:
+    """The Streamable HTTP app at /mcp behind `Sessions` and `McpGate` (which does the
+    Host/Origin checks itself, so the SDK's own loopback-only list does not refuse a
+    token-holding client). `Sessions` alone ends sessions, so the SDK's own idle time-out and
+    session limit are off: two clocks would disagree on which sessions are open."""
     app = robot_server.server.streamable_http_app(
         streamable_http_path=MCP_PATH,
         max_request_body_size=MAX_BODY,
         host=host,
         transport_security=TransportSecuritySettings(enable_dns_rebinding_protection=False),
+        session_idle_timeout=None,
+        max_sessions=None,
     )
+    sessions = Sessions(app, limits or SessionLimits(), MCP_PATH, MAX_BODY)
     allowed = set(LOOPBACK_HOSTS) | ({host.lower()} if host not in ("0.0.0.0", "::") else set())
-    return McpGate(app, token, allowed)
+    return McpGate(sessions, token, allowed)
 
 
 async def serve_http(
@@ -121,6 +160,7 @@ async def serve_http(
     port: int,
     token: str | None,
     on_ready: Callable[[str], None] | None = None,
+    limits: SessionLimits | None = None,
 ) -> None:
     """Serve Streamable HTTP until cancelled (Ctrl-C, SIGTERM); then stop the robot.
 
@@ -128,7 +168,7 @@ async def serve_http(
     """
     check_binding(host, token, what="the MCP server")
     sock = bind(host, port)
-    app = http_app(robot_server, host, token)
+    app = http_app(robot_server, host, token, limits)
     # No access log: nothing secret is in MCP URLs, but the log would be noise on stderr.
     server = uvicorn.Server(
         uvicorn.Config(
