@@ -215,7 +215,7 @@ def test_the_estop_topic_stops_a_walk_the_mcp_server_started(client: RosClient) 
     the agent is latched (a new motion is refused) until a person releases it."""
     import anyio
 
-    from tests.mcp.conftest import HttpServer, connect, text_of
+    from tests.mcp.conftest import HttpServer, connect, structured, text_of
     from tests.ros.rosclient import NodeProcess
     from tests.ros.test_go2_truth import Truth
 
@@ -239,6 +239,12 @@ def test_the_estop_topic_stops_a_walk_the_mcp_server_started(client: RosClient) 
 
         async def scenario() -> None:
             async with connect("http", url=server.url) as mcp:
+                # The server's own robot must have odometry (its side of the DDS match).
+                with anyio.fail_after(TIMEOUT):
+                    while not structured(await mcp.call_tool("get_state", {}))["robot"].get(
+                        "connected"
+                    ):
+                        await anyio.sleep(0.1)
                 async with anyio.create_task_group() as tasks:
 
                     async def walk() -> None:
