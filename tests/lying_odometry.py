@@ -82,6 +82,12 @@ class LyingOdometry:
     def belief(self) -> Belief | None:
         return self.sim.belief()
 
+    def look(self) -> None:
+        self.sim.look()
+
+    def vocabulary(self) -> frozenset[str]:
+        return self.sim.vocabulary()
+
     def known_objects(self) -> tuple[KnownObject, ...]:
         return self.sim.known_objects()
 

@@ -80,6 +80,7 @@ class LateRobot:
             posture=self.sim.get_state().posture,
             distance_travelled=self.intake.distance,
             angle_turned=self.intake.turned,
+            time_moving=self.intake.moving,
             stamp=now,
         )
 
@@ -159,6 +160,12 @@ class LateRobot:
 
     def watch_estop(self, listener: object) -> None:
         """No e-stop source of its own."""
+
+    def look(self) -> None:
+        self.sim.look()
+
+    def vocabulary(self) -> frozenset[str]:
+        return self.sim.vocabulary()
 
     def known_objects(self) -> tuple[()]:
         return ()

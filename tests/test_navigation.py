@@ -70,13 +70,35 @@ def test_going_to_a_point_behind_the_red_ball_walks_around_it():
     assert min(abs(y) for _t, x, y in robot.true_path if abs(x - 3.0) < 0.05) > 0.2 + BODY
 
 
-def test_a_goal_inside_an_objects_clearance_is_refused_naming_it():
+def test_a_goal_inside_an_objects_clearance_ends_at_the_nearest_clear_point_facing_it():
+    """(3, 2) is 0.5 m from the blue box's centre: the body would overlap it there. As Nav2's
+    planner tolerance does, the walk ends at the nearest point that keeps the body clear (within
+    0.5 m), facing the goal, and says so."""
     agent, robot = make()
     result = agent.execute_mission("go to position 3, 2")
+    assert result.success, result.response
+    st_ = robot.get_state()
+    assert 0.15 < math.hypot(st_.x - 3.0, st_.y - 2.0) < 0.5, (st_.x, st_.y)
+    facing = math.atan2(2.0 - st_.y, 3.0 - st_.x)
+    assert abs(math.remainder(st_.yaw - facing, math.tau)) < math.radians(3)
+    assert deepest(robot) == 0.0
+    assert (
+        "the point (3.00, 2.00) lies within the blue box's clearance: went to the nearest "
+        "point that keeps the body clear"
+    ) in result.response
+    dry = agent.dry_run("go to position 3, 2")  # the plan check predicts the same end
+    assert (
+        dry.success
+        and math.hypot(dry.predicted_path[-1].x - st_.x, dry.predicted_path[-1].y - st_.y) < 0.05
+    )
+
+
+def test_a_goal_deep_inside_an_objects_clearance_is_refused_naming_it():
+    agent, robot = make()
+    result = agent.execute_mission("go to position 2.5, 2")  # the blue box's centre
     assert not result.success and not robot.received_motion
     assert (
-        "no safe path to (3.00, 2.00): the goal (3.00, 2.00) is inside the blue box's "
-        "clearance (0.35 m kept for the body)"
+        "the goal (2.50, 2.00) is inside the blue box's clearance (0.35 m kept for the body)"
     ) in result.response
 
 
@@ -245,3 +267,34 @@ def test_a_path_re_planned_on_the_way_is_checked_by_the_governors_rules():
     assert "re-planned, but the new path is refused" in result.response
     assert "geofence polygon" in result.response
     assert robot.get_state().x < 2.5 and deepest(robot) < 1e-9  # touched (stale map), no more
+
+
+def test_doctor_lists_the_places_the_body_cannot_reach(tmp_path):
+    """Places are checked against the simulator's map from the origin: one inside an object's
+    clearance but near a clear point is reached there; one deep inside is listed, saying why."""
+    from tests.test_cli import shadowhound
+
+    profile = tmp_path / "places.yaml"
+    profile.write_text(
+        "places:\n  kitchen: [4.0, 2.5]\n  by the box: [3.0, 2.0]\n  in the ball: [3.0, 0.0]\n"
+    )
+    done = shadowhound("--config", str(profile), "doctor")
+    assert done.returncode == 0, done.stderr
+    assert "ok  places reachable on the simulator's map: kitchen, by the box" in done.stdout
+    assert (
+        "warn place 'in the ball' (3.0, 0.0) cannot be reached: the goal (3.00, 0.00) is "
+        "inside the red ball's clearance"
+    ) in done.stdout
+
+
+def test_the_profiles_charging_dock_is_reached_beside_the_dock():
+    """The default profile's place stands clear of the dock (it once lay inside its clearance,
+    and "go to the charging dock" was refused)."""
+    agent, robot = make()  # the default profile's places
+    result = agent.execute_mission("go to the charging dock")
+    assert result.success, result.response
+    st_ = robot.get_state()
+    dock = DEFAULT_WORLD.find("charging dock")
+    assert dock is not None and deepest(robot) == 0.0
+    assert math.hypot(st_.x - dock.x, st_.y - dock.y) < dock.radius + 0.6 + 0.1
+    assert "lies within" not in result.response  # the place itself is clear: no detour

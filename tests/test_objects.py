@@ -172,13 +172,59 @@ def test_an_object_hidden_behind_a_wall_is_found_by_walking_round_it():
 
 
 def test_a_search_that_finds_nothing_says_where_it_looked():
-    agent, robot = make(search=SearchConfig(max_seconds=60, max_distance=5))
+    # A unicorn the simulator can label, standing behind the room's wall: never in view.
+    hidden = World(objects=(*DEFAULT_WORLD.objects, WorldObject("unicorn", 7.5, 0.0, 0.3)))
+    agent, robot = make(world=hidden, search=SearchConfig(max_seconds=60, max_distance=5))
     result = agent.execute_mission("find the unicorn")
     assert not result.success
     assert "did not find the unicorn: looked around from (0.0, 0.0)" in result.response
     assert "search.max_seconds" in result.response
     assert robot.true_odometer <= 5 + 0.05
     never_touched(robot)
+
+
+def test_a_name_the_robot_cannot_recognise_is_refused_before_moving():
+    """A typo or a place nobody taught ("the bedroom") starts no search: refused at once,
+    naming the word, what is known and what could be looked for."""
+    agent, robot = make()
+    for mission in ("go to the bedroom", "find the zorblax", "walk over to the sofa"):
+        result = agent.execute_mission(mission)
+        assert not result.success and not robot.received_motion, result.response
+        word = mission.split()[-1]
+        assert f"'{word}' is not a place or an object I know" in result.response
+        assert "I can look for: blue box, charging dock, green plant, person" in result.response
+    near = agent.execute_mission("go to the charging station")
+    assert "Did you mean the charging dock?" in near.response
+    dry = agent.dry_run("go to the bedroom")
+    assert not dry.success and "'bedroom' is not a place" in dry.response
+
+
+def test_a_shorter_name_finds_the_one_object_it_fits_and_asks_between_two():
+    """ "the chair" is the yellow chair, seen or looked for; with two chairs known it asks."""
+    agent, robot = make()
+    result = agent.execute_mission("go to the chair")  # not in view at the start: a search
+    assert result.success, result.response
+    assert "found the yellow chair" in result.response
+    stands_before(robot, "yellow chair")
+    two = World(objects=(*DEFAULT_WORLD.objects, WorldObject("red chair", 2.0, -2.0, 0.4)))
+    agent, robot = make(world=two)
+    assert agent.execute_mission("turn left 120 degrees").success  # sees the yellow chair
+    assert agent.execute_mission("turn right 200 degrees").success  # and the red one
+    asked = agent.execute_mission("go to the chair")
+    assert not asked.success, asked.response
+    assert "'chair' could be the" in asked.response and "say which" in asked.response
+    assert "the yellow chair" in asked.response and "the red chair" in asked.response
+
+
+def test_a_dry_run_of_a_search_says_so_with_its_budget():
+    agent, robot = make(search=SearchConfig(max_seconds=90, max_distance=12))
+    dry = agent.dry_run("find the chair")
+    assert dry.success and not robot.received_motion
+    assert (
+        "step 1 (nav.goto): would look for the chair (not seen yet) for up to 90 s and 12 m"
+        in dry.response
+    )
+    assert "end near" not in dry.response  # where a search ends is not known
 
 
 def test_without_a_map_an_unknown_name_is_refused_before_moving():
@@ -188,7 +234,7 @@ def test_without_a_map_an_unknown_name_is_refused_before_moving():
     agent = RobotAgent(RobotAgentConfig(robot=robot, settings=cfg))
     result = agent.execute_mission("go to the unicorn")
     assert not result.success and not robot.received_motion
-    assert "unknown place 'unicorn'" in result.response
+    assert "'unicorn' is not a place or an object I know. Places: start, home." in (result.response)
 
 
 def _fences():

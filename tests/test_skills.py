@@ -76,6 +76,7 @@ VALID = {
     "nav.strafe": {"distance": 1},
     "nav.rotate": {"degrees": 9},
     "nav.goto": {"x": 1, "y": 1},
+    "nav.face": {"x": 1, "y": 1},
     "nav.patrol": {},
     "sys.wait": {"seconds": 1},
 }
@@ -273,7 +274,9 @@ def test_unknown_place_is_a_plan_problem_without_a_map(registry):
     from shadowhound.robot.sim import SimRobot
 
     robot = SimRobot(SimConfig(collisions=False), time_scale=0.0)  # no map: nothing to search
-    with pytest.raises(ValueError, match="unknown place 'garage'; known places: kitchen"):
+    with pytest.raises(
+        ValueError, match="'garage' is not a place or an object I know. Places: kitchen"
+    ):
         run(registry, robot, "nav.goto", place="garage")
     assert not robot.received_motion
 

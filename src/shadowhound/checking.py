@@ -29,6 +29,7 @@ class CheckedPlan:
     approvals: list[str]  # why a person must approve before it runs
     path: list[Pose2D]  # predicted poses, the start first
     invalid: list[list[str]]  # per proposed step, why it is not a valid call (empty: valid)
+    forecasts: list[str]  # what the check could not predict, per step ("step 1 (...): ...")
 
 
 def check_plan(
@@ -46,6 +47,13 @@ def check_plan(
         StepResult(i, c.skill, plain_args(c.args), c.label) for i, c in enumerate(plan.steps, first)
     ]
     verdict = governor.check_plan(calls, start, env)
+    forecasts = [
+        f"step {i} ({c.name}): {text}"
+        for i, c in enumerate(calls, first)
+        if c is not None
+        and c.skill.forecast is not None
+        and (text := c.skill.forecast(c.args, env))
+    ]
     plan.notes.extend(n for n in verdict.notes if n not in plan.notes)
 
     def renumber(r: Any) -> str:
@@ -62,7 +70,7 @@ def check_plan(
     else:
         for s, c in zip(steps, valid, strict=True):
             s.args = c.args_dict()
-    return CheckedPlan(steps, valid, problems, approvals, verdict.path, invalid)
+    return CheckedPlan(steps, valid, problems, approvals, verdict.path, invalid, forecasts)
 
 
 def _validate(

@@ -268,7 +268,7 @@ class ShadowHoundConfig(_Section):
     agent: AgentConfig = Field(default_factory=AgentConfig)
     memory: MemoryConfig = Field(default_factory=MemoryConfig)
     places: dict[str, tuple[float, float]] = Field(
-        default_factory=lambda: {"kitchen": (4.0, 2.5), "charging dock": (-2.4, -1.0)},
+        default_factory=lambda: {"kitchen": (4.0, 2.5), "charging dock": (-2.1, -1.0)},
         description="named places in the odom frame, metres",
     )
     patrol_route: list[tuple[float, float]] = Field(

@@ -14,7 +14,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .skills.sense import describe_frame
+from .planning import TRAVEL_QUESTION
+from .skills.sense import describe_frame, travel_report
 
 if TYPE_CHECKING:
     from .diagnostics import Progress
@@ -51,6 +52,7 @@ _TOPICS: list[tuple[str, re.Pattern[str]]] = [
     ("see", re.compile(r"\b(see|seeing|look|view|camera|in front|ahead of you|surround)")),
     ("battery", re.compile(r"\b(battery|charge|charged|power|energy)\b")),
     ("where", re.compile(r"\b(where|position|pose|location|located|heading|facing)\b")),
+    ("travel", TRAVEL_QUESTION),  # "how far have you walked?": the planner's words for it
     ("history", re.compile(r"\b(did|last|previous|recent|history|happened|missions?|done)\b")),
     ("skills", re.compile(r"\b(can you do|what can|skills?|abilities|help|commands?)\b")),
     ("status", re.compile(r"\b(status|how are you|state|posture|ok|okay|doing)\b")),
@@ -64,6 +66,8 @@ def answer_offline(text: str, chat: ChatContext) -> str:
     topics = [name for name, pattern in _TOPICS if pattern.search(question)]
     if "recall" in topics:  # a question about the past is not about the camera now
         topics = [t for t in topics if t not in ("see", "where")]
+    if "travel" in topics:  # "how long have you been walking": not a question of missions
+        topics = [t for t in topics if t not in ("history", "status")]
     if not topics or topics == ["status"] and chat.is_command(text):
         if chat.is_command(text):
             return (
@@ -98,6 +102,8 @@ def answer_offline(text: str, chat: ChatContext) -> str:
                 f"I am at x={st.x:.2f} m, y={st.y:.2f} m, facing "
                 f"{math.degrees(st.yaw):.0f} degrees (odom frame)."
             )
+        elif topic == "travel":
+            answers.append(travel_report(st) + ".")
         elif topic == "history":
             answers.append(_history(chat))
         elif topic == "skills":

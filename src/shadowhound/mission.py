@@ -106,6 +106,12 @@ class MissionRun:
         end, problems = checked.path[-1], checked.problems
         if problems:
             response = "Dry run: the plan would be refused: " + "; ".join(problems)
+        elif checked.forecasts:  # where it ends is not known before it runs
+            response = (
+                f"Dry run: {len(checked.steps)} step(s) would run; "
+                + "; ".join(checked.forecasts)
+                + "; nothing moved."
+            )
         else:
             response = (
                 f"Dry run: {len(checked.steps)} step(s) would run and end near "
@@ -155,6 +161,7 @@ class MissionRun:
             self.crew.places(),
             MissionBudget.start(self.start, self.robot.now),
             belief,
+            vocabulary=self.robot.vocabulary(),
         )
         return None
 

@@ -72,6 +72,7 @@ class RobotState:
     battery: float | None = 100.0  # percent; None = unknown (a Go2 without a battery source)
     distance_travelled: float = 0.0  # metres, path length since the robot started
     angle_turned: float = 0.0  # radians, absolute rotation since the robot started
+    time_moving: float = 0.0  # seconds the robot has been moving since it started
     stamp: float = 0.0  # seconds on the robot's clock
     estopped: bool = False
     connected: bool = True
@@ -104,6 +105,7 @@ class RobotState:
             "battery": None if self.battery is None else number(self.battery, 2),
             "distance_travelled": number(self.distance_travelled, 4),
             "angle_turned": number(self.angle_turned, 4),
+            "time_moving": number(self.time_moving, 2),
             "moving": self.is_moving,
             "estopped": self.estopped,
             "connected": self.connected,

@@ -38,6 +38,8 @@ GOAL = "go to x=4, y=0"
 BOX_MISSION = "go to the blue box"  # in view from the start pose (38.7 degrees to the left)
 BALL, BALL_RADIUS = (3.0, 0.0), 0.2  # the default scene's red ball
 BOX = DEFAULT_WORLD.find("blue box")
+CHAIR = DEFAULT_WORLD.find("yellow chair")
+CLASSES = ",".join(o.name for o in DEFAULT_WORLD.objects)
 assert BOX is not None
 BODY = 0.35  # the simulated body's radius
 STANDOFF = 0.6  # metres from the object's surface (search.standoff's default)
@@ -110,7 +112,17 @@ def test_nav2_driving_faster_than_the_limit_is_cancelled(client: RosClient) -> N
 @pytest.fixture(scope="module")
 def rig(client: RosClient) -> Iterator[Rig]:
     # The driver's detections feed the node's world model: objects are known by name.
-    rig, stop = start_rig(client, (), "/nav", "/nav", "nav", "-p", "detections_topic:=detections")
+    rig, stop = start_rig(
+        client,
+        (),
+        "/nav",
+        "/nav",
+        "nav",
+        "-p",
+        "detections_topic:=detections",
+        "-p",
+        f"detector_classes:={CLASSES}",  # what the driver's detector can name
+    )
     yield rig
     stop()
 
@@ -294,3 +306,27 @@ def test_a_goal_nav2_cannot_reach_fails_in_words(client: RosClient, rig: Rig) ->
         assert "inside" in result.result().result.error_msg
     finally:
         nav.destroy()
+
+
+def test_a_name_the_detector_cannot_give_is_refused_before_moving(rig: Rig) -> None:
+    """Not a place, not seen, not one of the detector's names: no search starts."""
+    before = rig.truth.still()
+    final = rig.agent.run("go to the bedroom", 30.0)
+    assert final.startswith("FAILED: ") and "'bedroom' is not a place or an object I know" in final
+    assert "I can look for: blue box, charging dock" in final, final
+    after = rig.truth.still()
+    assert math.hypot(after["x"] - before["x"], after["y"] - before["y"]) < 1e-3
+
+
+def test_the_chair_is_the_yellow_chair_looked_for_through_the_detections(rig: Rig) -> None:
+    """Out of view at the start; the detector calls it "yellow chair": the search waits for
+    its reports at each look, and "the chair" fits the one chair."""
+    assert CHAIR is not None
+    final = rig.agent.run("go to the chair", 120.0)
+    end = rig.truth.still()
+    assert final.startswith("COMPLETED: ") and "the yellow chair" in final, final
+    gap = math.dist((end["x"], end["y"]), (CHAIR.x, CHAIR.y)) - CHAIR.radius
+    assert abs(gap - STANDOFF) < 0.10, (gap, end)
+    facing = math.atan2(CHAIR.y - end["y"], CHAIR.x - end["x"])
+    assert abs(math.degrees(math.remainder(end["yaw"] - facing, math.tau))) < 10.0, end
+    home(rig)

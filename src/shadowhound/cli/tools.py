@@ -94,7 +94,30 @@ def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         )
     if args.go2 or settings.robot == "go2":
         return _doctor_go2(args)
+    _doctor_places(settings)
     return EXIT_OK
+
+
+def _doctor_places(settings: ShadowHoundConfig) -> None:
+    """The profile's places on the simulator's map, from the origin: each one the body can
+    reach, or why not (a place inside an object's clearance is reached at the nearest point
+    that keeps the body clear)."""
+    from ..robot.sim import SimRobot
+    from ..world import place_problem
+
+    belief = SimRobot(settings.sim, time_scale=0.0).belief()
+    if belief is None or not settings.places:
+        return
+    problems = {
+        name: why
+        for name, point in settings.places.items()
+        if (why := place_problem(belief, (0.0, 0.0), point))
+    }
+    good = [name for name in settings.places if name not in problems]
+    if good:
+        print(f"ok  places reachable on the simulator's map: {', '.join(good)}")
+    for name, why in problems.items():
+        print(f"warn place {name!r} {settings.places[name]} cannot be reached: {why}")
 
 
 def _doctor_go2(args: argparse.Namespace) -> int:

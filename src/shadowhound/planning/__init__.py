@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from ..config import ShadowHoundConfig
 from ..plan import Plan, SkillCall, Usage
+from ._phrases import TRAVEL as TRAVEL_QUESTION  # chat answers the same questions
 
 if TYPE_CHECKING:
     from ..llm.backend import LLMBackend
@@ -119,5 +120,6 @@ __all__ = [
     "ReplanningPlanner",
     "StepRunner",
     "StepwisePlanner",
+    "TRAVEL_QUESTION",
     "make_planner",
 ]

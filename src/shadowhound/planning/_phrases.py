@@ -117,6 +117,28 @@ STATUS = re.compile(
     r"|location|pose|state|condition|coordinates|heading)|are\s+you\s+(?:ok|okay|alright"
     r"|all\s+right|fine)|sitrep|systems?\s+check)\b"
 )
+# Turning to face a thing: "face the blue box", "turn towards the chair", "look at the person".
+FACE = re.compile(
+    r"^(?:(?:turn|rotate|spin|pivot)(?:\s+(?:yourself|(?:a)?round))?\s+(?:to\s+face|towards?"
+    r"|to\s+look\s+(?:at|towards?)|to|so\s+(?:that\s+)?you(?:\s+are|re)?\s+fac(?:e|ing))"
+    r"|(?:turn|point)\s+(?:your\s+)?(?:head|camera|nose|face|eyes)\s+(?:to|towards?|at)"
+    r"|face|look\s+(?:at|towards?)|point\s+(?:yourself\s+)?(?:at|towards?)"
+    r"|(?:stare|gaze)\s+at|orient\s+(?:yourself\s+)?(?:to|towards?))\s+(?P<target>.+)$"
+)
+# What "look at ..." may name that is no thing to face: the view itself.
+VIEW_WORDS = frozenset(
+    {"view", "scene", "surroundings", "room", "area", "things", "stuff", "everything",
+     "it", "this", "that", "what", "whats", "around", "me", "us", "camera", "picture"}
+)  # fmt: skip
+# Questions about the robot's own travel: "how far have you walked?", "how long have you been
+# walking?", "what is your odometer?".
+TRAVEL = re.compile(
+    r"\bhow\s+(?:far|much\s+distance|many\s+(?:metres|meters|m))\b"
+    r"|\bhow\s+(?:long|much\s+time)\s+(?:have\s+|did\s+|were\s+|are\s+)?(?:you\s+)?(?:been\s+)?"
+    r"(?:walk|mov|travel|run|roam|wander|on\s+(?:the\s+)?move)\w*"
+    r"|\bodometer\b|\bdistance\s+(?:travel+ed|walked|covered|so\s+far)"
+    r"|\b(?:travel+ed|walked|covered)\s+so\s+far\b"
+)
 REPORT = re.compile(r"^(?:report(?:\s+in|\s+back)?|give\s+(?:me\s+)?(?:a\s+)?report|check\s+in)$")
 LOOK_AROUND = re.compile(
     r"^(?:(?:take|have)\s+a\s+look|look|scan|glance|peek|search|check|survey)"

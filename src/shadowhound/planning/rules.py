@@ -192,10 +192,13 @@ class RulePlanner:
                 f"I do not plan around conditions ('{condition[0]}'); say what "
                 "to do, or ask a language-model planner"
             )
+        if phrases.TRAVEL.search(text):  # the status report says how far and how long
+            return [SkillCall("sys.status", {}, label)], ""
         for handler in (
             self._wait,
             self._posture,
             self._trick,
+            self._face,
             self._find,
             self._goto,
             self._patrol,
@@ -314,6 +317,26 @@ class RulePlanner:
             raise NotUnderstood("a position needs two numbers, e.g. 'go to position 2, 1'")
         place = _thing(target, label, notes)
         return None if place is None else goto(place=place)
+
+    def _face(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
+        """ "face the blue box", "turn towards position 2, 1": turn in place to a thing, a
+        place or a point (nav.face resolves the name as nav.goto does)."""
+        m = phrases.FACE.match(text)
+        if m is None:
+            return None
+        target = m["target"]
+        xy = phrases.COORDS.match(target)
+        if xy is not None:
+            x, y = en.quantity(xy["x"], xy["xu"]), en.quantity(xy["y"], xy["yu"])
+            if any(q.unit not in ("", nums.DISTANCE) for q in (x, y)):
+                raise NotUnderstood("a position takes two distances, x and y")
+            return [SkillCall("nav.face", {"x": float(x.value), "y": float(y.value)}, label)]
+        if phrases.HOME.match(target):
+            return [SkillCall("nav.face", {"place": "home"}, label)]
+        thing = _thing(target, label, notes)
+        if thing is None or set(thing.split()) & phrases.VIEW_WORDS:
+            return None  # "turn to the left", "look at the view": not a thing to face
+        return [SkillCall("nav.face", {"place": thing}, label)]
 
     def _find(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
         """ "find the blue box", "bring me to the fridge": go to a thing by name (nav.goto

@@ -102,6 +102,18 @@ class Robot(Protocol):
         and those it was told of without a map (a detector on ROS)."""
         ...
 
+    def look(self) -> None:
+        """Let what the robot recognises catch up with its view now (a detector runs at its
+        own rate, behind the camera): returns once it has reported on this view, or after a
+        bound. Immediate for a camera that labels each frame (the simulator)."""
+        ...
+
+    def vocabulary(self) -> frozenset[str] | None:
+        """The names of the kinds of thing its camera or detector can recognise ("red ball",
+        "chair"): a search may look only for these. None when its detector reports names not
+        known in advance (any name may be looked for); empty when it recognises nothing."""
+        ...
+
     def navigator(self) -> Navigator | None:
         """The robot's navigation server (Nav2's NavigateToPose), or None when it has none."""
         ...

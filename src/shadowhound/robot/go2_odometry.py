@@ -76,6 +76,7 @@ class OdometryIntake:
         self.clock = clock or StampClock()
         self.distance = 0.0  # metres the odometer counted (consistent samples only)
         self.turned = 0.0  # radians
+        self.moving = 0.0  # seconds between consecutive samples that showed motion
         self._fault: OdometryFault | None = None
         self._bad_at = -math.inf  # when the last bad sample arrived
         self._good = 0  # consistent samples since then
@@ -140,6 +141,7 @@ class OdometryIntake:
             self.distance += step
             self.turned += turn
             if step > _CHANGED or turn > _CHANGED:
+                self.moving += min(max(0.0, t - last.t), self.limits.burst)  # not a gap's
                 self._changed_at = t
                 self._shown_motion = self._shown_motion or self.tracker.commanding
         elif self._changed_at is None:

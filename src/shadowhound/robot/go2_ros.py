@@ -81,6 +81,7 @@ _SENSOR = QoSProfile(
 _KEEPALIVE_PERIOD = 0.1  # 10 Hz, as DIMOS streams Twist to the Go2
 _DRIVEN_SETTLE = 2.0  # seconds the body may still move after Nav2, a posture or a trick
 _PUBLISHERS_PERIOD = 0.5  # seconds between looks for a second odometry publisher
+_LOOK_SECONDS = 1.5  # longest wait for the detector's report on a view (2 Hz detectors, DDS)
 _NAME = {
     go2_api.STAND_UP: "StandUp",
     go2_api.BALANCE_STAND: "BalanceStand",
@@ -107,6 +108,9 @@ class Go2RosConfig:
     camera_topic: str = "camera/image_raw"
     battery_topic: str = ""  # sensor_msgs/BatteryState; '' = no source: battery unknown
     detections_topic: str = ""  # shadowhound_interfaces/DetectionArray; '' = none
+    # The names the detector can report ("chair", "red ball"): what a search may look for,
+    # besides the names it has already reported.
+    detector_classes: tuple[str, ...] = ()
     battery_timeout: float = 30.0  # seconds after which a battery reading is unknown again
     odom_timeout: float = 0.5  # seconds without odometry before get_state raises
     odom_latency: float | None = None  # seconds odometry lags the robot; None = measured
@@ -158,6 +162,7 @@ class Go2RosRobot:
             ),
         )
         self._driven_until = 0.0  # Nav2, a posture or a trick may move the body until then
+        self._detections_at: float | None = None  # monotonic receipt of the last detections
         self._posture = Posture.STANDING  # until go2_states says otherwise
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
@@ -448,6 +453,8 @@ class Go2RosRobot:
             )
 
     def _on_detections(self, msg: object) -> None:
+        with self._lock:
+            self._detections_at = time.monotonic()
         state = self.last_state()
         with self._lock:
             frames = self._frames
@@ -473,6 +480,27 @@ class Go2RosRobot:
             self.node.get_logger().warning(
                 f"dropped a detection: {problem}", throttle_duration_sec=5.0
             )
+
+    def look(self) -> None:
+        """Wait for the detector's next report (received after this call), at most
+        `_LOOK_SECONDS`: it runs at its own rate, so what it said before the robot came to
+        rest may be of another view. Nothing to wait for without a detections topic."""
+        if not self.config.detections_topic:
+            return
+        since = time.monotonic()
+        deadline = since + _LOOK_SECONDS
+        while time.monotonic() < deadline:
+            with self._lock:
+                heard = self._detections_at
+            if heard is not None and heard > since:
+                return
+            time.sleep(0.02)
+
+    def vocabulary(self) -> frozenset[str]:
+        """The detector's classes (`detector_classes`) and every name it has reported: what
+        a search may look for. Without a detector, nothing (no search can end)."""
+        reported = (o.name for o in self.known_objects())
+        return frozenset((*self.config.detector_classes, *reported))
 
     def known_objects(self) -> tuple[KnownObject, ...]:
         """What the detections topic has reported and what the world model holds (sightings
@@ -529,7 +557,7 @@ class Go2RosRobot:
             x, y, yaw = self._tracker.pose(now)
             vx, vy, wz = self._tracker.velocity(now)
             odom_at, battery = self._odom_at, self._battery
-            travel = (self._intake.distance, self._intake.turned)
+            travel = (self._intake.distance, self._intake.turned, self._intake.moving)
             posture, estopped = self._posture, self._estopped
         fresh = odom_at is not None and now - odom_at <= self.config.odom_timeout
         level = battery[1] if battery and now - battery[0] <= self.config.battery_timeout else None
@@ -544,6 +572,7 @@ class Go2RosRobot:
             battery=level,
             distance_travelled=travel[0],
             angle_turned=travel[1],
+            time_moving=travel[2],
             stamp=now,
             estopped=estopped,
             connected=fresh,

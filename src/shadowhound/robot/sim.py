@@ -243,6 +243,7 @@ class SimRobot:
             battery=max(0.0, (s.battery or 0.0) - drain),  # the simulator always knows it
             distance_travelled=s.distance_travelled + step,
             angle_turned=s.angle_turned + abs(mwz * dt),
+            time_moving=s.time_moving + (dt if step > 0 or mwz else 0.0),
             stamp=self._sim_time + dt,
             blocked_by=blocked_by,
         )
@@ -337,6 +338,13 @@ class SimRobot:
         with self._lock:
             self._state = replace(self._state, estopped=False)
             self._record("estop_release", None, True)
+
+    def look(self) -> None:
+        """Its camera labels every frame: nothing to wait for."""
+
+    def vocabulary(self) -> frozenset[str]:
+        """What its camera can label: the names of the objects of its world."""
+        return frozenset(o.name for o in self.world.objects)
 
     def watch_estop(self, listener: Callable[[bool], None]) -> None:
         """The simulator has no e-stop source of its own: `listener` is never called."""

@@ -74,6 +74,11 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
         "go2: shadowhound_interfaces/DetectionArray in, from any detector "
         "('' = none); each detection becomes a known object",
     ),
+    "detector_classes": (
+        "",
+        "go2: the names the detector can report, comma-separated ('red ball, chair'): "
+        "a search may look for these and for names it has reported; '' = only those",
+    ),
     "navigation": (
         "",
         "nav.goto: auto (Nav2's navigate_to_pose when it answers, else the "
@@ -133,6 +138,7 @@ class NodeSettings:
     odom_latency: float = -1.0
     battery_topic: str = ""
     detections_topic: str = ""
+    detector_classes: str = ""
     go2_firmware_tricks: bool = False
     navigation: str = ""
     map_topic: str = "map"
@@ -169,6 +175,9 @@ class NodeSettings:
             "odom_latency": None if self.odom_latency < 0 else self.odom_latency,
             "battery_topic": self.battery_topic,
             "detections_topic": self.detections_topic,
+            "detector_classes": tuple(
+                n for n in (c.strip() for c in self.detector_classes.split(",")) if n
+            ),
             "firmware_tricks": self.go2_firmware_tricks,
             "map_topic": self.map_topic,
             "scan_topic": self.scan_topic,

@@ -17,7 +17,7 @@ TrickName = Literal[tuple(TRICKS)]  # type: ignore[valid-type]
 
 class SportArgs(SkillArgs):
     trick: TrickName = Field(  # type: ignore[valid-type]
-        description="trick name; risky: " + ", ".join(t.name for t in TRICKS.values() if t.risky)
+        description="a trick (flips, jumps, pounce, handstand, bound: risky, need approval)"
     )
 
 
@@ -78,7 +78,7 @@ SKILLS = (
     ),
     Skill(
         "body.sport",
-        "Perform a Unitree sport-mode trick in place. Risky tricks need safety.allow_risky_tricks.",
+        "Perform a Unitree sport-mode trick in place.",
         SportArgs,
         _run_sport,
         timeout=lambda a, env: TRICKS[a.trick].duration + 15.0,

@@ -36,6 +36,9 @@ class PlanEnv:
     belief: Belief | None = None
     # Names nav.goto looked for during this mission: their approach was not predictable.
     searched: set[str] = field(default_factory=set)
+    # What the robot can recognise (`Robot.vocabulary`): a search may look only for these
+    # (None: any name, its detector's names are not known in advance).
+    vocabulary: frozenset[str] | None = None
 
     def __post_init__(self) -> None:
         self.places = {**self.config.places, **self.places}

@@ -15,7 +15,7 @@ from pydantic import ConfigDict, Field, model_validator
 from ..errors import PlanProblem, SkillError
 from ..state import Pose2D, normalize_angle, not_finite, position_unknown
 from ..units import format_number as _n
-from ..world import PlanError, apply_scan, plan_route
+from ..world import NearGoal, PlanError, apply_scan, near_goal, plan_route
 from . import motion, navigate, objects, paths
 from .arguments import (
     Angle,
@@ -42,23 +42,19 @@ class MoveArgs(SkillArgs):
     distance: Length = Field(
         ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres; + forward, - backward"
     )
-    speed: OptionalSpeed = Field(None, gt=0, le=1.5, description="m/s; default from config")
+    speed: OptionalSpeed = Field(None, gt=0, le=1.5, description="m/s")
 
 
 class StrafeArgs(SkillArgs):
     distance: Length = Field(
         ge=-_MAX_DISTANCE, le=_MAX_DISTANCE, description="metres sideways; + left, - right"
     )
-    speed: OptionalSpeed = Field(None, gt=0, le=1.5, description="m/s; default from config")
+    speed: OptionalSpeed = Field(None, gt=0, le=1.5, description="m/s")
 
 
 class RotateArgs(SkillArgs):
-    degrees: Angle = Field(
-        ge=-3600, le=3600, description="degrees; + counter-clockwise (left), - clockwise (right)"
-    )
-    speed: OptionalAngularSpeed = Field(
-        None, gt=0, le=3.0, description="rad/s; default from config"
-    )
+    degrees: Angle = Field(ge=-3600, le=3600, description="+ left (counter-clockwise), - right")
+    speed: OptionalAngularSpeed = Field(None, gt=0, le=3.0, description="rad/s")
 
 
 class GotoArgs(SkillArgs):
@@ -73,12 +69,12 @@ class GotoArgs(SkillArgs):
         None,
         min_length=1,
         max_length=100,
-        description="a place ('start', 'home') or an object",
+        description="place or object (start, home)",
     )
     heading_degrees: OptionalAngle = Field(
-        None, ge=-360, le=360, description="final heading in degrees (odom); default: keep"
+        None, ge=-360, le=360, description="final heading, degrees"
     )
-    speed: OptionalSpeed = Field(None, gt=0, le=1.5, description="m/s; default from config")
+    speed: OptionalSpeed = Field(None, gt=0, le=1.5, description="m/s")
 
     @model_validator(mode="after")
     def _target(self) -> GotoArgs:
@@ -93,7 +89,7 @@ class GotoArgs(SkillArgs):
 
 
 class PatrolArgs(SkillArgs):
-    laps: Count = Field(1, ge=1, le=20, description="how many times to walk the patrol route")
+    laps: Count = Field(1, ge=1, le=20, description="times round the route")
 
 
 def _linear(ctx_or_env: SkillContext | PlanEnv, speed: float | None) -> float:
@@ -156,6 +152,20 @@ def _goto_target(a: GotoArgs, env: PlanEnv) -> tuple[float, float]:
         return env.resolve_place(a.place)
     assert a.x is not None and a.y is not None  # guaranteed by GotoArgs._target
     return (a.x, a.y)
+
+
+def _goal(env: PlanEnv, pose: Pose2D, a: GotoArgs) -> tuple[tuple[float, float], NearGoal | None]:
+    """Where a go-to to a point or a place stands: the goal, or, when it lies inside
+    something's clearance on the map, the nearest reachable point that keeps the body clear
+    (as Nav2's planner tolerance does), with what was in the way."""
+    goal = _goto_target(a, env)
+    if env.belief is None:
+        return goal, None
+    try:
+        near = near_goal(env.belief, (pose.x, pose.y), goal)
+    except PlanError as exc:
+        raise PlanProblem(f"cannot go to ({goal[0]:.2f}, {goal[1]:.2f}): {exc}") from exc
+    return (goal, None) if near is None else (near.point, near)
 
 
 def route(env: PlanEnv, start: Pose2D, goal: tuple[float, float]) -> list[tuple[float, float]]:
@@ -229,19 +239,31 @@ def _run_goto(ctx: SkillContext, a: GotoArgs) -> str:
     target = objects.resolve(ctx.env, a.place) if a.place is not None else None
     if target is not None and target.point is None:
         return _approach(ctx, a, target, linear, angular)
-    x, y = _goto_target(a, ctx.env)
+    goal = _goto_target(a, ctx.env)
+    point, near = _goal(ctx.env, ctx.robot.get_state().pose, a)
     _walk_to(
         ctx,
-        (x, y),
+        point,
         lambda: _predict_goto(ctx.robot.get_state().pose, a, ctx.env)[-1].yaw,
         linear,
         angular,
     )
+    names = {None: "the point", "start": "where the mission started", "home": "home"}
+    where = names.get(a.place, f"the {a.place}")
+    if near is not None:
+        if a.heading_degrees is None:  # face what it could not stand on
+            st = ctx.robot.get_state()
+            motion.rotate(
+                ctx, normalize_angle(math.atan2(goal[1] - st.y, goal[0] - st.x) - st.yaw), angular
+            )
+        ctx.notes.append(
+            f"{where} ({goal[0]:.2f}, {goal[1]:.2f}) lies within {near.what}'s clearance: "
+            f"went to the nearest point that keeps the body clear, {near.moved:.2f} m from it"
+            + (", facing it" if a.heading_degrees is None else "")
+        )
     _final_heading(ctx, a)
     objects.sight_in_view(ctx)
     st = ctx.robot.get_state()
-    names = {None: "the point", "start": "where the mission started", "home": "home"}
-    where = names.get(a.place, f"the {a.place}")
     return f"reached {where} at x={st.x:.2f} m, y={st.y:.2f} m"
 
 
@@ -347,7 +369,11 @@ def _predict_goto(pose: Pose2D, a: GotoArgs, env: PlanEnv) -> list[Pose2D]:
         end = poses[-1]
         poses[-1] = Pose2D(end.x, end.y, spot.yaw)
     else:
-        poses = _predict_walk(pose, _goto_target(a, env), env)
+        point, near = _goal(env, pose, a)
+        poses = _predict_walk(pose, point, env)
+        if near is not None:  # it ends facing the goal it could not stand on
+            goal, end = _goto_target(a, env), poses[-1]
+            poses[-1] = Pose2D(end.x, end.y, math.atan2(goal[1] - end.y, goal[0] - end.x))
     if a.heading_degrees is not None:
         end = poses[-1]
         poses[-1] = Pose2D(end.x, end.y, normalize_angle(math.radians(a.heading_degrees)))
@@ -400,6 +426,22 @@ def _predict_patrol(pose: Pose2D, a: PatrolArgs, env: PlanEnv) -> list[Pose2D]:
 def _patrol_timeout(a: PatrolArgs, env: PlanEnv) -> float:
     legs = len(env.config.patrol_route) + 1
     return a.laps * legs * _goto_timeout(GotoArgs(x=0.0, y=0.0, place=None), env)
+
+
+def _forecast_goto(a: GotoArgs, env: PlanEnv) -> str:
+    """A go-to that must look for its object first: what the search may use."""
+    try:
+        target = objects.resolve(env, a.place) if a.place is not None else None
+    except PlanProblem:
+        return ""  # refused: the check says why
+    if target is None or not target.search:
+        return ""
+    cfg = env.config.search
+    return (
+        f"would look for {objects.the(target.name)} (not seen yet) for up to "
+        f"{cfg.max_seconds:g} s and {cfg.max_distance:g} m (search.max_seconds, "
+        "search.max_distance), then go to it: where it ends is not known before it runs"
+    )
 
 
 def _say_goto(a: GotoArgs) -> str:
@@ -458,15 +500,15 @@ SKILLS = (
     ),
     Skill(
         "nav.goto",
-        "Walk around obstacles to a point (x, y metres, odom), a place ('start': mission "
-        "start, 'home': origin) or an object (stops 0.6 m away facing it; searched for if "
-        "unseen).",
+        "Walk around obstacles to a point (x, y metres), a place or an object (stops 0.6 m "
+        "away facing it; looked for if not seen).",
         GotoArgs,
         _run_goto,
         timeout=_goto_timeout,
         moves=True,
         predict=_predict_goto,
         phrase=_say_goto,
+        forecast=_forecast_goto,
     ),
     Skill(
         "nav.patrol",

@@ -19,7 +19,15 @@ from ..errors import PlanProblem, SkillError, SkillTimeout
 from ..memory.service import AgentMemory
 from ..robot.base import Robot
 from ..state import Pose2D, normalize_angle
-from ..world import Belief, Coverage, KnownObject, PlanError, Viewpoint, standoff_point
+from ..world import (
+    Belief,
+    Coverage,
+    KnownObject,
+    PlanError,
+    Viewpoint,
+    object_key,
+    standoff_point,
+)
 from . import motion, paths
 from .context import PlanEnv, SkillContext
 
@@ -40,9 +48,11 @@ class Target:
 
 
 def resolve(env: PlanEnv, name: str) -> Target:
-    """A place first, then an object seen, then the one place or object whose name is a
-    misspelling of `name` ("chargng dock"); with a map, an unknown name is an object to look
-    for. Without a map, an unknown name is refused (nothing to search on)."""
+    """A place first, then an object seen (by its name or its last words: "chair" for the
+    one "yellow chair"; two that fit are a question), then the one place, object or
+    recognisable kind whose name is a misspelling of `name` ("chargng dock"); with a map, a
+    name the robot can recognise (`PlanEnv.vocabulary`) is an object to look for. Anything else
+    is refused before moving, naming the word and what the robot knows."""
     try:
         return Target(name, point=env.resolve_place(name))
     except PlanProblem as exc:
@@ -55,14 +65,45 @@ def resolve(env: PlanEnv, name: str) -> Target:
             raise PlanProblem(
                 f"{name!r} could be " + " or ".join(o.the_name for o in several) + ": say which"
             ) from exc
-        near = _misspelt(name, [*env.places, *(o.name for o in _objects(belief))])
+        kinds = sorted(env.vocabulary or ())
+        near = _misspelt(name, [*env.places, *(o.name for o in _objects(belief)), *kinds])
         if near is not None:
             return resolve(env, near)
-        if belief is None:
-            raise
-        if not name.strip():
-            raise PlanProblem(f"{exc}; objects seen: {seen_list(belief)}") from exc
+        if belief is None or not name.strip() or not recognisable(env.vocabulary, name):
+            raise PlanProblem(unknown(env, name)) from exc
         return Target(name)
+
+
+def recognisable(vocabulary: frozenset[str] | None, name: str) -> bool:
+    """Whether the robot can recognise `name` to look for it: one of the kinds it knows, by
+    its name or its last words ("chair" for "yellow chair"); any name when its vocabulary is
+    not known in advance (None)."""
+    if vocabulary is None:
+        return True
+    key = object_key(name)
+    return bool(key) and any(
+        object_key(v) == key or object_key(v).endswith(" " + key) for v in vocabulary
+    )
+
+
+def unknown(env: PlanEnv, name: str) -> str:
+    """Why a name cannot be gone to: what the robot knows instead, and any name that shares a
+    word with it ("charging station": did you mean the charging dock?)."""
+    places = [*env.places, "start", "home"]
+    seen = [o.name for o in _objects(env.belief)]
+    kinds = sorted(env.vocabulary or ())
+    words = set(object_key(name).split())
+    alike = sorted({n for n in (*env.places, *seen, *kinds) if words & set(n.lower().split())})
+    text = (
+        f"{name!r} is not a place or an object I know"
+        + (", nor a thing I can recognise to look for" if env.belief is not None else "")
+        + f". Places: {', '.join(places)}. Objects seen: {', '.join(seen) or 'none yet'}."
+    )
+    if env.belief is not None and env.vocabulary is not None:
+        text += f" I can look for: {', '.join(kinds) or 'nothing (no detector)'}."
+    if alike:
+        text += " Did you mean " + " or ".join(f"the {n}" for n in alike) + "?"
+    return text
 
 
 def find(belief: Belief | None, name: str) -> KnownObject | None:
@@ -167,13 +208,14 @@ def see_at_start(robot: Robot, belief: Belief | None, memory: AgentMemory | None
 # -- search ---------------------------------------------------------------------------------
 
 
-def _look_around(ctx: SkillContext, name: str, angular: float) -> KnownObject | None:
+def look_around(ctx: SkillContext, name: str, angular: float) -> KnownObject | None:
     """Turn a full circle in quarters, sighting at each; stop as soon as `name` is seen."""
     belief = ctx.env.belief
     assert belief is not None
     for quarter in range(4):
         if quarter:
             motion.rotate(ctx, _QUARTER, angular)
+        ctx.robot.look()  # a detector reports at its own rate: let it see this view
         sight_in_view(ctx)
         found = find(belief, name)
         if found is not None:
@@ -210,7 +252,7 @@ def search(ctx: SkillContext, name: str, linear: float, angular: float) -> Known
             pose = robot.get_state().pose
             if not _fits(ctx, deadline, turn):
                 break
-            found = _look_around(ctx, name, angular)
+            found = look_around(ctx, name, angular)
             coverage.look((pose.x, pose.y))
             if found is not None:
                 ctx.notes.append(
@@ -248,7 +290,7 @@ def search(ctx: SkillContext, name: str, linear: float, angular: float) -> Known
         ctx.deadline, ctx._late = saved_deadline, saved_late
     places = ", ".join(f"({x:.1f}, {y:.1f})" for x, y in coverage.looked_from) or "nowhere"
     raise SkillError(
-        f"did not find {_the(name)}: looked around from {places}, walked {walked:.1f} m in "
+        f"did not find {the(name)}: looked around from {places}, walked {walked:.1f} m in "
         f"{robot.now() - start.stamp:.0f} s; {why} (budget {cfg.max_seconds:g} s, "
         f"{max_walk:g} m: search.max_seconds, search.max_distance). Objects seen: "
         f"{seen_list(belief)}"
@@ -306,7 +348,8 @@ def _corner_poses(pose: Pose2D, points: list[tuple[float, float]]) -> list[Pose2
     return poses
 
 
-def _the(name: str) -> str:
+def the(name: str) -> str:
+    """The name with "the" before it, as a sentence says it ("the chair" for "chair")."""
     key = " ".join(name.strip().split())
     return key if key.lower().startswith("the ") else f"the {key}"
 

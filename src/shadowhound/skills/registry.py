@@ -39,6 +39,7 @@ Predictor = Callable[["Pose2D", Any, "PlanEnv"], list["Pose2D"]]
 Timeout = Callable[[Any, "PlanEnv"], float]
 Seconds = Callable[[Any], float]  # of a call's arguments
 Words = Callable[[Any], str]  # of a call's arguments
+Forecast = Callable[[Any, "PlanEnv"], str]  # of a call's arguments, in a mission
 
 
 @dataclass(frozen=True)
@@ -77,6 +78,9 @@ class Skill:
     # Retrieval memory keeps each successful output as this kind (observation, fact, mission).
     remembered_as: str | None = None
     phrase: Words | None = None  # a call in a few words ("move forward 2 m"); default: the name
+    # What the plan check cannot predict of a call, in words ("would look for the chair for up
+    # to 120 s and 20 m ..."), "" when it can: a dry run says it.
+    forecast: Forecast | None = None
 
     def __post_init__(self) -> None:
         if self.moves and self.low_battery:  # below the battery floor nothing may walk

@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 from pydantic import Field
 
-from ..state import CameraFrame
+from ..state import CameraFrame, RobotState
 from ..units import format_number
 from . import motion
 from .arguments import Duration, NoArgs, SkillArgs
@@ -18,9 +18,7 @@ from .registry import Skill
 
 
 class DescribeArgs(SkillArgs):
-    question: str | None = Field(
-        None, max_length=500, description="what to look for; default: describe the view"
-    )
+    question: str | None = Field(None, max_length=500, description="what to look for")
 
 
 class WaitArgs(SkillArgs):
@@ -70,12 +68,34 @@ def _run_look_around(ctx: SkillContext, a: DescribeArgs) -> str:
 
 def _run_status(ctx: SkillContext, _a: NoArgs) -> str:
     st = ctx.robot.get_state()
+    budget = ctx.env.budget
     return (
         f"{st.posture.value.capitalize()} at x={st.x:.2f} m, y={st.y:.2f} m, "
-        f"facing {math.degrees(st.yaw):.0f} degrees; battery {st.battery_text}; "
-        f"travelled {st.distance_travelled:.2f} m in total"
+        f"facing {math.degrees(st.yaw):.0f} degrees; battery {st.battery_text}"
         + ("; e-stop latched" if st.estopped else "")
+        + "; "
+        + travel_report(st, budget.travelled(st) if budget is not None else None)
     )
+
+
+def travel_report(state: RobotState, this_mission: float | None = None) -> str:
+    """How far the robot has walked and turned, and for how long, from its odometer (since it
+    started), and what the current mission has walked so far."""
+    text = (
+        f"I have walked {state.distance_travelled:.2f} m and turned "
+        f"{math.degrees(state.angle_turned):.0f} degrees since I started, moving for "
+        f"{_duration(state.time_moving)} in all (my odometer)"
+    )
+    if this_mission is not None:
+        text += f"; {this_mission:.2f} m in this mission so far"
+    return text
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 60:
+        return f"{seconds:.1f} s"
+    minutes, rest = divmod(round(seconds), 60)
+    return f"{minutes} min {rest} s" if minutes < 60 else f"{minutes // 60} h {minutes % 60} min"
 
 
 def _run_wait(ctx: SkillContext, a: WaitArgs) -> str:
@@ -89,7 +109,7 @@ def _run_wait(ctx: SkillContext, a: WaitArgs) -> str:
 SKILLS = (
     Skill(
         "perception.describe",
-        "Describe what the camera sees now, or answer a question about it. Does not move.",
+        "Describe the camera's view, or answer a question about it. Does not move.",
         DescribeArgs,
         _run_describe,
         timeout=60.0,
@@ -99,7 +119,7 @@ SKILLS = (
     ),
     Skill(
         "perception.look_around",
-        "Turn in place a full circle in quarter turns, describing each view.",
+        "Turn a full circle in place in quarter turns, describing each view.",
         DescribeArgs,
         _run_look_around,
         timeout=120.0,
@@ -110,7 +130,7 @@ SKILLS = (
     ),
     Skill(
         "sys.status",
-        "Report pose, posture and battery. Does not move.",
+        "Report pose, posture, battery and how far and long it has walked. Does not move.",
         NoArgs,
         _run_status,
         timeout=5.0,

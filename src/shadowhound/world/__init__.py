@@ -18,7 +18,7 @@ from .inflation import DEFAULT_ROBOT_RADIUS, InflatedGrid, inflate
 from .legs import LegCheck, blocker_near, check_leg
 from .objects import Belief, KnownObject, merge_sightings, object_key
 from .planner import Path, line_is_clear, plan_path
-from .route import plan_route
+from .route import GOAL_TOLERANCE, NearGoal, near_goal, place_problem, plan_route
 from .scan_update import apply_scan
 from .search import Coverage, Viewpoint
 from .standoff import DEFAULT_STANDOFF, Standoff, standoff_point
@@ -27,6 +27,7 @@ __all__ = [
     "DEFAULT_RESOLUTION",
     "DEFAULT_ROBOT_RADIUS",
     "DEFAULT_STANDOFF",
+    "GOAL_TOLERANCE",
     "FREE",
     "OCCUPIED",
     "OCCUPIED_THRESHOLD",
@@ -38,6 +39,7 @@ __all__ = [
     "InflatedGrid",
     "KnownObject",
     "LegCheck",
+    "NearGoal",
     "OccupancyGrid",
     "Path",
     "PlanError",
@@ -49,6 +51,8 @@ __all__ = [
     "inflate",
     "line_is_clear",
     "merge_sightings",
+    "near_goal",
+    "place_problem",
     "object_key",
     "plan_path",
     "plan_route",
