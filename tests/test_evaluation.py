@@ -10,12 +10,36 @@ from shadowhound.evaluation import load_cases, run_case
 
 DATA = Path(__file__).parent / "data"
 HELD_OUT = load_cases(DATA / "missions_heldout.yaml")
+WORLD = load_cases(DATA / "missions_world.yaml")
 
 
 @pytest.mark.parametrize("case", HELD_OUT, ids=[c.mission[:50] for c in HELD_OUT])
 def test_held_out_case(case):
     outcome = run_case(case, ShadowHoundConfig())
     assert outcome.passed, f"{outcome.failures} -> {outcome.response}"
+
+
+@pytest.mark.parametrize("case", WORLD, ids=[c.mission[:50] for c in WORLD])
+def test_world_case(case):
+    """Going to things, places and points, names it cannot recognise, facing, travel."""
+    outcome = run_case(case, ShadowHoundConfig())
+    assert outcome.passed, f"{outcome.failures} -> {outcome.response}"
+
+
+def test_travel_questions_are_answered_from_the_odometer_without_moving():
+    from shadowhound import RobotAgent
+
+    agent = RobotAgent(ShadowHoundConfig())
+    assert agent.execute_mission("walk forward 1 meter and turn left 90 degrees").success
+    before = agent.robot.get_state()
+    for question in ("how far have you walked?", "how long have you been walking?"):
+        answer = agent.chat(question)
+        assert "I have walked 1.00 m and turned 90 degrees since I started" in answer, answer
+        assert "moving for" in answer
+        reply = agent.execute_mission(question)
+        assert reply.success and "I have walked 1.00 m" in reply.response, reply.response
+    after = agent.robot.get_state()
+    assert (after.x, after.y, after.yaw) == (before.x, before.y, before.yaw)
 
 
 # -- several planners side by side ---------------------------------------------------------------

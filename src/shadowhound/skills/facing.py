@@ -106,6 +106,12 @@ def _run(ctx: SkillContext, a: FaceArgs) -> str:
     return f"facing {name} {where}, heading {math.degrees(yaw):.0f} degrees"
 
 
+def _timeout(_a: FaceArgs, env: PlanEnv) -> float:
+    """A full look-around in quarter turns (for a thing not seen yet), then the turn to it."""
+    m = env.config.motion
+    return 5 * motion.rotate_timeout(math.pi / 2, m.default_angular_speed, m.angular_accel)
+
+
 def _say(a: FaceArgs) -> str:
     if a.place is not None:
         return f"face {a.place}"
@@ -133,14 +139,7 @@ SKILLS = (
         "Turn in place to face a point (x, y), a place or an object.",
         FaceArgs,
         _run,
-        timeout=lambda a, env: (
-            4
-            * motion.rotate_timeout(
-                math.pi / 2,
-                a.speed or env.config.motion.default_angular_speed,
-                env.config.motion.angular_accel,
-            )
-        ),
+        timeout=_timeout,
         moves=True,
         predict=_predict,
         phrase=_say,
