@@ -27,6 +27,7 @@ class LyingOdometry:
     def __init__(self, sim: SimRobot | None = None, **lies: float) -> None:
         self.sim = sim or SimRobot(time_scale=0.0)
         self.name = self.sim.name
+        self.description = self.sim.description
         self.lies: dict[str, float] = lies or {"x": math.nan}
 
     def _lie(self, state: RobotState) -> RobotState:

@@ -33,6 +33,7 @@ class LateRobot:
     """The Robot protocol over a SimRobot whose pose is known only from late odometry."""
 
     name = "late-odometry"
+    description = "simulated Go2 behind late odometry"
 
     def __init__(
         self,

@@ -69,3 +69,33 @@ def test_inspector_lists_tools_and_calls_one_over_http(inspector, http_server):
     assert "get_state" in names
     state = _inspect(target, "--method", "tools/call", "--tool-name", "get_state")
     assert state["structuredContent"]["robot"]["connected"] is True
+
+
+def test_inspector_gives_a_length_as_text_with_its_unit(inspector, tmp_path):
+    """The README promises "2 ft" wherever a length goes: the tool schema says a number or a
+    string, so the Inspector sends "50 cm" as it was typed (it turns a field declared only as a
+    number into a number, and "50 cm" into NaN), and the registry reads it as 0.5 m."""
+    server = [
+        *inspector,
+        "-e",
+        f"PYTHONPATH={SRC}",
+        "-e",
+        f"SHADOWHOUND_MEMORY__DATA_DIR={tmp_path}",
+        *server_command(),
+    ]
+    tools = {t["name"]: t for t in _inspect(server, "--method", "tools/list")["tools"]}
+    distance = tools["nav_move"]["inputSchema"]["properties"]["distance"]
+    assert sorted(distance["type"]) == ["number", "string"], distance
+    answer = _inspect(
+        server,
+        "--method",
+        "tools/call",
+        "--tool-name",
+        "nav_move",
+        "--tool-arg",
+        "distance=50 cm",
+    )
+    assert answer.get("isError") is not True, answer
+    result = answer["structuredContent"]
+    assert result["success"] is True
+    assert result["robot"]["x"] == pytest.approx(0.5, abs=0.02)

@@ -16,6 +16,7 @@ from typing import Any
 
 import pytest
 
+from shadowhound.mcp.catalogue import skill_schema
 from shadowhound.skills import default_registry
 
 from .conftest import HttpServer, connect, server_env, structured, text_of
@@ -75,8 +76,20 @@ def test_lists_tools_from_the_registry_resources_and_the_prompt(transport, http_
             assert "release_estop" not in tools  # a person's decision (--allow-release-estop)
             for skill in default_registry():  # one tool per skill, the registry's schema
                 tool = tools[skill.tool_name]
-                assert tool.input_schema == skill.parameters_schema()
+                assert tool.input_schema == skill_schema(skill)
                 assert tool.description == skill.description
+            # ... where a number may also be text with a unit ("50 cm"), as the registry reads
+            # it; its bounds stay (they apply to numbers).
+            distance = tools["nav_move"].input_schema["properties"]["distance"]
+            assert distance["type"] == ["number", "string"] and distance["maximum"] == 1000
+            speed = tools["nav_move"].input_schema["properties"]["speed"]["anyOf"]
+            assert speed[0]["type"] == ["number", "string"] and speed[1] == {"type": "null"}
+            laps = tools["nav_patrol"].input_schema["properties"]["laps"]
+            assert laps["type"] == ["integer", "string"]
+            assert (
+                tools["body_sport"].input_schema
+                == default_registry().get("body.sport").parameters_schema()
+            )  # no numbers: the registry's schema as it is
             uris = {str(r.uri) for r in (await client.list_resources()).resources}
             assert {
                 "shadowhound://skills",

@@ -315,6 +315,7 @@ def test_the_go2_implements_the_whole_robot_protocol(robot: Go2RosRobot) -> None
     from shadowhound.world import Belief
 
     assert isinstance(robot, Robot)
+    assert robot.description == f"Go2 over ROS (namespace {NS})"  # what a dashboard says
     assert robot.realtime and robot.time_scale == 1.0
     belief = robot.belief()
     assert belief is None or (isinstance(belief, Belief) and robot.belief() is belief)

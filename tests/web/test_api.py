@@ -178,6 +178,9 @@ def test_chat_status_diagnostics_skills_map(client: TestClient) -> None:
     diagnostics = client.get("/api/diagnostics").json()
     assert diagnostics["agent_backend"] == "offline" and "limits" in diagnostics
     assert diagnostics["web"]["auth"] is False
+    # Which robot this is, in words the page's header shows.
+    assert diagnostics["robot_description"] == "simulated Go2"
+    assert diagnostics["robot_name"] == "sim-go2"
     skills = {s["name"] for s in client.get("/api/skills").json()["skills"]}
     assert {"nav.move", "nav.rotate", "body.stand"} <= skills
     world = client.get("/api/map").json()

@@ -37,6 +37,17 @@ def pixel_at(image: Any, layout: dict[str, Any], x: float, y: float) -> int:
     return value
 
 
+def test_the_map_names_its_obstacles_before_anything_is_seen(client: TestClient) -> None:
+    """The simulator's map is labelled with its scene's names: the dashboard can name every
+    blob from the start, while `objects` (what the robot has seen) is still empty."""
+    world = client.get("/api/map").json()
+    assert world["objects"] == []
+    labels = {o["name"]: o for o in world["labels"]}
+    assert {"red ball", "blue box", "white fridge", "charging dock", "yellow chair"} <= set(labels)
+    assert (labels["charging dock"]["x"], labels["charging dock"]["y"]) == (-3.0, -1.0)
+    assert labels["white fridge"]["radius"] > 0
+
+
 def test_map_gives_the_grid_layout_and_objects_and_the_png_shows_them(client: TestClient) -> None:
     assert client.get("/api/map").json()["objects"] == []  # nothing seen yet
     # Planning a mission looks around first: what is in view becomes known.

@@ -1,9 +1,11 @@
 """The MCP tool list: names, short descriptions and input schemas, as plain dicts.
 
 Skill tools come from the skill registry (one source of truth: the same names, descriptions
-and schemas the LLM planner sends as function tools). The other tools are few and described
-in a line each, so the whole list costs a client's model less than the planner's own prompt
-(bench/bench_mcp.py measures both).
+and schemas the LLM planner sends as function tools), except that a numeric argument is
+declared as a number or a string: the registry reads text with a unit ("50 cm", "90°",
+"2 min") as it reads a number, and a client that follows the schema must be able to send it.
+The other tools are few and described in a line each, so the whole list costs a client's
+model less than the planner's own prompt (bench/bench_mcp.py measures both).
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import ToolInputError
-from ..skills import SkillRegistry
+from ..skills import Skill, SkillRegistry
+from ..skills.arguments import is_numeric
 
 _NO_ARGS: dict[str, Any] = {"type": "object", "properties": {}, "additionalProperties": False}
 
@@ -135,9 +138,21 @@ def mission_tools(max_mission_chars: int, *, release_estop: bool = False) -> lis
 
 def skill_tools(registry: SkillRegistry) -> list[ToolSpec]:
     """One tool per skill, named like the planner's function tools (`nav_move`)."""
-    return [
-        ToolSpec(s.tool_name, s.description, s.parameters_schema(), skill=s.name) for s in registry
-    ]
+    return [ToolSpec(s.tool_name, s.description, skill_schema(s), skill=s.name) for s in registry]
+
+
+def skill_schema(skill: Skill) -> dict[str, Any]:
+    """The skill's argument schema, a numeric argument a number or a string: `"type":
+    ["number", "string"]` (its bounds apply to numbers; text is read by shadowhound.units,
+    which refuses a wrong unit, "3 s" for a length, with what is allowed)."""
+    schema = skill.parameters_schema()
+    for name, info in skill.args_model.model_fields.items():
+        if is_numeric(info):
+            prop = schema["properties"][info.alias or name]
+            for branch in prop.get("anyOf", [prop]):  # an optional one: [number, null]
+                if branch.get("type") in ("number", "integer"):
+                    branch["type"] = [branch["type"], "string"]
+    return schema
 
 
 def all_tools(

@@ -24,6 +24,9 @@ class Robot(Protocol):
     """A quadruped the agent can drive. Implementations must make `stop` thread-safe."""
 
     name: str
+    # What the robot is and how it is reached, in a person's words ("simulated Go2", "Go2
+    # over ROS (namespace /robot0)"): dashboards say which robot they drive.
+    description: str
 
     @property
     def time_scale(self) -> float:

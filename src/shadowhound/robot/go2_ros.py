@@ -139,7 +139,9 @@ class Go2RosRobot:
         self, config: Go2RosConfig | None = None, *, context: Context | None = None
     ) -> None:
         self.config = c = config or Go2RosConfig()
-        self.name = f"go2 ({c.namespace.strip('/')})" if c.namespace.strip("/") else "go2"
+        namespace = c.namespace.strip("/")
+        self.name = f"go2 ({namespace})" if namespace else "go2"
+        self.description = "Go2 over ROS" + (f" (namespace /{namespace})" if namespace else "")
         self._own_context = context is None and not rclpy.ok()
         if self._own_context:
             context = Context()

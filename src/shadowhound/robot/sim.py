@@ -97,6 +97,7 @@ class SimRobot:
         if self.config.time_scale < 0 or not math.isfinite(self.config.time_scale):
             raise ValueError("time_scale must be a finite number >= 0 (0 = as fast as possible)")
         self.name = name
+        self.description = "simulated Go2"
         self._world = world
         self.world: scene.World = world if world is not None else scene.DEFAULT_WORLD
         # What the robot's map was made of: the scene itself, or an older one (a stale map).

@@ -248,6 +248,8 @@ async def diagnostics(request: Request) -> dict[str, Any]:
     d.update(
         agent_backend=settings.backend,
         agent_model=settings.llm.model or "offline",
+        robot_name=web.agent.robot.name,
+        robot_description=web.agent.robot.description,
         robot_mode=d["robot"].get("posture"),
         last_update=time.time(),
         web={
@@ -273,7 +275,9 @@ _GRID_IMAGES = GridImages()
 @router.get("/map", tags=["status"])
 async def world_map(request: Request) -> dict[str, Any]:
     """What the dashboard's map draws besides the robot: places, route, geofence, the known
-    objects and the occupancy grid's layout and version (its image: /api/map/grid.png)."""
+    objects, the names a labelled map gives its obstacles (`labels`: the simulator's scene,
+    known before anything is seen) and the occupancy grid's layout and version (its image:
+    /api/map/grid.png)."""
     agent = ctx(request).agent
     settings, robot = agent.settings, agent.robot
     places = known_places(settings.places, agent.memory.places)  # taught ones too
@@ -282,6 +286,7 @@ async def world_map(request: Request) -> dict[str, Any]:
     return {
         "grid": grid,
         "objects": object_dicts(robot_objects(robot)),
+        "labels": object_dicts(belief.labels if belief is not None else ()),
         "places": {name: list(place.position) for name, place in places.items()},
         "patrol_route": [list(p) for p in settings.patrol_route],
         "geofence_radius": settings.safety.geofence_radius,

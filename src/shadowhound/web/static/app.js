@@ -62,10 +62,17 @@ function withToken(path) {
   return path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(view.token);
 }
 
-function say(selector, text, kind) {
+// `about` says what the message is about ("mission", "estop"), so a later outcome of the
+// same thing replaces it: a mission's result its "accepted", a release the e-stop's note.
+function say(selector, text, kind, about) {
   const element = $(selector);
   element.textContent = text;
   element.dataset.kind = kind || "info";
+  element.dataset.about = about || "";
+}
+
+function unsay(selector, about) {
+  if ($(selector).dataset.about === about) say(selector, "", "info");
 }
 
 // -- missions -----------------------------------------------------------------------------
@@ -80,14 +87,15 @@ async function submitMission(dryRun) {
   if (reply.status === 202) {
     remember(command);
     view.current = reply.data.mission_id;
+    say("#mission-msg", reply.data.message, "info", "mission");
     // Its events may have overtaken this answer: keep the steps they already drew.
     if (view.shown !== view.current) showCurrent(command + (dryRun ? " (dry run)" : ""), []);
     // A quick mission (a dry run) may even have finished already.
     const record = view.finished.get(view.current);
     if (record) showResult(record);
-    say("#mission-msg", reply.data.message, "info");
   } else {
-    say("#mission-msg", "Refused: " + detail(reply.data), "error");
+    say("#mission-msg", "Refused: " + detail(reply.data), "error",
+      reply.status === 409 ? "estop" : "mission");
   }
 }
 
@@ -98,6 +106,7 @@ function showCurrent(text, steps) {
   $("#progress").value = 0;
   $("#result").textContent = "";
   $("#result").dataset.kind = "";
+  $("#cancel").hidden = false; // until the mission ends
   renderSteps($("#steps"), steps);
 }
 
@@ -107,6 +116,8 @@ function showResult(record) {
   const text = record.response || result.response || record.error || "no result";
   $("#result").textContent = text;
   $("#result").dataset.kind = record.success || result.success ? "ok" : "error";
+  $("#cancel").hidden = true;
+  unsay("#mission-msg", "mission"); // the outcome replaces "accepted; it starts now"
   if (result.success) $("#progress").value = 1;
   if (result.dry_run) {
     view.predicted = (result.predicted_path || []).map((p) => ({ x: p.x, y: p.y }));
@@ -148,7 +159,7 @@ async function pressEstop() {
     say("#mission-msg", "E-stop request failed: " + detail(reply.data), "error");
     return;
   }
-  say("#mission-msg", reply.data.message, "error");
+  say("#mission-msg", reply.data.message, "error", "estop");
   renderRobot(reply.data.robot); // the robot as it was once stopped, before the next tick
 }
 
@@ -159,6 +170,7 @@ async function releaseEstop() {
 }
 
 function setEstop(latched) {
+  if (!latched) unsay("#mission-msg", "estop"); // its notes and refusals are over
   view.estop = latched;
   $("#estop-banner").hidden = !latched;
   $("#release").hidden = !latched;
@@ -205,12 +217,27 @@ function applyStatus(status) {
 }
 
 function renderRobot(robot) {
+  if (robot.connected === false && robot.posture === undefined) {
+    renderKv($("#robot"), { connected: "no: " + (robot.error || "no state") });
+    return;
+  }
   renderKv($("#robot"), {
-    posture: robot.posture, battery: robot.battery === null ? "unknown" : robot.battery + " %", moving: robot.moving,
-    "e-stop": robot.estopped, travelled: robot.distance_travelled + " m",
-    connected: robot.connected,
+    posture: robot.posture,
+    battery: Number.isFinite(robot.battery) ? robot.battery.toFixed(1) + " %" : "unknown",
+    moving: robot.moving ? "yes" : "no",
+    "e-stop": robot.estopped ? "latched" : "released",
+    heading: Number.isFinite(robot.yaw_deg) ? Math.round(robot.yaw_deg) + "°" : "unknown",
+    travelled: metres(robot.distance_travelled),
+    turned: Number.isFinite(robot.angle_turned) ?
+      Math.round(robot.angle_turned * 180 / Math.PI) + "°" : "unknown",
+    connected: robot.connected ? "yes" : "no",
+    ...(robot.blocked_by ? { "blocked by": robot.blocked_by } : {}),
   });
   movePose(robot);
+}
+
+function metres(value) {
+  return Number.isFinite(value) ? value.toFixed(2) + " m" : "unknown";
 }
 
 function movePose(robot) {
@@ -232,8 +259,8 @@ function movePose(robot) {
   map.dataset.x = robot.x.toFixed(3);
   map.dataset.y = robot.y.toFixed(3);
   map.dataset.yaw = robot.yaw.toFixed(3);
-  $("#pose").textContent = "x " + robot.x.toFixed(2) + " m · y " + robot.y.toFixed(2) +
-    " m · " + Math.round(robot.yaw_deg) + "°";
+  $("#pose").textContent = "x " + metres(robot.x) + " · y " + metres(robot.y) + " · heading " +
+    Math.round(robot.yaw_deg) + "°";
   drawMap();
 }
 
@@ -321,7 +348,14 @@ function setConn(state) {
 }
 
 function drawMap() {
-  draw($("#map"), view);
+  draw($("#map"), view, { labels: $("#map-labels"), scale: $("#map-scale") });
+}
+
+// The names and the scale bar are laid out in CSS pixels: again when the map's size changes.
+let redraw = 0;
+function drawMapSoon() {
+  cancelAnimationFrame(redraw);
+  redraw = requestAnimationFrame(drawMap);
 }
 
 // -- panels fetched once or now and then --------------------------------------------------
@@ -393,10 +427,15 @@ async function loadDiagnostics() {
   const reply = await api("GET", "/api/diagnostics");
   if (!reply.ok) return;
   const d = reply.data;
+  $("#robot-badge").textContent = d.robot_description || d.robot_name || "";
+  // The last mission's refusals are in its response: the errors row leaves them out, so no
+  // refusal shows twice (an earlier mission's refusal is one of the recent errors).
+  const refusals = d.refusals || [];
+  const errors = (d.errors || []).filter((e) => !refusals.some((r) => e.includes(r)));
   renderKv($("#diag"), {
-    status: d.status, backend: d.agent_backend, model: d.agent_model,
-    "last mission": d.last_mission || "none", errors: (d.errors || []).slice(-3).join(" | ") ||
-      "none", refusals: (d.refusals || []).join(" | ") || "none",
+    status: d.status, robot: d.robot_description || d.robot_name, backend: d.agent_backend,
+    model: d.agent_model, "last mission": d.last_mission || "none",
+    "recent errors": errors.slice(-3).join(" | ") || "none",
     "live clients": d.web.clients, queued: d.web.queued,
   });
 }
@@ -443,6 +482,7 @@ function start() {
     if (!reply.ok) say("#mission-msg", detail(reply.data), "error");
   });
   $("#estop").addEventListener("click", pressEstop);
+  window.addEventListener("resize", drawMapSoon);
   $("#release").addEventListener("click", releaseEstop);
   $("#approve").addEventListener("click", () => decide(true));
   $("#reject").addEventListener("click", () => decide(false));

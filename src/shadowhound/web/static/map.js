@@ -2,10 +2,16 @@
 // occupancy grid, geofence, named places, known objects, the planned path of the mission (or a
 // dry run's), the path walked and the robot. `view` holds pose, trail, predicted, world, grid,
 // gridImage, objects and estop (see app.js). The transform used is left on the canvas as
-// data-cx, data-cy and data-scale (pixels per metre), so a test can find what it drew.
-const SHOW_WHOLE_GRID = 30; // metres: a grid up to this size is kept in view entirely
+// data-cx, data-cy and data-scale (pixels per metre), so a test can find what it drew. Names
+// (places, objects, the map's own labels) and the scale bar are HTML over the canvas, in
+// `overlay` ({labels, scale}; labels.js places the names).
+import { placeLabels } from "./labels.js";
 
-export function drawMap(canvas, view) {
+const SHOW_WHOLE_GRID = 30; // metres: a grid up to this size is kept in view entirely
+const SCALE_BARS = [0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100]; // metres
+const PLACE_MARK = 3; // canvas pixels: half a place's square
+
+export function drawMap(canvas, view, overlay) {
   const ctx = canvas.getContext("2d");
   const width = canvas.width;
   const height = canvas.height;
@@ -45,21 +51,22 @@ export function drawMap(canvas, view) {
   for (let g = Math.floor(cy - 2 * span); g <= cy + 2 * span; g += step) {
     line(ctx, 0, sy(g), width, sy(g));
   }
-  ctx.strokeStyle = "#d08c8c";
-  ctx.setLineDash([6, 4]);
-  ctx.beginPath();
-  ctx.arc(sx(0), sy(0), view.world.geofence_radius * scale, 0, 2 * Math.PI);
-  ctx.stroke();
-  ctx.setLineDash([]);
-  ctx.fillStyle = "#555";
-  ctx.font = "12px system-ui, sans-serif";
-  for (const [name, [x, y]] of Object.entries(view.world.places)) {
-    ctx.fillRect(sx(x) - 3, sy(y) - 3, 6, 6);
-    ctx.fillText(name, sx(x) + 5, sy(y) - 5);
-  }
+  drawGeofence(ctx, view.world, sx, sy, scale);
   drawObjects(ctx, view.objects, sx, sy, scale);
+  ctx.fillStyle = "#555"; // places on top: a place may be at an object
+  for (const [x, y] of Object.values(view.world.places)) {
+    ctx.fillRect(sx(x) - PLACE_MARK, sy(y) - PLACE_MARK, 2 * PLACE_MARK, 2 * PLACE_MARK);
+  }
   polyline(ctx, view.predicted, sx, sy, "#3f6fb5", [6, 4]);
   polyline(ctx, view.trail, sx, sy, "#2f7d32", []);
+  if (overlay) {
+    const leaders = placeLabels(overlay.labels, canvas, namedMarks(view, sx, sy, scale),
+      [{ x: sx(view.pose.x), y: sy(view.pose.y), r: 12 }]);
+    ctx.strokeStyle = "rgba(60, 60, 55, 0.6)";
+    ctx.lineWidth = 1;
+    for (const l of leaders) line(ctx, l.x1, l.y1, l.x2, l.y2);
+    drawScale(overlay.scale, canvas, scale);
+  }
   const { x, y, yaw } = view.pose;
   ctx.save();
   ctx.translate(sx(x), sy(y));
@@ -96,19 +103,61 @@ function gridCorners(grid) {
     y: y + s * u + c * v }));
 }
 
+function drawGeofence(ctx, world, sx, sy, scale) {
+  ctx.strokeStyle = "#d08c8c";
+  ctx.lineWidth = 1.5;
+  ctx.setLineDash([6, 4]);
+  ctx.beginPath();
+  ctx.arc(sx(0), sy(0), world.geofence_radius * scale, 0, 2 * Math.PI);
+  ctx.stroke();
+  const polygon = world.geofence_polygon || [];
+  if (polygon.length >= 3) {
+    ctx.beginPath();
+    polygon.forEach(([x, y], i) => (i ? ctx.lineTo(sx(x), sy(y)) : ctx.moveTo(sx(x), sy(y))));
+    ctx.closePath();
+    ctx.stroke();
+  }
+  ctx.setLineDash([]);
+}
+
 function drawObjects(ctx, objects, sx, sy, scale) {
-  ctx.font = "12px system-ui, sans-serif";
   for (const o of objects) {
     ctx.fillStyle = "rgba(230, 126, 34, " + (0.35 + 0.5 * o.confidence).toFixed(2) + ")";
     ctx.strokeStyle = "#a84300";
     ctx.lineWidth = 1.5;
     ctx.beginPath();
-    ctx.arc(sx(o.x), sy(o.y), Math.max(4, o.radius * scale), 0, 2 * Math.PI);
+    ctx.arc(sx(o.x), sy(o.y), objectRadius(o, scale), 0, 2 * Math.PI);
     ctx.fill();
     ctx.stroke();
-    ctx.fillStyle = "#7a3200";
-    ctx.fillText(o.name, sx(o.x) + Math.max(5, o.radius * scale) + 2, sy(o.y) + 4);
   }
+}
+
+function objectRadius(o, scale) {
+  return Math.max(4, o.radius * scale);
+}
+
+// Everything that has a name, places first: the places, the objects seen, and the obstacles
+// the map itself names (the simulator's scene) that have not been seen yet.
+function namedMarks(view, sx, sy, scale) {
+  const seen = new Set(view.objects.map((o) => o.name));
+  return [
+    ...Object.entries(view.world.places).map(([name, [x, y]]) => ({
+      key: "place:" + name, kind: "place", name, x: sx(x), y: sy(y), r: PLACE_MARK })),
+    ...view.objects.map((o) => ({ key: "object:" + o.name, kind: "object", name: o.name,
+      x: sx(o.x), y: sy(o.y), r: objectRadius(o, scale) })),
+    ...(view.world.labels || []).filter((o) => !seen.has(o.name)).map((o) => ({
+      key: "label:" + o.name, kind: "label", name: o.name, x: sx(o.x), y: sy(o.y),
+      r: o.radius * scale })),
+  ];
+}
+
+// A bar of a round length, 40 to 120 CSS pixels long where it can be.
+function drawScale(element, canvas, scale) {
+  const perMetre = scale * (canvas.clientWidth / canvas.width || 1); // CSS pixels
+  const metres = SCALE_BARS.find((m) => m * perMetre >= 40) || SCALE_BARS[SCALE_BARS.length - 1];
+  element.dataset.metres = String(metres);
+  element.querySelector(".bar").style.width = (metres * perMetre).toFixed(1) + "px";
+  element.querySelector(".text").textContent = metres + " m";
 }
 
 function line(ctx, x1, y1, x2, y2) {

@@ -15,7 +15,7 @@ function stepItem(step) {
 function fillStep(item, step) {
   const args = Object.entries(step.args || {})
     .filter(([, value]) => value !== null)
-    .map(([key, value]) => key + "=" + value).join(", ");
+    .map(([key, value]) => key + "=" + shown(value)).join(", ");
   item.dataset.status = step.status;
   item.textContent = step.skill + "(" + args + ")";
   const note = step.error || step.output;
@@ -36,14 +36,28 @@ export function updateStep(list, step) {
   fillStep(item, step);
 }
 
+// A number as people read it: at most two decimals (0.3333 -> 0.33, 1.0 -> 1).
+function shown(value) {
+  return typeof value === "number" ? String(Number(value.toFixed(2))) : String(value);
+}
+
+// A dry run is "dry run" (its record's status is the agent's idle: nothing ran), with what it
+// found; a mission is its status and response.
 export function renderHistory(list, missions) {
   list.replaceChildren(...missions.map((m) => {
     const item = document.createElement("li");
-    item.dataset.status = m.status;
     const head = document.createElement("strong");
-    head.textContent = m.command + (m.dry_run ? " (dry run)" : "");
+    head.textContent = m.command;
     const body = document.createElement("span");
-    body.textContent = " " + m.status + (m.response ? ": " + m.response : "");
+    if (m.dry_run) {
+      item.dataset.status = "dry-run";
+      item.dataset.ok = String(m.success === true);
+      const found = (m.response || "").replace(/^Dry run:\s*/, "");
+      body.textContent = " dry run" + (found ? ": " + found : m.state ? " " + m.state : "");
+    } else {
+      item.dataset.status = m.status;
+      body.textContent = " " + m.status + (m.response ? ": " + m.response : "");
+    }
     item.append(head, body);
     return item;
   }));
