@@ -13,6 +13,16 @@ from .. import jsonout
 from ..config import ShadowHoundConfig
 from ..exit_codes import EXIT_FAILED, EXIT_OK, EXIT_USAGE
 
+# What a command that needs ROS 2 tells a Python without it (said once, for every such command).
+ROS_INSTALL = "pip install 'shadowhound[ros]' (Python 3.11 or 3.12) and bash scripts/build_ros.sh"
+
+
+def needs_ros(what: str, exc: ImportError) -> int:
+    """Say on stderr that `what` needs the `ros` extra and how to install it; exit code 2."""
+    print(f"shadowhound: {what} needs ROS 2 ({ROS_INSTALL}): {exc}", file=sys.stderr)
+    return EXIT_USAGE
+
+
 # -- skills ----------------------------------------------------------------------------------
 
 
@@ -70,9 +80,13 @@ def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
 
 def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    go2 = args.go2 or settings.robot == "go2"
+    robot = repr(settings.robot)
+    if go2 and settings.robot != "go2":  # the Go2 is what is checked, whatever the profile says
+        robot = f"'go2' (--go2; the profile's robot is {robot})"
     print(
         f"ok  configuration: profile {settings.profile!r}, backend {settings.backend!r}, "
-        f"robot {settings.robot!r}"
+        f"robot {robot}"
     )
     s = settings.safety
     print(
@@ -92,22 +106,21 @@ def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             f"ok  planning mode {settings.llm.mode!r}, plan format "
             f"{settings.llm.plan_format!r}, vision {'on' if settings.llm.vision else 'off'}"
         )
-    if args.go2 or settings.robot == "go2":
-        return _doctor_go2(args)
-    return EXIT_OK
+    return _doctor_go2(args) if go2 else EXIT_OK
 
 
 def _doctor_go2(args: argparse.Namespace) -> int:
     """The Go2 driver's link, in words (see ros/go2_doctor.py)."""
     try:
-        from ..ros.go2_doctor import diagnose, observe
+        from ..ros.go2_doctor import diagnose, observe, require_ros
+
+        require_ros()
     except ImportError as exc:
         print(
             f"fail Go2 checks need ROS 2 (rclpy) and go2_interfaces: {exc}\n"
-            "     fix: source ROS 2 and your go2_ros2_sdk workspace, or run "
-            "scripts/build_ros.sh"
+            f"     fix: {ROS_INSTALL}; or source ROS 2 and your go2_ros2_sdk workspace"
         )
-        return EXIT_FAILED
+        return EXIT_USAGE
     print(f"...  watching the Go2 driver's topics for {args.seconds:g} s")
     findings = diagnose(
         observe(
@@ -270,12 +283,7 @@ def cmd_node(ros_argv: list[str]) -> int:
     try:
         from ..ros.node import main as node_main
     except ImportError as exc:
-        print(
-            f"shadowhound: the ROS 2 node needs rclpy and the shadowhound_interfaces package "
-            f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
-            file=sys.stderr,
-        )
-        return EXIT_USAGE
+        return needs_ros("the ROS 2 node (rclpy and shadowhound_interfaces)", exc)
     return node_main(ros_argv)
 
 
@@ -283,10 +291,5 @@ def cmd_sim_driver(argv: list[str]) -> int:
     try:
         from ..ros.sim_driver import main as driver_main
     except ImportError as exc:
-        print(
-            f"shadowhound: the simulated Go2 driver needs rclpy and the go2_interfaces package "
-            f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
-            file=sys.stderr,
-        )
-        return EXIT_USAGE
+        return needs_ros("the simulated Go2 driver (rclpy and go2_interfaces)", exc)
     return driver_main(argv)
