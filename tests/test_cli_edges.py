@@ -1,5 +1,6 @@
 """The command line at its edges, as users meet them in a shell: a real `shadowhound` process
-without the `ros` extra."""
+without the `ros` extra, writing into a pipe that closes, given a mission without quotes, or
+asked to serve on a port something else holds."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ from pathlib import Path
 import pytest
 
 from tests.test_cli import shadowhound
+
+DATA = Path(__file__).parent / "data"
 
 # -- without the `ros` extra ---------------------------------------------------------------------
 
@@ -69,3 +72,91 @@ def test_doctor_go2_names_the_robot_it_checks(no_ros):
     assert "robot 'go2'" in header and "robot 'sim'" not in header, header
     plain = shadowhound("doctor")
     assert plain.returncode == 0 and "robot 'sim'" in plain.stdout.splitlines()[0]
+
+
+# -- a pipe that closes ----------------------------------------------------------------------
+
+
+def into_closed_pipe(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    """Run `shadowhound ARGS` with stdout a pipe whose reading end is closed before it writes
+    a byte: every write fails, as into `| head -1` once head has gone."""
+    read, write = os.pipe()
+    os.close(read)
+    full = {**os.environ, **(env or {})}
+    full.pop("SHADOWHOUND_CONFIG", None)
+    try:
+        return subprocess.run(
+            [sys.executable, "-m", "shadowhound", *args],
+            stdout=write,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=60,
+            env=full,
+        )
+    finally:
+        os.close(write)
+
+
+@pytest.fixture(scope="module")
+def history(tmp_path_factory) -> dict[str, str]:
+    """A data directory whose history holds one mission (and the objects it saw)."""
+    env = {"SHADOWHOUND_MEMORY__DATA_DIR": str(tmp_path_factory.mktemp("history"))}
+    assert shadowhound("run", "-q", "what do you see?", env=env).returncode == 0
+    return env
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("skills",),
+        ("skills", "--json"),
+        ("history",),
+        ("history", "--json"),
+        ("places",),
+        ("places", "--json"),
+        ("recall", "ball"),
+        ("config",),
+        ("doctor",),
+        ("run", "stand up"),
+        ("run", "--json", "stand up"),
+        ("run", "--dry-run", "walk forward 1 meter"),
+        ("eval", str(DATA / "missions_public.yaml")),
+        ("eval", "--json", str(DATA / "missions_public.yaml")),
+    ],
+    ids=" ".join,
+)
+def test_a_closed_pipe_ends_quietly_with_141(args, history):
+    proc = into_closed_pipe(*args, env=history)
+    assert "Traceback" not in proc.stderr and "BrokenPipe" not in proc.stderr, proc.stderr
+    assert "internal error" not in proc.stderr and "Exception ignored" not in proc.stderr
+    assert proc.returncode == 141, proc.stderr  # 128 + SIGPIPE, as the shell reports for cat
+
+
+@pytest.mark.parametrize("args", [("--help",), ("run", "--help")])
+def test_help_into_a_closed_pipe_is_quiet(args):
+    """argparse itself ignores a failed write of its help (and exits 0)."""
+    proc = into_closed_pipe(*args)
+    assert proc.stderr == "" and proc.returncode in (0, 141)
+
+
+@pytest.mark.parametrize("command", ["skills", "history"])
+def test_head_takes_the_first_line_and_nothing_is_said(command, history):
+    """The shell pipe of the report: `shadowhound skills | head -1`."""
+    full = {**os.environ, **history}
+    full.pop("SHADOWHOUND_CONFIG", None)
+    proc = subprocess.run(
+        [
+            "bash",
+            "-c",
+            f'"$1" -m shadowhound {command} | head -1; echo "exit ${{PIPESTATUS[0]}}"',
+            "bash",
+            sys.executable,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=full,
+    )
+    first, status = proc.stdout.splitlines()
+    assert first and status in ("exit 0", "exit 141"), proc.stdout  # 0: it all fit the pipe
+    assert proc.stderr == "", proc.stderr

@@ -1,13 +1,15 @@
 """`shadowhound`: the command line. Commands live in `missions` (run, chat, eval) and `tools`.
 
 Exit codes (shadowhound.exit_codes): 0 success, 1 mission (or evaluation) failure, 2 usage or
-configuration error, 130 interrupted (the robot is stopped first).
+configuration error, 130 interrupted (the robot is stopped first), 141 the output went away (a
+closed pipe: the command ends quietly).
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
@@ -15,7 +17,7 @@ from typing import Any, NoReturn
 from .. import __version__
 from ..config import ShadowHoundConfig, available_profiles, load_config
 from ..errors import BackendUnavailable, ConfigError, MemoryStoreError, UsageError
-from ..exit_codes import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
+from ..exit_codes import EXIT_BROKEN_PIPE, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 from ..mcp.limits import DEFAULT_IDLE_TIMEOUT, DEFAULT_MAX_SESSIONS
 from ._base import report_error
 from .missions import cmd_chat, cmd_eval, cmd_run
@@ -314,6 +316,30 @@ def _settings(args: argparse.Namespace, planner: str | None = None) -> ShadowHou
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The `shadowhound` command. Returns its exit code (shadowhound.exit_codes)."""
+    try:
+        try:
+            code = _main(argv)
+        finally:  # --help and --version end in SystemExit: their output is flushed too
+            sys.stdout.flush()  # so a pipe closed now is noticed here, not at exit
+    except BrokenPipeError:
+        return _output_gone()
+    return code
+
+
+def _output_gone() -> int:
+    """Whoever read stdout went away (`| head -1`): end quietly, as cat and git do.
+
+    What is still buffered goes to /dev/null, so the interpreter's own flush at exit does not
+    complain either (the recipe of Python's signal module documentation).
+    """
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+    return EXIT_BROKEN_PIPE
+
+
+def _main(argv: Sequence[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["node"]:  # ROS owns the rest of the command line (--ros-args ...)
         return cmd_node(argv[1:])
@@ -357,6 +383,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return report_error(_kind(exc), str(exc), EXIT_USAGE, json_out=json_out, mission=mission)
     except MemoryStoreError as exc:
         return report_error("memory", str(exc), EXIT_USAGE, json_out=json_out, mission=mission)
+    except BrokenPipeError:  # the reader went away: main() ends quietly
+        raise
     except KeyboardInterrupt:  # before the mission ran (while connecting, say): nothing moved
         what = "stopped before the mission started" if args.command == "run" else "stopped"
         return report_error(
