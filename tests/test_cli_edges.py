@@ -4,7 +4,9 @@ asked to serve on a port something else holds."""
 
 from __future__ import annotations
 
+import json
 import os
+import socket
 import subprocess
 import sys
 import textwrap
@@ -160,3 +162,56 @@ def test_head_takes_the_first_line_and_nothing_is_said(command, history):
     first, status = proc.stdout.splitlines()
     assert first and status in ("exit 0", "exit 141"), proc.stdout  # 0: it all fit the pipe
     assert proc.stderr == "", proc.stderr
+
+
+# -- a mission without quotes, a port in use ----------------------------------------------------
+
+
+def test_a_mission_without_quotes_is_answered_with_the_quoted_command():
+    proc = shadowhound("run", "walk", "forward", "1", "meter")
+    assert proc.returncode == 2
+    assert "unrecognized arguments" not in proc.stderr
+    assert "put it in quotes" in proc.stderr
+    assert "shadowhound run 'walk forward 1 meter'" in proc.stderr, proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_the_quoted_command_keeps_the_options_given():
+    proc = shadowhound("--time-scale", "0", "run", "-q", "walk", "forward", "--yes", "1", "m")
+    assert proc.returncode == 2
+    assert "shadowhound --time-scale 0 run -q 'walk forward' --yes '1 m'" not in proc.stderr
+    assert "shadowhound --time-scale 0 run -q 'walk forward 1 m' --yes" in proc.stderr, proc.stderr
+
+
+def test_a_mission_without_quotes_with_json_is_one_json_error():
+    proc = shadowhound("run", "--json", "turn", "left")
+    assert proc.returncode == 2
+    answer = json.loads(proc.stdout)
+    assert (
+        answer["error_kind"] == "usage" and "shadowhound run --json 'turn left'" in answer["error"]
+    )
+
+
+def test_an_unknown_option_is_still_named():
+    proc = shadowhound("run", "--bogus", "stand up")
+    assert proc.returncode == 2 and "unrecognized arguments: --bogus" in proc.stderr
+
+
+@pytest.fixture
+def taken_port():
+    """A loopback port another program listens on."""
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        sock.listen(1)
+        yield sock.getsockname()[1]
+
+
+@pytest.mark.parametrize("command", [("serve",), ("mcp", "--http")], ids=" ".join)
+def test_serving_on_a_taken_port_suggests_another(command, taken_port):
+    proc = shadowhound(*command, "--port", str(taken_port))
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert f"port {taken_port}" in proc.stderr and "in use" in proc.stderr, proc.stderr
+    suggested = proc.stderr.split(f"shadowhound {' '.join(command)} --port ")[1].split()[0]
+    with socket.socket() as sock:  # the port suggested is free
+        sock.bind(("127.0.0.1", int(suggested)))

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import shlex
 import sys
 from collections.abc import Sequence
 from typing import Any, NoReturn
@@ -349,7 +350,9 @@ def _main(argv: Sequence[str] | None) -> int:
     # A line that cannot be parsed has no `args` to ask; `run ... --json` in it is enough.
     json_out = "run" in argv and "--json" in argv
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:
+            raise _unrecognized(parser, argv, args, extra)
     except UsageError as exc:
         sys.stderr.write(exc.usage)
         return report_error("usage", str(exc), EXIT_USAGE, json_out=json_out)
@@ -393,6 +396,37 @@ def _main(argv: Sequence[str] | None) -> int:
     except Exception as exc:  # a bug: the traceback goes to the log, the answer is still one
         logging.getLogger(__name__).exception("shadowhound %s crashed", args.command)
         return report_error("internal", repr(exc), EXIT_FAILED, json_out=json_out, mission=mission)
+
+
+def _unrecognized(
+    parser: argparse.ArgumentParser, argv: list[str], args: argparse.Namespace, extra: list[str]
+) -> UsageError:
+    """What argparse says of arguments it does not know, except for a mission typed without
+    quotes (`run walk forward 1 meter`): that gets the command with the mission quoted."""
+    words = [args.mission, *extra] if args.command == "run" else []
+    if not words or any(w.startswith("-") for w in extra):
+        return UsageError(
+            f"{parser.prog}: unrecognized arguments: {' '.join(extra)}", parser.format_usage()
+        )
+    return UsageError(
+        f"the mission of run is one argument, but it came as {len(words)} words; "
+        f"put it in quotes: {shlex.join(['shadowhound', *_quoted(argv, words)])}",
+        "",
+    )
+
+
+def _quoted(argv: list[str], words: list[str]) -> list[str]:
+    """`argv` with the mission's `words` (in order, after `run`) made one argument where the
+    first of them stood; the options stay where they were."""
+    spots: list[int] = []
+    for i in range(argv.index("run") + 1 if "run" in argv else 0, len(argv)):
+        if len(spots) < len(words) and argv[i] == words[len(spots)]:
+            spots.append(i)
+    if len(spots) < len(words):  # not found as typed: the plain command
+        return ["run", " ".join(words)]
+    quoted = [a for i, a in enumerate(argv) if i not in spots[1:]]
+    quoted[spots[0]] = " ".join(words)
+    return quoted
 
 
 def _kind(exc: ConfigError) -> str:

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import sys
 import time
@@ -253,7 +254,45 @@ def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             file=sys.stderr,
         )
         return EXIT_USAGE
+    taken = _port_taken(args.host, args.port, "shadowhound serve")
+    if taken:
+        print(taken, file=sys.stderr)
+        return EXIT_USAGE
     return int(serve_main(settings, args.host, args.port, args.token))
+
+
+def _port_taken(host: str, port: int, command: str) -> str:
+    """Why `command` cannot listen on `host`:`port` because another program does, with a free
+    port to use instead; "" when the port is free (or fails otherwise: the server says why)."""
+    if not _in_use(host, port):
+        return ""
+    why = f"{command}: port {port} on {host} is in use by another program"
+    if port == 8080:
+        why += " (llama.cpp's server, for one, listens on 8080 too)"
+    return f"{why}; choose another port: {command} --port {_free_port(host, port + 1)}"
+
+
+def _free_port(host: str, start: int) -> int:
+    """The first free port from `start` on (of the next hundred), else one the system picks."""
+    from ..serving import bind
+
+    free = (p for p in range(start, min(start + 100, 65536)) if not _in_use(host, p))
+    found = next(free, 0)
+    if not found:
+        with bind(host, 0) as sock:
+            found = sock.getsockname()[1]
+    return found
+
+
+def _in_use(host: str, port: int) -> bool:
+    from ..errors import ServeError
+    from ..serving import bind
+
+    try:
+        bind(host, port).close()
+    except ServeError as exc:
+        return isinstance(exc.__cause__, OSError) and exc.__cause__.errno == errno.EADDRINUSE
+    return False
 
 
 # -- mcp -----------------------------------------------------------------------------------------
@@ -261,6 +300,11 @@ def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
 def cmd_mcp(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     from ..mcp import main as mcp_main
+
+    taken = _port_taken(args.host, args.port, "shadowhound mcp --http") if args.http else ""
+    if taken:
+        print(taken, file=sys.stderr)
+        return EXIT_USAGE
 
     return int(
         mcp_main(
