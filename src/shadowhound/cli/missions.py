@@ -8,7 +8,7 @@ import queue
 import sys
 import threading
 from collections.abc import Callable
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from .. import events as ev
 from .. import jsonout
@@ -19,10 +19,16 @@ from ..result import StepStatus
 from ..worker import MissionJob, MissionWorker
 from ._base import make_agent, print_json, report_error
 
+if TYPE_CHECKING:
+    from ..skills import SkillRegistry
+
 # -- run -----------------------------------------------------------------------------------
 
 
-def _progress(stream: TextIO) -> ev.Listener:
+def _progress(stream: TextIO, registry: SkillRegistry) -> ev.Listener:
+    """Each step as it starts and ends. A step whose output answers the user (a skill that
+    `reports`: a view, a status) is only marked answered: the response says the answer."""
+
     def show(event: ev.MissionEvent) -> None:
         if isinstance(event, ev.MissionStarted):
             print(f"mission: {event.mission!r}", file=stream)
@@ -36,7 +42,10 @@ def _progress(stream: TextIO) -> ev.Listener:
             step = event.step
             ok = step.status is StepStatus.SUCCEEDED
             mark = "ok" if ok else step.status.value.upper()
-            detail = step.output if ok else step.error
+            skill = registry.find(step.skill)
+            detail = (
+                step.error if not ok else "answered" if skill and skill.reports else step.output
+            )
             print(
                 f"  [{step.index}] {mark}: {detail} ({step.robot_duration:.1f} s robot time)",
                 file=stream,
@@ -74,7 +83,7 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     agent = make_agent(settings)
     if not args.dry_run:
         if not args.quiet:
-            agent.add_listener(_progress(sys.stderr))
+            agent.add_listener(_progress(sys.stderr, agent.registry))
         if args.yes or sys.stdin.isatty():
             agent.enable_approvals()
             agent.add_listener(_approver(agent, ask=not args.yes))
