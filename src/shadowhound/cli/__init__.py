@@ -1,4 +1,4 @@
-"""`shadowhound`: the command line. Commands live in `missions` (run, chat, eval) and `tools`.
+"""`shadowhound`: the command line. Commands live in `missions` (run, eval), `chat` and `tools`.
 
 Exit codes (shadowhound.exit_codes): 0 success, 1 mission (or evaluation) failure, 2 usage or
 configuration error, 130 interrupted (the robot is stopped first), 141 the output went away (a
@@ -19,7 +19,8 @@ from ..config import ShadowHoundConfig, available_profiles, load_config
 from ..errors import BackendUnavailable, ConfigError, MemoryStoreError, UsageError
 from ..exit_codes import EXIT_BROKEN_PIPE, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 from ._base import report_error
-from .missions import cmd_chat, cmd_eval, cmd_run
+from .chat import cmd_chat
+from .missions import cmd_eval, cmd_run
 from .parser import BACKENDS, build_parser
 from .tools import (
     cmd_config,

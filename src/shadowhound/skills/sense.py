@@ -116,12 +116,7 @@ def _run_look_around(ctx: SkillContext, a: DescribeArgs) -> str:
 
 def _run_status(ctx: SkillContext, _a: NoArgs) -> str:
     st = ctx.robot.get_state()
-    return (
-        f"{st.posture.value.capitalize()} at x={st.x:.2f} m, y={st.y:.2f} m, "
-        f"facing {math.degrees(st.yaw):.0f} degrees; battery {st.battery_text}; "
-        f"travelled {st.distance_travelled:.2f} m in total"
-        + ("; e-stop latched" if st.estopped else "")
-    )
+    return st.in_words() + ("; e-stop latched" if st.estopped else "")
 
 
 def _run_wait(ctx: SkillContext, a: WaitArgs) -> str:
