@@ -67,6 +67,36 @@ def test_doctor_go2_without_the_ros_extra_says_what_to_install(no_ros):
     assert "No module named 'rclpy'" in proc.stdout
 
 
+@pytest.mark.parametrize(
+    "args",
+    [("send", "stand up"), ("estop",), ("estop", "--release"), ("sim-fault", "{}")],
+    ids=" ".join,
+)
+def test_ros_clients_without_the_ros_extra_say_what_to_install(args, no_ros):
+    proc = shadowhound(*args, env=no_ros)
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr and "internal error" not in proc.stderr
+    assert f"shadowhound: shadowhound {args[0]} needs ROS 2 (pip install 'shadowhound[ros]'" in (
+        proc.stderr
+    )
+
+
+def test_loopback_env_is_for_eval_and_not_domain_0():
+    script = (
+        'eval "$("$1" -m shadowhound loopback-env --domain 42)"; env | grep -E "^(ROS|RMW|FAST)"'
+    )
+    proc = subprocess.run(
+        ["bash", "-c", script, "bash", sys.executable], capture_output=True, text=True, timeout=60
+    )
+    env = dict(line.split("=", 1) for line in proc.stdout.splitlines())
+    assert env["ROS_DOMAIN_ID"] == "42" and env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+    assert Path(env["FASTRTPS_DEFAULT_PROFILES_FILE"]).name == "fastdds_loopback.xml"
+    default = shadowhound("loopback-env").stdout
+    domain = default.split("export ROS_DOMAIN_ID=")[1].split()[0]
+    assert 0 < int(domain) <= 232
+    assert shadowhound("loopback-env", "--domain", "300").returncode == 2
+
+
 def test_doctor_go2_names_the_robot_it_checks(no_ros):
     """The header says the Go2 is checked, also when the profile's robot is the simulator."""
     proc = shadowhound("doctor", "--go2", "--seconds", "0.1", env=no_ros)

@@ -1,4 +1,5 @@
-"""`shadowhound`: the command line. Commands live in `missions` (run, eval), `chat` and `tools`.
+"""`shadowhound`: the command line. Commands live in `missions` (run, eval), `chat`, `tools` and
+`ros_tools` (node, sim-driver, send, estop, sim-fault, loopback-env).
 
 Exit codes (shadowhound.exit_codes): 0 success, 1 mission (or evaluation) failure, 2 usage or
 configuration error, 130 interrupted (the robot is stopped first), 141 the output went away (a
@@ -22,16 +23,22 @@ from ._base import report_error
 from .chat import cmd_chat
 from .missions import cmd_eval, cmd_run
 from .parser import BACKENDS, build_parser
+from .ros_tools import (
+    cmd_estop,
+    cmd_loopback_env,
+    cmd_node,
+    cmd_send,
+    cmd_sim_driver,
+    cmd_sim_fault,
+)
 from .tools import (
     cmd_config,
     cmd_doctor,
     cmd_history,
     cmd_mcp,
-    cmd_node,
     cmd_places,
     cmd_recall,
     cmd_serve,
-    cmd_sim_driver,
     cmd_skills,
 )
 
@@ -131,6 +138,10 @@ def _main(argv: Sequence[str] | None) -> int:
             "recall": cmd_recall,
             "serve": cmd_serve,
             "mcp": cmd_mcp,
+            "send": cmd_send,
+            "estop": cmd_estop,
+            "sim-fault": cmd_sim_fault,
+            "loopback-env": cmd_loopback_env,
         }[args.command]
         return handler(args, settings)
     except ConfigError as exc:
@@ -154,27 +165,27 @@ def _unrecognized(
 ) -> UsageError:
     """What argparse says of arguments it does not know, except for a mission typed without
     quotes (`run walk forward 1 meter`): that gets the command with the mission quoted."""
-    words = [args.mission, *extra] if args.command == "run" else []
+    words = [args.mission, *extra] if args.command in ("run", "send") else []
     if not words or any(w.startswith("-") for w in extra):
         return UsageError(
             f"{parser.prog}: unrecognized arguments: {' '.join(extra)}", parser.format_usage()
         )
     return UsageError(
-        f"the mission of run is one argument, but it came as {len(words)} words; "
-        f"put it in quotes: {shlex.join(['shadowhound', *_quoted(argv, words)])}",
+        f"the mission of {args.command} is one argument, but it came as {len(words)} words; "
+        f"put it in quotes: {shlex.join(['shadowhound', *_quoted(argv, words, args.command)])}",
         "",
     )
 
 
-def _quoted(argv: list[str], words: list[str]) -> list[str]:
-    """`argv` with the mission's `words` (in order, after `run`) made one argument where the
-    first of them stood; the options stay where they were."""
+def _quoted(argv: list[str], words: list[str], command: str) -> list[str]:
+    """`argv` with the mission's `words` (in order, after `command`) made one argument where
+    the first of them stood; the options stay where they were."""
     spots: list[int] = []
-    for i in range(argv.index("run") + 1 if "run" in argv else 0, len(argv)):
+    for i in range(argv.index(command) + 1 if command in argv else 0, len(argv)):
         if len(spots) < len(words) and argv[i] == words[len(spots)]:
             spots.append(i)
     if len(spots) < len(words):  # not found as typed: the plain command
-        return ["run", " ".join(words)]
+        return [command, " ".join(words)]
     quoted = [a for i, a in enumerate(argv) if i not in spots[1:]]
     quoted[spots[0]] = " ".join(words)
     return quoted

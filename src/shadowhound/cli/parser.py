@@ -260,4 +260,104 @@ def build_parser() -> argparse.ArgumentParser:
         "...]; see shadowhound sim-driver --help",
         add_help=False,
     )
+    _ros_clients(sub)
     return parser
+
+
+def _ros_clients(sub: Any) -> None:
+    """The commands that talk to running nodes over ROS 2, from the venv (no `ros2` command)."""
+    send = sub.add_parser(
+        "send",
+        help="send a mission to a running `shadowhound node` over ROS 2 and follow it to its "
+        "end (needs the 'ros' extra)",
+        description="Send MISSION to the mission node on this ROS graph, by its execute_mission "
+        "action when it offers one (else on mission_command), after DDS has matched both "
+        "sides; show each step (the action's feedback) or status line on stderr and the "
+        "node's response on stdout. Exit 0 when the mission succeeded, 1 when it failed or was "
+        "refused (or --timeout passed: it is cancelled), 2 when no node answers, 130 when "
+        "Ctrl-C cancelled it.",
+    )
+    send.add_argument("mission", help='what to do, e.g. "walk forward 1 meter"')
+    send.add_argument(
+        "--namespace",
+        default="",
+        help="the node's namespace (a node started with -r __ns:=/robot1: /robot1)",
+    )
+    send.add_argument(
+        "--topic",
+        action="store_true",
+        help="publish on mission_command and follow mission_status instead of the action: "
+        "the mission then waits behind a running one (the action refuses it) and cannot be "
+        "cancelled from here",
+    )
+    send.add_argument(
+        "--wait",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="seconds to wait for the node to be discovered (default 10)",
+    )
+    send.add_argument(
+        "--timeout",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="cancel the mission and exit 1 when it has not ended after S seconds "
+        "(default 0: wait for its end)",
+    )
+    send.add_argument("--quiet", "-q", action="store_true", help="no progress on stderr")
+
+    estop = sub.add_parser(
+        "estop",
+        help="press the e-stop of every ShadowHound agent on this ROS graph (/shadowhound/estop), "
+        "or --release it (needs the 'ros' extra)",
+        description="Publish std_msgs/Empty on /shadowhound/estop (every agent stops at once and "
+        "stays stopped) or /shadowhound/estop_release, once something subscribes, and wait "
+        "until each subscriber has it. Exit 0 when delivered, 2 when nothing subscribes.",
+    )
+    estop.add_argument("--release", action="store_true", help="release the e-stop instead")
+    estop.add_argument(
+        "--wait",
+        type=float,
+        default=5.0,
+        metavar="S",
+        help="seconds to wait for a subscriber (default 5)",
+    )
+
+    fault = sub.add_parser(
+        "sim-fault",
+        help="set the faults of a running `shadowhound sim-driver` (sim_driver/fault), e.g. "
+        """'{"odom": false}' (needs the 'ros' extra)""",
+        description="Publish FAULT (a JSON object; {} clears every fault) on the simulated "
+        "driver's sim_driver/fault; the keys are listed by shadowhound sim-driver --help and "
+        "docs/go2.md. Exit 0 when the driver has it, 2 when no driver subscribes.",
+    )
+    fault.add_argument("fault", help="""a JSON object, e.g. '{"delay_ms": 200}'""")
+    fault.add_argument(
+        "--namespace", default="", help="the robot's namespace with several robots, e.g. robot0"
+    )
+    fault.add_argument(
+        "--wait",
+        type=float,
+        default=5.0,
+        metavar="S",
+        help="seconds to wait for the driver (default 5)",
+    )
+
+    env = sub.add_parser(
+        "loopback-env",
+        help="print the environment that keeps ROS 2 traffic on this machine, for "
+        'eval "$(shadowhound loopback-env)"',
+        description="Print export lines: ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, "
+        "RMW_IMPLEMENTATION and the Fast DDS profile that allows only loopback and shared "
+        "memory (the tests' settings). Use it in every terminal of a demo; not with a real "
+        "robot on the network.",
+    )
+    env.add_argument(
+        "--domain",
+        type=int,
+        default=None,
+        metavar="N",
+        help="ROS_DOMAIN_ID, 0..232 (default: 101 + your user id %% 100, the same in each of your "
+        "terminals; not 0, which every ROS 2 process started without a domain joins)",
+    )

@@ -1,5 +1,5 @@
 """Commands that inspect or serve: `skills`, `config`, `doctor`, `history`, `places`,
-`recall`, `serve`, `mcp`, and the ROS entry points `node` and `sim-driver`."""
+`recall`, `serve`, `mcp` (the ROS 2 commands are in ros_tools)."""
 
 from __future__ import annotations
 
@@ -13,16 +13,7 @@ from typing import Any
 from .. import jsonout
 from ..config import ShadowHoundConfig
 from ..exit_codes import EXIT_FAILED, EXIT_OK, EXIT_USAGE
-
-# What a command that needs ROS 2 tells a Python without it (said once, for every such command).
-ROS_INSTALL = "pip install 'shadowhound[ros]' (Python 3.11 or 3.12) and bash scripts/build_ros.sh"
-
-
-def needs_ros(what: str, exc: ImportError) -> int:
-    """Say on stderr that `what` needs the `ros` extra and how to install it; exit code 2."""
-    print(f"shadowhound: {what} needs ROS 2 ({ROS_INSTALL}): {exc}", file=sys.stderr)
-    return EXIT_USAGE
-
+from .ros_tools import ROS_INSTALL
 
 # -- skills ----------------------------------------------------------------------------------
 
@@ -318,22 +309,3 @@ def cmd_mcp(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             max_sessions=args.max_sessions,
         )
     )
-
-
-# -- node ----------------------------------------------------------------------------------------
-
-
-def cmd_node(ros_argv: list[str]) -> int:
-    try:
-        from ..ros.node import main as node_main
-    except ImportError as exc:
-        return needs_ros("the ROS 2 node (rclpy and shadowhound_interfaces)", exc)
-    return node_main(ros_argv)
-
-
-def cmd_sim_driver(argv: list[str]) -> int:
-    try:
-        from ..ros.sim_driver import main as driver_main
-    except ImportError as exc:
-        return needs_ros("the simulated Go2 driver (rclpy and go2_interfaces)", exc)
-    return driver_main(argv)
