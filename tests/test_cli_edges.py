@@ -109,7 +109,9 @@ def test_doctor_go2_names_the_robot_it_checks(no_ros):
 # -- a pipe that closes ----------------------------------------------------------------------
 
 
-def into_closed_pipe(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+def into_closed_pipe(
+    *args: str, env: dict[str, str] | None = None, stdin: str = ""
+) -> subprocess.CompletedProcess:
     """Run `shadowhound ARGS` with stdout a pipe whose reading end is closed before it writes
     a byte: every write fails, as into `| head -1` once head has gone."""
     read, write = os.pipe()
@@ -119,6 +121,7 @@ def into_closed_pipe(*args: str, env: dict[str, str] | None = None) -> subproces
     try:
         return subprocess.run(
             [sys.executable, "-m", "shadowhound", *args],
+            input=stdin,
             stdout=write,
             stderr=subprocess.PIPE,
             text=True,
@@ -162,6 +165,15 @@ def test_a_closed_pipe_ends_quietly_with_141(args, history):
     assert "Traceback" not in proc.stderr and "BrokenPipe" not in proc.stderr, proc.stderr
     assert "internal error" not in proc.stderr and "Exception ignored" not in proc.stderr
     assert proc.returncode == 141, proc.stderr  # 128 + SIGPIPE, as the shell reports for cat
+
+
+@pytest.mark.parametrize(
+    "lines", ["where are you?\n", "/run walk forward 1 meter\n", "/estop\nwhere are you?\n"]
+)
+def test_chat_into_a_closed_pipe_ends_quietly_with_141(lines):
+    proc = into_closed_pipe("chat", stdin=lines)
+    assert "Traceback" not in proc.stderr and "Exception" not in proc.stderr, proc.stderr
+    assert proc.returncode == 141, proc.stderr  # the steps of /run are on stderr, still open
 
 
 @pytest.mark.parametrize("args", [("--help",), ("run", "--help")])

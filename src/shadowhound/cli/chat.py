@@ -69,6 +69,8 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         lines.put(None)
         while not answered.wait(0.1):  # an Event, not join: Ctrl-C here must still stop
             pass
+        if screen.gone:
+            raise BrokenPipeError("the chat's output was closed")  # main() ends quietly
     except KeyboardInterrupt:
         agent.estop()
     finally:
@@ -84,6 +86,7 @@ class _ChatScreen:
 
     def __init__(self, prompting: bool) -> None:
         self.prompting = prompting
+        self.gone = False  # stdout was closed (a pipe whose reader went away)
         self._lock = threading.Lock()
         self._unanswered = 0
 
@@ -115,10 +118,15 @@ class _ChatScreen:
         return show
 
     def _show(self, text: str | None) -> None:
-        if text is not None:
-            print(text, flush=True)
-        if self.prompting and not self._unanswered:
-            print("you> ", end="", flush=True)
+        if self.gone:
+            return
+        try:
+            if text is not None:
+                print(text, flush=True)
+            if self.prompting and not self._unanswered:
+                print("you> ", end="", flush=True)
+        except BrokenPipeError:  # whoever read the chat went away: nothing more is shown
+            self.gone = True
 
 
 def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
