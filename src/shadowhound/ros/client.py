@@ -49,6 +49,7 @@ MISSION_TOPIC = str(PARAMETERS["mission_topic"][0])
 STATUS_TOPIC = str(PARAMETERS["status_topic"][0])
 _RELIABLE = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 _ACTION_GRACE = 2.0  # seconds to let the action's endpoints match once the node's topics have
+_ACK_WAIT = 5.0  # seconds for every subscriber to acknowledge a one-off message
 
 
 # -- what the client sees of a mission --------------------------------------------------------
@@ -152,7 +153,11 @@ class NodeClient:
                     f"Is the node running on this ROS graph? Here: {graph_settings()}"
                 )
             publisher.publish(message)
-            publisher.wait_for_all_acked(Duration(seconds=5.0))
+            if not publisher.wait_for_all_acked(Duration(seconds=_ACK_WAIT)):
+                raise NodeNotFound(
+                    f"published on {topic}, but not every subscriber acknowledged it within "
+                    f"{_ACK_WAIT:g} s (a subscriber that went away, or a link that drops data)"
+                )
             return int(publisher.get_subscription_count())
         finally:
             self.node.destroy_publisher(publisher)
@@ -207,6 +212,8 @@ class Mission:
         self._status: Any = None
         self._action: Any = None
         self._goal: Any = None
+        self._cancel_asked = False
+        self._lock = threading.Lock()  # the goal handle arrives on the client's thread
         self._started: set[int] = set()
         self._ours_started = False
 
@@ -218,11 +225,16 @@ class Mission:
             return None
 
     def cancel(self) -> bool:
-        """Cancel the mission (the robot stops); False when it went by topic: a mission on the
-        topic cannot be cancelled (`shadowhound estop` stops every robot)."""
-        if self._goal is None:
+        """Cancel the mission (the robot stops), also before the node has accepted it; False
+        when it went by topic: such a mission cannot be cancelled (`shadowhound estop` stops
+        every robot)."""
+        if self.via != "action":
             return False
-        self._goal.cancel_goal_async()
+        with self._lock:
+            self._cancel_asked = True
+            goal = self._goal
+        if goal is not None:
+            goal.cancel_goal_async()
         return True
 
     def close(self) -> None:
@@ -303,8 +315,12 @@ class Mission:
                 )
             )
             return
-        self._goal = handle
+        with self._lock:
+            self._goal = handle
+            cancel = self._cancel_asked
         handle.get_result_async().add_done_callback(self._on_result)
+        if cancel:
+            handle.cancel_goal_async()
 
     def _on_feedback(self, msg: Any) -> None:
         fb = msg.feedback
