@@ -266,7 +266,7 @@ def test_chat_answers_without_moving(agent, robot):
     assert "x=1.00 m" in agent.chat("where are you?")
     assert "%" in agent.chat("how is your battery")
     assert "walk forward 1 meter" in agent.chat("what did you do last?")
-    assert "nav.move" in agent.chat("what can you do?")
+    assert '"move forward 1 m"' in agent.chat("what can you do?")
     assert "red ball" in agent.chat("what do you see?")
     before = robot.counters["motion_commands"]
     reply = agent.chat("walk forward 2 meters")

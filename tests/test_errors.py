@@ -156,7 +156,7 @@ _COMMANDS = ("main", "serve", "serve_main", "run_node")
 
 
 def test_exit_codes_are_defined_once() -> None:
-    assert [int(c) for c in ExitCode] == [0, 1, 2, 130]
+    assert [int(c) for c in ExitCode] == [0, 1, 2, 130, 141]
     elsewhere = []
     for path, tree in _modules():
         if path.name == "exit_codes.py":

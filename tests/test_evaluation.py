@@ -37,7 +37,8 @@ def test_travel_questions_are_answered_from_the_odometer_without_moving():
         assert "I have walked 1.00 m and turned 90 degrees since I started" in answer, answer
         assert "moving for" in answer
         reply = agent.execute_mission(question)
-        assert reply.success and "I have walked 1.00 m" in reply.response, reply.response
+        assert reply.success and "travelled 1.00 m in total" in reply.response, reply.response
+        assert "turned 90 degrees and moving for" in reply.response
     after = agent.robot.get_state()
     assert (after.x, after.y, after.yaw) == (before.x, before.y, before.yaw)
 

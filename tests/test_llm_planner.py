@@ -523,7 +523,8 @@ def test_without_vision_describe_is_honest(srv):
     agent, _ = make_agent(srv)
     srv.script(json_plan([{"skill": "perception.describe", "args": {}}]))
     result = agent.execute_mission("what do you see?")
-    assert "No vision model is configured" in result.response and len(srv.requests) == 1
+    assert "A vision model (llm.vision) would describe" in result.response
+    assert len(srv.requests) == 1
 
 
 # -- prompt size and parser robustness ---------------------------------------------------------

@@ -74,7 +74,7 @@ def test_a_model_plans_it_the_robot_runs_it_the_result_says_it_the_history_keeps
     # It reports: its answer is a sentence of the response, not a "Done:" of actions.
     assert "Done:" not in result.response
     assert result.response.startswith("Stood up first (was sitting); looking up 20 degrees: ")
-    assert "The simulator reports in view" in result.response
+    assert "In view: " in result.response
     # The history holds the mission with its step.
     record = agent.memory.history.get(result.mission_id)
     assert record["status"] == "succeeded"

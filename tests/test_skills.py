@@ -254,13 +254,13 @@ def test_wait_takes_robot_time(registry, robot):
 
 def test_describe_without_vision_model_is_honest(registry, robot):
     out = run(registry, robot, "perception.describe")
-    assert "No vision model is configured" in out
-    assert "red ball about 3.0 m ahead" in out
+    assert out.startswith("In view: red ball about 3.0 m ahead")
+    assert "A vision model (llm.vision) would describe the image itself" in out
 
 
 def test_look_around_turns_full_circle(registry, robot):
     out = run(registry, robot, "perception.look_around")
-    assert out.count("No vision model") == 4
+    assert len(out.splitlines()) == 5 and out.count("vision model") == 1
     assert robot.get_state().angle_turned == pytest.approx(2 * math.pi, abs=0.01)
 
 

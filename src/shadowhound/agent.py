@@ -314,7 +314,7 @@ class RobotAgent:
             state=self.get_robot_state,
             progress=lambda: self._tracker.snapshot()[0],
             estop=self.estop_latched,
-            skills=[s["name"] for s in self.get_available_skills()],
+            examples=lambda: [e for s in self.registry if (e := s.example()) is not None],
             recent_missions=self.recent_missions,
             recall=self._memory.search,
             frame=self.latest_frame,

@@ -31,7 +31,7 @@ class ChatContext:
     state: Callable[[], RobotState]  # raises RobotError when the robot cannot say
     progress: Callable[[], Progress]
     estop: bool
-    skills: list[str]
+    examples: Callable[[], list[str]]  # missions people may say, one per skill (Skill.example)
     recent_missions: Callable[[int], list[dict[str, Any]]]  # newest first
     recall: Callable[[str], list[str]]  # memories about a question
     frame: Callable[[], CameraFrame | None]
@@ -107,8 +107,7 @@ def answer_offline(text: str, chat: ChatContext) -> str:
         elif topic == "history":
             answers.append(_history(chat))
         elif topic == "skills":
-            names = ", ".join(chat.skills)
-            answers.append(f"My skills are: {names}.")
+            answers.append(_what_i_can_do(chat))
         elif topic == "status":
             status = chat.progress().status.value
             answers.append(
@@ -116,6 +115,16 @@ def answer_offline(text: str, chat: ChatContext) -> str:
                 f"{st.battery_text}" + (", e-stop latched." if chat.estop else ".")
             )
     return " ".join(answers)
+
+
+def _what_i_can_do(chat: ChatContext) -> str:
+    """Missions said as a person says them (from the skills), and the questions answered."""
+    said = "; ".join(f'"{example}"' for example in chat.examples())
+    return (
+        f'Missions I understand, for example: {said}. Join them with "then" or commas; run '
+        'one with `/run MISSION` in the chat or `shadowhound run "MISSION"`. I also answer '
+        "questions: where are you? battery? what do you see? what did you do?"
+    )
 
 
 def _history(chat: ChatContext) -> str:

@@ -32,6 +32,8 @@ what was wrong and what is allowed or what to do.
     +-- CaseFileError                evaluation: a mission-case file is malformed (ValueError)
     +-- UsageError                   cli: a command line argparse cannot parse
     +-- ServeError                   web/mcp: a server cannot start as asked
+    +-- NodeNotFound                 ros client: nothing on the ROS graph answers (no mission
+    |                                    node, no e-stop subscriber) within the wait
     +-- FrameUnavailable             web: no camera frame to show yet
     +-- ToolInputError               mcp: arguments a tool cannot take (ValueError)
 
@@ -56,6 +58,7 @@ __all__ = [
     "GridError",
     "MemoryStoreError",
     "MissionCancelled",
+    "NodeNotFound",
     "NotUnderstood",
     "ParameterError",
     "PlanError",
@@ -232,6 +235,11 @@ class UsageError(ShadowHoundError):
 
 class ServeError(ShadowHoundError):
     """The server cannot start as asked. The message says why and what to do."""
+
+
+class NodeNotFound(ShadowHoundError):
+    """Nothing on this ROS graph answers what the client sends (see ros/client.py). The message
+    says what was looked for and which ROS settings to compare."""
 
 
 class FrameUnavailable(ShadowHoundError):

@@ -89,6 +89,17 @@ class RobotState:
         """The battery level for people: "87.0%", or "unknown" (never a guess)."""
         return "unknown" if self.battery is None else f"{self.battery:.1f}%"
 
+    def in_words(self) -> str:
+        """Posture, pose, battery and distance walked as people read them: "Standing at
+        x=1.00 m, y=0.00 m, facing 90 degrees; battery 99.9%; travelled 1.00 m in total"."""
+        unknown = position_unknown(self.pose)
+        facing = f"facing {math.degrees(self.yaw):.0f} degrees"
+        where = f", {unknown}" if unknown else f" at x={self.x:.2f} m, y={self.y:.2f} m, {facing}"
+        return (
+            f"{self.posture.value.capitalize()}{where}; battery {self.battery_text}; "
+            f"travelled {self.distance_travelled:.2f} m in total"
+        )
+
     @property
     def is_moving(self) -> bool:
         return abs(self.vx) > 1e-3 or abs(self.vy) > 1e-3 or abs(self.wz) > 1e-3

@@ -1,287 +1,48 @@
-"""`shadowhound`: the command line. Commands live in `missions` (run, chat, eval) and `tools`.
+"""`shadowhound`: the command line. Commands live in `missions` (run, eval), `chat`, `tools` and
+`ros_tools` (node, sim-driver, send, estop, sim-fault, loopback-env).
 
 Exit codes (shadowhound.exit_codes): 0 success, 1 mission (or evaluation) failure, 2 usage or
-configuration error, 130 interrupted (the robot is stopped first).
+configuration error, 130 interrupted (the robot is stopped first), 141 the output went away (a
+closed pipe: the command ends quietly).
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import os
+import shlex
 import sys
 from collections.abc import Sequence
-from typing import Any, NoReturn
+from typing import Any
 
-from .. import __version__
 from ..config import ShadowHoundConfig, available_profiles, load_config
 from ..errors import BackendUnavailable, ConfigError, MemoryStoreError, UsageError
-from ..exit_codes import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
-from ..mcp.limits import DEFAULT_IDLE_TIMEOUT, DEFAULT_MAX_SESSIONS
+from ..exit_codes import EXIT_BROKEN_PIPE, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 from ._base import report_error
-from .missions import cmd_chat, cmd_eval, cmd_run
+from .chat import cmd_chat
+from .missions import cmd_eval, cmd_run
+from .parser import BACKENDS, build_parser
+from .ros_tools import (
+    cmd_estop,
+    cmd_loopback_env,
+    cmd_node,
+    cmd_send,
+    cmd_sim_driver,
+    cmd_sim_fault,
+)
 from .tools import (
     cmd_config,
     cmd_doctor,
     cmd_history,
     cmd_mcp,
-    cmd_node,
     cmd_places,
     cmd_recall,
     cmd_serve,
-    cmd_sim_driver,
     cmd_skills,
 )
 
 __all__ = ["EXIT_FAILED", "EXIT_INTERRUPTED", "EXIT_OK", "EXIT_USAGE", "build_parser", "main"]
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse that raises instead of exiting, so `run --json` can still answer in JSON."""
-
-    def error(self, message: str) -> NoReturn:
-        raise UsageError(f"{self.prog}: {message}", self.format_usage())
-
-
-BACKENDS = ["offline", "openai", "ollama", "vllm", "llamacpp"]
-
-
-def _common(parser: argparse.ArgumentParser, suppress: bool, compare: bool = False) -> None:
-    default: Any = argparse.SUPPRESS if suppress else None
-    parser.add_argument(
-        "--config",
-        "-c",
-        metavar="PROFILE|PATH",
-        default=default,
-        help="profile name ("
-        + ", ".join(available_profiles())
-        + ") or a YAML file; default $SHADOWHOUND_CONFIG or offline",
-    )
-    if compare:  # eval: several planners side by side
-        parser.add_argument(
-            "--backend",
-            default=default,
-            action="append",
-            metavar="BACKEND[:OPTION...]",
-            help="a planner to evaluate; repeat to compare several. BACKEND is "
-            f"one of {', '.join(BACKENDS)}; OPTIONs: hybrid, llm (hybrid "
-            "off), json_schema, plain, tools, react; e.g. --backend offline "
-            "--backend llamacpp --backend llamacpp:llm:plain",
-        )
-    else:
-        parser.add_argument(
-            "--backend",
-            default=default,
-            choices=BACKENDS,
-            help="planner backend; without --config it also picks that profile",
-        )
-    parser.add_argument("--model", default=default, help="language model name (llm.model)")
-    parser.add_argument(
-        "--base-url",
-        default=default,
-        metavar="URL",
-        help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:8000/v1",
-    )
-    parser.add_argument(
-        "--mode",
-        default=default,
-        choices=["plan", "react"],
-        help="language-model planning mode (llm.mode)",
-    )
-    parser.add_argument(
-        "--time-scale",
-        type=float,
-        metavar="S",
-        default=default,
-        help="simulated robot: real seconds per simulated second (0 = fastest)",
-    )
-    parser.add_argument(
-        "--verbose",
-        "-v",
-        action="count",
-        default=argparse.SUPPRESS if suppress else 0,
-        help="log more (-vv for debug)",
-    )
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(
-        prog="shadowhound",
-        description="Mission agent for quadruped robots: plans a sentence into checked skills "
-        "and runs it on a simulated Unitree Go2 (default) or a real one.",
-    )
-    parser.add_argument("--version", action="version", version=f"shadowhound {__version__}")
-    _common(parser, suppress=False)
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-
-    run = sub.add_parser(
-        "run",
-        help="plan and run one mission",
-        description="Plan MISSION, check it, run it, print the result.",
-    )
-    _common(run, suppress=True)
-    run.add_argument("mission", help='what to do, e.g. "stand up and walk forward 1 meter"')
-    run.add_argument(
-        "--json",
-        action="store_true",
-        help="print exactly one JSON object with the result on stdout",
-    )
-    run.add_argument("--quiet", "-q", action="store_true", help="no progress on stderr")
-    run.add_argument(
-        "--yes",
-        action="store_true",
-        help="approve plans that need approval (risky tricks) without asking",
-    )
-    run.add_argument(
-        "--dry-run",
-        action="store_true",
-        help="plan and check only: show the plan and predicted path, move nothing",
-    )
-
-    skills = sub.add_parser("skills", help="list the skills with their argument schemas")
-    _common(skills, suppress=True)
-    skills.add_argument("--json", action="store_true", help="print the skills as JSON")
-
-    chat = sub.add_parser("chat", help="talk to the agent (a REPL; /run MISSION runs one)")
-    _common(chat, suppress=True)
-
-    evaluate = sub.add_parser("eval", help="run mission cases from a YAML file and score them")
-    _common(evaluate, suppress=True, compare=True)
-    evaluate.add_argument("file", help="YAML list of {mission, expect} cases")
-    evaluate.add_argument("--json", action="store_true", help="print the report as JSON")
-
-    show = sub.add_parser("config", help="print the effective configuration (no secrets)")
-    _common(show, suppress=True)
-
-    doctor = sub.add_parser(
-        "doctor",
-        help="check the configuration, the backend and the model "
-        "(and with --go2 the Go2 driver's ROS 2 link)",
-    )
-    _common(doctor, suppress=True)
-    doctor.add_argument(
-        "--go2",
-        action="store_true",
-        help="check the go2_ros2_sdk driver (also when the profile's robot is go2)",
-    )
-    doctor.add_argument("--namespace", default="", help="the robot's namespace, e.g. robot0")
-    doctor.add_argument(
-        "--cmd-vel-topic",
-        default="",
-        help="velocity topic to check ('' = as the robot discovers it)",
-    )
-    doctor.add_argument(
-        "--battery-topic", default="", help="sensor_msgs/BatteryState topic ('' = none)"
-    )
-    doctor.add_argument(
-        "--seconds", type=float, default=3.0, help="how long to watch the topics (default 3)"
-    )
-
-    history = sub.add_parser(
-        "history",
-        help="list past missions and the objects seen, or show one mission (memory.enabled)",
-    )
-    _common(history, suppress=True)
-    history.add_argument("mission_id", nargs="?", help="show this mission in full")
-    history.add_argument("--limit", type=int, default=20, help="how many to list (default 20)")
-    history.add_argument("--json", action="store_true", help="print JSON")
-
-    places = sub.add_parser("places", help="list the known places, or forget a taught one")
-    _common(places, suppress=True)
-    places.add_argument("--forget", metavar="NAME", help="forget a taught place")
-    places.add_argument("--json", action="store_true", help="print JSON")
-
-    recall = sub.add_parser("recall", help="search retrieval memory (memory.enable_rag)")
-    _common(recall, suppress=True)
-    recall.add_argument("query", help="what to look for, e.g. 'where is the fridge?'")
-
-    serve = sub.add_parser(
-        "serve", help="run the web dashboard and HTTP API (needs the 'web' extra)"
-    )
-    _common(serve, suppress=True)
-    serve.add_argument(
-        "--host",
-        default="127.0.0.1",
-        help="address to listen on; anything but a literal loopback address "
-        "(127.x.x.x, ::1) or localhost needs a token",
-    )
-    serve.add_argument("--port", type=int, default=8080, help="TCP port (default 8080)")
-    serve.add_argument(
-        "--token",
-        default=None,
-        help="bearer token the API requires (default $SHADOWHOUND_TOKEN; the "
-        "environment is safer: a command line is visible in ps)",
-    )
-
-    mcp = sub.add_parser(
-        "mcp",
-        help="run the MCP server for Claude Desktop and other MCP clients (needs the 'mcp' extra)",
-        description="Serve ShadowHound's tools to MCP clients: over stdio "
-        "(default; the client starts this command) or Streamable "
-        "HTTP (--http).",
-    )
-    _common(mcp, suppress=True)
-    mcp.add_argument(
-        "--robot",
-        choices=["sim", "go2"],
-        default=None,
-        help="robot to drive (default: the profile's, normally sim; go2 needs the "
-        "'ros' extra and go2_ros2_sdk)",
-    )
-    mcp.add_argument(
-        "--http",
-        action="store_true",
-        help="serve Streamable HTTP at http://HOST:PORT/mcp instead of stdio",
-    )
-    mcp.add_argument(
-        "--host",
-        default="127.0.0.1",
-        help="HTTP address; anything but a literal loopback address needs a token",
-    )
-    mcp.add_argument("--port", type=int, default=8765, help="HTTP port (default 8765)")
-    mcp.add_argument(
-        "--token",
-        default=None,
-        help="bearer token HTTP clients must send (default $SHADOWHOUND_TOKEN)",
-    )
-    mcp.add_argument(
-        "--allow-release-estop",
-        action="store_true",
-        help="offer the release_estop tool; each call asks the person through the client "
-        "(MCP elicitation) and is refused when nobody can be asked or they decline. Without "
-        "it no MCP client can release the e-stop",
-    )
-    mcp.add_argument(
-        "--session-idle",
-        type=float,
-        default=DEFAULT_IDLE_TIMEOUT,
-        metavar="SECONDS",
-        help="HTTP: close a session after this long without a request in flight (default "
-        f"{DEFAULT_IDLE_TIMEOUT:g}); a session whose client drops its connection closes at once",
-    )
-    mcp.add_argument(
-        "--max-sessions",
-        type=int,
-        default=DEFAULT_MAX_SESSIONS,
-        metavar="N",
-        help=f"HTTP: at most N open sessions (default {DEFAULT_MAX_SESSIONS}); a new one "
-        "closes the least recently used idle session, or is refused (503) while all are busy",
-    )
-
-    sub.add_parser(
-        "node",
-        help="run the ROS 2 MissionNode (needs the 'ros' extra): "
-        "shadowhound node --ros-args -p name:=value ...",
-        add_help=False,
-    )
-    sub.add_parser(
-        "sim-driver",
-        help="run a simulated Go2 behind go2_ros2_sdk's ROS 2 topics, "
-        "behaving as the real driver does (for robot:=go2 without "
-        "a robot): shadowhound sim-driver [options] [--ros-args "
-        "...]; see shadowhound sim-driver --help",
-        add_help=False,
-    )
-    return parser
 
 
 def _settings(args: argparse.Namespace, planner: str | None = None) -> ShadowHoundConfig:
@@ -314,6 +75,30 @@ def _settings(args: argparse.Namespace, planner: str | None = None) -> ShadowHou
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The `shadowhound` command. Returns its exit code (shadowhound.exit_codes)."""
+    try:
+        try:
+            code = _main(argv)
+        finally:  # --help and --version end in SystemExit: their output is flushed too
+            sys.stdout.flush()  # so a pipe closed now is noticed here, not at exit
+    except BrokenPipeError:
+        return _output_gone()
+    return code
+
+
+def _output_gone() -> int:
+    """Whoever read stdout went away (`| head -1`): end quietly, as cat and git do.
+
+    What is still buffered goes to /dev/null, so the interpreter's own flush at exit does not
+    complain either (the recipe of Python's signal module documentation).
+    """
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+    return EXIT_BROKEN_PIPE
+
+
+def _main(argv: Sequence[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["node"]:  # ROS owns the rest of the command line (--ros-args ...)
         return cmd_node(argv[1:])
@@ -323,7 +108,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     # A line that cannot be parsed has no `args` to ask; `run ... --json` in it is enough.
     json_out = "run" in argv and "--json" in argv
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:
+            raise _unrecognized(parser, argv, args, extra)
     except UsageError as exc:
         sys.stderr.write(exc.usage)
         return report_error("usage", str(exc), EXIT_USAGE, json_out=json_out)
@@ -351,12 +138,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             "recall": cmd_recall,
             "serve": cmd_serve,
             "mcp": cmd_mcp,
+            "send": cmd_send,
+            "estop": cmd_estop,
+            "sim-fault": cmd_sim_fault,
+            "loopback-env": cmd_loopback_env,
         }[args.command]
         return handler(args, settings)
     except ConfigError as exc:
         return report_error(_kind(exc), str(exc), EXIT_USAGE, json_out=json_out, mission=mission)
     except MemoryStoreError as exc:
         return report_error("memory", str(exc), EXIT_USAGE, json_out=json_out, mission=mission)
+    except BrokenPipeError:  # the reader went away: main() ends quietly
+        raise
     except KeyboardInterrupt:  # before the mission ran (while connecting, say): nothing moved
         what = "stopped before the mission started" if args.command == "run" else "stopped"
         return report_error(
@@ -365,6 +158,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:  # a bug: the traceback goes to the log, the answer is still one
         logging.getLogger(__name__).exception("shadowhound %s crashed", args.command)
         return report_error("internal", repr(exc), EXIT_FAILED, json_out=json_out, mission=mission)
+
+
+def _unrecognized(
+    parser: argparse.ArgumentParser, argv: list[str], args: argparse.Namespace, extra: list[str]
+) -> UsageError:
+    """What argparse says of arguments it does not know, except for a mission typed without
+    quotes (`run walk forward 1 meter`): that gets the command with the mission quoted."""
+    words = [args.mission, *extra] if args.command in ("run", "send") else []
+    if not words or any(w.startswith("-") for w in extra):
+        return UsageError(
+            f"{parser.prog}: unrecognized arguments: {' '.join(extra)}", parser.format_usage()
+        )
+    return UsageError(
+        f"the mission of {args.command} is one argument, but it came as {len(words)} words; "
+        f"put it in quotes: {shlex.join(['shadowhound', *_quoted(argv, words, args.command)])}",
+        "",
+    )
+
+
+def _quoted(argv: list[str], words: list[str], command: str) -> list[str]:
+    """`argv` with the mission's `words` (in order, after `command`) made one argument where
+    the first of them stood; the options stay where they were."""
+    spots: list[int] = []
+    for i in range(argv.index(command) + 1 if command in argv else 0, len(argv)):
+        if len(spots) < len(words) and argv[i] == words[len(spots)]:
+            spots.append(i)
+    if len(spots) < len(words):  # not found as typed: the plain command
+        return [command, " ".join(words)]
+    quoted = [a for i, a in enumerate(argv) if i not in spots[1:]]
+    quoted[spots[0]] = " ".join(words)
+    return quoted
 
 
 def _kind(exc: ConfigError) -> str:

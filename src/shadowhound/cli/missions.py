@@ -1,14 +1,13 @@
-"""Commands that run missions: `run` (with progress, approvals, dry runs), `chat`, `eval`."""
+"""Commands that run missions: `run` (with progress, approvals, dry runs) and `eval`; `chat`
+is in chat.py and shows a mission's steps with `progress` from here."""
 
 from __future__ import annotations
 
 import argparse
 import math
-import queue
 import sys
 import threading
-from collections.abc import Callable
-from typing import Any, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 from .. import events as ev
 from .. import jsonout
@@ -19,10 +18,16 @@ from ..result import StepStatus
 from ..worker import MissionJob, MissionWorker
 from ._base import make_agent, print_json, report_error
 
+if TYPE_CHECKING:
+    from ..skills import SkillRegistry
+
 # -- run -----------------------------------------------------------------------------------
 
 
-def _progress(stream: TextIO) -> ev.Listener:
+def progress(stream: TextIO, registry: SkillRegistry) -> ev.Listener:
+    """Each step as it starts and ends. A step whose output answers the user (a skill that
+    `reports`: a view, a status) is only marked answered: the response says the answer."""
+
     def show(event: ev.MissionEvent) -> None:
         if isinstance(event, ev.MissionStarted):
             print(f"mission: {event.mission!r}", file=stream)
@@ -36,7 +41,10 @@ def _progress(stream: TextIO) -> ev.Listener:
             step = event.step
             ok = step.status is StepStatus.SUCCEEDED
             mark = "ok" if ok else step.status.value.upper()
-            detail = step.output if ok else step.error
+            skill = registry.find(step.skill)
+            detail = (
+                step.error if not ok else "answered" if skill and skill.reports else step.output
+            )
             print(
                 f"  [{step.index}] {mark}: {detail} ({step.robot_duration:.1f} s robot time)",
                 file=stream,
@@ -74,7 +82,7 @@ def cmd_run(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     agent = make_agent(settings)
     if not args.dry_run:
         if not args.quiet:
-            agent.add_listener(_progress(sys.stderr))
+            agent.add_listener(progress(sys.stderr, agent.registry))
         if args.yes or sys.stdin.isatty():
             agent.enable_approvals()
             agent.add_listener(_approver(agent, ask=not args.yes))
@@ -124,7 +132,7 @@ def _run_on_worker(agent: Any, job: MissionJob) -> bool:
     """
     worker: MissionWorker | None = None
     try:
-        worker = MissionWorker(agent, on_start=_nothing, on_finish=_nothing)
+        worker = MissionWorker(agent, on_start=nothing, on_finish=nothing)
         worker.submit(job)  # the only job of a fresh worker: never refused
         while not job.done.wait(0.1):
             pass
@@ -138,7 +146,7 @@ def _run_on_worker(agent: Any, job: MissionJob) -> bool:
     return False
 
 
-def _nothing(job: MissionJob) -> None:
+def nothing(job: MissionJob) -> None:
     """The command line reports a mission itself, after it ends."""
 
 
@@ -168,92 +176,6 @@ def _show_dry_run(result: Any, args: argparse.Namespace) -> int:
             print(f"note: {note}")  # e.g. how a misspelt word was read
         print(result.response)
     return code
-
-
-# -- chat --------------------------------------------------------------------------------------
-
-_CHAT_HELP = (
-    "Ask a question (where are you? battery? what do you see? what did you do?), or: "
-    "/run MISSION, /status, /skills, /estop, /release, /help, /quit"
-)
-
-
-def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
-    agent = make_agent(settings)
-    worker = MissionWorker(agent, on_start=_nothing, on_finish=_nothing)
-    interactive = sys.stdin.isatty()
-    if interactive:
-        print("ShadowHound chat. " + _CHAT_HELP)
-    # Missions and questions are answered in order on another thread, so this one keeps reading:
-    # a /estop typed while a mission walks or a model thinks acts at once.
-    lines: queue.Queue[str | None] = queue.Queue()
-    answered = threading.Event()
-    printing = threading.Lock()
-
-    def say(text: str) -> None:  # two threads answer: each answer is one whole line
-        with printing:
-            print(text, flush=True)
-
-    def answer() -> None:
-        try:
-            while (line := lines.get()) is not None:
-                say(_chat_line(agent, worker, line))
-        finally:
-            answered.set()
-
-    threading.Thread(target=answer, name="shadowhound-chat", daemon=True).start()
-    try:
-        while True:
-            if interactive:
-                with printing:
-                    print("you> ", end="", flush=True)
-            line = sys.stdin.readline()
-            if not line:
-                break
-            line = line.strip()
-            if not line:
-                continue
-            if line in ("/quit", "/exit"):
-                break
-            if line.split()[0] == "/estop":
-                say(_chat_line(agent, worker, line))
-            else:
-                lines.put(line)
-        lines.put(None)
-        while not answered.wait(0.1):  # an Event, not join: Ctrl-C here must still stop
-            pass
-    except KeyboardInterrupt:
-        agent.estop()
-    finally:
-        worker.stop(timeout=0.0)  # the mission (if any) was stopped; do not wait for it
-        agent.cleanup()
-    return EXIT_OK
-
-
-def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
-    if line.startswith("/run"):
-        mission = line[4:].strip()
-        if not mission:
-            return "usage: /run MISSION"
-        job = MissionJob(mission, source="cli")
-        refused = worker.submit(job)
-        if refused is not None:
-            return "refused: " + refused
-        job.done.wait()  # answers come in order: the next line waits for this mission
-        if job.result is None:
-            return f"failed: {job.dropped}"
-        return ("ok: " if job.result.success else "failed: ") + job.result.response
-    commands: dict[str, Callable[[], str]] = {
-        "/status": lambda: jsonout.dumps(agent.get_robot_status()),
-        "/skills": lambda: ", ".join(s["name"] for s in agent.get_available_skills()),
-        "/estop": lambda: (agent.estop(), "e-stop latched; /release to release it")[1],
-        "/release": lambda: (agent.release_estop(), "e-stop released")[1],
-        "/help": lambda: _CHAT_HELP,
-    }
-    if line.startswith("/"):
-        action = commands.get(line.split()[0])
-        return action() if action else f"unknown command {line.split()[0]!r}. {_CHAT_HELP}"
-    return str(agent.chat(line))
 
 
 # -- eval ----------------------------------------------------------------------------------------

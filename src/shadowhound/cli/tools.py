@@ -1,9 +1,10 @@
 """Commands that inspect or serve: `skills`, `config`, `doctor`, `history`, `places`,
-`recall`, `serve`, `mcp`, and the ROS entry points `node` and `sim-driver`."""
+`recall`, `serve`, `mcp` (the ROS 2 commands are in ros_tools)."""
 
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import sys
 import time
@@ -12,6 +13,7 @@ from typing import Any
 from .. import jsonout
 from ..config import ShadowHoundConfig
 from ..exit_codes import EXIT_FAILED, EXIT_OK, EXIT_USAGE
+from .ros_tools import ROS_INSTALL
 
 # -- skills ----------------------------------------------------------------------------------
 
@@ -70,9 +72,13 @@ def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
 
 def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    go2 = args.go2 or settings.robot == "go2"
+    robot = repr(settings.robot)
+    if go2 and settings.robot != "go2":  # the Go2 is what is checked, whatever the profile says
+        robot = f"'go2' (--go2; the profile's robot is {robot})"
     print(
         f"ok  configuration: profile {settings.profile!r}, backend {settings.backend!r}, "
-        f"robot {settings.robot!r}"
+        f"robot {robot}"
     )
     s = settings.safety
     print(
@@ -92,7 +98,7 @@ def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             f"ok  planning mode {settings.llm.mode!r}, plan format "
             f"{settings.llm.plan_format!r}, vision {'on' if settings.llm.vision else 'off'}"
         )
-    if args.go2 or settings.robot == "go2":
+    if go2:
         return _doctor_go2(args)
     _doctor_places(settings)
     return EXIT_OK
@@ -123,14 +129,15 @@ def _doctor_places(settings: ShadowHoundConfig) -> None:
 def _doctor_go2(args: argparse.Namespace) -> int:
     """The Go2 driver's link, in words (see ros/go2_doctor.py)."""
     try:
-        from ..ros.go2_doctor import diagnose, observe
+        from ..ros.go2_doctor import diagnose, observe, require_ros
+
+        require_ros()
     except ImportError as exc:
         print(
             f"fail Go2 checks need ROS 2 (rclpy) and go2_interfaces: {exc}\n"
-            "     fix: source ROS 2 and your go2_ros2_sdk workspace, or run "
-            "scripts/build_ros.sh"
+            f"     fix: {ROS_INSTALL}; or source ROS 2 and your go2_ros2_sdk workspace"
         )
-        return EXIT_FAILED
+        return EXIT_USAGE
     print(f"...  watching the Go2 driver's topics for {args.seconds:g} s")
     findings = diagnose(
         observe(
@@ -263,7 +270,45 @@ def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             file=sys.stderr,
         )
         return EXIT_USAGE
+    taken = _port_taken(args.host, args.port, "shadowhound serve")
+    if taken:
+        print(taken, file=sys.stderr)
+        return EXIT_USAGE
     return int(serve_main(settings, args.host, args.port, args.token))
+
+
+def _port_taken(host: str, port: int, command: str) -> str:
+    """Why `command` cannot listen on `host`:`port` because another program does, with a free
+    port to use instead; "" when the port is free (or fails otherwise: the server says why)."""
+    if not _in_use(host, port):
+        return ""
+    why = f"{command}: port {port} on {host} is in use by another program"
+    if port == 8080:
+        why += " (llama.cpp's server, for one, listens on 8080 too)"
+    return f"{why}; choose another port: {command} --port {_free_port(host, port + 1)}"
+
+
+def _free_port(host: str, start: int) -> int:
+    """The first free port from `start` on (of the next hundred), else one the system picks."""
+    from ..serving import bind
+
+    free = (p for p in range(start, min(start + 100, 65536)) if not _in_use(host, p))
+    found = next(free, 0)
+    if not found:
+        with bind(host, 0) as sock:
+            found = sock.getsockname()[1]
+    return found
+
+
+def _in_use(host: str, port: int) -> bool:
+    from ..errors import ServeError
+    from ..serving import bind
+
+    try:
+        bind(host, port).close()
+    except ServeError as exc:
+        return isinstance(exc.__cause__, OSError) and exc.__cause__.errno == errno.EADDRINUSE
+    return False
 
 
 # -- mcp -----------------------------------------------------------------------------------------
@@ -271,6 +316,11 @@ def cmd_serve(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
 def cmd_mcp(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     from ..mcp import main as mcp_main
+
+    taken = _port_taken(args.host, args.port, "shadowhound mcp --http") if args.http else ""
+    if taken:
+        print(taken, file=sys.stderr)
+        return EXIT_USAGE
 
     return int(
         mcp_main(
@@ -284,32 +334,3 @@ def cmd_mcp(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
             max_sessions=args.max_sessions,
         )
     )
-
-
-# -- node ----------------------------------------------------------------------------------------
-
-
-def cmd_node(ros_argv: list[str]) -> int:
-    try:
-        from ..ros.node import main as node_main
-    except ImportError as exc:
-        print(
-            f"shadowhound: the ROS 2 node needs rclpy and the shadowhound_interfaces package "
-            f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
-            file=sys.stderr,
-        )
-        return EXIT_USAGE
-    return node_main(ros_argv)
-
-
-def cmd_sim_driver(argv: list[str]) -> int:
-    try:
-        from ..ros.sim_driver import main as driver_main
-    except ImportError as exc:
-        print(
-            f"shadowhound: the simulated Go2 driver needs rclpy and the go2_interfaces package "
-            f"(pip install 'shadowhound[ros]' and bash scripts/build_ros.sh): {exc}",
-            file=sys.stderr,
-        )
-        return EXIT_USAGE
-    return driver_main(argv)

@@ -266,6 +266,13 @@ def _battery(obs: Observation) -> Finding:
 # -- watching the graph (rclpy) --------------------------------------------------------------
 
 
+def require_ros() -> None:
+    """Raise ImportError naming what is missing when ROS 2 or go2_interfaces is not installed
+    (before anything is printed about watching topics)."""
+    import rclpy  # noqa: F401
+    from go2_interfaces.msg import Go2State  # noqa: F401
+
+
 def observe(
     namespace: str = "", *, seconds: float = 3.0, cmd_vel_topic: str = "", battery_topic: str = ""
 ) -> Observation:

@@ -114,3 +114,21 @@ def is_numeric(info: FieldInfo) -> bool:
     return argument_kind(info) is not None or any(
         isinstance(m, BeforeValidator) and m.func is _count for m in info.metadata
     )
+
+
+# What a person typically asks for, per kind of quantity: the values of `Skill.example`.
+_TYPICAL = {units.LENGTH: 1.0, units.ANGLE: 90.0, units.DURATION: 3.0}
+
+
+def typical_value(info: FieldInfo) -> object | None:
+    """A value people typically give this argument (1 m, 90 degrees, 3 s, 2 times, the first of
+    its choices), or None when there is none to guess (free text, a speed)."""
+    kind = argument_kind(info)
+    if kind is not None:
+        return _TYPICAL.get(kind)
+    if is_numeric(info):  # a count
+        return 2
+    if typing.get_origin(info.annotation) is typing.Literal:
+        first: object = typing.get_args(info.annotation)[0]
+        return first
+    return None

@@ -27,7 +27,7 @@ from ..errors import SkillValidationError
 from ..plan import SkillCall
 from ..state import Posture
 from ..units import UnitError
-from .arguments import SkillArgs
+from .arguments import SkillArgs, typical_value
 
 if TYPE_CHECKING:
     from ..state import Pose2D
@@ -77,7 +77,9 @@ class Skill:
     reports: bool = False
     # Retrieval memory keeps each successful output as this kind (observation, fact, mission).
     remembered_as: str | None = None
-    phrase: Words | None = None  # a call in a few words ("move forward 2 m"); default: the name
+    # A call in a few words ("move forward 2 m"); default: the name. With typical arguments it
+    # is also the mission the chat offers as an example (`example`), so say it as people do.
+    phrase: Words | None = None
     # What the plan check cannot predict of a call, in words ("would look for the chair for up
     # to 120 s and 20 m ..."), "" when it can: a dry run says it.
     forecast: Forecast | None = None
@@ -129,6 +131,24 @@ class Skill:
     def say(self, args: SkillArgs) -> str:
         """A call in a few words for people ("move forward 2 m"); the name without a phrase."""
         return self.phrase(args) if self.phrase is not None else self.name
+
+    def example(self) -> str | None:
+        """This skill asked for in words with typical arguments ("turn left 90 degrees"), for
+        people who ask what the robot can do; None when it has no `phrase`, or its arguments
+        have no typical values (free text such as a note)."""
+        if self.phrase is None:
+            return None
+        fields = self.args_model.model_fields
+        required = {n: typical_value(f) for n, f in fields.items() if f.is_required()}
+        optional = {n: typical_value(f) for n, f in fields.items() if not f.is_required()}
+        # The fewest arguments that make a valid call: the required ones, else every typical one.
+        for values in (required, required | optional):
+            given = {n: v for n, v in values.items() if v is not None}
+            try:
+                return self.say(self.args_model(**given))
+            except (ValidationError, UnitError):
+                continue
+        return None
 
     def describe(self) -> dict[str, Any]:
         return {

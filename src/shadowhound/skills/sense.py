@@ -25,28 +25,74 @@ class WaitArgs(SkillArgs):
     seconds: Duration = Field(ge=0, le=3600, description="seconds to stand still")
 
 
+Vision = Callable[[CameraFrame, str], str]
+
+
 def describe_frame(
-    frame: CameraFrame | None,
-    question: str | None,
-    vision: Callable[[CameraFrame, str], str] | None = None,
+    frame: CameraFrame | None, question: str | None, vision: Vision | None = None
 ) -> str:
-    """Answer from the latest frame: with a vision model if one is configured, else honestly."""
+    """Answer from the latest frame: with a vision model if one is configured; without one,
+    what is known to be in view first, then once what a vision model would add."""
     if frame is None:
-        return "I have no camera image yet, so I cannot say what I see."
+        return NO_IMAGE
     if vision is not None:
         return vision(frame, question or "Describe what you see.")
-    age = max(0.0, time.time() - frame.stamp)
-    parts = [
-        "No vision model is configured, so I cannot interpret the image myself. "
-        f"I have a {frame.width}x{frame.height} {frame.encoding.upper()} frame from the "
-        f"{frame.source}, {age:.1f} s old."
-    ]
+    seen = _known_in_view(frame)
+    if not seen:
+        return _without_vision([frame])
+    return f"{'In view: ' if frame.sightings else ''}{seen} {_without_vision([frame])}"
+
+
+def describe_views(
+    views: list[tuple[str, CameraFrame | None]], question: str | None, vision: Vision | None
+) -> str:
+    """One line per view ("Ahead: ..."), then, without a vision model, one line saying what a
+    vision model would add (said once, not once a view)."""
+    frames = [frame for _, frame in views if frame is not None]
+    if not frames:
+        return NO_IMAGE
+    lines = []
+    for side, frame in views:
+        if frame is None:
+            said = "no image"
+        elif vision is not None:
+            said = vision(frame, question or "Describe what you see.")
+        else:
+            said = _known_in_view(frame) or "nothing I can name."
+        lines.append(f"{side}: {said}")
+    if vision is None:
+        lines.append(_without_vision(frames))
+    return "\n".join(lines)
+
+
+NO_IMAGE = "I have no camera image yet, so I cannot say what I see."
+
+
+def _known_in_view(frame: CameraFrame) -> str:
+    """What the robot knows is in the frame's view ("" when it knows nothing of it)."""
     if frame.sightings:
-        seen = "; ".join(s.describe() for s in frame.sightings)
-        parts.append(f"The simulator reports in view: {seen}.")
-    elif frame.source == "simulator":
-        parts.append("The simulator reports nothing in view but the room.")
-    return " ".join(parts)
+        return "; ".join(s.describe() for s in frame.sightings) + "."
+    if frame.source == "simulator":
+        return "Nothing in view but the room."
+    return ""
+
+
+def _without_vision(frames: list[CameraFrame]) -> str:
+    """What the answer lacks without a vision model, and the frames it had, said briefly."""
+    first = frames[0]
+    kind = f"{first.width}x{first.height} {first.encoding.upper()}"
+    if first.source == "simulator":
+        what = "images themselves" if len(frames) > 1 else "image itself"
+        frames_of = f"{kind} frames" if len(frames) > 1 else f"a {kind} frame"
+        return (
+            f"A vision model (llm.vision) would describe the {what}; this is the simulator's "
+            f"list of what is in view ({frames_of})."
+        )
+    age = max(0.0, time.time() - first.stamp)
+    return (
+        f"I have a {kind} frame from the {first.source}, {age:.1f} s old, but no vision model "
+        "to look at it; one (llm.vision) would describe what it shows."
+    )
 
 
 def _run_describe(ctx: SkillContext, a: DescribeArgs) -> str:
@@ -56,25 +102,26 @@ def _run_describe(ctx: SkillContext, a: DescribeArgs) -> str:
 
 def _run_look_around(ctx: SkillContext, a: DescribeArgs) -> str:
     ctx.ensure_standing()
-    views = []
-    for quarter, side in enumerate(("ahead", "to my left", "behind me", "to my right")):
+    views: list[tuple[str, CameraFrame | None]] = []
+    for quarter, side in enumerate(("Ahead", "To my left", "Behind me", "To my right")):
         if quarter:
             motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed)
         sight_in_view(ctx)  # what it sees is remembered (the world model, memory)
-        views.append(f"{side}: {describe_frame(ctx.camera_frame(), a.question, ctx.vision)}")
+        views.append((side, ctx.camera_frame()))
     motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed)
-    return " | ".join(views)
+    return describe_views(views, a.question, ctx.vision)
 
 
 def _run_status(ctx: SkillContext, _a: NoArgs) -> str:
     st = ctx.robot.get_state()
     budget = ctx.env.budget
+    mission = budget.travelled(st) if budget is not None else None
     return (
-        f"{st.posture.value.capitalize()} at x={st.x:.2f} m, y={st.y:.2f} m, "
-        f"facing {math.degrees(st.yaw):.0f} degrees; battery {st.battery_text}"
+        st.in_words()
         + ("; e-stop latched" if st.estopped else "")
-        + "; "
-        + travel_report(st, budget.travelled(st) if budget is not None else None)
+        + f"; turned {math.degrees(st.angle_turned):.0f} degrees and moving for "
+        + f"{_duration(st.time_moving)} since it started (its odometer)"
+        + (f"; {mission:.2f} m in this mission so far" if mission is not None else "")
     )
 
 
