@@ -86,6 +86,8 @@ class LyingOdometry:
     def look(self) -> None:
         self.sim.look()
 
+    latency = 0.0  # its pose lies, but not late
+
     def vocabulary(self) -> frozenset[str]:
         return self.sim.vocabulary()
 

@@ -41,8 +41,11 @@ class LateRobot:
         delay: float,
         tracker: MotionTracker | None = None,
         sim: SimRobot | None = None,
+        burst: int = 1,
     ) -> None:
         self.sim = sim or SimRobot(time_scale=0)
+        self.burst = burst  # samples that travel together: held back, then 1 ms apart
+        self._group: list[tuple[tuple[float, float, float] | None, float]] = []
         self.tracker = tracker or MotionTracker()
         self.intake = OdometryIntake(self.tracker)
         self.lying = LyingOdometry()
@@ -52,7 +55,7 @@ class LateRobot:
         self._pending: deque[tuple[float, tuple[float, float, float] | None, float]] = deque()
         self._next = 0.0
         self._moving = False
-        self.sleep(1.0)
+        self.sleep(1.0 + delay + burst * self.period)  # odometry has come in, as a Go2 waits
 
     def lie(self, faults: Faults) -> None:
         """A fault message reaches the driver now (it fires as `faults` says)."""
@@ -124,7 +127,12 @@ class LateRobot:
                 if self.lying.fired and not fired and self.lying.faults.fall:
                     self.sim.stop()  # it falls where it is, and lies there
                     self.sim.set_posture(Posture.LYING, seconds=0.0)
-                self._pending.append((self._next + self.delay, shown, shift))
+                self._group.append((shown, shift))
+                if len(self._group) == self.burst:  # the link delivers them together
+                    arrival = self._next + self.delay
+                    for i, (pose, late) in enumerate(self._group):
+                        self._pending.append((arrival + 0.001 * i, pose, late))
+                    self._group.clear()
                 self._next += self.period
             while self._pending and self._pending[0][0] <= now + 1e-9:
                 t, shown, shift = self._pending.popleft()
@@ -164,6 +172,10 @@ class LateRobot:
 
     def look(self) -> None:
         self.sim.look()
+
+    @property
+    def latency(self) -> float:
+        return self.tracker.latency_bound
 
     def vocabulary(self) -> frozenset[str]:
         return self.sim.vocabulary()
@@ -291,3 +303,26 @@ def test_odometry_jitter_does_not_throw_the_closed_loop_off_target(
         heading = start.yaw + (math.radians(left) if mission.startswith("turn") else 0.0)
         goal = (start.x + ahead * math.cos(heading), start.y + ahead * math.sin(heading))
         assert math.hypot(truth.x - goal[0], truth.y - goal[1]) < 0.05, (mission, truth, goal)
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    delay=st.floats(0.0, 3.2),
+    burst=st.integers(1, 3),
+    rate=st.sampled_from([17.0, 20.0]),
+)
+def test_odometry_seconds_late_in_bursts_still_ends_on_target(
+    delay: float, burst: int, rate: float
+) -> None:
+    """go2_ros2_sdk #231: odometry 2-3 s late, several samples back to back then a gap, each
+    stamped when sent. Slower, never wrong: the mission ends on target in truth."""
+    robot = LateRobot(rate, delay, burst=burst)
+    settings = ShadowHoundConfig(robot="go2")
+    settings.motion = settings.motion.model_copy(update=GO2_MOTION)
+    agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
+    result = agent.execute_mission("walk forward 1 meter and turn left 90 degrees")
+    truth = robot.sim.get_state()
+    assert result.success, result.response
+    assert math.hypot(truth.x - 1.0, truth.y) < 0.05, (truth.x, truth.y)
+    assert abs(math.degrees(truth.yaw) - 90.0) < 3.0, math.degrees(truth.yaw)
+    assert robot.faults == []  # late is not lying: no fault was taken for it

@@ -58,9 +58,9 @@ def test_go2_options_for_latency_battery_and_firmware_tricks_are_checked() -> No
     ) == (0.3, "battery_state", True, "cmd_vel_out")
     with pytest.raises(ParameterError) as info:
         parse_parameters(
-            {"odom_latency": 5.0, "battery_topic": "9bad", "detections_topic": "bad topic"}
+            {"odom_latency": 5.5, "battery_topic": "9bad", "detections_topic": "bad topic"}
         )
-    assert "odom_latency must be -1 (measured) or seconds in 0..2, got 5.0" in str(info.value)
+    assert "odom_latency must be -1 (measured) or seconds in 0..5, got 5.5" in str(info.value)
     assert "battery_topic '9bad' is not a valid ROS topic name" in str(info.value)
     assert "detections_topic 'bad topic' is not a valid ROS topic name" in str(info.value)
 

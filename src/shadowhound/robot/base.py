@@ -35,6 +35,12 @@ class Robot(Protocol):
         ...
 
     @property
+    def latency(self) -> float:
+        """Seconds its measured pose may lag its motion (0: it knows its pose at once): steps
+        allow for it in their waits for rest and their time-outs."""
+        ...
+
+    @property
     def realtime(self) -> bool:
         """True when the robot's clock runs by itself (a hung skill then needs a watchdog)."""
         ...

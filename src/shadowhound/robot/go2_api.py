@@ -198,6 +198,17 @@ POSTURE_CHANGES: dict[int, PostureChange] = {
 }
 
 
+MOVE_QUANTUM = 0.01  # m/s and rad/s: go2_ros2_sdk rounds a Move to 2 decimals
+
+
+def movable(v: float) -> float:
+    """A velocity as a Move carries it: to 2 decimals, and a small one that would round to
+    zero (the robot would stand still) at the smallest the robot obeys, with its sign."""
+    if v == 0.0:
+        return 0.0
+    return math.copysign(max(MOVE_QUANTUM, round(abs(v), 2)), v)
+
+
 def move_parameter(x: float, y: float, z: float) -> dict[str, float] | None:
     """What go2_ros2_sdk sends for a Twist (x, y forward/left m/s, z yaw rate rad/s): None for
     an all-zero Twist, which it drops (a zero Twist stops nothing), else the Move (1008)

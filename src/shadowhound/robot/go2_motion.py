@@ -41,11 +41,12 @@ GO2_MOTION = {
 }
 
 _DT = 0.01  # seconds per model integration step
-_TRACE_SECONDS = 6.0  # model history kept: more than a fit window plus the largest latency
-_MAX_LATENCY = 2.0
+_TRACE_SECONDS = 10.0  # model history kept: more than a fit window plus the largest latency
+MAX_LATENCY = 5.0  # seconds: the most odometry is believed to lag (a busy Wi-Fi link: 2-5 s)
 _MOTION_EPS = 0.003  # metres (and the same in radians) that count as "it moved"
 _STILL_WINDOW = 0.25  # seconds of odometry a velocity is measured over
 _FIT_SECONDS = 3.0  # seconds of odometry the delay is fitted over
+_BURST = 0.01  # seconds: samples closer together than this came in one burst
 
 
 @dataclass(frozen=True)
@@ -112,6 +113,9 @@ class MotionTracker:
         self._fitted: float | None = None  # the latest least-squares latency
         self._segment: Sample | None = None  # the odometry at rest before the last start
         self._moved = False  # the model moved since the last fit
+        # The most the latency can be in this motion: from its first command to the first
+        # sample that showed it (odometry cannot show motion before it happens).
+        self._cap: float | None = None
 
     # -- inputs ------------------------------------------------------------------------
 
@@ -122,6 +126,7 @@ class MotionTracker:
         if moving and not self._model_moving():
             at_rest = bool(self._samples) and _still(self.measured_velocity())
             self._segment = self._samples[-1] if at_rest else None  # the rest it starts from
+            self._cap = None
             if at_rest and self.fixed_latency is None:
                 self._start = (t, self._samples[-1])
         self._command = (vx, vy, wz)
@@ -151,6 +156,19 @@ class MotionTracker:
         if self._fitted is not None:
             return self._fitted
         return statistics.median(self._latencies) if self._latencies else self._initial
+
+    @property
+    def latency_bound(self) -> float:
+        """The most odometry may lag now: the latency once configured or measured, else
+        `MAX_LATENCY` (a first start waits that long for odometry to show it)."""
+        known = self.fixed_latency is not None or self._fitted is not None or self._latencies
+        return self.latency if known else MAX_LATENCY
+
+    @property
+    def showing(self) -> bool:
+        """Motion started from rest that odometry has not shown yet: until it does, where the
+        robot is comes from the commands alone, and it may still be moving."""
+        return self._start is not None and self._model_started()
 
     def last_sample(self) -> Sample | None:
         return self._samples[-1] if self._samples else None
@@ -193,7 +211,9 @@ class MotionTracker:
         last = self._samples[-1] if self._samples else Sample(t, 0.0, 0.0, 0.0)
         if not any(self._command) and self._never_left_rest(last):
             return last.x, last.y, last.yaw
-        then = self._trace_at(last.t - self.latency)
+        # Odometry has not shown this start yet: all of the motion since is the commands'.
+        start = self._start
+        then = self._trace_at(start[0] if start and self.showing else last.t - self.latency)
         now = self._trace_at(t)
         return compose((last.x, last.y, last.yaw), relative(then, now))
 
@@ -203,8 +223,14 @@ class MotionTracker:
         self._advance(t)
         model = self._trace[-1] if self._trace else None
         modelled = (model.vx, model.vy, model.wz) if model else (0.0, 0.0, 0.0)
+        if self.showing:  # the robot may still be moving as commanded: odometry cannot say
+            modelled = max(
+                ((p.vx, p.vy, p.wz) for p in self._trace if p.t >= self._start[0]),  # type: ignore[index]
+                key=_speed,
+                default=modelled,
+            )
         measured = self.measured_velocity()
-        return max(modelled, measured, key=lambda v: math.hypot(v[0], v[1]) + abs(v[2]))
+        return max(modelled, measured, key=_speed)
 
     def measured_velocity(self) -> tuple[float, float, float]:
         """Body-frame velocity from successive odometry poses over the last quarter second."""
@@ -232,6 +258,12 @@ class MotionTracker:
         return math.hypot(d[0], d[1]) < _MOTION_EPS and abs(d[2]) < _MOTION_EPS
 
     # -- model -------------------------------------------------------------------------
+
+    def _model_started(self) -> bool:
+        """The model has moved since the pending start (its first command may be a hair)."""
+        assert self._start is not None
+        started = self._start[0]
+        return any(p.vx or p.vy or p.wz for p in reversed(self._trace) if p.t >= started)
 
     def _model_moving(self) -> bool:
         p = self._trace[-1] if self._trace else None
@@ -288,10 +320,11 @@ class MotionTracker:
         started, rest = self._start
         moved = relative((rest.x, rest.y, rest.yaw), (sample.x, sample.y, sample.yaw))
         if math.hypot(moved[0], moved[1]) < _MOTION_EPS and abs(moved[2]) < _MOTION_EPS:
-            if sample.t - started > _MAX_LATENCY + 1.0:
+            if sample.t - started > MAX_LATENCY + 1.0:
                 self._start = None  # the robot did not move (ignored, or sitting): no measure
             return
         self._start = None
+        self._cap = sample.t - started + self._sample_period()
         base = self._trace_at(started)
         shown = started
         for p in self._trace:  # when the model had moved as far as odometry can first show
@@ -302,7 +335,7 @@ class MotionTracker:
             if math.hypot(d[0], d[1]) >= _MOTION_EPS or abs(d[2]) >= _MOTION_EPS:
                 break
         latency = sample.t - shown - self._sample_period() / 2
-        self._latencies.append(min(_MAX_LATENCY, max(0.0, latency)))
+        self._latencies.append(min(MAX_LATENCY, max(0.0, latency)))
 
     def _fit_latency(self) -> None:
         """The delay that best lines odometry up with the trace over the motion that just
@@ -312,8 +345,12 @@ class MotionTracker:
         segment, end = self._segment, self._samples[-1].t
         if segment is None:
             return
-        # The trace reaches back _FIT_SECONDS + _MAX_LATENCY (it keeps _TRACE_SECONDS).
-        window = [s for s in self._samples if s.t >= max(segment.t, end - _FIT_SECONDS)]
+        # The trace reaches back _FIT_SECONDS + MAX_LATENCY (it keeps _TRACE_SECONDS).
+        recent = [s for s in self._samples if s.t >= max(segment.t, end - _FIT_SECONDS)]
+        # Of samples that came in a burst only the last is as late as the latency: the ones
+        # before it were held back on the link longer, yet arrived (and are timed) with it.
+        window = [s for s, after in zip(recent, recent[1:], strict=False) if after.t - s.t > _BURST]
+        window += recent[-1:]
         if len(window) < 5:
             return
         first = window[0]
@@ -329,7 +366,11 @@ class MotionTracker:
                 total += (m[0] - d[0]) ** 2 + (m[1] - d[1]) ** 2 + (m[2] - d[2]) ** 2
             return total
 
-        coarse = min((i * 0.05 for i in range(int(_MAX_LATENCY / 0.05) + 1)), key=cost)
+        # Only delays this motion allows: a larger one would line odometry up with an earlier
+        # motion of the model (a turn before this one), not with this.
+        top = self._cap if self._cap is not None else 2 * self.latency + 0.5
+        top = min(MAX_LATENCY, top)
+        coarse = min((i * 0.05 for i in range(int(top / 0.05) + 1)), key=cost)
         fine = [coarse + i * 0.005 for i in range(-10, 11) if coarse + i * 0.005 >= 0]
         best = min(fine, key=cost)
         scale = sum(d[0] ** 2 + d[1] ** 2 + d[2] ** 2 for d in seen)
@@ -382,6 +423,10 @@ class StampClock:
     def offset(self) -> float:
         """Seconds to add to a stamp (only meaningful once a stamped sample arrived)."""
         return self._gaps[0][1] if self._gaps else 0.0
+
+
+def _speed(v: tuple[float, float, float]) -> float:
+    return math.hypot(v[0], v[1]) + abs(v[2])
 
 
 def _still(v: tuple[float, float, float]) -> bool:

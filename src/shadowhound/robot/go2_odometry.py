@@ -256,7 +256,9 @@ class OdometryIntake:
         lim = self.limits
         if driven_elsewhere:
             return None
-        if self.tracker.idle_since(t) < self.tracker.latency + lim.stop_seconds:
+        # Odometry late by up to the latency (or, before it is measured, by the most it may
+        # be) still shows motion that was commanded: that is no one else driving.
+        if self.tracker.idle_since(t) < self.tracker.latency_bound + lim.stop_seconds:
             return None
         vx, vy, wz = self.tracker.measured_velocity()
         speed = math.hypot(vx, vy)

@@ -67,7 +67,7 @@ from . import go2_api
 from .base import RobotError
 from .estop_listener import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC, EstopListener
 from .go2_detections import Frames, SightingBoard, sightings_from_msg
-from .go2_motion import MotionTracker
+from .go2_motion import MAX_LATENCY, MotionTracker
 from .go2_nav2 import Nav2Navigator
 from .go2_odometry import OdometryFault, OdometryIntake, OdometryLimits
 from .go2_posture import STEPS, PostureWatch
@@ -285,6 +285,12 @@ class Go2RosRobot:
         """Seconds odometry lags the robot, as configured or as measured."""
         with self._lock:
             return self._tracker.latency
+
+    @property
+    def latency(self) -> float:
+        """The most odometry may lag now: measured (or configured), else MAX_LATENCY."""
+        with self._lock:
+            return self._tracker.latency_bound
 
     # -- callbacks (executor thread; short) ----------------------------------------------
 
@@ -609,10 +615,12 @@ class Go2RosRobot:
         c = self.config
         norm = math.hypot(values[0], values[1])
         scale = c.max_linear_speed / norm if norm > c.max_linear_speed else 1.0
+        # As the driver will send it (2 decimals), so the tracker models what the robot does;
+        # the last millimetres of an approach would otherwise round to standing still.
         command = (
-            values[0] * scale,
-            values[1] * scale,
-            max(-c.max_angular_speed, min(c.max_angular_speed, values[2])),
+            go2_api.movable(values[0] * scale),
+            go2_api.movable(values[1] * scale),
+            go2_api.movable(max(-c.max_angular_speed, min(c.max_angular_speed, values[2]))),
         )
         if not self.last_state().connected:
             raise RobotError(self._odometry_problem() + " Not moving without odometry.")
@@ -625,6 +633,13 @@ class Go2RosRobot:
             untrusted = self._intake.problem(time.monotonic())
         if untrusted:
             raise RobotError(f"odometry is not trusted: {untrusted}. Not moving.")
+        lag = self.odom_latency
+        if starting and lag >= MAX_LATENCY - 0.05:  # measured at the bound: maybe more
+            raise RobotError(
+                f"odometry lags the robot by {lag:.1f} s or more (measured): too late to steer "
+                f"on (ShadowHound steers on odometry up to {MAX_LATENCY:g} s late; check the "
+                "link: docs/go2.md). Not moving."
+            )
         topic = self._discover_velocity_topic()
         with self._send_lock:
             with self._lock:

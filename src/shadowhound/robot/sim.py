@@ -340,6 +340,8 @@ class SimRobot:
             self._state = replace(self._state, estopped=False)
             self._record("estop_release", None, True)
 
+    latency = 0.0  # its state is its truth, at once
+
     def look(self) -> None:
         """Its camera labels every frame: nothing to wait for."""
 

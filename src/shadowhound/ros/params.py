@@ -14,7 +14,7 @@ from typing import Any, get_args
 
 from ..config import ShadowHoundConfig, load_config
 from ..errors import ParameterError
-from ..robot.go2_motion import GO2_MOTION
+from ..robot.go2_motion import GO2_MOTION, MAX_LATENCY
 
 NODE_NAME = "shadowhound_mission_agent"
 
@@ -62,7 +62,7 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     "odom_timeout": (0.5, "go2: seconds without odometry before a motion step fails (0.05..10)"),
     "odom_latency": (
         -1.0,
-        "go2: seconds odometry lags the robot (0..2); -1 = measured at each start from rest",
+        "go2: seconds odometry lags the robot (0..5); -1 = measured at each start from rest",
     ),
     "battery_topic": (
         "",
@@ -257,8 +257,10 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
     if timeout is not None and not (math.isfinite(timeout) and 0.05 <= timeout <= 10):
         problems.append(f"odom_timeout must be a number of seconds in 0.05..10, got {timeout}")
     latency = out.get("odom_latency")
-    if latency is not None and not (latency == -1.0 or 0 <= latency <= 2):
-        problems.append(f"odom_latency must be -1 (measured) or seconds in 0..2, got {latency}")
+    if latency is not None and not (latency == -1.0 or 0 <= latency <= MAX_LATENCY):
+        problems.append(
+            f"odom_latency must be -1 (measured) or seconds in 0..{MAX_LATENCY:g}, got {latency}"
+        )
     port = out.get("web_interface_port")
     if port is not None and not 1 <= port <= 65535:
         problems.append(f"web_interface_port must be in 1..65535, got {port}")

@@ -73,6 +73,7 @@ class SimGo2:
         self._lie_lock = threading.Lock()
         self._counts = {"twists": 0, "twists_dropped": 0, "requests_dropped": 0, "detections": 0}
         self._pending: deque[tuple[int, Any, str, float]] = deque()  # the 10 Hz queue
+        self._states: deque[tuple[float, Truth, int]] = deque()  # go2_states on their way
         self._commands: list[tuple[float, int, Callable[[], None]]] = []  # (due, seq, apply)
         self._order = itertools.count()
         self._ready = threading.Condition()
@@ -245,9 +246,11 @@ class SimGo2:
 
     def _run_odometry(self) -> None:
         """Take the true pose every period (as the faults show it); publish each one
-        `odom_delay` later."""
+        `odom_delay` later, in bursts of `odom_burst`: a burst waits for its last sample."""
         period, delay = 1.0 / self.settings.odom_rate_hz, self.settings.odom_delay
-        due: deque[tuple[float, Truth, tuple[float, float, float] | None, float]] = deque()
+        Taken = tuple[Truth, tuple[float, float, float] | None, float]
+        due: deque[tuple[float, Taken]] = deque()
+        group: list[Taken] = []  # the burst being gathered
         next_take = time.monotonic()
         while True:
             now = time.monotonic()
@@ -259,10 +262,13 @@ class SimGo2:
                     fall = self._lying.fired and not before and self._lying.faults.fall
                 if fall:
                     self.body.fall()
-                due.append((now + delay, truth, shown, shift))
+                group.append((truth, shown, shift))
+                if len(group) >= self.settings.odom_burst:  # it all goes when its last is due
+                    due.extend((now + delay, taken) for taken in group)
+                    group.clear()
                 next_take = max(next_take + period, now)
             while due and due[0][0] <= time.monotonic():
-                _due, truth, shown, shift = due.popleft()
+                truth, shown, shift = due.popleft()[1]
                 if self.faults.odom:
                     self._publish_odom(truth, shown, shift)
             wake = min(next_take, due[0][0]) if due else next_take
@@ -287,15 +293,24 @@ class SimGo2:
         self._odom_pub.publish(msg)
 
     def publish_state(self) -> None:
-        if not self.faults.states or self._closing.is_set():
+        """go2_states as the robot was `odom_delay` ago: the driver reads it from the same
+        state stream as odometry, over the same link."""
+        if self._closing.is_set():
             return
-        t = self.body.truth()
+        now = time.monotonic()
+        self._states.append((now, self.body.truth(), self.body.progress))
+        shown = None
+        while self._states and self._states[0][0] <= now - self.settings.odom_delay:
+            shown = self._states.popleft()
+        if shown is None or not self.faults.states:
+            return
+        _taken, t, progress = shown
         c, s = math.cos(t.yaw), math.sin(t.yaw)
         standing = t.posture is Posture.STANDING and not t.changing
         self._state_pub.publish(
             Go2State(
                 mode=t.mode,
-                progress=self.body.progress,
+                progress=progress,
                 gait_type=1 if t.mode == SportMode.LOCOMOTION else 0,
                 foot_raise_height=0.08 if standing else 0.0,
                 position=[t.x, t.y, t.body_height],

@@ -30,6 +30,7 @@ class DriverSettings:
     move_timeout: float = 1.0
     odom_rate_hz: float = 20.0
     odom_delay: float = 0.2
+    odom_burst: int = 1
     state_rate_hz: float = 10.0
     posture_seconds: float = 1.5
     battery: float | None = None
@@ -103,7 +104,17 @@ OPTIONS: dict[str, Option] = {
         5,
         "SECONDS",
     ),
-    "state_rate_hz": Option(float, "go2_states publishing rate", 1, 100, "HZ"),
+    "odom_burst": Option(
+        int,
+        "odometry samples that travel together, as on a busy Wi-Fi link (go2_ros2_sdk #231): "
+        "held back until the last of N is due, then published back to back",
+        1,
+        10,
+        "N",
+    ),
+    "state_rate_hz": Option(
+        float, "go2_states publishing rate (delayed by --odom-delay, like odometry)", 1, 100, "HZ"
+    ),
     "posture_seconds": Option(
         float,
         "seconds a posture change (StandUp, StandDown, Sit, "

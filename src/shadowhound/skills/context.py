@@ -102,7 +102,9 @@ class SkillContext:
         self._start_clearance: list[float] | None = None  # per fence, where the step began
 
     def start_clock(self, timeout: float) -> None:
-        """Give the skill `timeout` seconds of robot time, and never past the mission's end."""
+        """Give the skill `timeout` seconds of robot time, more on a robot whose pose lags
+        (each approach waits for it to show the robot at rest), never past the mission's end."""
+        timeout += 4 * self.robot.latency  # the first approach and up to three corrections
         self.deadline = self.robot.now() + timeout
         self._late = f"timed out after {timeout:.1f} s (robot clock)"
         budget, limit = self.env.budget, self.config.safety.max_mission_duration
@@ -179,6 +181,12 @@ class SkillContext:
                 room, why = max(0.0, left), "mission"
                 reasons[why] = walked_too_far(budget.travelled(state), lim.max_mission_distance)
         return room, reasons.get(why, "")
+
+    @property
+    def last_command(self) -> tuple[float, float, float]:
+        """The velocity last commanded (vx, vy, wz): what the robot is doing as far as the
+        commands go, known at once (a measured velocity lags on a late robot)."""
+        return self._last_command
 
     def commanded(self) -> tuple[float, float, float]:
         """Where the commands of the current leg took the robot from where the leg began:

@@ -24,7 +24,7 @@ from .bounds import leg_margin, leg_room, turn_margin, turn_room
 from .context import SkillContext
 
 _SETTLE_SPEED = 0.01
-_SETTLE_SECONDS = 3.0  # longest wait for rest after a stop (odometry may be half a second late)
+_SETTLE_SECONDS = 3.0  # longest wait for rest after a stop, besides the robot's pose lag
 _CORRECTIONS = 3  # approaches after the first when the pose at rest is off the goal
 # A correction moves slowly enough that odometry half a second later than the robot believes
 # costs at most the tolerance (late odometry is what leaves the first approach off the goal).
@@ -51,7 +51,8 @@ def _profile(error: float, v_max: float, accel: float, period: float) -> float:
 
 
 def _arrived(error: float, speed: float, tolerance: float, period: float) -> bool:
-    """Close enough, and slow enough that stopping now keeps the robot within tolerance."""
+    """Close enough, and commanded slow enough that stopping now keeps the robot within
+    tolerance (whether it really stopped there is judged at rest, after `settle`)."""
     return abs(error) < tolerance and abs(speed) * period < tolerance
 
 
@@ -78,7 +79,8 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
             lx, ly = dx * c + dy * s, -dx * s + dy * c  # displacement in the start frame
             ex, ey = tx - lx, ty - ly
             error = math.hypot(ex, ey)
-            if _arrived(error, math.hypot(st.vx, st.vy), m.position_tolerance, ctx.period):
+            speed = math.hypot(*ctx.last_command[:2])  # what it was told: known at once
+            if _arrived(error, speed, m.position_tolerance, ctx.period):
                 break
             if error < best - 1e-3:
                 best, best_time = error, robot.now()
@@ -140,7 +142,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
             turned += normalize_angle(st.yaw - last_yaw)  # unwrapped, so 360 degree turns work
             last_yaw = st.yaw
             error = angle - turned
-            if _arrived(error, st.wz, m.yaw_tolerance, ctx.period):
+            if _arrived(error, ctx.last_command[2], m.yaw_tolerance, ctx.period):
                 break
             if abs(error) < best - 1e-3:
                 best, best_time = abs(error), robot.now()
@@ -262,7 +264,7 @@ def settle(ctx: SkillContext) -> None:
     """Command zero and wait (bounded) until the robot has come to rest: on a robot whose
     odometry is late (a Go2), until odometry shows it at rest."""
     ctx.drive(0.0, 0.0, 0.0)
-    for _ in range(int(_SETTLE_SECONDS / ctx.period) + 1):
+    for _ in range(int((_SETTLE_SECONDS + ctx.robot.latency) / ctx.period) + 1):
         st = ctx.robot.get_state()
         if max(abs(st.vx), abs(st.vy), abs(st.wz)) < _SETTLE_SPEED:
             return
