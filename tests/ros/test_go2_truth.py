@@ -248,6 +248,47 @@ def test_a_battery_source_is_read_and_the_floor_refuses_a_mission_under_it(
         stop()
 
 
+def test_a_listener_on_cmd_vel_without_a_relay_does_not_take_the_velocity(
+    client: RosClient,
+) -> None:
+    """Issue 23: the driver alone on cmd_vel_out (no twist_mux) and something that only
+    listens on cmd_vel (`ros2 topic echo /cmd_vel`, a recorder, a bridge): velocity must go to
+    cmd_vel_out, and the diagnostics say so and why."""
+    from geometry_msgs.msg import Twist
+
+    rig, stop = start_rig(client, ("--no-relay", "--no-map"), "/quiet", "/quiet", "quiet")
+    echo = RosClient("echo")
+    try:
+        heard = echo.subscribe(Twist, "/quiet/cmd_vel")
+        # Both sides of the match: the echo sees the node's cmd_vel publisher, the node sees
+        # the echo (its diagnostics name it).
+        wait_until(
+            lambda: heard.subscription.get_publisher_count() > 0,
+            TIMEOUT,
+            "the echo to match the node's cmd_vel",
+        )
+        _status, values = rig.agent.diagnostic(
+            rig.agent.diagnostics.mark(),
+            TIMEOUT,
+            lambda v: "/echo" in v.get("velocity_route", ""),
+        )
+        assert values["velocity_topic"] == "/quiet/cmd_vel_out", values
+        assert values["velocity_route"] == (
+            "nothing relays /quiet/cmd_vel (subscribers of /quiet/cmd_vel: /echo)"
+        ), values
+        start = rig.truth.still()
+        final = rig.agent.run("walk forward 1 meter", 60.0)
+        end = rig.truth.still()
+        assert final.startswith("COMPLETED: "), (final, rig.node.output()[-3000:])
+        ahead, left, _turned = frame_of(start, end)
+        assert math.hypot(ahead - 1.0, left) < METRES, (ahead, left)
+        assert heard.items == []  # nothing went where only the echo listens
+        assert "velocity commands go to /quiet/cmd_vel_out" in rig.node.output()
+    finally:
+        echo.close()
+        stop()
+
+
 def test_ctrl_c_of_the_node_during_a_walk_sends_stop_move(client: RosClient) -> None:
     # --no-map: this is about stopping; "walk forward 3 meters" from the start would be
     # refused on the map (the red ball stands at x = 3).
@@ -279,6 +320,9 @@ def rig(client: RosClient) -> Iterator[Rig]:
 def test_the_mission_ends_on_target_at_20_hz_0_2_s(rig: Rig) -> None:
     check_mission_from_lying(rig)
     assert "velocity commands go to /cmd_vel" in rig.node.output()  # through the relay
+    _status, values = rig.agent.diagnostic(rig.agent.diagnostics.mark(), 5.0)
+    assert values["velocity_topic"] == "/cmd_vel", values
+    assert values["velocity_route"] == "/twist_mux relays it to /cmd_vel_out", values
 
 
 def walk_then(rig: Rig, press: Any) -> tuple[float, dict[str, Any], str]:
@@ -375,9 +419,9 @@ def test_doctor_finds_the_driver_and_says_what_to_fix_when_odometry_stops(rig: R
     healthy = run_doctor()
     assert healthy.returncode == 0, healthy.stdout + healthy.stderr
     out = healthy.stdout
-    assert "ok   driver node(s): shadowhound_sim_driver" in out, out
+    assert "ok   driver node(s): /shadowhound_sim_driver" in out, out
     assert "go2_interfaces/msg/Go2State, type hash matches" in out, out
-    assert "ok   velocity goes to /cmd_vel (subscribed by twist_mux)" in out, out
+    assert "ok   velocity goes to /cmd_vel: /twist_mux relays it to /cmd_vel_out" in out, out
     assert "warn no battery source" in out, out
     rig.truth.fault.publish(String(data=json.dumps({"odom": False})))
     try:

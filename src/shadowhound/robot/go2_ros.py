@@ -3,9 +3,10 @@
 Written against how the driver really behaves (docs/go2.md):
 
 - motion: geometry_msgs/Twist, capped, re-published at 10 Hz while non-zero (the robot drops
-  a Move after about a second). The topic follows the launch layout: `cmd_vel` when something
-  (twist_mux) subscribes it, else `cmd_vel_out`, which the driver itself listens on, both
-  relative to the namespace; or the one configured.
+  a Move after about a second). The topic follows the graph: `cmd_vel` when a relay
+  (twist_mux: one node subscribing `cmd_vel` and publishing `cmd_vel_out`) carries it to the
+  driver, else `cmd_vel_out`, which the driver itself listens on, both relative to the
+  namespace, looked at again when the graph changes (go2_topics); or the one configured.
 - stopping: every stop (end of a step, settle, stall, cancel, e-stop, close) sends StopMove
   (sport api 1003). The driver drops all-zero Twists, so a zero Twist is never sent.
 - state: odometry carries the pose only and arrives late; `MotionTracker` predicts the pose
@@ -47,6 +48,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
+from typing import Any
 
 import rclpy
 from geometry_msgs.msg import Twist
@@ -71,7 +73,7 @@ from .go2_motion import MotionTracker
 from .go2_nav2 import Nav2Navigator
 from .go2_odometry import OdometryFault, OdometryIntake, OdometryLimits
 from .go2_posture import STEPS, PostureWatch
-from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
+from .go2_topics import VELOCITY_TOPICS, VelocityRoute, choose_velocity_topic, node_name
 from .go2_world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
@@ -179,11 +181,10 @@ class Go2RosRobot:
         self._estopped = False
         self._closed = False
         self._started = time.monotonic()
-        self._velocity_topic = c.cmd_vel_topic
+        self._route: VelocityRoute | None = None  # where velocity goes (discovered)
         self._postures = PostureWatch(
             self._check_estop, "", c.command_timeout, stale=max(1.0, c.odom_timeout)
         )
-        self._rediscover = True  # look up who subscribes at the next velocity command
         # use_global_arguments=False: the mission node's own remappings and parameters
         # (`-r __ns:=...`) must not move the robot's topics; `namespace` does that explicitly.
         self.node = Node(
@@ -618,7 +619,6 @@ class Go2RosRobot:
             raise RobotError(self._odometry_problem() + " Not moving without odometry.")
         with self._lock:
             starting = self._halted
-            self._rediscover = self._rediscover or starting  # starting: look again
         if starting:
             self._check_publishers()  # two odometry sources: found before the first step
         with self._lock:
@@ -805,29 +805,48 @@ class Go2RosRobot:
     # -- topics out ----------------------------------------------------------------------
 
     def _discover_velocity_topic(self) -> str:
-        """The configured topic, or the one the launch layout needs (see go2_topics). Looked
-        up again at each start from rest, since the driver may have come up since."""
-        with self._lock:
-            chosen, look = self._velocity_topic, self._rediscover
-            self._rediscover = False
-        if self.config.cmd_vel_topic or (chosen and not look):
-            return chosen or self.config.cmd_vel_topic
-        found = choose_velocity_topic(
-            {
+        """The configured topic, or the one the graph needs now (see go2_topics). The graph is
+        read at every command (cheap: a local cache), so when a relay or a listener comes or
+        goes, or its node's name becomes known, the next command follows."""
+        if self.config.cmd_vel_topic:
+            return self.config.cmd_vel_topic
+
+        def endpoints(infos: Callable[[str], list[Any]]) -> dict[str, list[tuple[str, str]]]:
+            return {
                 name: [
-                    (i.node_name, i.topic_type)
-                    for i in self.node.get_subscriptions_info_by_topic(self.topic(name))
+                    (node_name(i.node_namespace, i.node_name), i.topic_type)
+                    for i in infos(self.topic(name))
                 ]
                 for name in VELOCITY_TOPICS
             }
-        )
-        if found is None:
-            return chosen or VELOCITY_TOPICS[-1]  # nothing listens yet: the driver's own
-        if found != chosen:
-            self.node.get_logger().info(f"velocity commands go to {self.topic(found)}")
+
         with self._lock:
-            self._velocity_topic = found
-        return found
+            route = self._route
+        try:
+            found = choose_velocity_topic(
+                endpoints(self.node.get_subscriptions_info_by_topic),
+                endpoints(self.node.get_publishers_info_by_topic),
+                names={name: self.topic(name) for name in VELOCITY_TOPICS},
+            )
+        except Exception:  # rclpy raises several types once the context is shutting down
+            return route.topic if route is not None else VELOCITY_TOPICS[-1]
+        if route is None or found.topic != route.topic:
+            self.node.get_logger().info(
+                f"velocity commands go to {self.topic(found.topic)} ({found.why})"
+            )
+        with self._lock:
+            self._route = found
+        return found.topic
+
+    @property
+    def velocity_route(self) -> VelocityRoute:
+        """Where velocity goes and why, in full topic names (for diagnostics and logs)."""
+        topic = self._discover_velocity_topic()
+        with self._lock:
+            route = self._route
+        if self.config.cmd_vel_topic or route is None:
+            return VelocityRoute(self.topic(topic), "configured (cmd_vel_topic)")
+        return replace(route, topic=self.topic(route.topic))
 
     def _publish_twist(self, command: tuple[float, float, float], topic: str) -> None:
         """Publish one Twist; the caller holds the send lock."""

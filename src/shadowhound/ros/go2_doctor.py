@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..robot import go2_api
-from ..robot.go2_topics import TWIST_TYPE, VELOCITY_TOPICS, choose_velocity_topic
+from ..robot.go2_topics import TWIST_TYPE, VELOCITY_TOPICS, choose_velocity_topic, node_name
 
 ODOM_TYPE = "nav_msgs/msg/Odometry"
 STATE_TYPE = "go2_interfaces/msg/Go2State"
@@ -35,7 +35,7 @@ MAX_ODOM_AGE = 0.5  # seconds: the robot's odom_timeout default
 
 @dataclass(frozen=True)
 class Endpoint:
-    """One publisher or subscription in the graph."""
+    """One publisher or subscription in the graph; `node` is the node's full name."""
 
     node: str
     type: str
@@ -201,9 +201,23 @@ def _postures(obs: Observation) -> Finding:
 
 
 def _velocity(obs: Observation) -> Finding:
+    def on(side: dict[str, list[Endpoint]]) -> dict[str, list[tuple[str, str]]]:
+        return {name: [(e.node, e.type) for e in side.get(name, [])] for name in VELOCITY_TOPICS}
+
+    route = choose_velocity_topic(
+        on(obs.subscribers),
+        on(obs.publishers),
+        names={name: _name(obs, name) for name in VELOCITY_TOPICS},
+    )
     if obs.cmd_vel_topic:
         key = obs.cmd_vel_topic
         subscribed = [e for e in obs.subscribers.get(key, []) if e.type == TWIST_TYPE]
+        if _name(obs, key) == _name(obs, "cmd_vel") and route.topic != "cmd_vel":
+            return Finding(
+                "fail",
+                f"velocity on {_name(obs, key)} (configured) reaches no driver: {route.why}",
+                "leave cmd_vel_topic empty to follow the graph, or start twist_mux",
+            )
         if subscribed:
             return Finding(
                 "ok",
@@ -213,15 +227,9 @@ def _velocity(obs: Observation) -> Finding:
         return Finding(
             "fail",
             f"nothing subscribes {_name(obs, key)} (configured cmd_vel_topic)",
-            "leave cmd_vel_topic empty to follow the launch layout",
+            "leave cmd_vel_topic empty to follow the graph",
         )
-    chosen = choose_velocity_topic(
-        {
-            name: [(e.node, e.type) for e in obs.subscribers.get(name, [])]
-            for name in VELOCITY_TOPICS
-        }
-    )
-    if chosen is None:
+    if not route.reaches:
         hint = ""
         if obs.namespace and obs.root_cmd_vel_subscribed:
             hint = (
@@ -230,12 +238,10 @@ def _velocity(obs: Observation) -> Finding:
             )
         return Finding(
             "fail",
-            f"nothing subscribes {_name(obs, 'cmd_vel')} or "
-            f"{_name(obs, 'cmd_vel_out')}: velocity would reach nothing{hint}",
+            f"velocity would reach nothing: {route.why}{hint}",
             "start the driver (it listens on cmd_vel_out) and check --namespace",
         )
-    via = ", ".join(sorted({e.node for e in obs.subscribers.get(chosen, [])}))
-    return Finding("ok", f"velocity goes to {_name(obs, chosen)} (subscribed by {via})")
+    return Finding("ok", f"velocity goes to {_name(obs, route.topic)}: {route.why}")
 
 
 def _battery(obs: Observation) -> Finding:
@@ -335,7 +341,7 @@ def observe(
             while not obs.battery_levels and time.monotonic() < grace:
                 executor.spin_once(timeout_sec=0.05)
         obs.ended = time.monotonic()
-        me = node.get_name()
+        me = node.get_fully_qualified_name()
         for key, full in obs.names.items():
             obs.publishers[key] = _endpoints(node.get_publishers_info_by_topic(full), me)
             obs.subscribers[key] = _endpoints(node.get_subscriptions_info_by_topic(full), me)
@@ -344,7 +350,11 @@ def observe(
             *node.get_subscriptions_info_by_topic(obs.names["odom"]),
             *node.get_publishers_info_by_topic(probe.topic_name),
         ]
-        obs.local_hashes = {i.topic_type: str(i.topic_type_hash) for i in own if i.node_name == me}
+        obs.local_hashes = {
+            i.topic_type: str(i.topic_type_hash)
+            for i in own
+            if node_name(i.node_namespace, i.node_name) == me
+        }
         obs.root_cmd_vel_subscribed = bool(node.get_subscriptions_info_by_topic("/cmd_vel"))
         obs.battery_elsewhere = sorted(
             n for n, types in node.get_topic_names_and_types() if BATTERY_TYPE in types
@@ -357,8 +367,8 @@ def observe(
 
 
 def _endpoints(infos: Sequence[Any], me: str) -> list[Endpoint]:
-    return [
-        Endpoint(i.node_name, i.topic_type, str(i.topic_type_hash))
+    ends = (
+        Endpoint(node_name(i.node_namespace, i.node_name), i.topic_type, str(i.topic_type_hash))
         for i in infos
-        if i.node_name != me
-    ]
+    )
+    return [e for e in ends if e.node != me]
