@@ -184,6 +184,8 @@ def check_mission_from_lying(rig: Rig) -> None:
     assert end["posture"] == "standing", end
     assert math.hypot(ahead - 1.0, left) < METRES, (ahead, left)
     assert abs(turned - 90.0) < DEGREES, turned
+    # It started walking only once the robot walked: no Move was ignored (issue 23).
+    assert end["moves_ignored"] == start["moves_ignored"], (start, end)
     # What the agent reports as the final pose is the truth's, within the same tolerances.
     reported = json.loads(
         rig.agent.robot.wait_for(
@@ -204,6 +206,9 @@ LAYOUTS = {
     ),
     "robot0/ names (twist_mux not namespaced)": (("--robots", "2"), "", "/robot0", "robot0"),
     "driver on cmd_vel_out only (no relay)": (("--no-relay",), "/norelay", "/norelay", "norelay"),
+    # A robot that reports Damping after StandUp, as a go2_webrtc_connect user's does (its
+    # body height shows it standing; it walks only after BalanceStand).
+    "StandUp reports mode 7": (("--stand-up-mode", "7"), "/damping", "/damping", "damping"),
 }
 
 

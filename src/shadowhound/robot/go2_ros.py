@@ -16,6 +16,9 @@ Written against how the driver really behaves (docs/go2.md):
 - posture: from `go2_states` (mode and body height, read through go2_api's one table), at start
   and after each posture command; a posture command is done when the posture is reached
   (`progress` is no help: it stays 0 while postures run). No command when already there.
+  Standing up, BalanceStand follows StandUp once the body height shows standing, whatever the
+  mode (firmware differ), or after a bounded wait; the stand ends once the robot walks, and a
+  walk on a robot standing with its joints held balances it first.
 - battery: a sensor_msgs/BatteryState topic when one is configured and publishing, else
   unknown (None): the driver publishes no battery level.
 - camera: `camera/image_raw` (sensor_msgs/Image) or a topic ending in `compressed`.
@@ -72,7 +75,7 @@ from .go2_detections import Frames, SightingBoard, sightings_from_msg
 from .go2_motion import MotionTracker
 from .go2_nav2 import Nav2Navigator
 from .go2_odometry import OdometryFault, OdometryIntake, OdometryLimits
-from .go2_posture import STEPS, PostureWatch
+from .go2_posture import STAND_UP_BOUND, STEPS, PostureWatch
 from .go2_topics import VELOCITY_TOPICS, VelocityRoute, choose_velocity_topic, node_name
 from .go2_world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 
@@ -168,6 +171,7 @@ class Go2RosRobot:
         self._driven_until = 0.0  # Nav2, a posture or a trick may move the body until then
         self._detections_at: float | None = None  # monotonic receipt of the last detections
         self._posture = Posture.STANDING  # until go2_states says otherwise
+        self._posture_seen = False  # go2_states has shown a posture (a change then means news)
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
         self._sightings = SightingBoard()
@@ -282,6 +286,13 @@ class Go2RosRobot:
         return self.topic(self._discover_velocity_topic())
 
     @property
+    def joints_held(self) -> bool:
+        """go2_states shows the robot standing in a mode in which it does not walk (after a
+        StandUp: JointLock, or Damping on some firmware), recently and settled."""
+        report = self._postures.fresh()
+        return report is not None and report.posture is Posture.STANDING and not report.balanced
+
+    @property
     def odom_latency(self) -> float:
         """Seconds odometry lags the robot, as configured or as measured."""
         with self._lock:
@@ -352,7 +363,8 @@ class Go2RosRobot:
         if posture is None:
             return
         with self._lock:
-            was, self._posture = self._posture, posture
+            was, self._posture = self._posture if self._posture_seen else posture, posture
+            self._posture_seen = True
             moving = not self._halted
         if was is Posture.STANDING and posture is not was and not self._postures.commanded:
             # Nobody here asked for it: a fall, or the remote. Moves would be ignored or worse;
@@ -618,9 +630,13 @@ class Go2RosRobot:
         if not self.last_state().connected:
             raise RobotError(self._odometry_problem() + " Not moving without odometry.")
         with self._lock:
-            starting = self._halted
+            starting, estopped = self._halted, self._estopped
         if starting:
             self._check_publishers()  # two odometry sources: found before the first step
+            if self.joints_held and not estopped:
+                # Standing with its joints held (a StandUp from elsewhere): every Move would be
+                # ignored. BalanceStand first; the walk starts once the robot walks.
+                self.set_posture(Posture.STANDING)
         with self._lock:
             untrusted = self._intake.problem(time.monotonic())
         if untrusted:
@@ -704,12 +720,26 @@ class Go2RosRobot:
         )
         with self._body_commanded():
             for b, api_ids in zip(path[1:], steps, strict=True):
-                for api_id in api_ids:
+                for api_id, then in zip(api_ids, (*api_ids[1:], None), strict=True):
                     balance = api_id == go2_api.BALANCE_STAND
                     if balance and self._postures.balanced():
                         continue  # RiseSit already ends balanced: no redundant command
                     self._request(api_id)
-                    self._postures.reach(b, f"{_NAME[api_id]} (api id {api_id})", balance)
+                    what = f"{_NAME[api_id]} (api id {api_id})"
+                    if then == go2_api.BALANCE_STAND:
+                        self._stand_before_balancing(what)
+                    else:  # the posture shows (after BalanceStand: in a mode that walks)
+                        self._postures.reach(b, what, balance)
+
+    def _stand_before_balancing(self, what: str) -> None:
+        """After StandUp (or RiseSit): BalanceStand once go2_states shows the body standing,
+        whatever the mode (firmware differ: JointLock 6, Damping 7), or after a bounded wait."""
+        if not self._postures.stood_up(what):
+            self.node.get_logger().warning(
+                f"{what} sent, but {self._postures.topic} shows {self._postures.describe()} "
+                f"after {STAND_UP_BOUND:g} s; sending BalanceStand anyway (the robot queues "
+                "posture commands)"
+            )
 
     def perform(self, trick: str) -> None:
         info = go2_api.TRICKS.get(trick)
