@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import signal
 import socket
 import subprocess
@@ -410,21 +411,38 @@ def test_without_a_battery_source_the_battery_is_unknown_everywhere(rig: Rig) ->
     assert "battery unknown" in answer and "100%" not in answer, answer
 
 
-def run_doctor(*args: str) -> subprocess.CompletedProcess[str]:
+def run_doctor(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "shadowhound", "doctor", "--go2", "--seconds", "8", *args],
         capture_output=True,
         text=True,
         cwd=ROOT,
         timeout=120,
+        env=env,
     )
+
+
+def test_doctor_without_a_driver_says_so_plainly() -> None:
+    """Issue 23: a go2_ros2_sdk whose driver fails at start (its newest commits do) leaves no
+    go2_driver_node; the doctor says that first, instead of only listing missing topics. Run
+    in a domain of its own (201..232, unused by the tests and `loopback-env`), where no
+    driver of this session can be."""
+    env = dict(os.environ, ROS_DOMAIN_ID=str(201 + os.getpid() % 32))
+    done = run_doctor("--seconds", "2", env=env)
+    assert done.returncode == 1, done.stdout + done.stderr
+    plainly = "fail no go2_driver_node on the graph: did the driver start? see docs/go2.md"
+    assert plainly in done.stdout.splitlines(), done.stdout
+    assert "check out 8d8785e" in done.stdout, done.stdout
 
 
 def test_doctor_finds_the_driver_and_says_what_to_fix_when_odometry_stops(rig: Rig) -> None:
     healthy = run_doctor()
     assert healthy.returncode == 0, healthy.stdout + healthy.stderr
     out = healthy.stdout
-    assert "ok   driver node(s): /shadowhound_sim_driver" in out, out
+    assert (
+        "ok   driver: /shadowhound_sim_driver, ShadowHound's simulated driver (shadowhound "
+        "sim-driver), not go2_ros2_sdk's go2_driver_node" in out
+    ), out
     assert "go2_interfaces/msg/Go2State, type hash matches" in out, out
     assert "ok   velocity goes to /cmd_vel: /twist_mux relays it to /cmd_vel_out" in out, out
     assert "warn no battery source" in out, out
