@@ -13,7 +13,8 @@ from shadowhound.ros.go2_doctor import (
     diagnose,
 )
 
-DRIVER = "go2_driver_node"
+DRIVER = "/go2_driver_node"
+MUX = "/twist_mux"
 
 
 def healthy(**changes: object) -> Observation:
@@ -22,12 +23,14 @@ def healthy(**changes: object) -> Observation:
         publishers={
             "odom": [Endpoint(DRIVER, ODOM_TYPE)],
             "go2_states": [Endpoint(DRIVER, STATE_TYPE, UPSTREAM_HASHES[STATE_TYPE])],
+            "cmd_vel_out": [Endpoint(MUX, TWIST_TYPE)],
         },
         subscribers={
             "webrtc_req": [Endpoint(DRIVER, REQUEST_TYPE, UPSTREAM_HASHES[REQUEST_TYPE])],
-            "cmd_vel": [Endpoint("twist_mux", TWIST_TYPE)],
+            "cmd_vel": [Endpoint(MUX, TWIST_TYPE)],
             "cmd_vel_out": [Endpoint(DRIVER, TWIST_TYPE)],
         },
+        nodes=[DRIVER, MUX],
         local_hashes=dict(UPSTREAM_HASHES),
         odom_receipts=[i * 0.05 for i in range(60)],
         ended=3.0,
@@ -45,18 +48,23 @@ def lines(obs: Observation) -> list[str]:
 def test_a_healthy_driver_passes_and_says_where_velocity_goes() -> None:
     found = lines(healthy())
     assert all(not line.startswith("fail") for line in found), found
-    assert "ok   driver node(s): go2_driver_node" in found
-    assert "ok   velocity goes to /cmd_vel (subscribed by twist_mux)" in found
+    assert "ok   go2_ros2_sdk's driver: /go2_driver_node" in found
+    assert "ok   velocity goes to /cmd_vel: /twist_mux relays it to /cmd_vel_out" in found
     assert any("odometry on /odom: 20.0 Hz" in line for line in found)
     assert any("(standing)" in line for line in found)
     assert any(line.startswith("warn no battery source") for line in found)
 
 
-def test_no_driver_says_how_to_start_one() -> None:
-    found = lines(healthy(publishers={}, subscribers={}, odom_receipts=[], states=[]))
-    assert found[0].startswith("fail no Go2 driver") and "same ROS_DOMAIN_ID" in found[0]
+def test_no_driver_says_so_plainly_and_which_commit_starts() -> None:
+    found = lines(healthy(nodes=[], publishers={}, subscribers={}, odom_receipts=[], states=[]))
+    first = found[0]
+    assert first.startswith(
+        "fail no go2_driver_node on the graph: did the driver start? see docs/go2.md"
+    ), first
+    assert "check out 8d8785e" in first and "TabError" in first and "ROS_DOMAIN_ID" in first
     assert any(
-        line.startswith("fail nothing subscribes /cmd_vel or /cmd_vel_out") for line in found
+        line.startswith("fail velocity would reach nothing: nothing subscribes /cmd_vel_out")
+        for line in found
     )
 
 
@@ -80,9 +88,27 @@ def test_stopped_odometry_fails_and_slow_odometry_warns() -> None:
 
 def test_without_twist_mux_velocity_goes_to_the_drivers_cmd_vel_out() -> None:
     obs = healthy()
-    obs.subscribers["cmd_vel"] = []
+    obs.subscribers["cmd_vel"], obs.publishers["cmd_vel_out"] = [], []
     found = lines(obs)
-    assert "ok   velocity goes to /cmd_vel_out (subscribed by go2_driver_node)" in found
+    assert (
+        "ok   velocity goes to /cmd_vel_out: nothing relays /cmd_vel (nothing subscribes /cmd_vel)"
+        in found
+    )
+
+
+def test_a_listener_on_cmd_vel_is_no_relay() -> None:
+    """`ros2 topic echo /cmd_vel`, a recorder or a bridge on cmd_vel, and no twist_mux: the
+    driver hears only cmd_vel_out (issue 23)."""
+    obs = healthy()
+    obs.subscribers["cmd_vel"], obs.publishers["cmd_vel_out"] = [Endpoint("/echo", TWIST_TYPE)], []
+    found = lines(obs)
+    assert (
+        "ok   velocity goes to /cmd_vel_out: nothing relays /cmd_vel "
+        "(subscribers of /cmd_vel: /echo)" in found
+    ), found
+    configured = lines(healthy(cmd_vel_topic="cmd_vel", subscribers=obs.subscribers))
+    wanted = "fail velocity on /cmd_vel (configured) reaches no driver"
+    assert any(line.startswith(wanted) for line in configured), configured
 
 
 def test_a_namespaced_robot_is_told_twist_mux_does_not_reach_it() -> None:
@@ -96,3 +122,47 @@ def test_the_battery_source_is_reported() -> None:
     assert "ok   battery from /battery: 42%" in lines(obs)
     found = lines(healthy(battery_elsewhere=["/bms/battery"]))
     assert any("BatteryState seen on /bms/battery" in line for line in found)
+
+
+def test_the_launch_without_its_driver_is_named() -> None:
+    """robot.launch.py ran (twist_mux is up) but go2_driver_node died at start (issue 23)."""
+    found = lines(
+        healthy(
+            nodes=[MUX, "/rviz2"],
+            publishers={"cmd_vel_out": [Endpoint(MUX, TWIST_TYPE)]},
+            subscribers={"cmd_vel": [Endpoint(MUX, TWIST_TYPE)]},
+            odom_receipts=[],
+            states=[],
+        )
+    )
+    assert found[0].startswith("fail no go2_driver_node on the graph") and (
+        "(/twist_mux, /rviz2 up: the launch ran, its driver did not)" in found[0]
+    ), found[0]
+
+
+def test_the_simulated_driver_counts_and_says_what_it_is() -> None:
+    sim = "/shadowhound_sim_driver"
+    obs = healthy(nodes=[sim, MUX])
+    found = lines(obs)
+    assert (
+        "ok   driver: /shadowhound_sim_driver, ShadowHound's simulated driver (shadowhound "
+        "sim-driver), not go2_ros2_sdk's go2_driver_node" in found
+    ), found
+
+
+def test_a_driver_of_another_name_serving_the_topics_is_a_warning() -> None:
+    obs = healthy(nodes=["/my_go2_bridge"])
+    obs.publishers["odom"] = [Endpoint("/my_go2_bridge", ODOM_TYPE)]
+    obs.publishers["go2_states"] = [
+        Endpoint("/my_go2_bridge", STATE_TYPE, UPSTREAM_HASHES[STATE_TYPE])
+    ]
+    obs.subscribers["webrtc_req"] = []
+    found = lines(obs)
+    assert found[0].startswith(
+        "warn no go2_driver_node on the graph; /my_go2_bridge serves the driver's topics"
+    ), found[0]
+
+
+def test_a_namespaced_driver_node_counts() -> None:
+    found = lines(healthy(nodes=["/robots/go2_driver_node"]))
+    assert "ok   go2_ros2_sdk's driver: /robots/go2_driver_node" in found

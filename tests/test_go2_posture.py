@@ -85,3 +85,51 @@ def test_reach_fails_clearly_when_the_posture_never_comes() -> None:
     feed(w, *[STANDING] * 4, period=0.05)
     with pytest.raises(RobotError, match="did not reach sitting within 0 s: /go2_states shows"):
         w.reach(Posture.SITTING, "Sit (api id 1009)")
+
+
+STANDING_DAMPED = (int(SportMode.DAMPING), BODY_HEIGHT[Posture.STANDING])
+LYING_DAMPED = (int(SportMode.DAMPING), BODY_HEIGHT[Posture.LYING])
+
+
+def test_damping_at_standing_height_reads_as_standing_that_does_not_walk() -> None:
+    """Some firmware reports Damping (7) after StandUp (issue 23): the body height tells a
+    robot standing with held joints (BalanceStand makes it walk) from one lying limp."""
+    w = watch()
+    assert feed(w, *[STANDING_DAMPED] * 4) is Posture.STANDING
+    assert not w.balanced()
+    assert w.stood_up("StandUp (api id 1004)", bound=0.0)
+    assert feed(w, *[LYING_DAMPED] * 4) is Posture.LYING
+    assert not w.stood_up("StandUp (api id 1004)", bound=0.0)
+
+
+def rise(w: PostureWatch, mode: int, stop: threading.Event) -> None:
+    """Reports of a StandUp in `mode`: the body height rising to standing, then staying."""
+    for height in (0.08, 0.14, 0.2, 0.26, *[BODY_HEIGHT[Posture.STANDING]] * 30):
+        if stop.is_set():
+            return
+        w.update(mode, height)
+        time.sleep(0.05)
+
+
+def test_standing_up_is_evident_from_the_body_height_whatever_the_mode() -> None:
+    """After StandUp: standing counts once the body height shows it (settled), in any mode,
+    one ShadowHound does not know included."""
+    for mode in (int(SportMode.JOINT_LOCK), int(SportMode.DAMPING), 4):
+        w, stop = watch(), threading.Event()
+        feeder = threading.Thread(target=rise, args=(w, mode, stop))
+        feeder.start()
+        try:
+            assert w.stood_up("StandUp (api id 1004)", bound=2.0), mode
+        finally:
+            stop.set()
+            feeder.join()
+
+
+def test_the_wait_for_standing_up_is_bounded_and_does_not_fail() -> None:
+    """go2_states not showing standing (late, or a body height of another firmware) delays
+    BalanceStand by `bound` at most; then it goes anyway (the robot queues postures)."""
+    w = watch()
+    feed(w, *[LYING_DAMPED] * 4, period=0.05)
+    began = time.monotonic()
+    assert not w.stood_up("StandUp (api id 1004)", bound=0.3)
+    assert time.monotonic() - began >= 0.3

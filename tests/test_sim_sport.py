@@ -15,8 +15,9 @@ from shadowhound.config import SimConfig
 from shadowhound.robot import go2_api
 from shadowhound.robot.go2_api import (
     BODY_HEIGHT,
-    MODE_POSTURE,
+    MODE_POSTURES,
     POSTURE_CHANGES,
+    WALKING_MODES,
     SportMode,
     move_parameter,
     posture_of,
@@ -84,14 +85,17 @@ def test_a_twist_is_dropped_only_when_all_zero_and_otherwise_rounded(
 
 
 def test_every_mode_of_a_posture_reads_back_as_that_posture_once_the_height_is_reached() -> None:
-    for mode, posture in MODE_POSTURE.items():
-        assert posture_of(mode, BODY_HEIGHT[posture]) is posture
-        others = [h for p, h in BODY_HEIGHT.items() if p is not posture]
+    for mode, postures in MODE_POSTURES.items():
+        for posture in postures:
+            assert posture_of(mode, BODY_HEIGHT[posture]) is posture
+        others = [h for p, h in BODY_HEIGHT.items() if p not in postures]
         assert all(posture_of(mode, h) is None for h in others)  # still on its way
+    # Damping: limp and lying, or (on some firmware, after StandUp) standing with held joints.
+    assert MODE_POSTURES[SportMode.DAMPING] == {Posture.LYING, Posture.STANDING}
     assert posture_of(SportMode.RECOVERY_STAND, BODY_HEIGHT[Posture.STANDING]) is None
     assert posture_of(SportMode.SIT, math.nan) is None
     for change in POSTURE_CHANGES.values():  # every change ends in a mode of its posture
-        assert MODE_POSTURE[change.mode_after] is change.target
+        assert change.target in MODE_POSTURES[change.mode_after]
 
 
 def test_a_move_walks_and_stop_move_stops(robot: SimSportMode) -> None:
@@ -195,3 +199,44 @@ def test_what_the_robot_reports_never_runs_ahead_of_its_posture(robot: SimSportM
         for truth in samples:
             reported = posture_of(truth.mode, truth.body_height)
             assert reported is None or reported is truth.posture, truth
+
+
+def test_go2_states_never_shows_a_walking_mode_while_moves_are_ignored(robot: SimSportMode) -> None:
+    """A posture command ignores Moves while it runs, so the mode it leads to is shown only
+    once it ends when that mode walks (BalanceStand from a locked stand moves no body height:
+    the mode is the only sign of its end). A client that waits for a walking mode then never
+    sends a Move the robot ignores (issue 23)."""
+    steps = (go2_api.SIT, go2_api.RISE_SIT, go2_api.STAND_UP, go2_api.BALANCE_STAND)
+    for api_id in steps:
+        assert request(robot, api_id) == (True, ""), api_id
+        while (truth := robot.truth()).changing:
+            assert truth.mode not in WALKING_MODES, truth
+        assert robot.truth().mode == POSTURE_CHANGES[api_id].mode_after
+    assert robot.truth().mode == SportMode.BALANCE_STAND
+    assert robot.move(0.3, 0.0, 0.0) == ""
+
+
+def test_stand_up_may_report_another_mode_and_the_robot_walks_only_after_balance_stand() -> None:
+    """`sim-driver --stand-up-mode 7`: a robot that reports Damping after StandUp (as one
+    go2_webrtc_connect user's does) stands, at standing height, and ignores Moves until
+    BalanceStand."""
+    body = SimSportMode(
+        SimRobot(SimConfig(time_scale=1.0)),
+        posture_seconds=POSTURE_SECONDS,
+        start=Posture.LYING,
+        stand_up_mode=SportMode.DAMPING,
+    )
+    try:
+        assert request(body, go2_api.STAND_UP) == (True, "")
+        assert body.truth().mode == SportMode.DAMPING  # from the start of StandUp
+        wait_idle(body)
+        truth = body.truth()
+        assert (truth.posture, truth.mode) == (Posture.STANDING, SportMode.DAMPING)
+        assert posture_of(truth.mode, truth.body_height) is Posture.STANDING
+        assert body.move(0.3, 0.0, 0.0).startswith("ignored: mode DAMPING does not walk")
+        assert request(body, go2_api.BALANCE_STAND) == (True, "")
+        wait_idle(body)
+        assert body.truth().mode == SportMode.BALANCE_STAND
+        assert body.move(0.3, 0.0, 0.0) == ""
+    finally:
+        body.close()

@@ -131,6 +131,75 @@ def test_postures_are_read_from_go2_states_and_sent_only_when_needed(
     assert api_ids(requests)[3:] == [1009, 1010, 1004, 1002]
 
 
+def test_a_robot_that_reports_damping_after_stand_up_stands_and_walks_without_ignored_moves(
+    client: RosClient,
+) -> None:
+    """Issue 23: some firmware reports Damping (7) after StandUp. Standing is judged by the body
+    height, BalanceStand follows, and the walk starts only once the robot walks."""
+    damped = SimDriver(
+        context=client.context,
+        namespace="/damped",
+        options={"posture_seconds": 0.5, "start_posture": "lying", "stand_up_mode": 7},
+    )
+    for node in damped.nodes:
+        client.executor.add_node(node)
+    requests = client.subscribe(String, "/damped/sim_driver/requests")
+    robot = Go2RosRobot(
+        Go2RosConfig(namespace="damped", node_name="shadowhound_go2_damped"),
+        context=client.context,
+    )
+    try:
+        wait_until(lambda: robot.last_state().connected, 30, "odometry from the damped driver")
+        wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the driver")
+        robot.set_posture(Posture.STANDING)
+        truth = damped.truth()
+        assert truth.posture is Posture.STANDING and truth.mode in (1, 3), truth
+        wait_until(lambda: len(api_ids(requests)) >= 2, 5, "the driver's records")
+        assert api_ids(requests) == [1004, 1002]  # StandUp, then BalanceStand
+        robot.send_velocity(0.3, 0.0, 0.0)
+        try:
+            wait_until(lambda: damped.truth().moving, 10, "the true robot to walk")
+        finally:
+            robot.stop()
+        assert damped.truth().moves_ignored == 0
+    finally:
+        robot.close()
+        for node in damped.nodes:
+            client.executor.remove_node(node)
+        damped.close()
+        damped.destroy_node()
+
+
+def test_a_walk_on_a_robot_standing_with_locked_joints_balances_it_first(
+    client: RosClient, driver: SimDriver, robot: Go2RosRobot
+) -> None:
+    """Someone else's StandUp leaves the robot standing with locked joints (mode 6): a walk
+    sends BalanceStand first and starts once the robot walks, so no Move is ignored."""
+    requests = client.subscribe(String, f"{NS}/sim_driver/requests")
+    webrtc = client.publisher(WebRtcReq, f"{NS}/webrtc_req")
+    wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the driver")
+    wait_until(lambda: webrtc.get_subscription_count() > 0, 10, "the driver's webrtc_req")
+    robot.set_posture(Posture.STANDING)
+    webrtc.publish(
+        WebRtcReq(id=0, topic="rt/api/sport/request", api_id=1004, parameter="", priority=0)
+    )
+    wait_until(
+        lambda: driver.truth().mode == 6 and not driver.truth().changing,
+        10,
+        "the robot standing locked",
+    )
+    wait_until(lambda: robot.joints_held, 5, "go2_states to show it to the robot")
+    ignored, mark = driver.truth().moves_ignored, requests.mark()
+    robot.send_velocity(0.3, 0.0, 0.0)
+    try:
+        wait_until(lambda: driver.truth().moving, 10, "the true robot to walk")
+    finally:
+        robot.stop()
+    wait_until(lambda: not driver.truth().moving, 10, "the true robot to stop")
+    assert driver.truth().moves_ignored == ignored
+    assert 1002 in api_ids(requests, mark)
+
+
 def test_firmware_tricks_are_refused_unless_enabled(robot: Go2RosRobot) -> None:
     with pytest.raises(
         RobotError,

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import signal
 import socket
 import subprocess
@@ -191,6 +192,8 @@ def check_mission_from_lying(rig: Rig) -> None:
     assert end["posture"] == "standing", end
     assert math.hypot(ahead - 1.0, left) < METRES, (ahead, left)
     assert abs(turned - 90.0) < DEGREES, turned
+    # It started walking only once the robot walked: no Move was ignored (issue 23).
+    assert end["moves_ignored"] == start["moves_ignored"], (start, end)
     # What the agent reports as the final pose is the truth's, within the same tolerances.
     reported = json.loads(
         rig.agent.robot.wait_for(
@@ -225,6 +228,9 @@ LAYOUTS = {
     "odometry 20 Hz, on time": (("--odom-delay", "0"), "/now", "/now", "now"),
     "robot0/ names (twist_mux not namespaced)": (("--robots", "2"), "", "/robot0", "robot0"),
     "driver on cmd_vel_out only (no relay)": (("--no-relay",), "/norelay", "/norelay", "norelay"),
+    # A robot that reports Damping after StandUp, as a go2_webrtc_connect user's does (its
+    # body height shows it standing; it walks only after BalanceStand).
+    "StandUp reports mode 7": (("--stand-up-mode", "7"), "/damping", "/damping", "damping"),
 }
 
 
@@ -266,6 +272,47 @@ def test_a_battery_source_is_read_and_the_floor_refuses_a_mission_under_it(
         doctor = run_doctor("--namespace", "bat", "--battery-topic", "battery_state")
         assert "ok   battery from /bat/battery_state: 12%" in doctor.stdout, doctor.stdout
     finally:
+        stop()
+
+
+def test_a_listener_on_cmd_vel_without_a_relay_does_not_take_the_velocity(
+    client: RosClient,
+) -> None:
+    """Issue 23: the driver alone on cmd_vel_out (no twist_mux) and something that only
+    listens on cmd_vel (`ros2 topic echo /cmd_vel`, a recorder, a bridge): velocity must go to
+    cmd_vel_out, and the diagnostics say so and why."""
+    from geometry_msgs.msg import Twist
+
+    rig, stop = start_rig(client, ("--no-relay", "--no-map"), "/quiet", "/quiet", "quiet")
+    echo = RosClient("echo")
+    try:
+        heard = echo.subscribe(Twist, "/quiet/cmd_vel")
+        # Both sides of the match: the echo sees the node's cmd_vel publisher, the node sees
+        # the echo (its diagnostics name it).
+        wait_until(
+            lambda: heard.subscription.get_publisher_count() > 0,
+            TIMEOUT,
+            "the echo to match the node's cmd_vel",
+        )
+        _status, values = rig.agent.diagnostic(
+            rig.agent.diagnostics.mark(),
+            TIMEOUT,
+            lambda v: "/echo" in v.get("velocity_route", ""),
+        )
+        assert values["velocity_topic"] == "/quiet/cmd_vel_out", values
+        assert values["velocity_route"] == (
+            "nothing relays /quiet/cmd_vel (subscribers of /quiet/cmd_vel: /echo)"
+        ), values
+        start = rig.truth.still()
+        final = rig.agent.run("walk forward 1 meter", 60.0)
+        end = rig.truth.still()
+        assert final.startswith("COMPLETED: "), (final, rig.node.output()[-3000:])
+        ahead, left, _turned = frame_of(start, end)
+        assert math.hypot(ahead - 1.0, left) < METRES, (ahead, left)
+        assert heard.items == []  # nothing went where only the echo listens
+        assert "velocity commands go to /quiet/cmd_vel_out" in rig.node.output()
+    finally:
+        echo.close()
         stop()
 
 
@@ -315,6 +362,9 @@ def rig(client: RosClient) -> Iterator[Rig]:
 def test_the_mission_ends_on_target_at_20_hz_0_2_s(rig: Rig) -> None:
     check_mission_from_lying(rig)
     assert "velocity commands go to /cmd_vel" in rig.node.output()  # through the relay
+    _status, values = rig.agent.diagnostic(rig.agent.diagnostics.mark(), 5.0)
+    assert values["velocity_topic"] == "/cmd_vel", values
+    assert values["velocity_route"] == "/twist_mux relays it to /cmd_vel_out", values
 
 
 def walk_then(rig: Rig, press: Any) -> tuple[float, dict[str, Any], str]:
@@ -397,23 +447,40 @@ def test_without_a_battery_source_the_battery_is_unknown_everywhere(rig: Rig) ->
     assert "battery unknown" in answer and "100%" not in answer, answer
 
 
-def run_doctor(*args: str) -> subprocess.CompletedProcess[str]:
+def run_doctor(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-m", "shadowhound", "doctor", "--go2", "--seconds", "8", *args],
         capture_output=True,
         text=True,
         cwd=ROOT,
         timeout=120,
+        env=env,
     )
+
+
+def test_doctor_without_a_driver_says_so_plainly() -> None:
+    """Issue 23: a go2_ros2_sdk whose driver fails at start (its newest commits do) leaves no
+    go2_driver_node; the doctor says that first, instead of only listing missing topics. Run
+    in a domain of its own (201..232, unused by the tests and `loopback-env`), where no
+    driver of this session can be."""
+    env = dict(os.environ, ROS_DOMAIN_ID=str(201 + os.getpid() % 32))
+    done = run_doctor("--seconds", "2", env=env)
+    assert done.returncode == 1, done.stdout + done.stderr
+    plainly = "fail no go2_driver_node on the graph: did the driver start? see docs/go2.md"
+    assert plainly in done.stdout.splitlines(), done.stdout
+    assert "check out 8d8785e" in done.stdout, done.stdout
 
 
 def test_doctor_finds_the_driver_and_says_what_to_fix_when_odometry_stops(rig: Rig) -> None:
     healthy = run_doctor()
     assert healthy.returncode == 0, healthy.stdout + healthy.stderr
     out = healthy.stdout
-    assert "ok   driver node(s): shadowhound_sim_driver" in out, out
+    assert (
+        "ok   driver: /shadowhound_sim_driver, ShadowHound's simulated driver (shadowhound "
+        "sim-driver), not go2_ros2_sdk's go2_driver_node" in out
+    ), out
     assert "go2_interfaces/msg/Go2State, type hash matches" in out, out
-    assert "ok   velocity goes to /cmd_vel (subscribed by twist_mux)" in out, out
+    assert "ok   velocity goes to /cmd_vel: /twist_mux relays it to /cmd_vel_out" in out, out
     assert "warn no battery source" in out, out
     rig.truth.fault.publish(String(data=json.dumps({"odom": False})))
     try:

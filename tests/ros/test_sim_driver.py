@@ -503,6 +503,7 @@ def test_the_relay_gives_the_joystick_priority_while_it_speaks() -> None:
         (["--start-posture", "kneeling"], "invalid choice: 'kneeling'"),
         (["--ros-args", "-p", "battery:=101.0"], "battery must be in 0..100, got 101.0"),
         (["--ros-args", "-p", "lidar:=true"], "unknown ROS parameter(s): lidar"),
+        (["--stand-up-mode", "5"], "stand_up_mode must be one of 0, 1, 6, 7"),
     ],
 )
 def test_bad_options_and_parameters_exit_2_with_what_is_allowed(

@@ -127,9 +127,10 @@ def _doctor_places(settings: ShadowHoundConfig) -> None:
 
 
 def _doctor_go2(args: argparse.Namespace) -> int:
-    """The Go2 driver's link, in words (see ros/go2_doctor.py)."""
+    """The Go2 driver's link, in words (see ros/go2_doctor.py, ros/go2_doctor_watch.py)."""
     try:
-        from ..ros.go2_doctor import diagnose, observe, require_ros
+        from ..ros.go2_doctor import diagnose
+        from ..ros.go2_doctor_watch import observe, require_ros
 
         require_ros()
     except ImportError as exc:

@@ -93,19 +93,22 @@ class SportMode(IntEnum):
     FRONT_POUNCE = 13
 
 
-# The posture each mode means. RECOVERY_STAND is a change under way, so it has none.
-MODE_POSTURE: dict[int, Posture] = {
-    SportMode.IDLE: Posture.STANDING,
-    SportMode.BALANCE_STAND: Posture.STANDING,
-    SportMode.POSE: Posture.STANDING,
-    SportMode.LOCOMOTION: Posture.STANDING,
-    SportMode.JOINT_LOCK: Posture.STANDING,
-    SportMode.FRONT_FLIP: Posture.STANDING,
-    SportMode.FRONT_JUMP: Posture.STANDING,
-    SportMode.FRONT_POUNCE: Posture.STANDING,
-    SportMode.LIE_DOWN: Posture.LYING,
-    SportMode.DAMPING: Posture.LYING,
-    SportMode.SIT: Posture.SITTING,
+# The postures each mode can mean; the body height tells which, and when a change has ended.
+# DAMPING is the limp robot lying (after Damp or a fall) and, on firmware that reports it after
+# StandUp (a go2_webrtc_connect user's robot: unitree_webrtc_connect #17), the robot standing
+# with its joints held. RECOVERY_STAND is a change under way, so it has none.
+MODE_POSTURES: dict[int, frozenset[Posture]] = {
+    SportMode.IDLE: frozenset({Posture.STANDING}),
+    SportMode.BALANCE_STAND: frozenset({Posture.STANDING}),
+    SportMode.POSE: frozenset({Posture.STANDING}),
+    SportMode.LOCOMOTION: frozenset({Posture.STANDING}),
+    SportMode.JOINT_LOCK: frozenset({Posture.STANDING}),
+    SportMode.FRONT_FLIP: frozenset({Posture.STANDING}),
+    SportMode.FRONT_JUMP: frozenset({Posture.STANDING}),
+    SportMode.FRONT_POUNCE: frozenset({Posture.STANDING}),
+    SportMode.LIE_DOWN: frozenset({Posture.LYING}),
+    SportMode.DAMPING: frozenset({Posture.LYING, Posture.STANDING}),
+    SportMode.SIT: frozenset({Posture.SITTING}),
 }
 # Modes in which the robot obeys Move (1008); in any other it ignores Moves.
 WALKING_MODES = frozenset({SportMode.BALANCE_STAND, SportMode.LOCOMOTION})
@@ -120,12 +123,19 @@ BODY_HEIGHT_TOLERANCE = 0.02
 
 
 def posture_of(mode: int, body_height: float) -> Posture | None:
-    """The posture `go2_states` reports: the mode's posture once the body height has reached
-    it, else None (a posture change is under way, or the mode is not a posture)."""
-    posture = MODE_POSTURE.get(mode)
-    if posture is None or not math.isfinite(body_height):
+    """The posture `go2_states` reports: the one of the mode's postures whose body height has
+    been reached, else None (a posture change is under way, or the mode is not a posture)."""
+    if not math.isfinite(body_height):
         return None
-    return posture if abs(body_height - BODY_HEIGHT[posture]) <= BODY_HEIGHT_TOLERANCE else None
+    for posture in MODE_POSTURES.get(mode, ()):
+        if at_height(posture, body_height):
+            return posture
+    return None
+
+
+def at_height(posture: Posture, body_height: float) -> bool:
+    """`body_height` is the posture's, within BODY_HEIGHT_TOLERANCE."""
+    return abs(body_height - BODY_HEIGHT[posture]) <= BODY_HEIGHT_TOLERANCE
 
 
 @dataclass(frozen=True)

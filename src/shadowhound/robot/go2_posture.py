@@ -5,8 +5,10 @@ go2_ros2_sdk copies the robot's sport-mode state: `mode` and `body_height` tell 
 their end. So a posture command is done when go2_states shows the posture it leads to (and,
 after BalanceStand, a mode in which the robot walks). A posture counts once every report for
 `SETTLE` seconds shows it: go2_states may flap (a single report of "sitting" 0.07 s into a
-1.5 s Sit is no sitting robot). No rclpy here: the robot hands in each report and a check for
-the e-stop.
+1.5 s Sit is no sitting robot). Firmware differ in the mode they report after StandUp (JointLock
+6; Damping 7 on some), so before BalanceStand standing is judged by the body height alone, and
+for `STAND_UP_BOUND` seconds at most (`stood_up`). No rclpy here: the robot hands in each
+report and a check for the e-stop.
 """
 
 from __future__ import annotations
@@ -25,7 +27,15 @@ from .base import RobotError
 _T = TypeVar("_T")
 _POLL = 0.02  # seconds between looks at go2_states while a posture runs
 SETTLE = 0.25  # seconds every report must show a posture before it counts
+# Seconds after StandUp (or RiseSit) that BalanceStand waits for go2_states to show the body
+# standing: a StandUp takes 1-2 s; after this BalanceStand goes anyway (the robot queues
+# posture commands, as go2_ros2_sdk's joystick, which sends both back to back, relies on).
+STAND_UP_BOUND = 3.0
 # Modes of a robot that fell (motors limp, or getting up after a fall): it does not stand.
+# Damping at standing height may also be a robot standing after StandUp (some firmware): it
+# still counts as fallen here (the robot's state says lying until BalanceStand), while the
+# posture read (go2_api.posture_of) and `stood_up` see it standing, so standing up from there
+# sends BalanceStand only.
 FALL_MODES = frozenset({go2_api.SportMode.DAMPING, go2_api.SportMode.RECOVERY_STAND})
 
 # Sport api ids that take the robot from one posture to the next (sitting is left with
@@ -165,6 +175,23 @@ class PostureWatch:
                     "nothing else (the phone app, a joystick) holds the robot and that it has "
                     "room"
                 )
+            time.sleep(_POLL)
+
+    def stood_up(self, what: str, bound: float = STAND_UP_BOUND) -> bool:
+        """Wait until go2_states shows the body at standing height (settled), whatever the
+        mode; False once `bound` seconds (at most `timeout`) pass without it."""
+        deadline = time.monotonic() + min(bound, self.timeout)
+        while True:
+            with self._lock:
+                report = self._report
+                standing = self._settled(
+                    lambda r: go2_api.at_height(Posture.STANDING, r.body_height)
+                )
+            if standing and report is not None and time.monotonic() - report.receipt <= self.stale:
+                return True
+            self._check_estop(f"waiting for {what}")
+            if time.monotonic() > deadline:
+                return False
             time.sleep(_POLL)
 
     def pause(self, seconds: float, what: str) -> None:

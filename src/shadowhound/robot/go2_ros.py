@@ -3,9 +3,10 @@
 Written against how the driver really behaves (docs/go2.md):
 
 - motion: geometry_msgs/Twist, capped, re-published at 10 Hz while non-zero (the robot drops
-  a Move after about a second). The topic follows the launch layout: `cmd_vel` when something
-  (twist_mux) subscribes it, else `cmd_vel_out`, which the driver itself listens on, both
-  relative to the namespace; or the one configured.
+  a Move after about a second). The topic follows the graph: `cmd_vel` when a relay
+  (twist_mux: one node subscribing `cmd_vel` and publishing `cmd_vel_out`) carries it to the
+  driver, else `cmd_vel_out`, which the driver itself listens on, both relative to the
+  namespace, looked at again when the graph changes (go2_topics); or the one configured.
 - stopping: every stop (end of a step, settle, stall, cancel, e-stop, close) sends StopMove
   (sport api 1003). The driver drops all-zero Twists, so a zero Twist is never sent.
 - state: odometry carries the pose only and arrives late; `MotionTracker` predicts the pose
@@ -15,6 +16,9 @@ Written against how the driver really behaves (docs/go2.md):
 - posture: from `go2_states` (mode and body height, read through go2_api's one table), at start
   and after each posture command; a posture command is done when the posture is reached
   (`progress` is no help: it stays 0 while postures run). No command when already there.
+  Standing up, BalanceStand follows StandUp once the body height shows standing, whatever the
+  mode (firmware differ), or after a bounded wait; the stand ends once the robot walks, and a
+  walk on a robot standing with its joints held balances it first.
 - battery: a sensor_msgs/BatteryState topic when one is configured and publishing, else
   unknown (None): the driver publishes no battery level.
 - camera: `camera/image_raw` (sensor_msgs/Image) or a topic ending in `compressed`.
@@ -47,6 +51,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, replace
+from typing import Any
 
 import rclpy
 from geometry_msgs.msg import Twist
@@ -70,8 +75,8 @@ from .go2_detections import Frames, SightingBoard, sightings_from_msg
 from .go2_motion import MAX_LATENCY, MotionTracker
 from .go2_nav2 import Nav2Navigator
 from .go2_odometry import OdometryFault, OdometryIntake, OdometryLimits
-from .go2_posture import STEPS, PostureWatch
-from .go2_topics import VELOCITY_TOPICS, choose_velocity_topic
+from .go2_posture import STAND_UP_BOUND, STEPS, PostureWatch
+from .go2_topics import VELOCITY_TOPICS, VelocityRoute, choose_velocity_topic, node_name
 from .go2_world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
@@ -166,6 +171,7 @@ class Go2RosRobot:
         self._driven_until = 0.0  # Nav2, a posture or a trick may move the body until then
         self._detections_at: float | None = None  # monotonic receipt of the last detections
         self._posture = Posture.STANDING  # until go2_states says otherwise
+        self._posture_seen = False  # go2_states has shown a posture (a change then means news)
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
         self._sightings = SightingBoard()
@@ -179,11 +185,10 @@ class Go2RosRobot:
         self._estopped = False
         self._closed = False
         self._started = time.monotonic()
-        self._velocity_topic = c.cmd_vel_topic
+        self._route: VelocityRoute | None = None  # where velocity goes (discovered)
         self._postures = PostureWatch(
             self._check_estop, "", c.command_timeout, stale=max(1.0, c.odom_timeout)
         )
-        self._rediscover = True  # look up who subscribes at the next velocity command
         # use_global_arguments=False: the mission node's own remappings and parameters
         # (`-r __ns:=...`) must not move the robot's topics; `namespace` does that explicitly.
         self.node = Node(
@@ -281,6 +286,13 @@ class Go2RosRobot:
         return self.topic(self._discover_velocity_topic())
 
     @property
+    def joints_held(self) -> bool:
+        """go2_states shows the robot standing in a mode in which it does not walk (after a
+        StandUp: JointLock, or Damping on some firmware), recently and settled."""
+        report = self._postures.fresh()
+        return report is not None and report.posture is Posture.STANDING and not report.balanced
+
+    @property
     def odom_latency(self) -> float:
         """Seconds odometry lags the robot, as configured or as measured."""
         with self._lock:
@@ -357,7 +369,8 @@ class Go2RosRobot:
         if posture is None:
             return
         with self._lock:
-            was, self._posture = self._posture, posture
+            was, self._posture = self._posture if self._posture_seen else posture, posture
+            self._posture_seen = True
             moving = not self._halted
         if was is Posture.STANDING and posture is not was and not self._postures.commanded:
             # Nobody here asked for it: a fall, or the remote. Moves would be ignored or worse;
@@ -625,10 +638,13 @@ class Go2RosRobot:
         if not self.last_state().connected:
             raise RobotError(self._odometry_problem() + " Not moving without odometry.")
         with self._lock:
-            starting = self._halted
-            self._rediscover = self._rediscover or starting  # starting: look again
+            starting, estopped = self._halted, self._estopped
         if starting:
             self._check_publishers()  # two odometry sources: found before the first step
+            if self.joints_held and not estopped:
+                # Standing with its joints held (a StandUp from elsewhere): every Move would be
+                # ignored. BalanceStand first; the walk starts once the robot walks.
+                self.set_posture(Posture.STANDING)
         with self._lock:
             untrusted = self._intake.problem(time.monotonic())
         if untrusted:
@@ -719,12 +735,26 @@ class Go2RosRobot:
         )
         with self._body_commanded():
             for b, api_ids in zip(path[1:], steps, strict=True):
-                for api_id in api_ids:
+                for api_id, then in zip(api_ids, (*api_ids[1:], None), strict=True):
                     balance = api_id == go2_api.BALANCE_STAND
                     if balance and self._postures.balanced():
                         continue  # RiseSit already ends balanced: no redundant command
                     self._request(api_id)
-                    self._postures.reach(b, f"{_NAME[api_id]} (api id {api_id})", balance)
+                    what = f"{_NAME[api_id]} (api id {api_id})"
+                    if then == go2_api.BALANCE_STAND:
+                        self._stand_before_balancing(what)
+                    else:  # the posture shows (after BalanceStand: in a mode that walks)
+                        self._postures.reach(b, what, balance)
+
+    def _stand_before_balancing(self, what: str) -> None:
+        """After StandUp (or RiseSit): BalanceStand once go2_states shows the body standing,
+        whatever the mode (firmware differ: JointLock 6, Damping 7), or after a bounded wait."""
+        if not self._postures.stood_up(what):
+            self.node.get_logger().warning(
+                f"{what} sent, but {self._postures.topic} shows {self._postures.describe()} "
+                f"after {STAND_UP_BOUND:g} s; sending BalanceStand anyway (the robot queues "
+                "posture commands)"
+            )
 
     def perform(self, trick: str) -> None:
         info = go2_api.TRICKS.get(trick)
@@ -820,29 +850,48 @@ class Go2RosRobot:
     # -- topics out ----------------------------------------------------------------------
 
     def _discover_velocity_topic(self) -> str:
-        """The configured topic, or the one the launch layout needs (see go2_topics). Looked
-        up again at each start from rest, since the driver may have come up since."""
-        with self._lock:
-            chosen, look = self._velocity_topic, self._rediscover
-            self._rediscover = False
-        if self.config.cmd_vel_topic or (chosen and not look):
-            return chosen or self.config.cmd_vel_topic
-        found = choose_velocity_topic(
-            {
+        """The configured topic, or the one the graph needs now (see go2_topics). The graph is
+        read at every command (cheap: a local cache), so when a relay or a listener comes or
+        goes, or its node's name becomes known, the next command follows."""
+        if self.config.cmd_vel_topic:
+            return self.config.cmd_vel_topic
+
+        def endpoints(infos: Callable[[str], list[Any]]) -> dict[str, list[tuple[str, str]]]:
+            return {
                 name: [
-                    (i.node_name, i.topic_type)
-                    for i in self.node.get_subscriptions_info_by_topic(self.topic(name))
+                    (node_name(i.node_namespace, i.node_name), i.topic_type)
+                    for i in infos(self.topic(name))
                 ]
                 for name in VELOCITY_TOPICS
             }
-        )
-        if found is None:
-            return chosen or VELOCITY_TOPICS[-1]  # nothing listens yet: the driver's own
-        if found != chosen:
-            self.node.get_logger().info(f"velocity commands go to {self.topic(found)}")
+
         with self._lock:
-            self._velocity_topic = found
-        return found
+            route = self._route
+        try:
+            found = choose_velocity_topic(
+                endpoints(self.node.get_subscriptions_info_by_topic),
+                endpoints(self.node.get_publishers_info_by_topic),
+                names={name: self.topic(name) for name in VELOCITY_TOPICS},
+            )
+        except Exception:  # rclpy raises several types once the context is shutting down
+            return route.topic if route is not None else VELOCITY_TOPICS[-1]
+        if route is None or found.topic != route.topic:
+            self.node.get_logger().info(
+                f"velocity commands go to {self.topic(found.topic)} ({found.why})"
+            )
+        with self._lock:
+            self._route = found
+        return found.topic
+
+    @property
+    def velocity_route(self) -> VelocityRoute:
+        """Where velocity goes and why, in full topic names (for diagnostics and logs)."""
+        topic = self._discover_velocity_topic()
+        with self._lock:
+            route = self._route
+        if self.config.cmd_vel_topic or route is None:
+            return VelocityRoute(self.topic(topic), "configured (cmd_vel_topic)")
+        return replace(route, topic=self.topic(route.topic))
 
     def _publish_twist(self, command: tuple[float, float, float], topic: str) -> None:
         """Publish one Twist; the caller holds the send lock."""

@@ -7,8 +7,11 @@ driver in `shadowhound.ros.sim_driver` puts the topics around it):
   new Move renews it; StopMove (1003) stops at once. Moves are obeyed only in a walking mode
   (BalanceStand or locomotion) and not while a posture changes or a trick runs.
 - Posture commands (go2_api.POSTURE_CHANGES) run one at a time, in order, and take time; the
-  mode changes when one starts and the body height moves to the new posture's meanwhile;
-  `progress` is not raised by them (only tricks raise it).
+  mode changes when one starts (to a mode in which the robot walks only when it ends: it
+  ignores Moves until then) and the body height moves to the new posture's meanwhile;
+  `progress` is not raised by them (only tricks raise it). StandUp leaves the robot standing
+  with its joints locked (`stand_up_mode`: JOINT_LOCK, or the mode another firmware reports,
+  e.g. DAMPING), ignoring Moves until BalanceStand.
 - Tricks run only while standing balanced; the "ai"-mode ones only after MOTION_SWITCH {"name":
   "ai"} on the motion switcher topic.
 
@@ -24,7 +27,7 @@ import queue
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 from ..state import Posture
@@ -122,10 +125,16 @@ class SimSportMode:
         move_timeout: float = 1.0,
         posture_seconds: float = 1.5,
         start: Posture = Posture.STANDING,
+        stand_up_mode: SportMode = SportMode.JOINT_LOCK,
     ) -> None:
         self.sim = sim
         self.move_timeout = move_timeout
         self.posture_seconds = posture_seconds
+        stand_up = replace(POSTURE_CHANGES[go2_api.STAND_UP], mode=stand_up_mode)
+        self._changes = {
+            **POSTURE_CHANGES,
+            go2_api.STAND_UP: replace(stand_up, mode_after=stand_up_mode),
+        }
         self._cond = threading.Condition()
         self._mode = _START_MODES[start]  # a Go2 boots standing, balanced
         sim.set_posture(start, seconds=0.0)
@@ -198,7 +207,7 @@ class SimSportMode:
                 return
             note = self.move(x, y, z)
             report(not note, note)
-        elif api_id in POSTURE_CHANGES or api_id in _TRICKS_BY_ID:
+        elif api_id in self._changes or api_id in _TRICKS_BY_ID:
             self._jobs.put((api_id, report))
         else:
             report(False, f"not simulated: api id {api_id}")
@@ -275,8 +284,9 @@ class SimSportMode:
             )
 
     def _current_mode(self, moving: bool) -> SportMode:
-        if self._change is not None:
-            return self._change.command.mode
+        if self._change is not None:  # Moves are ignored until it ends: no walking mode yet
+            mode = self._change.command.mode
+            return self._mode if mode in WALKING_MODES else mode
         if self._trick:
             return _TRICK_MODES.get(go2_api.TRICKS[self._trick].api_id, self._mode)
         if self._mode in WALKING_MODES:
@@ -319,7 +329,7 @@ class SimSportMode:
     def _run_jobs(self) -> None:
         while (job := self._jobs.get()) is not None:
             api_id, report = job
-            change = POSTURE_CHANGES.get(api_id)
+            change = self._changes.get(api_id)
             if change is not None:
                 self._change_posture(change, report)
             else:

@@ -1,20 +1,18 @@
 """`shadowhound doctor --go2`: is the Go2 driver there, and will ShadowHound's commands reach it?
 
 Watches the ROS graph and the driver's topics for a few seconds, then says, in words, what is
-fine and what to fix: the driver node, each topic's type and type hash (a hash that differs
-means Fast DDS silently drops every sample), odometry rate and age, which velocity topic
-reaches the driver, postures from go2_states, and the battery source.
+fine and what to fix: the driver node (go2_ros2_sdk's `go2_driver_node`; its absence first and
+plainly, since some go2_ros2_sdk commits fail at start), each topic's type and type hash (a
+hash that differs means Fast DDS silently drops every sample), odometry rate and age, which
+velocity topic reaches the driver and why, postures from go2_states, and the battery source.
 
-`observe` (rclpy, imported lazily by the CLI) gathers an `Observation`; `diagnose` (pure) turns
-it into findings, so every rule is testable without ROS.
+`observe` (go2_doctor_watch.py: rclpy, imported lazily by the CLI) gathers an `Observation`;
+`diagnose` (pure, here) turns it into findings, so every rule is testable without ROS.
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 from ..robot import go2_api
 from ..robot.go2_topics import TWIST_TYPE, VELOCITY_TOPICS, choose_velocity_topic
@@ -23,19 +21,22 @@ ODOM_TYPE = "nav_msgs/msg/Odometry"
 STATE_TYPE = "go2_interfaces/msg/Go2State"
 REQUEST_TYPE = "go2_interfaces/msg/WebRtcReq"
 BATTERY_TYPE = "sensor_msgs/msg/BatteryState"
-BATTERY_GRACE = 5.0  # extra seconds to wait for a slow battery topic
 # go2_ros2_sdk's own type hashes (ROS 2 Jazzy), as its go2_interfaces builds them.
 UPSTREAM_HASHES = {
     STATE_TYPE: "RIHS01_26947c9882eb8f10418057a5777d99d4b3163c30f479a5626f034a65c3ea2848",
     REQUEST_TYPE: "RIHS01_1b3c5ffa35c3257e84c4282ceef9f14148d3c51579ea5e359d76f720613261fd",
 }
 MIN_ODOM_RATE = 5.0  # Hz below which the closed loop steers on too little
+DRIVER_NODE = "go2_driver_node"  # go2_ros2_sdk's driver (presentation/go2_driver_node.py)
+SIM_DRIVER_NODE = "shadowhound_sim_driver"  # `shadowhound sim-driver` (ros/sim_driver.py)
+# Nodes robot.launch.py starts beside the driver: up without it, the driver failed at start.
+LAUNCH_NODES = ("twist_mux", "robot_state_publisher", "pointcloud_to_laserscan", "rviz2")
 MAX_ODOM_AGE = 0.5  # seconds: the robot's odom_timeout default
 
 
 @dataclass(frozen=True)
 class Endpoint:
-    """One publisher or subscription in the graph."""
+    """One publisher or subscription in the graph; `node` is the node's full name."""
 
     node: str
     type: str
@@ -47,6 +48,7 @@ class Observation:
     """What the doctor saw. Topic keys are the robot-relative names (odom, go2_states, ...)."""
 
     namespace: str = ""
+    nodes: list[str] = field(default_factory=list)  # full names of every node on the graph
     names: dict[str, str] = field(default_factory=dict)  # key -> full topic name
     publishers: dict[str, list[Endpoint]] = field(default_factory=dict)
     subscribers: dict[str, list[Endpoint]] = field(default_factory=dict)
@@ -90,21 +92,38 @@ def _name(obs: Observation, key: str) -> str:
 
 
 def _driver(obs: Observation) -> Finding:
-    nodes = sorted(
-        {e.node for key in ("odom", "go2_states") for e in obs.publishers.get(key, [])}
-        | {e.node for e in obs.subscribers.get("webrtc_req", [])}
-    )
-    if not nodes:
+    """go2_ros2_sdk's driver node (any namespace), or the simulated one, said as such."""
+    by_name = {
+        name: sorted(n for n in obs.nodes if n.rsplit("/", 1)[-1] == name)
+        for name in (DRIVER_NODE, SIM_DRIVER_NODE, *LAUNCH_NODES)
+    }
+    if by_name[DRIVER_NODE]:
+        return Finding("ok", f"go2_ros2_sdk's driver: {', '.join(by_name[DRIVER_NODE])}")
+    if by_name[SIM_DRIVER_NODE]:
         return Finding(
-            "fail",
-            f"no Go2 driver: nothing publishes {_name(obs, 'odom')} or "
-            f"{_name(obs, 'go2_states')}, nothing subscribes "
-            f"{_name(obs, 'webrtc_req')}",
-            "start go2_ros2_sdk (ros2 launch go2_robot_sdk robot.launch.py) or "
-            "`shadowhound sim-driver`, in the same ROS_DOMAIN_ID and "
-            "RMW_IMPLEMENTATION; with several robots give --namespace robot0",
+            "ok",
+            f"driver: {', '.join(by_name[SIM_DRIVER_NODE])}, ShadowHound's simulated driver "
+            f"(shadowhound sim-driver), not go2_ros2_sdk's {DRIVER_NODE}",
         )
-    return Finding("ok", f"driver node(s): {', '.join(nodes)}")
+    serving = {e.node for key in ("odom", "go2_states") for e in obs.publishers.get(key, [])}
+    serving |= {e.node for e in obs.subscribers.get("webrtc_req", [])}
+    if serving:
+        return Finding(
+            "warn",
+            f"no {DRIVER_NODE} on the graph; {', '.join(sorted(serving))} serves the driver's "
+            "topics (a driver under another name, or a recording?)",
+            "fine if it drives the robot; otherwise start go2_ros2_sdk (docs/go2.md)",
+        )
+    launched = [n for name in LAUNCH_NODES for n in by_name[name]]
+    ran = f" ({', '.join(launched)} up: the launch ran, its driver did not)" if launched else ""
+    return Finding(
+        "fail",
+        f"no {DRIVER_NODE} on the graph: did the driver start? see docs/go2.md{ran}",
+        "read the launch's output for the driver's error. go2_ros2_sdk's newest commits do "
+        "not start (7f005bb and de12621: TabError in go2_connection.py; 9b67a62: an "
+        "undefined name in connect()): check out 8d8785e. Run it with this ROS_DOMAIN_ID "
+        "and RMW_IMPLEMENTATION; `shadowhound sim-driver` rehearses without a robot",
+    )
 
 
 def _types(obs: Observation) -> list[Finding]:
@@ -201,9 +220,23 @@ def _postures(obs: Observation) -> Finding:
 
 
 def _velocity(obs: Observation) -> Finding:
+    def on(side: dict[str, list[Endpoint]]) -> dict[str, list[tuple[str, str]]]:
+        return {name: [(e.node, e.type) for e in side.get(name, [])] for name in VELOCITY_TOPICS}
+
+    route = choose_velocity_topic(
+        on(obs.subscribers),
+        on(obs.publishers),
+        names={name: _name(obs, name) for name in VELOCITY_TOPICS},
+    )
     if obs.cmd_vel_topic:
         key = obs.cmd_vel_topic
         subscribed = [e for e in obs.subscribers.get(key, []) if e.type == TWIST_TYPE]
+        if _name(obs, key) == _name(obs, "cmd_vel") and route.topic != "cmd_vel":
+            return Finding(
+                "fail",
+                f"velocity on {_name(obs, key)} (configured) reaches no driver: {route.why}",
+                "leave cmd_vel_topic empty to follow the graph, or start twist_mux",
+            )
         if subscribed:
             return Finding(
                 "ok",
@@ -213,15 +246,9 @@ def _velocity(obs: Observation) -> Finding:
         return Finding(
             "fail",
             f"nothing subscribes {_name(obs, key)} (configured cmd_vel_topic)",
-            "leave cmd_vel_topic empty to follow the launch layout",
+            "leave cmd_vel_topic empty to follow the graph",
         )
-    chosen = choose_velocity_topic(
-        {
-            name: [(e.node, e.type) for e in obs.subscribers.get(name, [])]
-            for name in VELOCITY_TOPICS
-        }
-    )
-    if chosen is None:
+    if not route.reaches:
         hint = ""
         if obs.namespace and obs.root_cmd_vel_subscribed:
             hint = (
@@ -230,12 +257,10 @@ def _velocity(obs: Observation) -> Finding:
             )
         return Finding(
             "fail",
-            f"nothing subscribes {_name(obs, 'cmd_vel')} or "
-            f"{_name(obs, 'cmd_vel_out')}: velocity would reach nothing{hint}",
+            f"velocity would reach nothing: {route.why}{hint}",
             "start the driver (it listens on cmd_vel_out) and check --namespace",
         )
-    via = ", ".join(sorted({e.node for e in obs.subscribers.get(chosen, [])}))
-    return Finding("ok", f"velocity goes to {_name(obs, chosen)} (subscribed by {via})")
+    return Finding("ok", f"velocity goes to {_name(obs, route.topic)}: {route.why}")
 
 
 def _battery(obs: Observation) -> Finding:
@@ -261,104 +286,3 @@ def _battery(obs: Observation) -> Finding:
         "go2_ros2_sdk publishes no battery level; set battery_topic to a "
         "sensor_msgs/BatteryState topic if you have one",
     )
-
-
-# -- watching the graph (rclpy) --------------------------------------------------------------
-
-
-def require_ros() -> None:
-    """Raise ImportError naming what is missing when ROS 2 or go2_interfaces is not installed
-    (before anything is printed about watching topics)."""
-    import rclpy  # noqa: F401
-    from go2_interfaces.msg import Go2State  # noqa: F401
-
-
-def observe(
-    namespace: str = "", *, seconds: float = 3.0, cmd_vel_topic: str = "", battery_topic: str = ""
-) -> Observation:
-    """Watch the driver's topics for `seconds` in a private rclpy context."""
-    import rclpy
-    from go2_interfaces.msg import Go2State, WebRtcReq
-    from nav_msgs.msg import Odometry
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from sensor_msgs.msg import BatteryState
-
-    obs = Observation(
-        namespace=namespace.strip("/"),
-        seconds=seconds,
-        cmd_vel_topic=cmd_vel_topic,
-        battery_topic=battery_topic,
-    )
-    context = Context()
-    rclpy.init(context=context)
-    node = Node(
-        "shadowhound_doctor",
-        namespace="/" + obs.namespace,
-        context=context,
-        use_global_arguments=False,
-        start_parameter_services=False,
-    )
-    qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-    keys = ["odom", "go2_states", "webrtc_req", *VELOCITY_TOPICS]
-    if cmd_vel_topic and cmd_vel_topic not in keys:
-        keys.append(cmd_vel_topic)
-    obs.names = {k: node.resolve_topic_name(k) for k in keys}
-    if battery_topic:
-        obs.names["battery"] = node.resolve_topic_name(battery_topic)
-    node.create_subscription(
-        Odometry, "odom", lambda _m: obs.odom_receipts.append(time.monotonic()), qos
-    )
-
-    def on_state(msg: Any) -> None:
-        obs.states.append((int(msg.mode), float(msg.body_height)))
-
-    def on_battery(msg: Any) -> None:
-        obs.battery_levels.append(float(msg.percentage) * 100.0)
-
-    node.create_subscription(Go2State, "go2_states", on_state, qos)
-    probe = node.create_publisher(WebRtcReq, "shadowhound_doctor/type_probe", qos)
-    if battery_topic:
-        node.create_subscription(BatteryState, battery_topic, on_battery, qos)
-    executor = SingleThreadedExecutor(context=context)
-    executor.add_node(node)
-    try:
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            executor.spin_once(timeout_sec=0.05)
-        # Battery sources often publish at 1 Hz or slower: give a configured one that has a
-        # publisher up to BATTERY_GRACE more seconds for its first message.
-        if battery_topic and node.get_publishers_info_by_topic(obs.names["battery"]):
-            grace = time.monotonic() + BATTERY_GRACE
-            while not obs.battery_levels and time.monotonic() < grace:
-                executor.spin_once(timeout_sec=0.05)
-        obs.ended = time.monotonic()
-        me = node.get_name()
-        for key, full in obs.names.items():
-            obs.publishers[key] = _endpoints(node.get_publishers_info_by_topic(full), me)
-            obs.subscribers[key] = _endpoints(node.get_subscriptions_info_by_topic(full), me)
-        own = [
-            *node.get_subscriptions_info_by_topic(obs.names["go2_states"]),
-            *node.get_subscriptions_info_by_topic(obs.names["odom"]),
-            *node.get_publishers_info_by_topic(probe.topic_name),
-        ]
-        obs.local_hashes = {i.topic_type: str(i.topic_type_hash) for i in own if i.node_name == me}
-        obs.root_cmd_vel_subscribed = bool(node.get_subscriptions_info_by_topic("/cmd_vel"))
-        obs.battery_elsewhere = sorted(
-            n for n, types in node.get_topic_names_and_types() if BATTERY_TYPE in types
-        )
-    finally:
-        executor.shutdown(timeout_sec=1.0)
-        node.destroy_node()
-        rclpy.try_shutdown(context=context)
-    return obs
-
-
-def _endpoints(infos: Sequence[Any], me: str) -> list[Endpoint]:
-    return [
-        Endpoint(i.node_name, i.topic_type, str(i.topic_type_hash))
-        for i in infos
-        if i.node_name != me
-    ]

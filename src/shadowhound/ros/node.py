@@ -218,7 +218,8 @@ class MissionNode(Node):
             velocity = (
                 topic(s.cmd_vel_topic)
                 if s.cmd_vel_topic
-                else f"{topic('cmd_vel')} or {topic('cmd_vel_out')} (whichever is subscribed)"
+                else f"{topic('cmd_vel')} when a relay (twist_mux) carries it to "
+                f"{topic('cmd_vel_out')}, else {topic('cmd_vel_out')}"
             )
             battery = (
                 topic(s.battery_topic) if s.battery_topic else "none (battery reported unknown)"
@@ -474,6 +475,9 @@ class MissionNode(Node):
             "camera_last_error": self._last_camera_error,
             "busy": self._worker.busy,
         }
+        if self._go2 is not None:  # which topic reaches the driver, and why (go2_topics)
+            route = self._go2.velocity_route
+            extra.update(velocity_topic=route.topic, velocity_route=route.why)
         name = DIAGNOSTICS_NAME
         if self.get_fully_qualified_name() != f"/{NODE_NAME}":  # keep several agents apart
             name += f" ({self.get_fully_qualified_name()})"

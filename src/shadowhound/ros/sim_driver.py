@@ -40,6 +40,7 @@ from rclpy.node import Node
 
 from ..config import SimConfig
 from ..errors import ParameterError
+from ..robot.go2_api import SportMode
 from ..robot.sim import SimRobot
 from .process import run_node
 from .sim_go2 import Faults, SimGo2, Truth
@@ -56,6 +57,13 @@ from .twist_mux import TwistMux
 __all__ = ["Faults", "SimDriver", "Truth", "main"]
 
 NODE_NAME = "shadowhound_sim_driver"
+# Modes a robot may report standing after StandUp (sim_options' stand_up_mode).
+STAND_UP_MODES = (
+    SportMode.IDLE,
+    SportMode.BALANCE_STAND,
+    SportMode.JOINT_LOCK,
+    SportMode.DAMPING,
+)
 PROG = "shadowhound sim-driver"
 
 
@@ -73,6 +81,11 @@ class SimDriver(Node):
     ) -> None:
         super().__init__(node_name, **node_kwargs)
         self.settings = s = parse_settings({**self._read_parameters(), **(options or {})})
+        if s.stand_up_mode not in STAND_UP_MODES:
+            raise ParameterError(
+                f"stand_up_mode must be one of {', '.join(map(str, STAND_UP_MODES))} (modes "
+                f"of a robot standing still), got {s.stand_up_mode}"
+            )
         if sim is not None and s.robots != 1:
             raise ParameterError("a given SimRobot makes one robot; robots must be 1")
         self.robots = [

@@ -67,6 +67,7 @@ class SimGo2:
             move_timeout=settings.move_timeout,
             posture_seconds=settings.posture_seconds,
             start=Posture(settings.start_posture),
+            stand_up_mode=SportMode(settings.stand_up_mode),
         )
         self.faults = Faults()
         self._lying = LyingOdometry()  # odometry faults that fire on the way (sim_faults)

@@ -25,6 +25,7 @@ class DriverSettings:
 
     robots: int = 1
     start_posture: str = "standing"
+    stand_up_mode: int = 6
     relay: bool = True
     relay_timeout: float = 0.5
     move_timeout: float = 1.0
@@ -73,6 +74,15 @@ OPTIONS: dict[str, Option] = {
         "posture the robots start in (lying: mode LieDown, sitting: Sit, standing: BalanceStand)",
         metavar="POSTURE",
         choices=("standing", "sitting", "lying"),
+    ),
+    "stand_up_mode": Option(
+        int,
+        "go2_states mode during and after StandUp: 6 JointLock, 7 Damping (as some firmware "
+        "reports) or 0 Idle: Moves ignored until BalanceStand; 1 BalanceStand: StandUp ends "
+        "balanced and walks",
+        0,
+        7,
+        "MODE",
     ),
     "relay": Option(
         bool,
