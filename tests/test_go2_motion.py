@@ -10,7 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shadowhound.robot.go2_motion import MotionTracker, StampClock, compose, relative
+from shadowhound.robot.go2_motion import MotionTracker, compose, relative
+from shadowhound.robot.go2_stamps import StampClock
 from shadowhound.robot.sim import SimRobot
 
 
