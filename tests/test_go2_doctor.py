@@ -80,10 +80,22 @@ def test_stopped_odometry_fails_and_slow_odometry_warns() -> None:
     assert any(
         line.startswith("fail odometry on /odom") and "(stopped)" in line for line in stopped
     )
-    slow = lines(healthy(odom_receipts=[0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 2.9], ended=3.0))
-    assert any(line.startswith("warn odometry on /odom: 2.0 Hz") for line in slow)
-    bursts = lines(healthy(odom_receipts=[0.0, 0.001, 0.002, 0.5, 1.0, 1.5, 2.0, 2.5], ended=2.6))
-    assert any(line.startswith("warn odometry on /odom: 2.0 Hz") for line in bursts)
+    slow = lines(healthy(odom_receipts=[0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0], ended=3.1))
+    assert any(line.startswith("warn odometry on /odom: 2.0 Hz") for line in slow), slow
+    times = [k * 0.5 + i * 0.001 for k in range(6) for i in range(3)]  # 3 at a time, 2 Hz
+    bursts = lines(healthy(odom_receipts=times, ended=2.6))
+    warned = next(line for line in bursts if line.startswith("warn odometry on /odom: 6.8 Hz"))
+    assert "in bursts of 3.0 (a new pose every 0.50 s)" in warned, warned
+    assert "(new poses below 5 Hz)" in warned and "missions work up to 5 s late" in warned
+
+
+def test_odometry_in_bursts_on_a_busy_link_is_named() -> None:
+    """go2_ros2_sdk #231: three poses 1 ms apart every 0.176 s (17 Hz)."""
+    times = [k * 0.176 + i * 0.001 for k in range(12) for i in range(3)]
+    found = lines(healthy(odom_receipts=times, ended=times[-1] + 0.05))
+    line = next(x for x in found if "odometry on /odom" in x)
+    assert line.startswith("ok   odometry on /odom: 18.1 Hz") and "in bursts of 3.0" in line, line
+    assert "a new pose every 0.18 s" in line
 
 
 def test_without_twist_mux_velocity_goes_to_the_drivers_cmd_vel_out() -> None:

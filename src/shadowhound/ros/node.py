@@ -478,6 +478,7 @@ class MissionNode(Node):
         if self._go2 is not None:  # which topic reaches the driver, and why (go2_topics)
             route = self._go2.velocity_route
             extra.update(velocity_topic=route.topic, velocity_route=route.why)
+            extra["odom_latency"] = f"{self._go2.odom_latency:.2f} s"  # measured when it moves
         name = DIAGNOSTICS_NAME
         if self.get_fully_qualified_name() != f"/{NODE_NAME}":  # keep several agents apart
             name += f" ({self.get_fully_qualified_name()})"
