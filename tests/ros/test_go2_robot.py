@@ -124,7 +124,9 @@ def test_postures_are_read_from_go2_states_and_sent_only_when_needed(
         10,
         "the robot standing locked",
     )
-    wait_until(lambda: robot.get_state().posture is Posture.STANDING, 5, "go2_states")
+    # go2_states come as late as odometry: wait until the robot, too, sees the joints locked.
+    wait_until(lambda: not robot.walking_mode, 5, "go2_states showing the joints locked")
+    assert robot.get_state().posture is Posture.STANDING
     robot.set_posture(Posture.STANDING)
     assert driver.truth().mode in (1, 3)
     wait_until(lambda: len(api_ids(requests)) >= 7, 5, "the driver's records")

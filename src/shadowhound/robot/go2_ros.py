@@ -299,6 +299,11 @@ class Go2RosRobot:
             return self._tracker.latency
 
     @property
+    def walking_mode(self) -> bool:
+        """go2_states shows the robot standing in a mode in which it obeys Moves (settled)."""
+        return self._postures.balanced()
+
+    @property
     def latency(self) -> float:
         """The most odometry may lag now: measured (or configured), else MAX_LATENCY."""
         with self._lock:
