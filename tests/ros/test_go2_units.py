@@ -30,6 +30,7 @@ def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
         "odom_latency": None,
         "battery_topic": "",
         "detections_topic": "",
+        "detector_classes": (),
         "firmware_tricks": False,
         "map_topic": "map",
         "scan_topic": "scan",
