@@ -1,19 +1,36 @@
+"""Fixtures for the whole suite, and its homes (see tests/home.py)."""
+
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
-from tests.home import RealHome
+from tests.home import RealHome, home_env
 
 _real_home: RealHome | None = None
+_session_home: Path | None = None
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    global _real_home
+    """Before any test module is imported: this process (and every process it starts, xdist
+    workers included) lives in a temporary home; what outlives a test (module-scoped node
+    processes, servers) keeps this one."""
+    global _real_home, _session_home
     if not hasattr(config, "workerinput"):  # the controller (or the only process)
         _real_home = RealHome.record(Path.home())
+    _session_home = Path(tempfile.mkdtemp(prefix="shadowhound-test-home-"))
+    os.environ.update(home_env(_session_home))
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if _session_home is not None:
+        shutil.rmtree(_session_home, ignore_errors=True)
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
@@ -43,18 +60,19 @@ def robot(settings: ShadowHoundConfig) -> SimRobot:
 
 
 @pytest.fixture
-def agent(robot: SimRobot, settings: ShadowHoundConfig) -> RobotAgent:
+def agent(robot: SimRobot, settings: ShadowHoundConfig) -> Iterator[RobotAgent]:
     a = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
     a.initialize()
     yield a
     a.cleanup()
 
 
-@pytest.fixture(autouse=True, scope="session")
-def _memory_in_a_temporary_directory(tmp_path_factory):
-    """Profiles keep history in ~/.shadowhound; tests (and the CLI processes they start) must
-    not touch the developer's real history."""
-    import os
-
-    os.environ["SHADOWHOUND_MEMORY__DATA_DIR"] = str(tmp_path_factory.mktemp("memory"))
-    yield
+@pytest.fixture(autouse=True)
+def own_home(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Every test runs in an empty home of its own (HOME, the XDG directories, the memory's
+    data_dir), also for the processes it starts: nothing one test or run remembers reaches
+    another, and nothing reaches the user's home."""
+    path = tmp_path_factory.mktemp("home")
+    for name, value in home_env(path).items():
+        monkeypatch.setenv(name, value)
+    return path
