@@ -24,6 +24,8 @@ def pytest_configure(config: pytest.Config) -> None:
     global _real_home, _session_home
     if not hasattr(config, "workerinput"):  # the controller (or the only process)
         _real_home = RealHome.record(Path.home())
+        # xdist workers derive their ROS domains from the run's pid (tests/ros/conftest.py).
+        os.environ["SHADOWHOUND_TESTS_RUN_PID"] = str(os.getpid())
     _session_home = Path(tempfile.mkdtemp(prefix="shadowhound-test-home-"))
     os.environ.update(home_env(_session_home))
 
@@ -41,7 +43,11 @@ def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     changed = _real_home.changes()
     if changed:
         reporter = session.config.pluginmanager.get_plugin("terminalreporter")
-        lines = [f"the tests changed the real home {_real_home.path}:", *changed[:50]]
+        lines = [
+            f"the tests changed the real home {_real_home.path} (or, on a shared machine, "
+            "another program did meanwhile):",
+            *changed[:50],
+        ]
         if reporter is not None:
             reporter.ensure_newline()
             reporter.write_sep("=", "real home changed", red=True)
