@@ -6,6 +6,7 @@ No rclpy needed: these run on every interpreter, also where ROS 2 is not install
 from __future__ import annotations
 
 import math
+import os
 import subprocess
 import sys
 import threading
@@ -293,6 +294,18 @@ def test_loopback_environment_keeps_dds_on_this_machine() -> None:
     tags = {e.tag.split("}")[1]: (e.text or "").strip() for e in xml}
     assert tags["useBuiltinTransports"] == "false" and tags["address"] == "127.0.0.1"
     assert 1 <= session_domain_id() <= 100
+
+
+def test_each_xdist_worker_of_a_run_has_a_domain_of_its_own() -> None:
+    from tests.ros.conftest import RUN_PID, tests_domain_id
+
+    for run in (1, 99, 12345, 4_194_303):  # pids up to Linux's pid_max
+        domains = [
+            tests_domain_id({RUN_PID: str(run), "PYTEST_XDIST_WORKER": f"gw{n}"}) for n in range(8)
+        ]
+        assert len(set(domains)) == 8 and all(1 <= d <= 100 for d in domains), domains
+    assert tests_domain_id({RUN_PID: "7"}) == session_domain_id(7)  # without xdist
+    assert os.environ["ROS_DOMAIN_ID"] == str(tests_domain_id())  # this process's
 
 
 def test_importing_the_ros_package_does_not_import_rclpy() -> None:
