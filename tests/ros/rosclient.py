@@ -155,7 +155,11 @@ class RosClient:
 
     def destroy(self, *endpoints: Any) -> None:
         """Remove inboxes, publishers and clients made here (a rig that ends takes its own
-        along, so that a later rig's readers are the only ones on their topics)."""
+        along, so that a later rig's readers are the only ones on their topics). On the spin
+        thread: nothing is destroyed under a wait that uses it."""
+        self.call(self._destroy, endpoints)
+
+    def _destroy(self, endpoints: Sequence[Any]) -> None:
         for endpoint in endpoints:
             self._order.pop(id(endpoint), None)
             if isinstance(endpoint, Inbox):
