@@ -2,25 +2,40 @@
 
 The environment is set here, before any test module imports rclpy, and child processes
 inherit it: loopback + shared-memory Fast DDS profile (shipped in shadowhound/ros/),
-ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, ROS_DOMAIN_ID derived from the test run's process id
-and, under pytest-xdist, the worker's number (tests_domain_id).
+ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, and a ROS_DOMAIN_ID this process holds alone among
+the test processes on this machine (`claim_domain`): each pytest-xdist worker, and every
+other test run at the same time, gets its own.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
-from collections.abc import Mapping
+import tempfile
+from pathlib import Path
+from typing import IO
 
 from shadowhound.ros.dds import loopback_env, session_domain_id
 
-RUN_PID = "SHADOWHOUND_TESTS_RUN_PID"  # set by tests/conftest.py in the run's first process
+LOCKS = Path(tempfile.gettempdir())
 
 
-def tests_domain_id(environ: Mapping[str, str] = os.environ) -> int:
-    """This process's domain: the run's, plus the xdist worker's number (gw0, gw1, ...), so two
-    workers of one run never share a domain (their own pids could, modulo 100)."""
-    worker = environ.get("PYTEST_XDIST_WORKER", "gw0")
-    return session_domain_id(int(environ.get(RUN_PID, os.getpid())), int(worker[2:]))
+def claim_domain(start: int, locks: Path = LOCKS) -> tuple[int, IO[str]]:
+    """The first domain from `start` on (1..100, wrapping) that no other process holds: a lock
+    on a file per domain, held as long as the returned file stays open (this process's life).
+    Derived from a pid alone, the domains of runs started together collided (pids are handed
+    out in sequence) and one run's nodes answered the other's tests."""
+    for step in range(100):
+        domain = 1 + (start - 1 + step) % 100
+        lock = (locks / f"shadowhound-test-ros-domain-{domain}.lock").open("w")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.close()
+            continue
+        return domain, lock
+    raise RuntimeError("every ROS domain 1..100 is held by another test process")
 
 
-os.environ.update(loopback_env(tests_domain_id()))
+DOMAIN, _HELD = claim_domain(session_domain_id())
+os.environ.update(loopback_env(DOMAIN))

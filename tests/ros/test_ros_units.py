@@ -296,16 +296,18 @@ def test_loopback_environment_keeps_dds_on_this_machine() -> None:
     assert 1 <= session_domain_id() <= 100
 
 
-def test_each_xdist_worker_of_a_run_has_a_domain_of_its_own() -> None:
-    from tests.ros.conftest import RUN_PID, tests_domain_id
+def test_each_test_process_holds_a_domain_of_its_own(tmp_path) -> None:
+    from tests.ros.conftest import DOMAIN, claim_domain
 
-    for run in (1, 99, 12345, 4_194_303):  # pids up to Linux's pid_max
-        domains = [
-            tests_domain_id({RUN_PID: str(run), "PYTEST_XDIST_WORKER": f"gw{n}"}) for n in range(8)
-        ]
-        assert len(set(domains)) == 8 and all(1 <= d <= 100 for d in domains), domains
-    assert tests_domain_id({RUN_PID: "7"}) == session_domain_id(7)  # without xdist
-    assert os.environ["ROS_DOMAIN_ID"] == str(tests_domain_id())  # this process's
+    assert os.environ["ROS_DOMAIN_ID"] == str(DOMAIN)  # this process's, set before rclpy
+    first, held = claim_domain(100, tmp_path)
+    second, other = claim_domain(100, tmp_path)  # another worker or run starting at the same
+    assert (first, second) == (100, 1)  # the next free one, wrapping after 100
+    held.close()  # the first process ended
+    third, again = claim_domain(100, tmp_path)
+    assert third == 100
+    other.close()
+    again.close()
 
 
 def test_importing_the_ros_package_does_not_import_rclpy() -> None:

@@ -14,11 +14,9 @@ from pathlib import Path
 LOOPBACK_PROFILE = Path(__file__).with_name("fastdds_loopback.xml")
 
 
-def session_domain_id(pid: int | None = None, worker: int = 0) -> int:
-    """A domain id in 1..100 derived from a process id, so parallel sessions do not meet.
-    `worker` counts the parallel workers of one session (pytest-xdist's gw0, gw1, ...): each
-    gets the next domain, so up to 100 workers of a session never share one."""
-    return 1 + ((os.getpid() if pid is None else pid) + worker) % 100
+def session_domain_id(pid: int | None = None) -> int:
+    """A domain id in 1..100 derived from a process id, so parallel sessions do not meet."""
+    return 1 + (os.getpid() if pid is None else pid) % 100
 
 
 def loopback_env(domain_id: int | None = None) -> dict[str, str]:
