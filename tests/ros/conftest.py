@@ -4,18 +4,20 @@ The environment is set here, before any test module imports rclpy, and child pro
 inherit it: loopback + shared-memory Fast DDS profile (shipped in shadowhound/ros/),
 ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, and a ROS_DOMAIN_ID this process holds alone among
 the test processes on this machine (`claim_domain`): each pytest-xdist worker, and every
-other test run at the same time, gets its own.
+other test run at the same time, gets its own. Two runs in one domain answer each other's
+tests (seen: a run's nav2 rig got another run's node's status lines).
 """
 
 from __future__ import annotations
 
 import fcntl
 import os
+import random
 import tempfile
 from pathlib import Path
 from typing import IO
 
-from shadowhound.ros.dds import loopback_env, session_domain_id
+from shadowhound.ros.dds import loopback_env
 
 LOCKS = Path(tempfile.gettempdir())
 
@@ -37,5 +39,7 @@ def claim_domain(start: int, locks: Path = LOCKS) -> tuple[int, IO[str]]:
     raise RuntimeError("every ROS domain 1..100 is held by another test process")
 
 
-DOMAIN, _HELD = claim_domain(session_domain_id())
+# From a random domain on: runs started together have neighbouring pids, and a run that takes
+# no lock (an older checkout) uses the pid-derived domain, 1 + pid % 100.
+DOMAIN, _HELD = claim_domain(random.randint(1, 100))
 os.environ.update(loopback_env(DOMAIN))
