@@ -44,12 +44,12 @@ def test_profiles_keep_their_memory_in_the_tests_home(own_home: Path) -> None:
 def test_the_real_home_check_sees_what_a_run_would_leave(tmp_path: Path) -> None:
     user = tmp_path / "user"
     (user / ".shadowhound").mkdir(parents=True)
-    (user / ".cache" / "pip").mkdir(parents=True)
+    (user / ".config" / "chromium").mkdir(parents=True)
     (user / ".shadowhound" / "history.db").write_bytes(b"old")
     real = RealHome.record(user)
     assert real.changes() == []
-    (user / ".cache" / "pip" / "wheel").write_bytes(b"pip's own")  # other programs' caches
+    (user / ".config" / "chromium" / "Local State").write_text("{}")  # the user's browser
     assert real.changes() == []
     (user / ".shadowhound" / "history.db").write_bytes(b"old and new")
-    (user / ".ros").mkdir()
-    assert real.changes() == ["created .ros", "modified .shadowhound/history.db"]
+    (user / ".mcp-inspector").mkdir()
+    assert real.changes() == ["created .mcp-inspector", "modified .shadowhound/history.db"]
