@@ -86,11 +86,14 @@ class Watch:
         self.requests: list[dict[str, Any]] = []
         self.status: list[str] = []
         self.robot: list[dict[str, Any]] = []
-        n.create_subscription(String, "/sim_driver/truth", self._truth, RELIABLE)
+        # Each process's periodic topic is subscribed last (truth: the driver; robot_status: the
+        # node): a message there proves that process matched every reader made before it too
+        # (both sides of the match, as tests/ros/rosclient.py's wait_matched).
         n.create_subscription(
             String, "/sim_driver/requests", lambda m: self.requests.append(json.loads(m.data)), 50
         )
         n.create_subscription(String, "/mission_status", lambda m: self.status.append(m.data), 50)
+        n.create_subscription(String, "/sim_driver/truth", self._truth, RELIABLE)
         n.create_subscription(
             String, "/shadowhound/robot_status", lambda m: self.robot.append(json.loads(m.data)), 10
         )

@@ -118,9 +118,9 @@ class Rig:
         self.status: list[str] = []
         self.robot: list[dict[str, Any]] = []
         n = self.node
-        n.create_subscription(
-            String, "/sim_driver/truth", lambda m: self.truth.append(json.loads(m.data)), RELIABLE
-        )
+        # Each process's periodic topic is subscribed last (truth: the driver; robot_status: the
+        # node): a message there proves that process matched every reader made before it too
+        # (both sides of the match, as tests/ros/rosclient.py's wait_matched).
         n.create_subscription(
             String,
             "/sim_driver/requests",
@@ -129,6 +129,9 @@ class Rig:
         )
         n.create_subscription(
             String, "/mission_status", lambda m: self.status.append(m.data), RELIABLE
+        )
+        n.create_subscription(
+            String, "/sim_driver/truth", lambda m: self.truth.append(json.loads(m.data)), RELIABLE
         )
         n.create_subscription(
             String, "/shadowhound/robot_status", lambda m: self.robot.append(json.loads(m.data)), 10

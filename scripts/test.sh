@@ -52,9 +52,18 @@ echo "== lint and format (ruff)"
 echo "== type check (mypy, core)"
 "$VENV/bin/mypy" --no-error-summary src/shadowhound
 
-echo "== tests (Python $("$VENV/bin/python" -c 'import platform; print(platform.python_version())'))"
+# Tests run in parallel workers (pytest-xdist), each test file whole in one worker: a module's
+# node processes and servers stay with its tests. Most tests wait on a robot walking in real
+# time, so there are more workers than cores (TEST_WORKERS=1: one process, no xdist).
+WORKERS=${TEST_WORKERS:-3}
+PARALLEL=()
+if [ "$WORKERS" != 1 ]; then
+  PARALLEL=(-n "$WORKERS" --dist loadfile)
+fi
+
+echo "== tests (Python $("$VENV/bin/python" -c 'import platform; print(platform.python_version())'), $WORKERS worker(s))"
 # Here ROS must be present: its tests fail instead of skipping (the 3.10 run below skips them).
-SHADOWHOUND_REQUIRE_ROS=1 "$VENV/bin/python" -m pytest -q "$@"
+SHADOWHOUND_REQUIRE_ROS=1 "$VENV/bin/python" -m pytest -q "${PARALLEL[@]}" "$@"
 
 # The core must also work on Python 3.10 (ROS 2 Humble's Python). Run the core tests there
 # when a 3.10 interpreter is available (pyenv on the project's machines).
@@ -76,5 +85,5 @@ if [ -n "$PY310" ] && [ -z "${SKIP_PY310:-}" ]; then
   fi
   .venv310/bin/python -m pip install --quiet --upgrade pip
   .venv310/bin/python -m pip install --quiet -e ".[dev]"
-  .venv310/bin/python -m pytest -q -p no:cacheprovider
+  .venv310/bin/python -m pytest -q -p no:cacheprovider "${PARALLEL[@]}"
 fi

@@ -63,7 +63,6 @@ def rig(client: RosClient, tmp_path_factory: pytest.TempPathFactory) -> Iterator
 def send_fault(rig: Rig, fault: dict[str, Any]) -> None:
     """Publish a fault message and wait until the driver's truth shows it armed."""
     want = Faults.from_json(json.dumps(fault)).to_dict()
-    wait_until(lambda: rig.truth.fault.get_subscription_count() > 0, TIMEOUT, "the fault topic")
     rig.truth.fault.publish(String(data=json.dumps(fault)))
     rig.truth.wait(
         lambda t: {k: t["faults"][k] for k in want} == want and not t["faults"]["fired"],
@@ -220,10 +219,10 @@ def test_the_estop_topic_stops_a_walk_the_mcp_server_started(client: RosClient) 
     from tests.ros.test_go2_truth import Truth
 
     driver = NodeProcess(command="sim-driver", options=("--camera-rate-hz", "0"))
+    truth = Truth(client, "")
     server = None
     try:
-        truth = Truth(client, "")
-        wait_until(lambda: driver.check_alive() or truth.truth.items, TIMEOUT, "the driver")
+        truth.wait_ready(driver)
         server = HttpServer("--robot", "go2", time_scale=1.0)
         estop = client.publisher(Empty, "/shadowhound/estop")
         release = client.publisher(Empty, "/shadowhound/estop_release")
@@ -239,12 +238,25 @@ def test_the_estop_topic_stops_a_walk_the_mcp_server_started(client: RosClient) 
 
         async def scenario() -> None:
             async with connect("http", url=server.url) as mcp:
-                # The server's own robot must have odometry (its side of the DDS match).
-                with anyio.fail_after(TIMEOUT):
-                    while not structured(await mcp.call_tool("get_state", {}))["robot"].get(
-                        "connected"
-                    ):
-                        await anyio.sleep(0.1)
+
+                async def robot_until(what: str, check: Any) -> None:
+                    try:
+                        with anyio.fail_after(TIMEOUT):
+                            while not check(
+                                structured(await mcp.call_tool("get_state", {}))["robot"]
+                            ):
+                                await anyio.sleep(0.1)
+                    except TimeoutError:
+                        raise AssertionError(f"timed out waiting for {what}") from None
+
+                # The server's own robot must have odometry (its side of the DDS match with the
+                # driver), and its e-stop listener must have matched these writers (the other
+                # side of the match `matched` sees): one press and one release, each seen.
+                await robot_until("odometry", lambda r: r.get("connected"))
+                estop.publish(Empty())
+                await robot_until("the e-stop latched", lambda r: r["estopped"])
+                release.publish(Empty())
+                await robot_until("the e-stop released", lambda r: not r["estopped"])
                 async with anyio.create_task_group() as tasks:
 
                     async def walk() -> None:
@@ -282,4 +294,5 @@ def test_the_estop_topic_stops_a_walk_the_mcp_server_started(client: RosClient) 
     finally:
         if server is not None:
             server.stop()
+        truth.close()
         driver.stop()

@@ -6,6 +6,7 @@ Skipped without rclpy or go2_interfaces unless SHADOWHOUND_REQUIRE_ROS=1 (then i
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -93,7 +94,7 @@ def test_the_build_check_refuses_a_copy_with_other_fields(tmp_path: Path) -> Non
         text=True,
         timeout=60,
         cwd="/tmp",
-        env={"PYTHONPATH": str(tmp_path)},
+        env={"PYTHONPATH": str(tmp_path), "HOME": os.environ["HOME"]},  # the test's home
     )
     assert done.returncode == 1
     assert (

@@ -122,6 +122,7 @@ def rig(client: RosClient) -> Iterator[Rig]:
         "detections_topic:=detections",
         "-p",
         f"detector_classes:={CLASSES}",  # what the driver's detector can name
+        navigation=True,
     )
     yield rig
     stop()
@@ -168,10 +169,9 @@ def test_the_map_reaches_the_plan_check(rig: Rig) -> None:
     assert math.hypot(rig.truth.now()["x"], rig.truth.now()["y"]) < 0.01
 
 
-def test_go_to_a_point_through_navigate_to_pose_with_feedback(client: RosClient, rig: Rig) -> None:
-    feedback = client.subscribe(
-        NavigateToPose.Impl.FeedbackMessage, "/nav/navigate_to_pose/_action/feedback"
-    )
+def test_go_to_a_point_through_navigate_to_pose_with_feedback(rig: Rig) -> None:
+    feedback = rig.truth.nav_feedback
+    sent = feedback.mark()
     before = navigation(rig.truth.still())
     poses = rig.truth.truth.mark()
     final = rig.agent.run(GOAL, 90.0)
@@ -187,7 +187,7 @@ def test_go_to_a_point_through_navigate_to_pose_with_feedback(client: RosClient,
     assert clearance >= BALL_RADIUS + BODY - 0.01, clearance
     assert touches(walked) == []
     # Feedback came all along, the distance remaining falling to the goal.
-    remaining = [m.feedback.distance_remaining for m in feedback.items]
+    remaining = [m.feedback.distance_remaining for m in feedback.since(sent)]
     assert len(remaining) > 10 and remaining[0] > 4.0 and remaining[-1] < 0.3, remaining[:5]
     home(rig)
 
@@ -202,9 +202,8 @@ def test_go_to_the_blue_box_through_navigate_to_pose_with_feedback(
         lambda m: "blue box" in labels(m), TIMEOUT, "the blue box among the node's known objects"
     )
     assert math.dist(labels(shown)["blue box"], (BOX.x, BOX.y)) < 1e-3
-    feedback = client.subscribe(
-        NavigateToPose.Impl.FeedbackMessage, "/nav/navigate_to_pose/_action/feedback"
-    )
+    feedback = rig.truth.nav_feedback
+    sent = feedback.mark()
     before = navigation(rig.truth.still())
     poses = rig.truth.truth.mark()
     final = rig.agent.run(BOX_MISSION, 90.0)
@@ -220,7 +219,7 @@ def test_go_to_the_blue_box_through_navigate_to_pose_with_feedback(
     assert abs(math.degrees(math.remainder(end["yaw"] - facing, math.tau))) < 10.0, end
     walked = [json.loads(m.data) for m in rig.truth.truth.since(poses)]
     assert touches(walked) == []
-    remaining = [m.feedback.distance_remaining for m in feedback.items]
+    remaining = [m.feedback.distance_remaining for m in feedback.since(sent)]
     assert len(remaining) > 10 and remaining[0] > 1.8 and remaining[-1] < 0.3, remaining[:5]
     home(rig)
 
@@ -231,7 +230,9 @@ def start_walk(rig: Rig) -> Any:
     from shadowhound_interfaces.action import ExecuteMission
 
     wait_until(lambda: rig.agent.action.server_is_ready(), TIMEOUT, "the action server")
-    sent = rig.agent.action.send_goal_async(ExecuteMission.Goal(command=BOX_MISSION))
+    sent = rig.agent.client.call(
+        rig.agent.action.send_goal_async, ExecuteMission.Goal(command=BOX_MISSION)
+    )
     handle = wait_until(lambda: sent.done() and sent.result(), TIMEOUT, "the goal accepted")
     assert handle.accepted
     rig.truth.wait(
@@ -243,30 +244,27 @@ def start_walk(rig: Rig) -> Any:
 def test_cancelling_the_walk_to_the_blue_box_cancels_the_nav2_goal(rig: Rig) -> None:
     before = navigation(rig.truth.now())
     handle = start_walk(rig)
-    handle.cancel_goal_async()
+    rig.agent.client.call(handle.cancel_goal_async)
     end = rig.truth.wait(lambda t: not navigation(t)["active"], "the goal to end", 5.0)
     assert navigation(end)["canceled"] == before["canceled"] + 1
     still = rig.truth.still()
     gap = math.dist((still["x"], still["y"]), (BOX.x, BOX.y)) - BOX.radius
     assert gap > STANDOFF + 0.5, still  # stopped on the way, not there
-    result = handle.get_result_async()
+    result = rig.agent.client.call(handle.get_result_async)
     wait_until(result.done, TIMEOUT, "the mission's result")
     assert result.result().result.success is False
     home(rig)
 
 
 def test_estop_on_the_way_to_the_blue_box_cancels_the_nav2_goal_and_stops_the_robot(
-    client: RosClient, rig: Rig
+    rig: Rig,
 ) -> None:
-    estop = client.publisher(Empty, "/shadowhound/estop")
-    release = client.publisher(Empty, "/shadowhound/estop_release")
-    wait_until(lambda: estop.get_subscription_count() > 0, TIMEOUT, "the node's e-stop topic")
     before = navigation(rig.truth.now())
     mark = rig.agent.status.mark()
     start_walk(rig)
     try:
         pressed = rig.truth.now()
-        estop.publish(Empty())
+        rig.agent.estop.publish(Empty())
         end = rig.truth.wait(lambda t: not navigation(t)["active"], "the goal to end", 5.0)
         assert navigation(end)["canceled"] == before["canceled"] + 1
         still = rig.truth.still()
@@ -282,30 +280,23 @@ def test_estop_on_the_way_to_the_blue_box_cancels_the_nav2_goal_and_stops_the_ro
         later = rig.truth.still()
         assert math.hypot(later["x"] - still["x"], later["y"] - still["y"]) < 1e-3
     finally:
-        release.publish(Empty())
+        rig.agent.release.publish(Empty())
     wait_until(lambda: not rig.agent.robot_state()["estopped"], 10, "the release")
     home(rig)
 
 
-def test_a_goal_nav2_cannot_reach_fails_in_words(client: RosClient, rig: Rig) -> None:
+def test_a_goal_nav2_cannot_reach_fails_in_words(rig: Rig) -> None:
     # Straight to the server, as a Nav2 user's tool would: a goal inside the blue box.
-    from rclpy.action import ActionClient
-
-    nav = ActionClient(client.node, NavigateToPose, "/nav/navigate_to_pose")
-    try:
-        assert nav.wait_for_server(timeout_sec=TIMEOUT)
-        goal = NavigateToPose.Goal()
-        goal.pose.header.frame_id = "odom"
-        goal.pose.pose.position.x, goal.pose.pose.position.y = 2.5, 2.0  # the blue box
-        goal.pose.pose.orientation.w = 1.0
-        sent = nav.send_goal_async(goal)
-        handle = wait_until(lambda: sent.done() and sent.result(), TIMEOUT, "the goal")
-        result = handle.get_result_async()
-        wait_until(result.done, TIMEOUT, "its result")
-        assert result.result().result.error_code == 206  # GOAL_OCCUPIED
-        assert "inside" in result.result().result.error_msg
-    finally:
-        nav.destroy()
+    goal = NavigateToPose.Goal()
+    goal.pose.header.frame_id = "odom"
+    goal.pose.pose.position.x, goal.pose.pose.position.y = 2.5, 2.0  # the blue box
+    goal.pose.pose.orientation.w = 1.0
+    sent = rig.truth.client.call(rig.truth.nav.send_goal_async, goal)
+    handle = wait_until(lambda: sent.done() and sent.result(), TIMEOUT, "the goal")
+    result = rig.truth.client.call(handle.get_result_async)
+    wait_until(result.done, TIMEOUT, "its result")
+    assert result.result().result.error_code == 206  # GOAL_OCCUPIED
+    assert "inside" in result.result().result.error_msg
 
 
 def test_a_name_the_detector_cannot_give_is_refused_before_moving(rig: Rig) -> None:

@@ -22,11 +22,17 @@ from tests.ros.needs import require
 require("rclpy", "shadowhound_interfaces", "go2_interfaces")
 
 from geometry_msgs.msg import Twist  # noqa: E402
-from go2_interfaces.msg import Go2State  # noqa: E402
+from go2_interfaces.msg import Go2State, WebRtcReq  # noqa: E402
 from nav_msgs.msg import Odometry  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
-from tests.ros.rosclient import Agent, NodeProcess, RosClient, wait_until  # noqa: E402
+from tests.ros.rosclient import (  # noqa: E402
+    Agent,
+    NodeProcess,
+    RosClient,
+    wait_matched,
+    wait_until,
+)
 
 NS = "/robot0"
 TIMEOUT = 30.0
@@ -37,12 +43,31 @@ class Driver:
     """The simulated driver's topics, seen from the test client."""
 
     def __init__(self, client: RosClient) -> None:
+        self.client = client
         self.odom = client.subscribe(Odometry, f"{NS}/odom")
         self.states = client.subscribe(Go2State, f"{NS}/go2_states")
         self.requests = client.subscribe(String, f"{NS}/sim_driver/requests")
-        self.truth = client.subscribe(String, f"{NS}/sim_driver/truth")
         self.fault = client.publisher(String, f"{NS}/sim_driver/fault")
         self.cmd_vel = client.publisher(Twist, f"{NS}/cmd_vel")
+        self.webrtc = client.publisher(WebRtcReq, f"{NS}/webrtc_req")  # the last writer
+        self.truth = client.subscribe(String, f"{NS}/sim_driver/truth")  # last reader: 50 Hz
+
+    def wait_ready(self, process: NodeProcess) -> None:
+        """Until the driver and this client have matched every topic both ways."""
+
+        def ping() -> Any:  # a request the driver drops (not JSON) and records
+            mark = self.requests.mark()
+            self.webrtc.publish(WebRtcReq(id=0, topic="", api_id=0, parameter="{", priority=0))
+            return lambda: 0 in self.api_ids(mark)
+
+        wait_matched(
+            self.client,
+            "the simulated driver",
+            [self.odom, self.states, self.requests, self.truth],
+            [self.fault, self.cmd_vel, self.webrtc],
+            ping=ping,
+            alive=process.check_alive,
+        )
 
     def pose(self) -> tuple[float, float, float]:
         """The true pose (the driver's odometry is late: the truth is the judge)."""
@@ -97,19 +122,7 @@ def rig() -> Iterator[tuple[Agent, Driver]]:
     agent, driver = Agent(client), Driver(client)
     try:
         agent.wait_ready(node)
-        # Every topic the tests read must have delivered once: DDS matches each reader on
-        # its own, so odometry arriving says nothing about the truth or the states.
-        wait_until(
-            lambda: (
-                driver_process.check_alive()
-                or (driver.odom.items and driver.truth.items and driver.states.items)
-            ),
-            TIMEOUT,
-            "odometry, go2_states and the ground truth from the simulated driver",
-        )
-        wait_until(
-            lambda: driver.fault.get_subscription_count() > 0, TIMEOUT, "the driver's fault topic"
-        )
+        driver.wait_ready(driver_process)
         wait_until(
             lambda: agent.robot_state()["connected"],
             TIMEOUT,
@@ -179,12 +192,10 @@ def test_sitting_ignores_motion_in_the_driver(rig) -> None:
 
 def test_estop_during_a_move_brings_the_drivers_velocity_to_zero(rig) -> None:
     agent, driver = rig
-    estop = agent.client.publisher(Empty, "/shadowhound/estop")
-    release = agent.client.publisher(Empty, "/shadowhound/estop_release")
     mark, requests = agent.status.mark(), driver.requests.mark()
     agent.missions.publish(String(data="walk backward 3 meters"))
     driver.wait_moving()
-    estop.publish(Empty())
+    agent.estop.publish(Empty())
     try:
         driver.wait_still("the driver's velocity to reach zero after the e-stop")
         done = agent.status.wait_for(
@@ -199,7 +210,7 @@ def test_estop_during_a_move_brings_the_drivers_velocity_to_zero(rig) -> None:
         assert not agent.run("walk forward 1 meter").startswith("COMPLETED")  # refused
         assert math.hypot(driver.pose()[0] - x0, driver.pose()[1] - y0) < 1e-3
     finally:
-        release.publish(Empty())
+        agent.release.publish(Empty())
     agent.diagnostic(agent.diagnostics.mark(), 5.0, lambda v: v["estop"] == "false")
 
 

@@ -37,11 +37,19 @@ require("rclpy", "shadowhound_interfaces", "go2_interfaces")
 from go2_interfaces.msg import WebRtcReq  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
-from tests.ros.rosclient import ROOT, Agent, NodeProcess, RosClient, wait_until  # noqa: E402
+from tests.ros.rosclient import (  # noqa: E402
+    ROOT,
+    Agent,
+    NodeProcess,
+    RosClient,
+    wait_matched,
+    wait_until,
+)
 
 MISSION = "stand up, walk forward 1 meter and turn left 90 degrees"
 TIMEOUT = 40.0
 METRES, DEGREES = 0.05, 3.0
+PING_API_ID = 0  # no sport command: a readiness ping the driver drops and records
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 
 
@@ -54,12 +62,51 @@ def free_port() -> int:
 class Truth:
     """The simulated driver's own topics for one robot (`prefix` '' or '/robot0')."""
 
-    def __init__(self, client: RosClient, prefix: str) -> None:
-        self.prefix = prefix
-        self.truth = client.subscribe(String, f"{prefix}/sim_driver/truth")
+    def __init__(self, client: RosClient, prefix: str, navigation: bool = False) -> None:
+        self.client, self.prefix = client, prefix
+        self.navigation: list[Any] = []
+        if navigation:  # the driver's navigate_to_pose: a client and its feedback, read apart
+            from nav2_msgs.action import NavigateToPose
+
+            self.nav = client.action_client(f"{prefix}/navigate_to_pose", NavigateToPose)
+            self.nav_feedback = client.subscribe(
+                NavigateToPose.Impl.FeedbackMessage, f"{prefix}/navigate_to_pose/_action/feedback"
+            )
+            self.navigation = [self.nav, self.nav_feedback]
         self.requests = client.subscribe(String, f"{prefix}/sim_driver/requests")
         self.fault = client.publisher(String, f"{prefix}/sim_driver/fault")
-        self.webrtc = client.publisher(WebRtcReq, f"{prefix}/webrtc_req")
+        self.webrtc = client.publisher(WebRtcReq, f"{prefix}/webrtc_req")  # the last writer
+        self.truth = client.subscribe(String, f"{prefix}/sim_driver/truth")  # last reader: 50 Hz
+
+    def wait_ready(self, driver: NodeProcess) -> None:
+        """Until the driver and this client have matched every topic both ways."""
+        readers = [self.requests, self.truth]
+        if self.navigation:
+            readers.insert(0, self.nav_feedback)
+        wait_matched(
+            self.client,
+            f"the simulated driver under {self.prefix or '/'}",
+            readers,
+            [self.fault, self.webrtc],
+            ping=self.ping,
+            alive=driver.check_alive,
+        )
+        if self.navigation:
+            wait_until(self.nav.server_is_ready, TIMEOUT, "the driver's navigate_to_pose")
+
+    def ping(self) -> Any:
+        """A request the driver drops (its parameter is not JSON) and records: it reaches no
+        robot. Returns the check for its record."""
+        mark = self.requests.mark()
+        self.webrtc.publish(
+            WebRtcReq(id=0, topic="", api_id=PING_API_ID, parameter="{ping", priority=0)
+        )
+        return lambda: any(
+            json.loads(m.data)["api_id"] == PING_API_ID for m in self.requests.since(mark)
+        )
+
+    def close(self) -> None:
+        self.client.destroy(*self.navigation, self.requests, self.fault, self.webrtc, self.truth)
 
     def now(self, mark: int = 0) -> dict[str, Any]:
         """The next truth record (after `mark`)."""
@@ -84,9 +131,6 @@ class Truth:
 
     def lie_down(self) -> None:
         """StandDown straight to the driver (as a person with the phone app would)."""
-        wait_until(
-            lambda: self.webrtc.get_subscription_count() > 0, TIMEOUT, "the driver's webrtc_req"
-        )
         self.webrtc.publish(
             WebRtcReq(id=0, topic="rt/api/sport/request", api_id=1005, parameter="", priority=0)
         )
@@ -116,8 +160,10 @@ def start_rig(
     prefix: str,
     robot_namespace: str,
     *node_args: str,
+    navigation: bool = False,
 ) -> tuple[Rig, Any]:
-    """The driver (options, `-r __ns:=ns`) and the node, ready, with their stopper."""
+    """The driver (options, `-r __ns:=ns`) and the node, ready, with their stopper
+    (`navigation`: the test also talks to the driver's navigate_to_pose, see Truth)."""
     driver_ros = ("-r", f"__ns:={ns}") if ns else ()
     driver = NodeProcess(
         *driver_ros, command="sim-driver", options=("--camera-rate-hz", "0", *options)
@@ -134,18 +180,18 @@ def start_rig(
         f"web_interface_port:={port}",
         *node_args,
     )
-    agent, truth = Agent(client), Truth(client, prefix)
+    agent, truth = Agent(client), Truth(client, prefix, navigation)
     rig = Rig(agent, truth, node, driver, port)
 
     def stop() -> None:
+        agent.close()
+        truth.close()
         codes = {"node": node.stop(signal.SIGINT), "driver": driver.stop(signal.SIGTERM)}
         assert codes == {"node": 0, "driver": 0}, (node.output()[-3000:], driver.output()[-3000:])
 
     try:
         agent.wait_ready(node)
-        wait_until(
-            lambda: driver.check_alive() or truth.truth.items, TIMEOUT, "the driver's ground truth"
-        )
+        truth.wait_ready(driver)
         wait_until(
             lambda: agent.robot_state()["connected"],
             TIMEOUT,
@@ -387,11 +433,8 @@ def walk_then(rig: Rig, press: Any) -> tuple[float, dict[str, Any], str]:
 
 
 def test_estop_from_the_ros_topic_stops_the_truth(rig: Rig) -> None:
-    estop = rig.agent.client.publisher(Empty, "/shadowhound/estop")
-    release = rig.agent.client.publisher(Empty, "/shadowhound/estop_release")
-    wait_until(lambda: estop.get_subscription_count() > 0, TIMEOUT, "the node's e-stop topic")
     try:
-        latency, end, done = walk_then(rig, lambda: estop.publish(Empty()))
+        latency, end, done = walk_then(rig, lambda: rig.agent.estop.publish(Empty()))
         assert done.startswith("FAILED: ") and "e-stop pressed" in done, done
         assert 0 <= latency < 1.0  # the figure is the benchmark's (bench/bench_go2.py)
         before = rig.truth.now()
@@ -399,7 +442,7 @@ def test_estop_from_the_ros_topic_stops_the_truth(rig: Rig) -> None:
         after = rig.truth.still()
         assert math.hypot(after["x"] - before["x"], after["y"] - before["y"]) < 1e-3
     finally:
-        release.publish(Empty())
+        rig.agent.release.publish(Empty())
     wait_until(lambda: not rig.agent.robot_state()["estopped"], 10, "the release")
 
 
@@ -422,15 +465,18 @@ def test_cancelling_the_mission_action_during_a_walk_sends_stop_move(rig: Rig) -
 
     assert rig.agent.run("stand up").startswith("COMPLETED")
     wait_until(lambda: rig.agent.action.server_is_ready(), TIMEOUT, "the action server")
-    sent = rig.agent.action.send_goal_async(ExecuteMission.Goal(command="walk forward 3 meters"))
+    client = rig.agent.client
+    sent = client.call(
+        rig.agent.action.send_goal_async, ExecuteMission.Goal(command="walk forward 3 meters")
+    )
     handle = wait_until(lambda: sent.done() and sent.result(), TIMEOUT, "the goal accepted")
     assert handle.accepted
     rig.truth.wait(lambda t: abs(t["vx"]) > 0.2, "the robot to walk")
     requests = rig.truth.requests.mark()
-    handle.cancel_goal_async()
+    client.call(handle.cancel_goal_async)
     wait_until(lambda: rig.truth.stop_moves(requests), 5.0, "StopMove at the driver")
     assert not rig.truth.still()["moving"]
-    result = handle.get_result_async()
+    result = client.call(handle.get_result_async)
     wait_until(result.done, TIMEOUT, "the mission's result")
 
 
@@ -484,7 +530,7 @@ def test_doctor_finds_the_driver_and_says_what_to_fix_when_odometry_stops(rig: R
     assert "warn no battery source" in out, out
     rig.truth.fault.publish(String(data=json.dumps({"odom": False})))
     try:
-        time.sleep(1.0)
+        rig.truth.wait(lambda t: t["faults"]["odom"] is False, "odometry off at the driver")
         broken = run_doctor()
     finally:
         rig.truth.fault.publish(String(data="{}"))

@@ -99,7 +99,8 @@ def cam_agent(nodes: dict[str, tuple[NodeProcess, Agent]]) -> Iterator[Agent]:
 def send_goal(
     agent: Agent, command: str, dry_run: bool = False, feedback: list | None = None
 ) -> object:
-    future = agent.action.send_goal_async(
+    future = agent.client.call(
+        agent.action.send_goal_async,
         ExecuteMission.Goal(command=command, dry_run=dry_run),
         feedback_callback=(lambda fb: feedback.append(fb.feedback))
         if feedback is not None
@@ -109,8 +110,8 @@ def send_goal(
     return future.result()
 
 
-def get_result(goal_handle: object) -> object:
-    future = goal_handle.get_result_async()
+def get_result(agent: Agent, goal_handle: object) -> object:
+    future = agent.client.call(goal_handle.get_result_async)
     wait_until(future.done, TIMEOUT, "the action result")
     return future.result()
 
@@ -152,7 +153,7 @@ def test_action_goal_gets_feedback_per_step_and_a_result(agent: Agent) -> None:
         agent, "walk forward 0.2 meters then turn left 20 degrees", feedback=feedback
     )
     assert handle.accepted
-    response = get_result(handle)
+    response = get_result(agent, handle)
     assert response.status == GoalStatus.STATUS_SUCCEEDED
     result = response.result
     assert result.success, result.response
@@ -168,11 +169,11 @@ def test_action_goal_gets_feedback_per_step_and_a_result(agent: Agent) -> None:
 
 def test_dry_run_plans_and_checks_without_moving(agent: Agent) -> None:
     before = agent.robot_state()
-    result = get_result(send_goal(agent, "walk forward 2 meters", dry_run=True)).result
+    result = get_result(agent, send_goal(agent, "walk forward 2 meters", dry_run=True)).result
     assert result.success, result.response
     assert result.response.startswith("Dry run")
     assert [s["skill"] for s in json.loads(result.steps_json)] == ["nav.move"]
-    refused = get_result(send_goal(agent, "walk forward 50 meters", dry_run=True)).result
+    refused = get_result(agent, send_goal(agent, "walk forward 50 meters", dry_run=True)).result
     assert not refused.success and "refused" in refused.response
     after = agent.robot_state()
     assert after["distance_travelled"] == before["distance_travelled"]
@@ -184,9 +185,9 @@ def test_cancel_stops_the_robot_and_a_second_goal_is_rejected(agent: Agent) -> N
     assert handle.accepted
     wait_moving(agent)
     assert not send_goal(agent, "turn left 10 degrees").accepted  # one mission at a time
-    cancel = handle.cancel_goal_async()
+    cancel = agent.client.call(handle.cancel_goal_async)
     wait_until(cancel.done, TIMEOUT, "the cancel response")
-    response = get_result(handle)
+    response = get_result(agent, handle)
     assert response.status == GoalStatus.STATUS_CANCELED
     assert not response.result.success
     assert "mission cancelled" in response.result.response
@@ -195,11 +196,11 @@ def test_cancel_stops_the_robot_and_a_second_goal_is_rejected(agent: Agent) -> N
     )
     assert stopped["x"] < 1.8  # cancelled before the end (x = 2.0)
     # the node takes goals again
-    assert get_result(send_goal(agent, "turn right 5 degrees")).result.success
+    assert get_result(agent, send_goal(agent, "turn right 5 degrees")).result.success
 
 
 def test_empty_goal_is_aborted_with_a_reason(agent: Agent) -> None:
-    response = get_result(send_goal(agent, "   "))
+    response = get_result(agent, send_goal(agent, "   "))
     assert response.status == GoalStatus.STATUS_ABORTED
     assert "empty" in response.result.response
 
@@ -207,19 +208,12 @@ def test_empty_goal_is_aborted_with_a_reason(agent: Agent) -> None:
 # -- e-stop ----------------------------------------------------------------------------------
 
 
-def test_estop_stops_latches_and_releases(agent: Agent, client: RosClient) -> None:
-    estop = client.publisher(Empty, "/shadowhound/estop")
-    release = client.publisher(Empty, "/shadowhound/estop_release")
-    wait_until(
-        lambda: estop.get_subscription_count() and release.get_subscription_count(),
-        TIMEOUT,
-        "the e-stop subscriptions",
-    )
+def test_estop_stops_latches_and_releases(agent: Agent) -> None:
     mark = agent.status.mark()
     agent.missions.publish(String(data="walk forward 2 meters"))
     wait_moving(agent)
     diag_mark = agent.diagnostics.mark()
-    estop.publish(Empty())
+    agent.estop.publish(Empty())
     final = agent.status.wait_for(
         lambda m: m.data.startswith(("COMPLETED", "FAILED")), TIMEOUT, "the mission to end", mark
     )
@@ -231,7 +225,7 @@ def test_estop_stops_latches_and_releases(agent: Agent, client: RosClient) -> No
     status, values = agent.diagnostic(diag_mark, match=lambda v: v["estop"] == "true")
     assert status.level == b"\x02" and status.message == "e-stop latched"
     assert agent.run("turn left 5 degrees").startswith("FAILED: Refused: the e-stop is latched")
-    release.publish(Empty())
+    agent.release.publish(Empty())
     wait_until(lambda: not agent.robot_state()["estopped"], 5, "the e-stop to be released")
     assert agent.run("turn left 5 degrees").startswith("COMPLETED: ")
 
@@ -273,18 +267,14 @@ def test_robot_status_is_json(agent: Agent) -> None:
     assert {"x", "y", "yaw", "battery", "posture", "moving", "estopped"} <= set(state)
 
 
-def test_chat_service_answers(agent: Agent, client: RosClient) -> None:
-    chat = client.node.create_client(Chat, "/chat")
-    wait_until(chat.service_is_ready, TIMEOUT, "the chat service")
-    future = chat.call_async(Chat.Request(text="where are you?"))
+def test_chat_service_answers(agent: Agent) -> None:
+    future = agent.chat.call_async(Chat.Request(text="where are you?"))
     wait_until(future.done, TIMEOUT, "the chat answer")
     assert future.result().answer.startswith("I am at x=")
 
 
-def test_risky_plans_wait_for_approval_over_ros(agent: Agent, client: RosClient) -> None:
-    requests = client.subscribe(String, "/approval_request")
-    approve = client.node.create_client(Approve, "/approve")
-    wait_until(approve.service_is_ready, TIMEOUT, "the approve service")
+def test_risky_plans_wait_for_approval_over_ros(agent: Agent) -> None:
+    requests, approve = agent.approvals, agent.approve
 
     def decide(command: str, yes: bool) -> str:
         mark, seen = agent.status.mark(), requests.mark()

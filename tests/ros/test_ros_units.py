@@ -6,6 +6,7 @@ No rclpy needed: these run on every interpreter, also where ROS 2 is not install
 from __future__ import annotations
 
 import math
+import os
 import subprocess
 import sys
 import threading
@@ -293,6 +294,20 @@ def test_loopback_environment_keeps_dds_on_this_machine() -> None:
     tags = {e.tag.split("}")[1]: (e.text or "").strip() for e in xml}
     assert tags["useBuiltinTransports"] == "false" and tags["address"] == "127.0.0.1"
     assert 1 <= session_domain_id() <= 100
+
+
+def test_each_test_process_holds_a_domain_of_its_own(tmp_path) -> None:
+    from tests.ros.conftest import DOMAIN, claim_domain
+
+    assert os.environ["ROS_DOMAIN_ID"] == str(DOMAIN)  # this process's, set before rclpy
+    first, held = claim_domain(100, tmp_path)
+    second, other = claim_domain(100, tmp_path)  # another worker or run starting at the same
+    assert (first, second) == (100, 1)  # the next free one, wrapping after 100
+    held.close()  # the first process ended
+    third, again = claim_domain(100, tmp_path)
+    assert third == 100
+    other.close()
+    again.close()
 
 
 def test_importing_the_ros_package_does_not_import_rclpy() -> None:

@@ -34,7 +34,13 @@ from std_msgs.msg import String  # noqa: E402
 from shadowhound.robot import go2_api  # noqa: E402
 from shadowhound.robot.go2_api import SportMode  # noqa: E402
 from shadowhound.state import Posture  # noqa: E402
-from tests.ros.rosclient import ROOT, NodeProcess, RosClient, wait_until  # noqa: E402
+from tests.ros.rosclient import (  # noqa: E402
+    ROOT,
+    NodeProcess,
+    RosClient,
+    wait_matched,
+    wait_until,
+)
 
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 MOVE_TIMEOUT, ODOM_DELAY, POSTURE_SECONDS = 1.5, 0.5, 1.0
@@ -53,6 +59,7 @@ DRIVER = (
     "0",
 )
 TIMEOUT = 20.0
+PING_API_ID = 0  # no sport command: a readiness ping the driver drops and records
 Truth = dict[str, Any]
 
 
@@ -61,25 +68,37 @@ class Driver:
 
     def __init__(self, client: RosClient, base: str = "") -> None:
         self.client, self.base = client, base
-        self.truths = client.subscribe(String, f"{base}/sim_driver/truth")
         self.odom = client.subscribe(Odometry, f"{base}/odom")
         self.states = client.subscribe(Go2State, f"{base}/go2_states")
         self.records = client.subscribe(String, f"{base}/sim_driver/requests")
         self.cmd_vel_out = client.publisher(Twist, f"{base}/cmd_vel_out")
-        self.webrtc = client.publisher(WebRtcReq, f"{base}/webrtc_req")
+        self.webrtc = client.publisher(WebRtcReq, f"{base}/webrtc_req")  # the last writer
+        self.truths = client.subscribe(String, f"{base}/sim_driver/truth")  # last reader: 50 Hz
 
     def wait_ready(self, process: NodeProcess) -> None:
-        def ready() -> bool:
-            process.check_alive()
-            return bool(
-                self.truths.items
-                and self.odom.items
-                and self.states.items
-                and self.cmd_vel_out.get_subscription_count()
-                and self.webrtc.get_subscription_count()
+        """Until the driver and this client have matched every topic both ways."""
+
+        def ping() -> Callable[[], bool]:  # a request the driver drops (not JSON) and records
+            mark = self.records.mark()
+            self.request(PING_API_ID, parameter="{")
+            return lambda: (
+                PING_API_ID in [json.loads(m.data)["api_id"] for m in self.records.since(mark)]
             )
 
-        wait_until(ready, TIMEOUT, f"the simulated driver's topics under {self.base or '/'}")
+        wait_matched(
+            self.client,
+            f"the simulated driver under {self.base or '/'}",
+            [self.odom, self.states, self.records, self.truths],
+            [self.cmd_vel_out, self.webrtc],
+            ping=ping,
+            alive=process.check_alive,
+            timeout=TIMEOUT,
+        )
+
+    def close(self) -> None:
+        self.client.destroy(
+            self.odom, self.states, self.records, self.cmd_vel_out, self.webrtc, self.truths
+        )
 
     def truth(self) -> Truth:
         return json.loads(self.truths.latest().data)
@@ -356,6 +375,7 @@ def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery_or_dete
         state = bare.states.latest()
         assert go2_api.posture_of(state.mode, state.body_height) is Posture.LYING
     finally:
+        bare.close()
         assert process.stop(signal.SIGTERM) == 0, process.output()[-2000:]
 
 
@@ -386,6 +406,8 @@ def test_several_robots_get_robot_i_names_and_twist_mux_feeds_none_of_them(
         robots[0].wait_truth(lambda t: t["moving"], "robot0 to walk", mark)
         assert robots[1].truth()["moves"] == 0 and not robots[1].truth()["moving"]
     finally:
+        for robot in robots:
+            robot.close()
         assert process.stop(signal.SIGTERM) == 0, process.output()[-2000:]
 
 
