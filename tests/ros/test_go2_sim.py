@@ -84,9 +84,15 @@ class Driver:
         )
 
     def wait_still(self, what: str) -> None:
-        """Until go2_states (published even while odometry is off) says velocity zero."""
-        mark = self.states.mark()
-        self.states.wait_for(lambda m: max(abs(v) for v in m.velocity) < 1e-3, 10.0, what, mark)
+        """Until the truth says the body is still. Not go2_states: it is `odom_delay` late like
+        odometry, so right after a stop it can still show the robot from before it moved."""
+        mark = self.truth.mark()
+
+        def still(m: String) -> bool:
+            t = json.loads(m.data)
+            return max(abs(t["vx"]), abs(t["vy"]), abs(t["wz"])) < 1e-3 and not t["moving"]
+
+        self.truth.wait_for(still, 10.0, what, mark)
 
     def set_faults(self, faults: dict[str, Any]) -> None:
         """Publish faults and wait until the driver's truth shows them in force (a mission sent

@@ -33,6 +33,7 @@ ARGUMENTS = {
     "odom_latency": "-1.0",
     "battery_topic": "",
     "detections_topic": "",
+    "detector_classes": "",
     "go2_firmware_tricks": "false",
     "navigation": "",
     "map_topic": "map",

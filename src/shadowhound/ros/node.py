@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
@@ -261,6 +262,9 @@ class MissionNode(Node):
             self._web.stop()
             self._web = None
         self._worker.stop()
+        # The mission's last status ("FAILED: ...") was just published: let every reader
+        # acknowledge it before the writer goes (a reliable line is lost with its writer).
+        self._status_pub.wait_for_all_acked(Duration(seconds=2.0))
         self._chat_thread.shutdown(wait=False, cancel_futures=True)
         self.agent.cleanup()
         self._camera.close()
