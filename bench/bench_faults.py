@@ -351,7 +351,8 @@ def main() -> int:
             "",
             "A fall is believed once go2_states has shown it for 0.25 s (a flapping report does "
             "not count); go2_states travel the link with odometry (0.2 s late here), and the "
-            "driver's 10 Hz loop hands StopMove on: about 0.7 s in all. The fallen robot "
+            "step's posture check runs at the control rate: about 0.7 s from the fall to StopMove. "
+            "The fallen robot "
             "ignores Moves meanwhile.",
             "",
             "| what | target | p50 | p99 | max | runs |",
