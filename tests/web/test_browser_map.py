@@ -27,13 +27,26 @@ class Canvas:
     def __init__(self, page: Any) -> None:
         from PIL import Image
 
-        self.image = Image.open(io.BytesIO(page.locator("#map").screenshot())).convert("RGB")
-        attr = page.get_attribute
-        self.cx, self.cy = float(attr("#map", "data-cx")), float(attr("#map", "data-cy"))
-        self.scale = float(attr("#map", "data-scale"))
-        width = int(attr("#map", "width"))
+        def transform() -> tuple[str | None, ...]:
+            return tuple(
+                page.get_attribute("#map", name)
+                for name in ("data-cx", "data-cy", "data-scale", "width", "height")
+            )
+
+        # The map re-fits its view when something new is drawn (a mission's end refreshes the
+        # objects): the screenshot counts only if the transform is the same before and after.
+        for _ in range(50):
+            before = transform()
+            shot = page.locator("#map").screenshot()
+            if transform() == before:
+                break
+        else:
+            raise AssertionError("the map's view kept changing while it was photographed")
+        self.image = Image.open(io.BytesIO(shot)).convert("RGB")
+        cx, cy, scale, width, height = (float(v or "nan") for v in before)
+        self.cx, self.cy, self.scale = cx, cy, scale
         self.ratio = self.image.width / width
-        self.half = (width / 2, int(attr("#map", "height")) / 2)
+        self.half = (width / 2, height / 2)
 
     def at(self, x: float, y: float) -> tuple[int, int, int]:
         px = (self.half[0] + (x - self.cx) * self.scale) * self.ratio

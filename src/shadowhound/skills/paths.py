@@ -14,6 +14,7 @@ from .. import geofence
 from ..config import SafetyConfig
 from ..state import Pose2D
 from ..world import check_leg
+from .bounds import fences
 from .context import PlanEnv
 
 
@@ -41,26 +42,11 @@ def path_problems(
 def _outside_fence(lim: SafetyConfig, pose: Pose2D, poses: list[Pose2D]) -> str:
     """Why the path from `pose` through `poses` breaks a geofence ("" when it does not).
     The robot's body is a circle of safety.geofence_margin around its centre."""
-    margin = lim.geofence_margin
-    fences: list[tuple[geofence.Fence, str, str]] = [
-        (
-            geofence.CircleFence(lim.geofence_radius),
-            f"the geofence of {lim.geofence_radius:g} m",
-            "around the origin (safety.geofence_radius)",
-        )
-    ]
-    if lim.geofence_polygon:
-        fences.append(
-            (
-                geofence.PolygonFence(lim.geofence_polygon),
-                "the geofence polygon",
-                "(safety.geofence_polygon)",
-            )
-        )
+    margin, every = lim.geofence_margin, fences(lim)
     previous = pose
     for p in poses:
         a, b = (previous.x, previous.y), (p.x, p.y)
-        for fence, name, where in fences:
+        for fence, name, where in every:
             breach = geofence.leg_breach(fence, a, b, margin)
             if breach is not None:
                 return _fence_message(breach, a, b, (name, where), margin)
