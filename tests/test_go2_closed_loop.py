@@ -233,6 +233,26 @@ def test_a_wrong_delay_is_corrected_at_rest_not_reported_as_done() -> None:
     assert math.hypot(truth.x - 1.0, truth.y) < 0.05, (truth.x, truth.y)
 
 
+@pytest.mark.parametrize(("believed", "true"), [(0.4, 0.2), (0.0, 0.2), (0.1, 0.3), (0.5, 0.3)])
+@pytest.mark.parametrize("mission", ["turn right 10 degrees", "turn left 90 degrees"])
+def test_a_turn_on_a_wrong_latency_settles_instead_of_swinging(
+    believed: float, true: float, mission: str
+) -> None:
+    """Odometry earlier or later than the robot believes (a latency measured under load, then
+    the link changes): steering on the mispredicted pose swings about the goal (it used to swing
+    +-5 degrees until the stall check failed a 10 degree turn). The approach stops at its second
+    pass of the goal, judges at rest and comes back slowly."""
+    robot = LateRobot(20.0, true, tracker=MotionTracker(latency=believed))
+    settings = ShadowHoundConfig(robot="go2")
+    settings.motion = settings.motion.model_copy(update=GO2_MOTION)
+    agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
+    want = float(mission.split()[2]) * (-1 if "right" in mission else 1)
+    result = agent.execute_mission(mission)
+    assert result.success, result.response
+    turned = math.degrees(robot.sim.get_state().yaw)
+    assert abs(turned - want) < 3.0, turned
+
+
 def test_the_late_odometry_robot_is_a_whole_robot() -> None:
     """Test robots implement the declared protocol too (the agent never probes for members)."""
     from shadowhound.robot.base import Robot

@@ -50,6 +50,26 @@ def _profile(error: float, v_max: float, accel: float, period: float) -> float:
     return math.copysign(min(v_max, magnitude), error)
 
 
+class _Passes:
+    """Counts how often an approach passes its goal. Passing it once and coming back is how a
+    closed loop settles; passing it again on the way back is a swing that will not settle: the
+    pose it steers on is predicted wrong (odometry later or earlier than the robot believes),
+    and the approach stops to judge at rest and come back slowly."""
+
+    def __init__(self) -> None:
+        self.side = 0.0  # the sign of the error before the last pass (0: not yet known)
+        self.count = 0
+
+    def passed(self, error: float, tolerance: float) -> bool:
+        """True once `error` (signed, along the approach) has crossed the goal twice by more
+        than `tolerance`."""
+        if self.side == 0.0:
+            self.side = math.copysign(1.0, error)
+        elif error * self.side <= -tolerance:
+            self.side, self.count = -self.side, self.count + 1
+        return self.count >= 2
+
+
 def _arrived(error: float, speed: float, tolerance: float, period: float) -> bool:
     """Close enough, and commanded slow enough that stopping now keeps the robot within
     tolerance (whether it really stopped there is judged at rest, after `settle`)."""
@@ -73,15 +93,21 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
     for attempt in range(1 + _CORRECTIONS):
         best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
         cap = speed if attempt == 0 else min(speed, m.position_tolerance / _CORRECTION_SECONDS)
+        toward: tuple[float, float] | None = None  # where the goal lay when this approach began
+        passes = _Passes()
         while True:
             st = robot.get_state()
             dx, dy = st.x - start.x, st.y - start.y
             lx, ly = dx * c + dy * s, -dx * s + dy * c  # displacement in the start frame
             ex, ey = tx - lx, ty - ly
             error = math.hypot(ex, ey)
-            speed = math.hypot(*ctx.last_command[:2])  # what it was told: known at once
-            if _arrived(error, speed, m.position_tolerance, ctx.period):
+            told = math.hypot(*ctx.last_command[:2])  # the speed it was told: known at once
+            if _arrived(error, told, m.position_tolerance, ctx.period):
                 break
+            if toward is None:
+                toward = (ex / error, ey / error)
+            if passes.passed(ex * toward[0] + ey * toward[1], m.position_tolerance):
+                break  # it swings about the goal: judge at rest, then come back slowly
             if error < best - 1e-3:
                 best, best_time = error, robot.now()
             elif robot.now() - best_time > m.stall_timeout:
@@ -137,6 +163,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
     for attempt in range(1 + _CORRECTIONS):
         best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
         cap = speed if attempt == 0 else min(speed, m.yaw_tolerance / _CORRECTION_SECONDS)
+        passes = _Passes()
         while True:
             st = robot.get_state()
             turned += normalize_angle(st.yaw - last_yaw)  # unwrapped, so 360 degree turns work
@@ -144,6 +171,8 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
             error = angle - turned
             if _arrived(error, ctx.last_command[2], m.yaw_tolerance, ctx.period):
                 break
+            if passes.passed(error, m.yaw_tolerance):
+                break  # it swings about the goal: judge at rest, then come back slowly
             if abs(error) < best - 1e-3:
                 best, best_time = abs(error), robot.now()
             elif robot.now() - best_time > m.stall_timeout:
