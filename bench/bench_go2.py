@@ -42,9 +42,10 @@ from datetime import date
 from pathlib import Path
 from typing import Any
 
-from shadowhound.ros.dds import loopback_env
+from shadowhound.ros.dds import claim_domain, loopback_env
 
-os.environ.update(loopback_env())  # before rclpy is imported
+_DOMAIN, _HELD = claim_domain()  # held for this process's life: no other run meets it
+os.environ.update(loopback_env(_DOMAIN))  # before rclpy is imported
 
 import httpx  # noqa: E402
 import rclpy  # noqa: E402

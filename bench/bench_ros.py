@@ -30,9 +30,10 @@ from datetime import date
 from pathlib import Path
 from typing import Any
 
-from shadowhound.ros.dds import loopback_env
+from shadowhound.ros.dds import claim_domain, loopback_env
 
-os.environ.update(loopback_env())  # before rclpy is imported
+_DOMAIN, _HELD = claim_domain()  # held for this process's life: no other run meets it
+os.environ.update(loopback_env(_DOMAIN))  # before rclpy is imported
 
 import rclpy  # noqa: E402
 from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
@@ -44,7 +45,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import CompressedImage, Image  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
-from results import write_section
+from results import write_section  # noqa: E402
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot  # noqa: E402
 from shadowhound.ros.node import ESTOP_TOPIC, MissionNode  # noqa: E402
 
