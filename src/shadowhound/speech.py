@@ -91,8 +91,8 @@ class Voice:
                 why = (
                     "speaking aloud is off (safety.max_speech_per_minute is 0)"
                     if per_minute == 0
-                    else f"already said {per_minute} things in the last minute "
-                    f"(safety.max_speech_per_minute: {per_minute})"
+                    else f"over the rate: it may say {per_minute} a minute "
+                    "(safety.max_speech_per_minute)"
                 )
                 return Saying(words, why, cut)
             try:
