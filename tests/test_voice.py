@@ -216,3 +216,9 @@ def test_say_hello_on_the_simulator_speaks_and_waves() -> None:
 def test_tell_me_without_out_loud_answers_on_screen_only() -> None:
     assert [s for s, _ in plan("tell me what you see")] == ["perception.describe"]
     assert [s for s, _ in plan("tell me where you are")] == ["sys.status"]
+
+
+def test_a_greeting_to_someone_is_the_greeting_and_speaking_to_someone_is_not_words() -> None:
+    assert plan("please say good morning to everyone") == [(SAY, {"text": "Good morning!"}), WAVE]
+    with pytest.raises(PlanningError, match="say things aloud"):
+        PLANNER.plan("speak to me")

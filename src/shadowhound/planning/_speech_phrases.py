@@ -45,6 +45,7 @@ GREETING = re.compile(
     r"^(?:hello|hi|hey|hiya|howdy|greetings|welcome|good\s*bye|bye|farewell"
     r"|good\s+(?:morning|afternoon|evening|night|day))\b"
 )
+_TO_SOMEONE = re.compile(r"^(?:to|at|with)\b")
 _QUOTES = "\"'\u201c\u201d\u2018\u2019`"
 
 
@@ -80,6 +81,8 @@ def speech_request(label: str) -> SpeechRequest | None:
             return SpeechRequest()
         return SpeechRequest(question=question)
     what = raw[at + verb.end() : end].strip().strip(_QUOTES).strip()
+    if _TO_SOMEONE.match(what.lower()):  # "speak to me": not words to say
+        return None
     if _ANSWER.match(what.lower()):
         return SpeechRequest()
     if _QUESTION.match(what.lower()):
@@ -91,8 +94,10 @@ def speech_request(label: str) -> SpeechRequest | None:
         rest, how = what.lower(), ""
     if how:
         what, count = what[: len(rest)], count + 1 if how == "more" else count
-    greeting = bool(GREETING.match(what.lower()))
-    return SpeechRequest(text=_sentence(what, greeting), greeting=greeting, count=count)
+    greeting = GREETING.match(what.lower())
+    if greeting and _TO_SOMEONE.match(what.lower()[greeting.end() :].strip()):
+        what = what[: greeting.end()]  # "say hello to the visitors": the greeting, waved at them
+    return SpeechRequest(text=_sentence(what, bool(greeting)), greeting=bool(greeting), count=count)
 
 
 def _sentence(words: str, greeting: bool) -> str:
