@@ -83,6 +83,7 @@ def rig() -> Iterator[tuple[Agent, Driver]]:
             TIMEOUT,
             "the node's Go2 robot to receive odometry",
         )
+        assert f"speech on {SPEECH}" in node.output(), node.output()[-2000:]
         yield agent, driver
         node.check_alive()
         driver_process.check_alive()
