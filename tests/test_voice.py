@@ -222,3 +222,10 @@ def test_a_greeting_to_someone_is_the_greeting_and_speaking_to_someone_is_not_wo
     assert plan("please say good morning to everyone") == [(SAY, {"text": "Good morning!"}), WAVE]
     with pytest.raises(PlanningError, match="say things aloud"):
         PLANNER.plan("speak to me")
+
+
+def test_control_characters_go_and_do_not_count_toward_the_cut() -> None:
+    agent, robot, _ = make(max_speech_chars=10)
+    result = agent.run_plan([SkillCall("voice.say", {"text": "ab\x00\x07\x1b\x7f\u200bcd\n"})])
+    assert result.success and robot.spoken == ["ab cd"]
+    assert result.steps[0].output == 'said "ab cd" aloud'

@@ -78,10 +78,10 @@ class Voice:
         once. Raises ValueError when nothing is left to say once the text is cleaned."""
         safety = self.settings.safety
         limit = safety.max_speech_chars
-        words = clean_speech(text, limit)
-        if not words:
+        whole = clean_speech(text, len(str(text)))
+        if not whole:
             raise ValueError("there are no words to say (empty after removing control characters)")
-        cut = len(_SPACE.sub(" ", str(text)).strip()) > limit
+        words, cut = clean_speech(whole, limit), len(whole) > limit
         per_minute = safety.max_speech_per_minute
         with self._lock:
             now = robot.now()
