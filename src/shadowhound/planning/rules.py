@@ -15,6 +15,7 @@ modules above.
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Any
 
 from shadowhound.plan import Plan, PlanningError, SkillCall
@@ -561,8 +562,12 @@ class RulePlanner:
 
 def _answers(step: SkillCall) -> bool:
     """Whether a step's output answers the user (its skill declares `reports`)."""
-    skill = default_registry().find(step.skill)
-    return skill is not None and skill.reports
+    return step.skill in _reporting()
+
+
+@cache
+def _reporting() -> frozenset[str]:
+    return frozenset(s.name for s in default_registry() if s.reports)
 
 
 def _implied_verb(text: str, last_verb: str) -> str:
