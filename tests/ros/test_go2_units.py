@@ -35,6 +35,7 @@ def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
         "map_topic": "map",
         "scan_topic": "scan",
         "nav2_action": "navigate_to_pose",
+        "speech_topic": "/tts",
     }
 
 

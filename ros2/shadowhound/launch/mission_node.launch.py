@@ -39,6 +39,7 @@ ARGUMENTS = {
     "map_topic": "map",
     "scan_topic": "scan",
     "nav2_action": "navigate_to_pose",
+    "speech_topic": "/tts",
 }
 
 

@@ -32,6 +32,8 @@ Written against how the driver really behaves (docs/go2.md):
   `stop` and `emergency_stop` cancel its goals.
 - detections (optional, `detections_topic`): shadowhound_interfaces/DetectionArray from any
   detector; each detection becomes a sighting (`known_objects()`), see go2_detections.py.
+- voice: `say` publishes one std_msgs/String on `speech_topic` (go2_ros2_sdk's `tts_node`
+  listens on `/tts` and plays it on the robot's speaker), without waiting for it to be heard.
 
 The robot has its own rclpy node and executor thread, so it works inside the MissionNode
 process (sharing its context) or in a plain script (it then initialises a private context).
@@ -63,6 +65,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, CompressedImage, Image, LaserScan
+from std_msgs.msg import String
 
 from ..camera import raw_image_frame, to_camera_frame
 from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan
@@ -135,6 +138,9 @@ class Go2RosConfig:
     # mission node listens itself). Wherever else a Go2 runs (MCP, scripts) they stop it.
     estop_topic: str = ESTOP_TOPIC
     estop_release_topic: str = ESTOP_RELEASE_TOPIC
+    # std_msgs/String for go2_ros2_sdk's tts_node, which listens on the absolute `/tts`;
+    # '' = no voice (`say` raises RobotError).
+    speech_topic: str = "/tts"
 
 
 class Go2RosRobot:
@@ -238,6 +244,9 @@ class Go2RosRobot:
         names = [c.cmd_vel_topic] if c.cmd_vel_topic else list(VELOCITY_TOPICS)
         self._twist_pubs = {name: n.create_publisher(Twist, name, _RELIABLE) for name in names}
         self._request_pub = n.create_publisher(WebRtcReq, c.webrtc_topic, _RELIABLE)
+        self._speech_pub = (
+            n.create_publisher(String, c.speech_topic, _RELIABLE) if c.speech_topic else None
+        )
         n.create_subscription(Odometry, c.odom_topic, self._on_odom, _RELIABLE)
         n.create_subscription(Go2State, c.state_topic, self._on_state, _RELIABLE)
         if c.battery_topic:
@@ -923,6 +932,13 @@ class Go2RosRobot:
                     priority=0,
                 )
             )
+
+    def say(self, text: str) -> None:
+        """Publish `text` once on `speech_topic` (a publish queues the message and returns)."""
+        if self._speech_pub is None:
+            raise RobotError("this Go2 has no voice: speech_topic is '' (set it, e.g. /tts)")
+        if self._context.ok():
+            self._speech_pub.publish(String(data=text))
 
     # -- postures ------------------------------------------------------------------------
 

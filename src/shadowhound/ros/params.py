@@ -92,6 +92,11 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     ),
     "scan_topic": ("scan", "go2: sensor_msgs/LaserScan in ('' = none)"),
     "nav2_action": ("navigate_to_pose", "go2: Nav2's NavigateToPose action ('' = no Nav2)"),
+    "speech_topic": (
+        "/tts",
+        "go2: std_msgs/String words to say out (go2_ros2_sdk's tts_node listens on "
+        "/tts); '' = none: the robot does not speak aloud",
+    ),
     "go2_firmware_tricks": (
         False,
         "go2: allow the tricks that need firmware support and the "
@@ -108,6 +113,7 @@ _OPTIONAL_TOPICS = (
     "map_topic",
     "scan_topic",
     "nav2_action",
+    "speech_topic",
 )
 NAVIGATION: tuple[str, ...] = get_args(ShadowHoundConfig.model_fields["navigation"].annotation)
 ROBOTS = ("sim", "go2")
@@ -144,6 +150,7 @@ class NodeSettings:
     map_topic: str = "map"
     scan_topic: str = "scan"
     nav2_action: str = "navigate_to_pose"
+    speech_topic: str = "/tts"
 
     @property
     def camera_compressed(self) -> bool:
@@ -182,6 +189,7 @@ class NodeSettings:
             "map_topic": self.map_topic,
             "scan_topic": self.scan_topic,
             "nav2_action": self.nav2_action,
+            "speech_topic": self.speech_topic,
         }
 
 
@@ -231,6 +239,7 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
             "map_topic",
             "scan_topic",
             "nav2_action",
+            "speech_topic",
         )
         if n in out and not _TOPIC.match(out[n]) and (out[n] or n not in _OPTIONAL_TOPICS)
     ]
