@@ -113,6 +113,8 @@ def test_driver_settings_default_and_are_checked_all_at_once() -> None:
     assert DriverSettings().battery is None and DriverSettings().relay is True
     chosen = parse_settings({"camera_rate_hz": 0, "odom_rate_hz": 10, "battery": 80})
     assert (chosen.odom_rate_hz, chosen.battery) == (10.0, 80.0)
+    assert DriverSettings().detector == "shadowhound"
+    assert parse_settings({"detector": "coco"}).detector == "coco"
     with pytest.raises(ParameterError) as info:
         parse_settings(
             {
@@ -123,6 +125,7 @@ def test_driver_settings_default_and_are_checked_all_at_once() -> None:
                 "battery_topic": "1bad",
                 "lidar": 1,
                 "start_posture": "kneeling",
+                "detector": "yolo",
             }
         )
     message = str(info.value)
@@ -134,6 +137,7 @@ def test_driver_settings_default_and_are_checked_all_at_once() -> None:
         "battery_topic '1bad' is not a valid ROS topic name",
         "unknown setting(s) lidar",
         "start_posture must be one of standing, sitting, lying, got 'kneeling'",
+        "detector must be one of shadowhound, coco, none, got 'yolo'",
     ):
         assert part in message
 
