@@ -125,3 +125,37 @@ def test_a_box_becomes_a_known_object_where_it_stands_and_a_far_one_a_bearing(
     assert found.confidence == pytest.approx(0.92)
     assert "person" not in {o.name for o in robot.known_objects()}  # a bearing only
     assert {"television", "sofa", "chair", "person"} <= robot.vocabulary()
+
+
+@pytest.mark.parametrize(
+    "obj, pose",
+    [
+        (WorldObject("chair", 3.0, 0.5, 0.4), Pose2D()),
+        (WorldObject("chair", 1.5, 1.0, 0.3), Pose2D(0.2, -0.3, 0.3)),
+        (WorldObject("chair", 2.0, -1.8, 0.35), Pose2D(0.0, 0.0, 0.0)),  # cut by the edge
+    ],
+)
+def test_the_simulated_coco_box_is_where_the_renderer_draws_the_object(
+    obj: WorldObject, pose: Pose2D
+) -> None:
+    from shadowhound.robot.renderer import render
+    from shadowhound.ros.sim_detector import CocoDetector
+
+    width, height = 160, 120
+    detector = CocoDetector(None, None, None, width, height, 90.0)  # type: ignore[arg-type]
+    empty, full = World(), World(objects=(obj,))
+    a, b = render(empty, pose, width, height), render(full, pose, width, height)
+    drawn = [
+        i
+        for i in range(width)
+        if any(
+            a[3 * (r * width + i) : 3 * (r * width + i) + 3]
+            != b[3 * (r * width + i) : 3 * (r * width + i) + 3]
+            for r in range(height)
+        )
+    ]
+    columns = detector.box(obj, pose)
+    assert columns is not None and drawn
+    # The box spans the columns drawn, to a pixel (a column is drawn when its centre ray hits).
+    assert columns[0] == pytest.approx(drawn[0], abs=1.0)
+    assert columns[1] == pytest.approx(drawn[-1] + 1, abs=1.0)
