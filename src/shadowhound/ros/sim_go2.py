@@ -100,17 +100,12 @@ class SimGo2:
             if settings.scan_rate_hz > 0
             else None
         )
+        coco = (self.topic("detected_objects"), self.topic("camera/camera_info"))
+        lens = (settings.camera_width, settings.camera_height, CAMERA_FOV_DEG)
         self.detector = (
             SimDetector.create(node, self.topic("detections"))
             if settings.detector == "shadowhound"
-            else CocoDetector.create(
-                node,
-                self.topic("detected_objects"),
-                self.topic("camera/camera_info"),
-                settings.camera_width,
-                settings.camera_height,
-                CAMERA_FOV_DEG,
-            )
+            else CocoDetector.create(node, *coco, *lens)
             if settings.detector == "coco"
             else None
         )
