@@ -100,12 +100,12 @@ class SimGo2:
             if settings.scan_rate_hz > 0
             else None
         )
-        coco = (self.topic("detected_objects"), self.topic("camera/camera_info"))
-        lens = (settings.camera_width, settings.camera_height, CAMERA_FOV_DEG)
+        boxes, info = self.topic("detected_objects"), self.topic("camera/camera_info")
+        width, height = settings.camera_width, settings.camera_height
         self.detector = (
             SimDetector.create(node, self.topic("detections"))
             if settings.detector == "shadowhound"
-            else CocoDetector.create(node, *coco, *lens)
+            else CocoDetector.create(node, boxes, info, width, height, CAMERA_FOV_DEG)
             if settings.detector == "coco"
             else None
         )
