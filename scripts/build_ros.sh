@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install ROS 2 Jazzy (rclpy and the message packages, from PyPI) into a virtual environment and
 # build + install the project's interface packages into it: ros2/shadowhound_interfaces,
-# ros2/nav2_msgs (NavigateToPose only) unless Nav2's own nav2_msgs is importable, and
+# ros2/nav2_msgs (NavigateToPose only) unless Nav2's own nav2_msgs is importable,
+# ros2/vision_msgs (Detection2DArray and its parts) unless a vision_msgs is importable, and
 # ros2/go2_interfaces (go2_ros2_sdk's WebRtcReq and Go2State) unless a go2_interfaces with those
 # messages, field for field, is already importable from another workspace (a sourced
 # go2_ros2_sdk install; scripts/check_go2_interfaces.py compares them).
@@ -81,6 +82,16 @@ print(os.path.dirname(os.path.realpath(nav2_msgs.action.__file__)))' 2>/dev/null
 case "$nav2_origin" in
   "" | "$(cd "$VENV" && pwd -P)"/*) build_pkg nav2_msgs 'from nav2_msgs.action import NavigateToPose' ;;
   *) echo "build_ros: using nav2_msgs from $nav2_origin (not building ros2/nav2_msgs)" >&2 ;;
+esac
+
+# vision_msgs likewise: a sourced vision_msgs (ROS's own, which coco_detector uses) wins; ours is
+# Detection2DArray and its parts only, with the fields of vision_msgs Jazzy's (4.1.1;
+# tests/ros/test_vision_msgs.py checks the type hashes).
+vision_origin=$(cd /tmp && "$PY" -c 'import os, vision_msgs.msg
+print(os.path.dirname(os.path.realpath(vision_msgs.msg.__file__)))' 2>/dev/null) || vision_origin=""
+case "$vision_origin" in
+  "" | "$(cd "$VENV" && pwd -P)"/*) build_pkg vision_msgs 'from vision_msgs.msg import Detection2DArray' ;;
+  *) echo "build_ros: using vision_msgs from $vision_origin (not building ros2/vision_msgs)" >&2 ;;
 esac
 
 # go2_ros2_sdk's own go2_interfaces wins when it is importable from elsewhere (the user's

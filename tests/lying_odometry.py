@@ -86,6 +86,9 @@ class LyingOdometry:
     def look(self) -> None:
         self.sim.look()
 
+    def say(self, text: str) -> None:
+        self.sim.say(text)
+
     latency = 0.0  # its pose lies, but not late
 
     def vocabulary(self) -> frozenset[str]:

@@ -46,6 +46,7 @@ BASE = {
     "jsonout",
     "plan",
     "result",
+    "speech",
     "state",
     "typos",
     "units",

@@ -173,6 +173,9 @@ class LateRobot:
     def look(self) -> None:
         self.sim.look()
 
+    def say(self, text: str) -> None:
+        self.sim.say(text)
+
     @property
     def latency(self) -> float:
         return self.tracker.latency_bound

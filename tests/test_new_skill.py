@@ -141,13 +141,13 @@ def test_a_low_battery_refuses_it_unless_it_declares_otherwise():
     assert refused == [
         "step 1 (body.look_up): the battery is at 9%, below the floor of 15% "
         "(safety.battery_floor): only nav.stop, body.sit, body.lie_down, "
-        "sys.status are allowed"
+        "sys.status, voice.say are allowed"
     ]
     gentle = with_look_up(dataclasses.replace(look_up_skill.SKILL, low_battery=True))
     assert check([SkillCall("body.look_up", {})], gentle, start=low).refusals == []
     still = check([SkillCall("nav.move", {"distance": 1})], gentle, start=low)
     assert reasons(still)[0].endswith(
-        "only nav.stop, body.sit, body.lie_down, sys.status, body.look_up are allowed"
+        "only nav.stop, body.sit, body.lie_down, sys.status, voice.say, body.look_up are allowed"
     )
 
 

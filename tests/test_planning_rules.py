@@ -213,7 +213,7 @@ CASES: list[tuple[str, list[Step]]] = [
     ("stop moving", [STOP]),
     ("don't move", [STOP]),
     # tricks
-    ("say hello", [trick("hello")]),
+    ("say hello", [("voice.say", {"text": "Hello!"}), trick("hello")]),  # aloud, with the wave
     ("wave at me", [trick("hello")]),
     ("greet our visitors", [trick("hello")]),
     ("shake hands", [trick("hello")]),

@@ -4,6 +4,7 @@ the RViz conversions (path poses, object markers)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from types import SimpleNamespace as NS
 
 import pytest
@@ -13,6 +14,8 @@ from hypothesis import strategies as st
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
 from shadowhound.robot.go2_detections import (
     DEFAULT_RADIUS,
+    BoxIntake,
+    CameraMount,
     DetectionError,
     Frames,
     SightingBoard,
@@ -166,3 +169,67 @@ def test_a_new_map_replaces_the_grid_and_keeps_the_objects_known() -> None:
     belief.replace_grid(second)
     assert belief.grid is second and belief.inflated.grid is second
     assert [o.name for o in belief.objects] == ["cup"]
+
+
+# -- boxes (vision_msgs/Detection2DArray, read by attribute) -------------------------------------
+
+
+def _stamp(t: float) -> NS:
+    return NS(sec=int(t), nanosec=int(round((t - int(t)) * 1e9)))
+
+
+def _box_msg(t: float, *boxes: tuple[str, float, float, float]) -> NS:
+    """A Detection2DArray stamped `t` with (class, centre column, width, score) boxes; per
+    detection headers left empty, as coco_detector leaves them."""
+    return NS(
+        header=NS(stamp=_stamp(t), frame_id="camera"),
+        detections=[
+            NS(
+                header=NS(stamp=_stamp(0.0), frame_id=""),
+                results=[NS(hypothesis=NS(class_id=c, score=s))] if c else [],
+                bbox=NS(center=NS(position=NS(x=u, y=360.0), theta=0.0), size_x=w, size_y=80.0),
+                id="",
+            )
+            for c, u, w, s in boxes
+        ],
+    )
+
+
+def test_boxes_become_sightings_with_the_pose_and_scan_at_the_images_stamp() -> None:
+    from shadowhound.robot.scene import World, WorldObject
+    from shadowhound.robot.sensors import cast_scan
+    from shadowhound.world.image_sighting import Bearing, CameraModel
+
+    intake = BoxIntake(CameraMount(0.3, 0.0, 0.0))
+    couch = WorldObject("couch", 3.0, 0.0, 0.4)
+    world = World(objects=(couch,), bounds=(-10.0, 10.0, -10.0, 10.0))
+    assert intake.read(_box_msg(10.0, ("couch", 640.0, 100.0, 0.9)))[2] == [
+        "no camera_info yet: the boxes cannot be turned into bearings"
+    ]
+    assert intake.on_camera_info([370.0, 0.0, 640.0, 0.0, 370.0, 360.0, 0.0, 0.0, 1.0]) is None
+    assert intake.on_camera_info([]) is not None  # kept the good one
+    # The robot turned from facing +y to facing +x over one second; the image is at its end.
+    for k in range(11):
+        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, math.pi / 2 * (1 - k / 10)))
+    # Cast where the robot was at 10 s, arriving with a wrong pose: placed by its stamp.
+    intake.on_scan(10.0, replace(cast_scan(world, Pose2D()), pose=Pose2D(99.0, 99.0, 0.0)))
+    camera = CameraModel(370.0, 640.0, 0.3)
+    half = math.asin(couch.radius / (couch.x - 0.3))
+    left, right = camera.column_of(half), camera.column_of(-half)
+    seen, bearings, problems = intake.read(
+        _box_msg(
+            10.0,
+            ("couch", (left + right) / 2, right - left, 0.8),
+            ("tv", 100.0, 30.0, 0.7),  # to the left: only the wall 10 m off, beyond 6 m
+            ("", 600.0, 10.0, 0.5),
+        )
+    )
+    assert problems == ["a detection without a class (results is empty)"]
+    assert [(o.name, o.stamp) for o in seen] == [("sofa", 10.0)]
+    assert math.hypot(seen[0].x - couch.x, seen[0].y - couch.y) < 0.1
+    assert [b.name for b in bearings] == ["television"] and isinstance(bearings[0], Bearing)
+    assert intake.bearings() == tuple(bearings)
+    # An image from before the odometry history has no pose: refused, never guessed.
+    assert intake.read(_box_msg(5.0, ("chair", 640.0, 50.0, 0.9)))[2] == [
+        "'chair': no odometry pose at the image's time 5.00"
+    ]

@@ -452,12 +452,27 @@ def test_a_standoff_is_free_reachable_and_faces_the_object():
     for obj in belief.objects:
         spot = standoff_point(belief, (0.0, 0.0), obj)
         d = math.hypot(obj.x - spot.pose.x, obj.y - spot.pose.y)
-        assert d == pytest.approx(obj.radius + 0.6, abs=1e-6), obj.name
+        gap = 1.0 if obj.name == "person" else 0.6  # a person is given at least a metre
+        assert d == pytest.approx(obj.radius + gap, abs=1e-6), obj.name
         assert belief.inflated.is_free_at(spot.pose.x, spot.pose.y)
         bearing = math.atan2(obj.y - spot.pose.y, obj.x - spot.pose.x)
         assert spot.pose.yaw == pytest.approx(bearing)
         assert spot.path.waypoints[-1] == pytest.approx((spot.pose.x, spot.pose.y))
         _assert_path_is_clear(belief.inflated, spot.path)
+
+
+def test_a_person_is_given_at_least_a_metre_whatever_the_standoff_asked():
+    belief = scene_belief(DEFAULT_WORLD, 0.35)
+    for name, gap, expected in (
+        ("person", 0.6, 1.0),
+        ("the tall man", 0.6, 1.0),
+        ("person", 1.4, 1.4),
+        ("chairperson desk", 0.6, 0.6),
+    ):
+        obj = KnownObject(name, 0.0, -3.0, 0.25)
+        spot = standoff_point(belief, (0.0, 0.0), obj, gap)
+        d = math.hypot(obj.x - spot.pose.x, obj.y - spot.pose.y)
+        assert d == pytest.approx(obj.radius + expected, abs=1e-6), name
 
 
 def test_an_object_with_no_room_around_it_has_no_standoff():

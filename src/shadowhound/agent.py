@@ -38,6 +38,7 @@ from .result import MissionResult
 from .robot.base import Robot, RobotError
 from .safety import Governor, Watchdog
 from .skills import SkillRegistry, default_registry
+from .speech import Voice
 from .state import CameraFrame, RobotState
 
 if TYPE_CHECKING:
@@ -135,6 +136,7 @@ class RobotAgent:
             self._arm_watchdog,
             self._known_places,
             self.recent_summaries,
+            Voice(s),
         )
         return True
 

@@ -110,6 +110,12 @@ class SafetyConfig(_Section):
     step_turn_margin_deg: float = Field(
         3.0, ge=0, le=45, description="degrees a step may command beyond its planned turn"
     )
+    max_speech_chars: int = Field(
+        200, ge=10, le=500, description="characters one saying keeps; longer text is cut"
+    )
+    max_speech_per_minute: int = Field(
+        6, ge=0, le=60, description="sayings the robot speaks a minute (0 = never aloud)"
+    )
 
     @field_validator("geofence_polygon", mode="before")
     @classmethod

@@ -20,6 +20,7 @@ from .result import MissionResult
 from .robot.base import Robot
 from .safety import Governor, Watchdog
 from .skills import SkillRegistry
+from .speech import Voice
 from .state import CameraFrame, RobotState
 
 
@@ -61,6 +62,7 @@ class Crew:
     arm_watchdog: Callable[[], Watchdog | None]
     places: Callable[[], dict[str, tuple[float, float]]]  # the profile's, then taught ones
     summaries: Callable[[], list[str]]  # recent missions, one line each, oldest first
+    voice: Voice  # what the robot says passes here: cleaned, cut, rate-limited
 
     def planning_context(
         self, text: str, planner: Planner | None, state: RobotState

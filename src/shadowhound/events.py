@@ -34,6 +34,7 @@ MISSION_FINISHED = "mission_finished"
 ESTOP = "estop"
 APPROVAL_REQUIRED = "approval_required"
 APPROVAL_DECIDED = "approval_decided"
+SPOKEN = "spoken"
 
 
 @dataclass(frozen=True)
@@ -145,6 +146,29 @@ class ApprovalDecided(MissionEvent):
 
     def payload(self) -> dict[str, Any]:
         return {"approved": self.approved, "reason": self.reason}
+
+
+@dataclass(frozen=True)
+class Spoken(MissionEvent):
+    """A step said words (`voice.say`): spoken aloud, or not (`why_silent`: over the rate, no
+    voice on this robot). Dashboards show the words either way."""
+
+    kind: ClassVar[str] = SPOKEN
+    text: str
+    step: int  # the step's index in the mission
+    why_silent: str = ""
+
+    @property
+    def aloud(self) -> bool:
+        return not self.why_silent
+
+    def payload(self) -> dict[str, Any]:
+        return {
+            "text": self.text,
+            "step": self.step,
+            "aloud": self.aloud,
+            "why_silent": self.why_silent,
+        }
 
 
 Listener = Callable[[MissionEvent], None]

@@ -38,6 +38,7 @@ from .skills import (
     ValidatedCall,
 )
 from .skills.objects import see_at_start
+from .speech import Saying
 from .state import RobotState
 
 log = logging.getLogger(__name__)
@@ -382,6 +383,8 @@ class MissionRun:
             memory=c.memory,
             on_progress=lambda f: c.tracker.step_progress(step.index, f),
             heartbeat=watchdog.beat if watchdog else lambda _moving: None,
+            say=lambda text: self.say(step, text),
+            answer=self.answer,
         )
         try:
             before = robot.get_state()
@@ -419,6 +422,23 @@ class MissionRun:
             c.tracker.step_progress(step.index, 1.0)
         self.emit(ev.StepFinished.of(self.id, step))
         return status
+
+    def say(self, step: StepResult, text: str) -> Saying:
+        """A step's words through the agent's voice; every interface sees them (`Spoken`)."""
+        try:
+            saying = self.crew.voice.speak(self.robot, text)
+        except ValueError as exc:
+            raise SkillError(str(exc)) from exc
+        self.emit(ev.Spoken(self.id, saying.text, step.index, saying.why_silent))
+        return saying
+
+    def answer(self) -> str | None:
+        """The output of this mission's latest successful step that answers the user."""
+        for done in reversed(self.steps):
+            skill = self.crew.registry.find(done.skill)
+            if done.status is StepStatus.SUCCEEDED and skill is not None and skill.reports:
+                return done.output
+        return None
 
     # 6. Report: one record for the history, the diagnostics and the listeners.
 

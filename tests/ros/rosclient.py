@@ -239,7 +239,7 @@ class Agent:
     Everything a test uses of the node is made here, in the order `wait_ready` relies on (see
     `wait_matched`): tests make no readers or writers of their own towards the node."""
 
-    def __init__(self, client: RosClient, ns: str = "") -> None:
+    def __init__(self, client: RosClient, ns: str = "", speech_topic: str = "") -> None:
         self.client = client
         self.ns = ns
         # A namespaced test node is started with its status topics under its namespace.
@@ -253,6 +253,8 @@ class Agent:
         self.estop = client.publisher(Empty, ESTOP_TOPIC)
         self.release = client.publisher(Empty, ESTOP_RELEASE_TOPIC)
         self.missions = client.publisher(String, f"{ns}/mission_command")  # the last writer
+        # What a Go2 node says (robot:=go2): matched before the node's robot_status proves it.
+        self.speech = client.subscribe(String, speech_topic) if speech_topic else None
         self.robot = client.subscribe(String, f"{base}/robot_status")  # the last reader: 5 Hz
 
     def wait_ready(self, process: NodeProcess, timeout: float = TIMEOUT) -> None:
@@ -272,7 +274,13 @@ class Agent:
         wait_matched(
             self.client,
             where,
-            readers=[self.approvals, self.status, self.diagnostics, self.robot],
+            readers=[
+                self.approvals,
+                self.status,
+                self.diagnostics,
+                *([self.speech] if self.speech is not None else []),
+                self.robot,
+            ],
             writers=[self.estop, self.release, self.missions],
             ping=ping,
             alive=process.check_alive,
@@ -298,6 +306,7 @@ class Agent:
             self.estop,
             self.release,
             self.missions,
+            *([self.speech] if self.speech is not None else []),
             self.robot,
         )
 

@@ -6,6 +6,7 @@ import math
 
 import pytest
 
+from shadowhound.robot.go2_detections import CameraMount
 from shadowhound.robot.go2_motion import GO2_MOTION
 from shadowhound.ros.params import ParameterError, parse_parameters
 from shadowhound.ros.sim_options import DriverSettings, build_parser, parse_settings
@@ -31,11 +32,40 @@ def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
         "battery_topic": "",
         "detections_topic": "",
         "detector_classes": (),
+        "coco_detections_topic": "",
+        "camera_info_topic": "camera/camera_info",
+        "camera_mount": CameraMount(0.3, 0.0, 0.0),
+        "coco_max_range": 6.0,
         "firmware_tricks": False,
         "map_topic": "map",
         "scan_topic": "scan",
         "nav2_action": "navigate_to_pose",
+        "speech_topic": "/tts",
     }
+
+
+def test_a_coco_detector_its_camera_and_its_range_are_checked() -> None:
+    settings = parse_parameters(
+        {
+            "robot": "go2",
+            "coco_detections_topic": "detected_objects",
+            "camera_x": 0.33,
+            "camera_yaw": 0.1,
+            "coco_max_range": 4,
+        }
+    )
+    options = settings.go2_options()
+    assert options["coco_detections_topic"] == "detected_objects"
+    assert options["camera_mount"] == CameraMount(0.33, 0.0, 0.1)
+    assert options["coco_max_range"] == 4.0
+    with pytest.raises(ParameterError) as info:
+        parse_parameters(
+            {"coco_detections_topic": "9bad", "camera_y": 5.0, "coco_max_range": math.inf}
+        )
+    text = str(info.value)
+    assert "coco_detections_topic '9bad' is not a valid ROS topic name" in text
+    assert "camera_y must be a number in -2..2, got 5.0" in text
+    assert "coco_max_range must be a number in 0.5..30, got inf" in text
 
 
 def test_go2_options_for_latency_battery_and_firmware_tricks_are_checked() -> None:
@@ -84,6 +114,8 @@ def test_driver_settings_default_and_are_checked_all_at_once() -> None:
     assert DriverSettings().battery is None and DriverSettings().relay is True
     chosen = parse_settings({"camera_rate_hz": 0, "odom_rate_hz": 10, "battery": 80})
     assert (chosen.odom_rate_hz, chosen.battery) == (10.0, 80.0)
+    assert DriverSettings().detector == "shadowhound"
+    assert parse_settings({"detector": "coco"}).detector == "coco"
     with pytest.raises(ParameterError) as info:
         parse_settings(
             {
@@ -94,6 +126,7 @@ def test_driver_settings_default_and_are_checked_all_at_once() -> None:
                 "battery_topic": "1bad",
                 "lidar": 1,
                 "start_posture": "kneeling",
+                "detector": "yolo",
             }
         )
     message = str(info.value)
@@ -105,6 +138,7 @@ def test_driver_settings_default_and_are_checked_all_at_once() -> None:
         "battery_topic '1bad' is not a valid ROS topic name",
         "unknown setting(s) lidar",
         "start_posture must be one of standing, sitting, lying, got 'kneeling'",
+        "detector must be one of shadowhound, coco, none, got 'yolo'",
     ):
         assert part in message
 

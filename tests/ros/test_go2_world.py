@@ -18,6 +18,7 @@ from tests.ros.needs import require
 
 require("rclpy", "shadowhound_interfaces", "go2_interfaces", "nav2_msgs")
 
+from shadowhound.errors import RobotError  # noqa: E402
 from shadowhound.robot.go2_ros import Go2RosConfig, Go2RosRobot  # noqa: E402
 from shadowhound.robot.go2_world_msgs import MAP_QOS, grid_to_msg  # noqa: E402
 from shadowhound.robot.navigator import NavStatus  # noqa: E402
@@ -176,3 +177,15 @@ def test_a_stop_at_any_moment_ends_the_goal_and_nothing_drives_on(
     assert math.hypot(after.x - still.x, after.y - still.y) < 1e-3
     assert driver.robots[0].navigator is not None
     assert not driver.robots[0].navigator.truth()["active"]
+
+
+def test_a_go2_without_a_speech_topic_has_no_voice_and_says_so(client: RosClient) -> None:
+    robot = Go2RosRobot(
+        Go2RosConfig(namespace="mute", camera_topic="", nav2_action="", speech_topic=""),
+        context=client.context,
+    )
+    try:
+        with pytest.raises(RobotError, match="no voice: speech_topic is ''"):
+            robot.say("hello")
+    finally:
+        robot.close()

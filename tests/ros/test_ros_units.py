@@ -102,6 +102,14 @@ def test_navigation_comes_from_the_profile_unless_the_parameter_sets_it() -> Non
     assert (go2["map_topic"], go2["scan_topic"], go2["nav2_action"]) == ("", "scan", "")
 
 
+def test_the_speech_topic_is_go2_ros2_sdks_tts_unless_set_and_empty_turns_the_voice_off() -> None:
+    assert parse_parameters({"robot": "go2"}).go2_options()["speech_topic"] == "/tts"
+    assert parse_parameters({"speech_topic": ""}).go2_options()["speech_topic"] == ""
+    assert parse_parameters({"speech_topic": "robot0/tts"}).speech_topic == "robot0/tts"
+    with pytest.raises(ParameterError, match="speech_topic '1tts' is not a valid ROS topic"):
+        parse_parameters({"speech_topic": "1tts"})
+
+
 # -- conversions ---------------------------------------------------------------------------
 
 

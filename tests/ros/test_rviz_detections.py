@@ -58,7 +58,7 @@ def remove(client: RosClient, *nodes: Any) -> None:
 def go2(client: RosClient) -> Iterator[MissionNode]:
     # The driver's own detections off: this test publishes the only ones.
     driver = SimDriver(
-        context=client.context, namespace=GO2, options={"odom_delay": 0.05, "detections": False}
+        context=client.context, namespace=GO2, options={"odom_delay": 0.05, "detector": "none"}
     )
     add(client, *driver.nodes)
     # No map (map_topic ''): detections are known objects all the same.

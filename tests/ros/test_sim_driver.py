@@ -353,7 +353,8 @@ def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery_or_dete
             "0",
             "--start-posture",
             "lying",
-            "--no-detections",
+            "--detector",
+            "none",
         ),
     )
     bare = Driver(client, "/bare")
@@ -362,7 +363,7 @@ def test_without_a_relay_cmd_vel_reaches_nothing_and_there_is_no_battery_or_dete
         cmd_vel = client.publisher(Twist, "/bare/cmd_vel")
         names = dict(client.node.get_topic_names_and_types())
         assert "/bare/battery_state" not in names and "/bare/odom" in names
-        assert "/bare/detections" not in names  # --no-detections
+        assert "/bare/detections" not in names  # --detector none
         assert cmd_vel.get_subscription_count() == 0
         bare.walk(0.3, 0.5, publisher=cmd_vel)
         after = bare.wait_truth(lambda _t: True, "the truth after Twists on cmd_vel")

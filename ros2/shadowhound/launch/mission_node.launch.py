@@ -34,11 +34,18 @@ ARGUMENTS = {
     "battery_topic": "",
     "detections_topic": "",
     "detector_classes": "",
+    "coco_detections_topic": "",
+    "camera_info_topic": "camera/camera_info",
+    "camera_x": "0.3",
+    "camera_y": "0.0",
+    "camera_yaw": "0.0",
+    "coco_max_range": "6.0",
     "go2_firmware_tricks": "false",
     "navigation": "",
     "map_topic": "map",
     "scan_topic": "scan",
     "nav2_action": "navigate_to_pose",
+    "speech_topic": "/tts",
 }
 
 

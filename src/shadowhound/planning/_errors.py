@@ -15,7 +15,7 @@ from shadowhound.skills import SkillRegistry, default_registry
 CAPABILITIES = (
     "I can stand, sit, lie down, move/strafe/turn by a distance or angle, go to a position or a "
     "named place, patrol, walk a square, wait, do tricks (hello, dance, stretch, ...), describe "
-    "what I see, report status, and stop."
+    "what I see, report status, say things aloud ('say hello', 'say what you see'), and stop."
 )
 
 

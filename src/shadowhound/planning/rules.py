@@ -15,6 +15,7 @@ modules above.
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Any
 
 from shadowhound.plan import Plan, PlanningError, SkillCall
@@ -25,8 +26,10 @@ from shadowhound.planning import _spelling as spelling
 from shadowhound.planning import _vocabulary as vocab
 from shadowhound.planning._errors import CAPABILITIES, NotUnderstood, describe, failure
 from shadowhound.planning._memory_phrases import memory_steps
+from shadowhound.planning._speech_phrases import SpeechRequest, speech_request
 from shadowhound.planning._text import canon
 from shadowhound.robot.go2_api import TRICKS
+from shadowhound.skills import default_registry
 from shadowhound.units import format_number
 
 __all__ = ["CAPABILITIES", "MAX_CHARS", "MAX_STEPS", "RulePlanner"]
@@ -78,6 +81,17 @@ class RulePlanner:
         failed: list[tuple[str, str]] = []
         last_verb = ""
         for label in en.split_clauses(text):
+            speech = speech_request(label)
+            if speech is not None:
+                try:
+                    said = self._speech(speech, label, notes, steps)
+                except NotUnderstood as exc:
+                    failed.append((label, exc.reason))
+                    continue
+                _check_size(steps, len(steps) + len(said))
+                steps.extend(said)
+                last_verb = ""
+                continue
             remembered = memory_steps(label)
             if remembered is not None:
                 steps.extend(remembered)
@@ -129,6 +143,54 @@ class RulePlanner:
         )
 
     # ---- one clause ---------------------------------------------------------------------------
+
+    def _speech(
+        self, speech: SpeechRequest, label: str, notes: list[str], before: list[SkillCall]
+    ) -> list[SkillCall]:
+        """Steps for a clause that asks to speak: a question's steps then its answer said, the
+        words said (a greeting with the wave), or an earlier step's answer said."""
+        say = SkillCall("voice.say", {}, label)
+        if speech.question is not None:
+            asked = self._question(speech.question, notes, bool(before))
+            if asked:
+                return [*asked, say]
+            if speech.text is None:
+                raise NotUnderstood(
+                    "I can say words aloud, or the answer to a question I understand "
+                    "('say what you see', 'tell me where you are out loud')"
+                )
+        if speech.text is not None:
+            said = SkillCall("voice.say", {"text": speech.text}, label)
+            steps = [said]
+            if speech.greeting and "hello" in TRICKS:  # a greeting is said with the wave
+                steps.append(SkillCall("body.sport", {"trick": "hello"}, label))
+            _check_size(before, len(before) + len(steps) * speech.count)
+            return steps * speech.count
+        if not any(_answers(s) for s in before):
+            raise NotUnderstood(
+                "nothing before it gives an answer to say; ask first, e.g. 'tell me what you "
+                "see and say it out loud'"
+            )
+        return [say]
+
+    def _question(self, question: str, notes: list[str], after_steps: bool) -> list[SkillCall]:
+        """The steps that answer `question` (planned as any clause), or [] when it is not
+        understood or its steps give no answer."""
+        asked = memory_steps(question)
+        tried: list[str] = []
+        if asked is None:
+            try:
+                norm, tried = en.normalize(question)
+                read = self._forgiving(norm, question, tried, "", after_steps)
+            except (NotUnderstood, ValueError):
+                return []
+            if read is None or read[0] is None or read[1] != 1:
+                return []
+            asked = read[0]
+        if not any(_answers(s) for s in asked):
+            return []
+        notes.extend(tried)
+        return asked
 
     def _forgiving(
         self, norm: str, label: str, notes: list[str], last_verb: str, after_steps: bool
@@ -496,6 +558,16 @@ class RulePlanner:
             notes.append(f"no direction given for '{label}': turned counter-clockwise (left)")
         sign = signs.pop() if signs else 1.0
         return [SkillCall("nav.rotate", {"degrees": float(sign * degrees)}, label)]
+
+
+def _answers(step: SkillCall) -> bool:
+    """Whether a step's output answers the user (its skill declares `reports`)."""
+    return step.skill in _reporting()
+
+
+@cache
+def _reporting() -> frozenset[str]:
+    return frozenset(s.name for s in default_registry() if s.reports)
 
 
 def _implied_verb(text: str, last_verb: str) -> str:

@@ -84,6 +84,12 @@ class Robot(Protocol):
         """Run a sport-mode trick by name (see go2_api.TRICKS); returns when done."""
         ...
 
+    def say(self, text: str) -> None:
+        """Speak `text` (cleaned and cut by `speech.Voice`) through the robot's speaker and
+        return at once, before it is heard: speaking never holds up motion. Raises RobotError
+        when the robot has no voice."""
+        ...
+
     def now(self) -> float:
         """Seconds on the robot's clock (simulated or wall)."""
         ...

@@ -1,11 +1,14 @@
 """Detections from any detector -> sightings in the robot's world model.
 
-A detector publishes shadowhound_interfaces/DetectionArray (docs/ros.md, "Detections"); the
-Go2 robot subscribes it when `detections_topic` is set. Each detection becomes a KnownObject in
-the odometry frame: positions in the odometry frame are taken as they are, positions in the
-robot's body frame are placed with the robot's pose when the detection arrives. Other frames
-would need tf, which the project does not use: they are refused, with a message naming the
-frames allowed, and nothing else in the array is lost.
+Two kinds: positions, and boxes in an image. A detector publishes
+shadowhound_interfaces/DetectionArray (docs/ros.md, "Detections"); the Go2 robot subscribes it
+when `detections_topic` is set. A 2-D detector (go2_ros2_sdk's coco_detector) publishes
+vision_msgs/Detection2DArray, subscribed when `coco_detections_topic` is set: `BoxIntake` turns
+its boxes into sightings with camera_info, odometry and the scan (world/image_sighting.py).
+Positions become KnownObjects in the odometry frame: positions in the odometry frame are taken
+as they are, positions in the robot's body frame are placed with the robot's pose when the
+detection arrives. Other frames would need tf, which the project does not use: they are
+refused, with a message naming the frames allowed, and nothing else in the array is lost.
 
 Pure Python (messages are read by attribute), so the rules are tested without ROS.
 """
@@ -14,12 +17,23 @@ from __future__ import annotations
 
 import math
 import threading
+from collections import deque
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from ..errors import DetectionError
-from ..state import Pose2D
+from ..state import Pose2D, Scan
+from ..world.image_sighting import (
+    Bearing,
+    BoxDetection,
+    CameraModel,
+    PoseHistory,
+    SightingRules,
+    locate,
+    nearest_scan,
+    planner_name,
+)
 from ..world.objects import KnownObject, merge_sightings
 
 DEFAULT_RADIUS = 0.25  # metres, a detection that gives no footprint
@@ -127,3 +141,130 @@ class SightingBoard:
     def objects(self) -> tuple[KnownObject, ...]:
         with self._lock:
             return self._objects
+
+
+# -- boxes in an image (vision_msgs/Detection2DArray, go2_ros2_sdk's coco_detector) ------------
+
+# The COCO category names coco_detector reports (its model's 80 classes), as the planner's
+# words: what a search may look for with a COCO detector.
+_COCO = (
+    "person, bicycle, car, motorcycle, airplane, bus, train, truck, boat, traffic light, "
+    "fire hydrant, stop sign, parking meter, bench, bird, cat, dog, horse, sheep, cow, "
+    "elephant, bear, zebra, giraffe, backpack, umbrella, handbag, tie, suitcase, frisbee, "
+    "skis, snowboard, sports ball, kite, baseball bat, baseball glove, skateboard, "
+    "surfboard, tennis racket, bottle, wine glass, cup, fork, knife, spoon, bowl, banana, "
+    "apple, sandwich, orange, broccoli, carrot, hot dog, pizza, donut, cake, chair, couch, "
+    "potted plant, bed, dining table, toilet, tv, laptop, mouse, remote, keyboard, "
+    "cell phone, microwave, oven, toaster, sink, refrigerator, book, clock, vase, "
+    "scissors, teddy bear, hair drier, toothbrush"
+)
+COCO_CLASSES = tuple(planner_name(name) for name in _COCO.split(", "))
+MAX_BEARINGS = 50  # bearing-only sightings kept (the latest), for diagnostics
+
+
+@dataclass(frozen=True)
+class CameraMount:
+    """Where the camera sits on the robot: `x` forward, `y` left (metres from base_link) and
+    `yaw` (radians left of the heading). The Go2's front camera is at its nose, about 0.3 m
+    ahead of base_link (take the exact figures from the robot's URDF)."""
+
+    x: float = 0.3
+    y: float = 0.0
+    yaw: float = 0.0
+
+
+def _seconds(stamp: Any) -> float:
+    return float(stamp.sec) + float(stamp.nanosec) * 1e-9
+
+
+class BoxIntake:
+    """vision_msgs/Detection2DArray -> sightings, with the camera model from camera_info, the
+    robot's poses from odometry and the scans that range the boxes, all by their stamps (the
+    ROS clock of the headers). Thread-safe; messages are read by attribute (no rclpy)."""
+
+    def __init__(
+        self, mount: CameraMount = CameraMount(), rules: SightingRules | None = None
+    ) -> None:
+        self._lock = threading.Lock()
+        self._mount = mount
+        self._rules = rules or SightingRules()
+        self._camera: CameraModel | None = None
+        self._poses = PoseHistory()
+        self._scans: deque[Scan] = deque(maxlen=20)
+        self._bearings: deque[Bearing] = deque(maxlen=MAX_BEARINGS)
+
+    def on_camera_info(self, k: Any) -> str | None:
+        """camera_info's K (row-major 3x3): fx = K[0], cx = K[2]. A problem, or None."""
+        try:
+            camera = CameraModel(
+                float(k[0]), float(k[2]), self._mount.x, self._mount.y, self._mount.yaw
+            )
+        except (IndexError, TypeError, ValueError) as exc:
+            return f"camera_info without a usable K (fx, cx): {exc}"
+        with self._lock:
+            self._camera = camera
+        return None
+
+    def on_pose(self, stamp: float, pose: Pose2D) -> None:
+        with self._lock:
+            self._poses.add(stamp, pose)
+
+    def on_scan(self, stamp: float, scan: Scan) -> None:
+        """A scan taken at `stamp`; placed at the robot's pose then (the latest known pose
+        when the history has none for it)."""
+        with self._lock:
+            pose = self._poses.at(stamp)
+            self._scans.append(replace(scan, pose=pose or scan.pose, stamp=stamp))
+
+    @property
+    def has_camera(self) -> bool:
+        with self._lock:
+            return self._camera is not None
+
+    def bearings(self) -> tuple[Bearing, ...]:
+        """The latest bearing-only sightings (kept as hints, never goals)."""
+        with self._lock:
+            return tuple(self._bearings)
+
+    def read(self, msg: Any) -> tuple[list[KnownObject], list[Bearing], list[str]]:
+        """A Detection2DArray as sightings (stamped with the image's header time), bearings
+        (no range, or beyond max_range) and what was refused."""
+        seen: list[KnownObject] = []
+        bearings: list[Bearing] = []
+        problems: list[str] = []
+        with self._lock:
+            camera = self._camera
+        if camera is None:
+            return seen, bearings, ["no camera_info yet: the boxes cannot be turned into bearings"]
+        for d in msg.detections:
+            stamp = d.header.stamp if (d.header.stamp.sec or d.header.stamp.nanosec) else None
+            at = _seconds(stamp if stamp is not None else msg.header.stamp)
+            if not d.results:
+                problems.append("a detection without a class (results is empty)")
+                continue
+            best = max(d.results, key=lambda r: float(r.hypothesis.score))
+            box = BoxDetection(
+                str(best.hypothesis.class_id),
+                float(d.bbox.center.position.x),
+                float(d.bbox.size_x),
+                float(best.hypothesis.score),
+                at,
+            )
+            with self._lock:
+                pose = self._poses.at(at)
+                scan = nearest_scan(tuple(self._scans), at, self._rules.scan_slack)
+            if pose is None:
+                problems.append(f"{box.label!r}: no odometry pose at the image's time {at:.2f}")
+                continue
+            try:
+                found = locate(box, camera, pose, scan, self._rules)
+            except ValueError as exc:
+                problems.append(str(exc))
+                continue
+            if isinstance(found, Bearing):
+                bearings.append(found)
+            else:
+                seen.append(found)
+        with self._lock:
+            self._bearings.extend(bearings)
+        return seen, bearings, problems

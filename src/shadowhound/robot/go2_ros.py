@@ -32,6 +32,11 @@ Written against how the driver really behaves (docs/go2.md):
   `stop` and `emergency_stop` cancel its goals.
 - detections (optional, `detections_topic`): shadowhound_interfaces/DetectionArray from any
   detector; each detection becomes a sighting (`known_objects()`), see go2_detections.py.
+- boxes (optional, `coco_detections_topic`): vision_msgs/Detection2DArray from a 2-D detector
+  (go2_ros2_sdk's coco_detector, `detected_objects`), placed with `camera_info_topic`'s K, the
+  camera's mount, odometry and the scan at the image's stamp (go2_detections.BoxIntake).
+- voice: `say` publishes one std_msgs/String on `speech_topic` (go2_ros2_sdk's `tts_node`
+  listens on `/tts` and plays it on the robot's speaker), without waiting for it to be heard.
 
 The robot has its own rclpy node and executor thread, so it works inside the MissionNode
 process (sharing its context) or in a plain script (it then initialises a private context).
@@ -62,16 +67,25 @@ from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import BatteryState, CompressedImage, Image, LaserScan
+from sensor_msgs.msg import BatteryState, CameraInfo, CompressedImage, Image, LaserScan
+from std_msgs.msg import String
 
 from ..camera import raw_image_frame, to_camera_frame
 from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan
 from ..world import DEFAULT_ROBOT_RADIUS, Belief, GridError, merge_sightings
+from ..world.image_sighting import SightingRules
 from ..world.objects import KnownObject
 from . import go2_api
 from .base import RobotError
 from .estop_listener import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC, EstopListener
-from .go2_detections import Frames, SightingBoard, sightings_from_msg
+from .go2_detections import (
+    COCO_CLASSES,
+    BoxIntake,
+    CameraMount,
+    Frames,
+    SightingBoard,
+    sightings_from_msg,
+)
 from .go2_motion import MAX_LATENCY, MotionTracker
 from .go2_nav2 import Nav2Navigator
 from .go2_odometry import OdometryFault, OdometryIntake, OdometryLimits
@@ -82,6 +96,9 @@ from .go2_world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _SENSOR = QoSProfile(
     depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
+)
+_SENSOR_DEPTH = QoSProfile(
+    depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
 )
 _KEEPALIVE_PERIOD = 0.1  # 10 Hz, as DIMOS streams Twist to the Go2
 _DRIVEN_SETTLE = 2.0  # seconds the body may still move after Nav2, a posture or a trick
@@ -116,6 +133,12 @@ class Go2RosConfig:
     # The names the detector can report ("chair", "red ball"): what a search may look for,
     # besides the names it has already reported.
     detector_classes: tuple[str, ...] = ()
+    # vision_msgs/Detection2DArray (coco_detector: `detected_objects`); '' = none. Needs
+    # camera_info (K) on `camera_info_topic`, odometry and the scan to place a box.
+    coco_detections_topic: str = ""
+    camera_info_topic: str = "camera/camera_info"
+    camera_mount: CameraMount = CameraMount()
+    coco_max_range: float = 6.0  # metres; a box farther away is a bearing only
     battery_timeout: float = 30.0  # seconds after which a battery reading is unknown again
     odom_timeout: float = 0.5  # seconds without odometry before get_state raises
     odom_latency: float | None = None  # seconds odometry lags the robot; None = measured
@@ -135,6 +158,9 @@ class Go2RosConfig:
     # mission node listens itself). Wherever else a Go2 runs (MCP, scripts) they stop it.
     estop_topic: str = ESTOP_TOPIC
     estop_release_topic: str = ESTOP_RELEASE_TOPIC
+    # std_msgs/String for go2_ros2_sdk's tts_node, which listens on the absolute `/tts`;
+    # '' = no voice (`say` raises RobotError).
+    speech_topic: str = "/tts"
 
 
 class Go2RosRobot:
@@ -175,6 +201,11 @@ class Go2RosRobot:
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
         self._sightings = SightingBoard()
+        self._boxes = (
+            BoxIntake(c.camera_mount, SightingRules(max_range=c.coco_max_range))
+            if c.coco_detections_topic
+            else None
+        )
         self._frames = Frames()  # odometry's own frame ids replace these when it arrives
         self._odom_frame = "odom"  # odometry's header.frame_id, once it arrives
         self._map: Belief | None = None  # the latest map, inflated once per map
@@ -238,6 +269,9 @@ class Go2RosRobot:
         names = [c.cmd_vel_topic] if c.cmd_vel_topic else list(VELOCITY_TOPICS)
         self._twist_pubs = {name: n.create_publisher(Twist, name, _RELIABLE) for name in names}
         self._request_pub = n.create_publisher(WebRtcReq, c.webrtc_topic, _RELIABLE)
+        self._speech_pub = (
+            n.create_publisher(String, c.speech_topic, _RELIABLE) if c.speech_topic else None
+        )
         n.create_subscription(Odometry, c.odom_topic, self._on_odom, _RELIABLE)
         n.create_subscription(Go2State, c.state_topic, self._on_state, _RELIABLE)
         if c.battery_topic:
@@ -261,6 +295,19 @@ class Go2RosRobot:
             n.create_subscription(
                 DetectionArray, c.detections_topic, self._on_detections, _RELIABLE
             )
+        if c.coco_detections_topic:
+            try:
+                from vision_msgs.msg import Detection2DArray
+            except ImportError as exc:
+                raise RobotError(
+                    "coco_detections_topic needs the vision_msgs package: "
+                    f"run scripts/build_ros.sh ({exc})"
+                ) from exc
+            # Best effort matches a detector's reliable publisher and a best-effort one.
+            n.create_subscription(
+                Detection2DArray, c.coco_detections_topic, self._on_boxes, _SENSOR_DEPTH
+            )
+            n.create_subscription(CameraInfo, c.camera_info_topic, self._on_camera_info, _SENSOR)
         if c.map_topic:
             n.create_subscription(GridMsg, c.map_topic, self._on_map, MAP_QOS)
         if c.scan_topic:
@@ -331,6 +378,8 @@ class Go2RosRobot:
                 )
         if fault is not None:
             self._odometry_fault(fault)
+        elif self._boxes is not None:
+            self._boxes.on_pose(stamp, Pose2D(p.x, p.y, yaw))
         if abs(after - before) >= 0.01:
             self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
@@ -451,6 +500,8 @@ class Go2RosRobot:
             return
         with self._lock:
             self._scan = (now, scan)
+        if self._boxes is not None:
+            self._boxes.on_scan(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, scan)
 
     def _on_battery(self, msg: BatteryState) -> None:
         percent = float(msg.percentage) * 100.0
@@ -493,6 +544,30 @@ class Go2RosRobot:
         seen, problems = sightings_from_msg(
             msg, Pose2D(state.x, state.y, state.yaw), frames, self.now(), age
         )
+        self._add_sightings(seen, problems)
+
+    def _on_camera_info(self, msg: CameraInfo) -> None:
+        assert self._boxes is not None  # subscribed only with the boxes' intake
+        problem = self._boxes.on_camera_info(msg.k)
+        if problem is not None:
+            self.node.get_logger().warning(problem, throttle_duration_sec=30.0)
+
+    def _on_boxes(self, msg: Any) -> None:
+        assert self._boxes is not None  # subscribed only with the boxes' intake
+        seen, bearings, problems = self._boxes.read(msg)
+        # Stamps are the image's (ROS clock); sightings are on the robot's clock.
+        offset = self.now() - self.node.get_clock().now().nanoseconds * 1e-9
+        seen = [replace(o, stamp=o.stamp + offset) for o in seen]
+        self._add_sightings(seen, problems)
+        with self._lock:  # after the sightings: look() waits for a report it can read
+            self._detections_at = time.monotonic()
+        for b in bearings:
+            self.node.get_logger().debug(
+                f"{b.name}: bearing {math.degrees(b.direction):.0f} degrees only ({b.why})"
+            )
+
+    def _add_sightings(self, seen: list[KnownObject], problems: list[str]) -> None:
+        """New sightings into the board and the world model; what was refused, logged."""
         self._sightings.add(seen)
         with self._lock:
             belief = self._map
@@ -511,7 +586,7 @@ class Go2RosRobot:
         """Wait for the detector's next report (received after this call), at most
         `_LOOK_SECONDS`: it runs at its own rate, so what it said before the robot came to
         rest may be of another view. Nothing to wait for without a detections topic."""
-        if not self.config.detections_topic:
+        if not (self.config.detections_topic or self.config.coco_detections_topic):
             return
         since = time.monotonic()
         deadline = since + _LOOK_SECONDS
@@ -526,7 +601,8 @@ class Go2RosRobot:
         """The detector's classes (`detector_classes`) and every name it has reported: what
         a search may look for. Without a detector, nothing (no search can end)."""
         reported = (o.name for o in self.known_objects())
-        return frozenset((*self.config.detector_classes, *reported))
+        coco = COCO_CLASSES if self.config.coco_detections_topic else ()
+        return frozenset((*self.config.detector_classes, *coco, *reported))
 
     def known_objects(self) -> tuple[KnownObject, ...]:
         """What the detections topic has reported and what the world model holds (sightings
@@ -923,6 +999,13 @@ class Go2RosRobot:
                     priority=0,
                 )
             )
+
+    def say(self, text: str) -> None:
+        """Publish `text` once on `speech_topic` (a publish queues the message and returns)."""
+        if self._speech_pub is None:
+            raise RobotError("this Go2 has no voice: speech_topic is '' (set it, e.g. /tts)")
+        if self._context.ok():
+            self._speech_pub.publish(String(data=text))
 
     # -- postures ------------------------------------------------------------------------
 

@@ -63,7 +63,7 @@ class RobotCommand:
     """One command the robot received, as recorded by the simulator."""
 
     stamp: float
-    kind: str  # velocity | stop | posture | trick
+    kind: str  # velocity | stop | posture | trick | say
     value: Any
     accepted: bool = True
     note: str = ""
@@ -122,6 +122,7 @@ class SimRobot:
         self._true_odometer = 0.0
         self._depth = 0.0  # how far the body overlaps the scene (0 unless reset into it)
         self._belief: Belief | None = None  # the scene's map, built on first use
+        self._spoken: deque[str] = deque(maxlen=100)
 
     # -- clock ---------------------------------------------------------------------------
 
@@ -390,6 +391,19 @@ class SimRobot:
             self._counters.tricks += 1
             self._cmd = (0.0, 0.0, 0.0)
         self.sleep(info.duration)
+
+    def say(self, text: str) -> None:
+        """The simulator's speaker is its record: `spoken` (and the command log) keep the words;
+        the agent's `Spoken` event shows them on dashboards."""
+        with self._lock:
+            self._record("say", text, True)
+            self._spoken.append(text)
+
+    @property
+    def spoken(self) -> list[str]:
+        """What the robot said aloud, oldest first (the last 100 sayings)."""
+        with self._lock:
+            return list(self._spoken)
 
     def get_camera_frame(self) -> CameraFrame | None:
         state = self.get_state()

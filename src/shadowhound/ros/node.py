@@ -225,11 +225,12 @@ class MissionNode(Node):
             battery = (
                 topic(s.battery_topic) if s.battery_topic else "none (battery reported unknown)"
             )
+            speech = topic(s.speech_topic) if s.speech_topic else "none (the robot does not speak)"
             log.info(
                 f"Go2 through go2_ros2_sdk: velocity on {velocity}, sport "
                 f"commands on {topic(s.webrtc_topic)}, odometry from "
                 f"{topic(s.odom_topic)}, state from {topic(s.go2_states_topic)}, battery "
-                f"{battery}"
+                f"{battery}, speech on {speech}"
             )
         if ExecuteMission is None:
             log.warning(

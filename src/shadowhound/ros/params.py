@@ -14,6 +14,7 @@ from typing import Any, get_args
 
 from ..config import ShadowHoundConfig, load_config
 from ..errors import ParameterError
+from ..robot.go2_detections import CameraMount
 from ..robot.go2_motion import GO2_MOTION, MAX_LATENCY
 
 NODE_NAME = "shadowhound_mission_agent"
@@ -79,6 +80,23 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
         "go2: the names the detector can report, comma-separated ('red ball, chair'): "
         "a search may look for these and for names it has reported; '' = only those",
     ),
+    "coco_detections_topic": (
+        "",
+        "go2: vision_msgs/Detection2DArray in from a 2-D detector (go2_ros2_sdk's "
+        "coco_detector: detected_objects; '' = none); each box is placed with camera_info, "
+        "odometry and the scan",
+    ),
+    "camera_info_topic": (
+        "camera/camera_info",
+        "go2: sensor_msgs/CameraInfo in (best effort), the camera model for the boxes",
+    ),
+    "camera_x": (0.3, "go2: metres the camera sits ahead of base_link (-2..2)"),
+    "camera_y": (0.0, "go2: metres the camera sits left of base_link (-2..2)"),
+    "camera_yaw": (0.0, "go2: radians the camera looks left of the heading (-pi..pi)"),
+    "coco_max_range": (
+        6.0,
+        "go2: metres (0.5..30) beyond which a box is a bearing only, never a place to go",
+    ),
     "navigation": (
         "",
         "nav.goto: auto (Nav2's navigate_to_pose when it answers, else the "
@@ -92,6 +110,11 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     ),
     "scan_topic": ("scan", "go2: sensor_msgs/LaserScan in ('' = none)"),
     "nav2_action": ("navigate_to_pose", "go2: Nav2's NavigateToPose action ('' = no Nav2)"),
+    "speech_topic": (
+        "/tts",
+        "go2: std_msgs/String words to say out (go2_ros2_sdk's tts_node listens on "
+        "/tts); '' = none: the robot does not speak aloud",
+    ),
     "go2_firmware_tricks": (
         False,
         "go2: allow the tricks that need firmware support and the "
@@ -105,9 +128,11 @@ _OPTIONAL_TOPICS = (
     "cmd_vel_topic",
     "battery_topic",
     "detections_topic",
+    "coco_detections_topic",
     "map_topic",
     "scan_topic",
     "nav2_action",
+    "speech_topic",
 )
 NAVIGATION: tuple[str, ...] = get_args(ShadowHoundConfig.model_fields["navigation"].annotation)
 ROBOTS = ("sim", "go2")
@@ -139,11 +164,18 @@ class NodeSettings:
     battery_topic: str = ""
     detections_topic: str = ""
     detector_classes: str = ""
+    coco_detections_topic: str = ""
+    camera_info_topic: str = "camera/camera_info"
+    camera_x: float = 0.3
+    camera_y: float = 0.0
+    camera_yaw: float = 0.0
+    coco_max_range: float = 6.0
     go2_firmware_tricks: bool = False
     navigation: str = ""
     map_topic: str = "map"
     scan_topic: str = "scan"
     nav2_action: str = "navigate_to_pose"
+    speech_topic: str = "/tts"
 
     @property
     def camera_compressed(self) -> bool:
@@ -178,10 +210,15 @@ class NodeSettings:
             "detector_classes": tuple(
                 n for n in (c.strip() for c in self.detector_classes.split(",")) if n
             ),
+            "coco_detections_topic": self.coco_detections_topic,
+            "camera_info_topic": self.camera_info_topic,
+            "camera_mount": CameraMount(self.camera_x, self.camera_y, self.camera_yaw),
+            "coco_max_range": self.coco_max_range,
             "firmware_tricks": self.go2_firmware_tricks,
             "map_topic": self.map_topic,
             "scan_topic": self.scan_topic,
             "nav2_action": self.nav2_action,
+            "speech_topic": self.speech_topic,
         }
 
 
@@ -228,9 +265,12 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
             "go2_states_topic",
             "battery_topic",
             "detections_topic",
+            "coco_detections_topic",
+            "camera_info_topic",
             "map_topic",
             "scan_topic",
             "nav2_action",
+            "speech_topic",
         )
         if n in out and not _TOPIC.match(out[n]) and (out[n] or n not in _OPTIONAL_TOPICS)
     ]
@@ -253,6 +293,15 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
     namespace = out.get("robot_namespace", "")
     if namespace.strip("/") and not _TOPIC.match(namespace.strip("/")):
         problems.append(f"robot_namespace {namespace!r} is not a valid ROS namespace (e.g. robot0)")
+    for name, low, high in (
+        ("camera_x", -2.0, 2.0),
+        ("camera_y", -2.0, 2.0),
+        ("camera_yaw", -math.pi, math.pi),
+        ("coco_max_range", 0.5, 30.0),
+    ):
+        value = out.get(name)
+        if value is not None and not (math.isfinite(value) and low <= value <= high):
+            problems.append(f"{name} must be a number in {low:g}..{high:g}, got {value}")
     timeout = out.get("odom_timeout")
     if timeout is not None and not (math.isfinite(timeout) and 0.05 <= timeout <= 10):
         problems.append(f"odom_timeout must be a number of seconds in 0.05..10, got {timeout}")

@@ -17,9 +17,12 @@ Per robot (names prefixed `robot{i}/` with `--robots 2` or more, as go2_ros2_sdk
 - `scan` (sensor_msgs/LaserScan: 360 beams, 0.1-8 m, `--scan-rate-hz`, from the simulator's ray
   casting, frame base_link) out; `map` (nav_msgs/OccupancyGrid: the scene at 5 cm, frame odom,
   transient local as map_server publishes it) out once;
-- `detections` (shadowhound_interfaces/DetectionArray) out at 2 Hz unless `--no-detections`:
+- `detections` (shadowhound_interfaces/DetectionArray) out at 2 Hz with `--detector shadowhound`:
   the objects the simulated camera sees (field of view and occlusion), at their true centres in
   frame odom, confidence 1, true radius: a detector for `detections_topic` of the Go2 robot;
+  with `--detector coco` instead `detected_objects` (vision_msgs/Detection2DArray: each object's
+  box in the camera image under its COCO name, as go2_ros2_sdk's coco_detector) and
+  `camera/camera_info` (best effort), for `coco_detections_topic`; `--detector none`: neither;
 - `navigate_to_pose` (nav2_msgs/action/NavigateToPose) served with the project's planner and
   path follower (ros/sim_nav.py), unless `--no-navigate-to-pose`;
 - `sim_driver/truth` (std_msgs/String JSON) out: the ground truth (true pose, velocity,
@@ -106,7 +109,7 @@ class SimDriver(Node):
             self.create_timer(1.0, self._each("publish_battery"))
         if s.scan_rate_hz > 0:
             self.create_timer(1.0 / s.scan_rate_hz, self._each("publish_scan"))
-        if s.detections:
+        if s.detector != "none":
             self.create_timer(1.0 / DETECTIONS_RATE_HZ, self._each("publish_detections"))
         for robot in self.robots:
             robot.start()
@@ -186,7 +189,8 @@ it with `shadowhound node --ros-args -p robot:=go2` in another terminal.
 Topics per robot (robot{{i}}/ prefix with --robots 2+): cmd_vel_out, webrtc_req in; odom (no
 twist, late by --odom-delay), go2_states, camera/image_raw, battery_state (--battery only)
 out; scan (LaserScan), map (OccupancyGrid, transient local) out; detections (DetectionArray,
-{DETECTIONS_RATE_HZ:g} Hz: what the simulated camera sees; --no-detections: none) out;
+{DETECTIONS_RATE_HZ:g} Hz: what the simulated camera sees; --detector coco: detected_objects,
+vision_msgs/Detection2DArray boxes, and camera/camera_info instead; --detector none: none) out;
 navigate_to_pose (Nav2's NavigateToPose action, served with the project's planner;
 --no-navigate-to-pose: none);
 sim_driver/truth (JSON ground truth), sim_driver/requests (JSON per sport request) out;

@@ -33,7 +33,7 @@ from ..robot.go2_world_msgs import MAP_QOS, grid_to_msg, scan_to_msg
 from ..robot.sim import SimRobot
 from ..robot.sim_sport import SimSportMode, Truth
 from ..state import Posture
-from .sim_detector import SimDetector
+from .sim_detector import CAMERA_FOV_DEG, CocoDetector, SimDetector
 from .sim_faults import Faults, LyingOdometry
 from .sim_nav import SimNavigator
 from .sim_options import DriverSettings
@@ -100,8 +100,14 @@ class SimGo2:
             if settings.scan_rate_hz > 0
             else None
         )
+        boxes, info = self.topic("detected_objects"), self.topic("camera/camera_info")
+        width, height = settings.camera_width, settings.camera_height
         self.detector = (
-            SimDetector.create(node, self.topic("detections")) if settings.detections else None
+            SimDetector.create(node, self.topic("detections"))
+            if settings.detector == "shadowhound"
+            else CocoDetector.create(node, boxes, info, width, height, CAMERA_FOV_DEG)
+            if settings.detector == "coco"
+            else None
         )
         if settings.map:  # published once: transient local keeps it for late subscribers
             self._map_pub = node.create_publisher(GridMsg, self.topic("map"), MAP_QOS)

@@ -45,7 +45,7 @@ class DriverSettings:
     map: bool = True
     navigate_to_pose: bool = True
     nav_speed: float = 0.4
-    detections: bool = True
+    detector: str = "shadowhound"
 
 
 @dataclass(frozen=True)
@@ -169,12 +169,16 @@ OPTIONS: dict[str, Option] = {
         "--no-navigate-to-pose: as a Go2 without Nav2",
     ),
     "nav_speed": Option(float, "m/s the navigate_to_pose server walks at", 0.05, 1.0, "M/S"),
-    "detections": Option(
-        bool,
-        "act as a detector: publish shadowhound_interfaces/DetectionArray on detections "
-        f"at {DETECTIONS_RATE_HZ:g} Hz, the objects the simulated camera sees (field of "
-        "view, occlusion) at their true centres in odom, confidence 1, true radius; "
-        "--no-detections: none",
+    "detector": Option(
+        str,
+        f"act as a detector at {DETECTIONS_RATE_HZ:g} Hz, reporting the objects the simulated "
+        "camera sees (field of view, occlusion). shadowhound: "
+        "shadowhound_interfaces/DetectionArray on detections, true centres in odom, "
+        "confidence 1, true radius; coco: vision_msgs/Detection2DArray on detected_objects "
+        "as go2_ros2_sdk's coco_detector, each object's box in the camera image under its "
+        "COCO name, with camera/camera_info; none: no detector",
+        metavar="KIND",
+        choices=("shadowhound", "coco", "none"),
     ),
 }
 DEFAULTS = DriverSettings()

@@ -1,6 +1,6 @@
 """Skills: typed robot capabilities in one registry.
 
-Each area module (nav, facing, body, sense, memory) holds its skills in `SKILLS`; a skill
+Each area module (nav, facing, body, sense, voice, memory) holds its skills in `SKILLS`; a skill
 declares on its `Skill` everything the rest of the house needs to know of it, so a new skill
 is one file.
 """
@@ -8,7 +8,7 @@ is one file.
 from __future__ import annotations
 
 from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout, SkillValidationError
-from . import body, facing, memory, nav, sense
+from . import body, facing, memory, nav, sense, voice
 from .arguments import (
     Angle,
     AngularSpeed,
@@ -30,7 +30,9 @@ from .registry import Skill, SkillRegistry, ValidatedCall
 
 def default_registry() -> SkillRegistry:
     """A fresh registry with every built-in skill."""
-    return SkillRegistry([*nav.SKILLS, *facing.SKILLS, *body.SKILLS, *sense.SKILLS, *memory.SKILLS])
+    return SkillRegistry(
+        [*nav.SKILLS, *facing.SKILLS, *body.SKILLS, *sense.SKILLS, *voice.SKILLS, *memory.SKILLS]
+    )
 
 
 __all__ = [

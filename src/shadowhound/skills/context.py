@@ -12,6 +12,7 @@ from ..config import ShadowHoundConfig
 from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout
 from ..memory.service import AgentMemory
 from ..robot.base import Robot
+from ..speech import Saying
 from ..state import CameraFrame, Pose2D, Posture, RobotState
 from ..world import Belief, KnownObject
 from .bounds import CommandLedger, fences, room_ahead
@@ -82,6 +83,8 @@ class SkillContext:
         on_progress: Callable[[float], None] = lambda _fraction: None,
         heartbeat: Callable[[bool | None], None] = lambda _moving: None,
         memory: AgentMemory | None = None,
+        say: Callable[[str], Saying] | None = None,
+        answer: Callable[[], str | None] = lambda: None,
     ) -> None:
         self.robot = robot
         self.env = env
@@ -92,6 +95,9 @@ class SkillContext:
         self.on_progress = on_progress
         self.heartbeat = heartbeat
         self.memory = memory  # AgentMemory: places, recall
+        self._say = say
+        # The mission's latest answer so far (what a step that reports said), None before one.
+        self.answer = answer
         self.period = 1.0 / self.config.motion.control_rate_hz
         self._last_command = (0.0, 0.0, 0.0)
         self.deadline = math.inf
@@ -252,6 +258,12 @@ class SkillContext:
 
     def camera_frame(self) -> CameraFrame | None:
         return self._camera()
+
+    def say(self, text: str) -> Saying:
+        """Say `text` through the agent's voice (cleaned, cut, rate-limited; see speech.py)."""
+        if self._say is None:
+            raise SkillError("nothing here can speak (no voice given to this step)")
+        return self._say(text)
 
 
 def _cap_vector(vx: float, vy: float, limit: float) -> tuple[float, float]:

@@ -102,6 +102,7 @@ class Skill:
         schema.pop("description", None)
         for prop in schema.get("properties", {}).values():
             prop.pop("title", None)
+            prop.pop("examples", None)  # for the chat's examples (`example`); tokens to a model
         schema.setdefault("properties", {})
         schema["additionalProperties"] = False
         return schema
@@ -135,14 +136,16 @@ class Skill:
     def example(self) -> str | None:
         """This skill asked for in words with typical arguments ("turn left 90 degrees"), for
         people who ask what the robot can do; None when it has no `phrase`, or its arguments
-        have no typical values (free text such as a note)."""
+        have no typical values (free text such as a note). A field's declared `examples` come
+        first (words to say: the call without them means something else)."""
         if self.phrase is None:
             return None
         fields = self.args_model.model_fields
         required = {n: typical_value(f) for n, f in fields.items() if f.is_required()}
         optional = {n: typical_value(f) for n, f in fields.items() if not f.is_required()}
+        shown = {n: f.examples[0] for n, f in fields.items() if f.examples}
         # The fewest arguments that make a valid call: the required ones, else every typical one.
-        for values in (required, required | optional):
+        for values in (required | shown, required, required | optional):
             given = {n: v for n, v in values.items() if v is not None}
             try:
                 return self.say(self.args_model(**given))

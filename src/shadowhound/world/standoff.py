@@ -7,10 +7,12 @@ from dataclasses import dataclass
 
 from ..errors import PlanError
 from ..state import Pose2D
-from .objects import Belief, KnownObject
+from .objects import Belief, KnownObject, object_key
 from .planner import Path, plan_path, require_finite
 
 DEFAULT_STANDOFF = 0.6  # metres between the object's surface and the robot's centre
+PERSON_STANDOFF = 1.0  # metres: the least a person is given, whatever the standoff asked
+_PEOPLE = frozenset({"person", "people", "man", "woman", "child", "kid", "boy", "girl", "human"})
 _STEP_DEG = 15
 
 
@@ -22,6 +24,12 @@ class Standoff:
     path: Path
 
 
+def is_person(target: KnownObject) -> bool:
+    """Whether the object is a person ("person", "the tall man"): by the last word of its name."""
+    words = object_key(target.name).split()
+    return bool(words) and words[-1] in _PEOPLE
+
+
 def standoff_point(
     belief: Belief,
     start: tuple[float, float],
@@ -29,9 +37,12 @@ def standoff_point(
     gap: float = DEFAULT_STANDOFF,
 ) -> Standoff:
     """The reachable standoff nearest the robot's side of the object (tried every 15 degrees,
-    starting with the direction towards `start`). Raises PlanError when none is reachable."""
+    starting with the direction towards `start`). A person is given at least PERSON_STANDOFF.
+    Raises PlanError when none is reachable."""
     if not (math.isfinite(gap) and gap > 0):
         raise ValueError(f"standoff gap must be > 0 metres, got {gap}")
+    if is_person(target):
+        gap = max(gap, PERSON_STANDOFF)
     require_finite(start, (target.x, target.y))
     reach = target.radius + max(gap, belief.robot_radius)
     towards = math.atan2(start[1] - target.y, start[0] - target.x)

@@ -107,7 +107,21 @@ function showCurrent(text, steps) {
   $("#result").textContent = "";
   $("#result").dataset.kind = "";
   $("#cancel").hidden = false; // until the mission ends
+  $("#spoken").replaceChildren();
   renderSteps($("#steps"), steps);
+}
+
+// What the robot said (voice.say): a line under the steps; spoken by the browser too when the
+// person turned that on. Words not said aloud (over the rate, no voice) show why.
+function showSpoken(message) {
+  const line = document.createElement("li");
+  line.dataset.aloud = String(message.aloud);
+  line.textContent = (message.aloud ? "said: " : "not said aloud (" + message.why_silent + "): ") +
+    "\u201c" + message.text + "\u201d";
+  $("#spoken").append(line);
+  if (message.aloud && $("#voice-here").checked && "speechSynthesis" in window) {
+    window.speechSynthesis.speak(new SpeechSynthesisUtterance(message.text));
+  }
 }
 
 function showResult(record) {
@@ -307,6 +321,9 @@ function onEvent(message) {
       break;
     case "estop":
       setEstop(message.latched);
+      break;
+    case "spoken":
+      if (message.mission_id === view.current) showSpoken(message);
       break;
     case "approval_required":
       showApproval(message.request);

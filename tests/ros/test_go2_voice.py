@@ -1,0 +1,131 @@
+"""The Go2's voice over real DDS: `shadowhound node -p robot:=go2` with `shadowhound sim-driver`
+(as test_go2_sim.py does), and this process listening where go2_ros2_sdk's tts_node listens.
+"say hello" publishes exactly one std_msgs/String there; the robot still waves. Skipped
+without rclpy or the interface packages unless SHADOWHOUND_REQUIRE_ROS=1 (then it fails).
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+from collections.abc import Callable, Iterator
+
+import pytest
+
+from tests.ros.needs import require
+
+require("rclpy", "shadowhound_interfaces", "go2_interfaces")
+
+from go2_interfaces.msg import WebRtcReq  # noqa: E402
+from std_msgs.msg import String  # noqa: E402
+
+from tests.ros.rosclient import (  # noqa: E402
+    Agent,
+    Inbox,
+    NodeProcess,
+    RosClient,
+    wait_matched,
+    wait_until,
+)
+
+NS = "/robot0"
+SPEECH = "/voice_test/tts"  # a speech topic of this test's own (the default is /tts)
+TIMEOUT = 30.0
+pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
+
+
+class Driver:
+    """The simulated driver's request log (what the robot was asked to do), matched both ways."""
+
+    def __init__(self, client: RosClient) -> None:
+        self.client = client
+        self.requests = client.subscribe(String, f"{NS}/sim_driver/requests")
+        self.webrtc = client.publisher(WebRtcReq, f"{NS}/webrtc_req")
+        self.truth = client.subscribe(String, f"{NS}/sim_driver/truth")  # last reader: 50 Hz
+
+    def wait_ready(self, process: NodeProcess) -> None:
+        def ping() -> Callable[[], bool]:
+            mark = self.requests.mark()
+            self.webrtc.publish(WebRtcReq(id=0, topic="", api_id=0, parameter="{", priority=0))
+            return lambda: 0 in self.api_ids(mark)
+
+        wait_matched(
+            self.client,
+            "the simulated driver",
+            [self.requests, self.truth],
+            [self.webrtc],
+            ping=ping,
+            alive=process.check_alive,
+        )
+
+    def api_ids(self, mark: int = 0) -> list[int]:
+        return [json.loads(m.data)["api_id"] for m in self.requests.since(mark)]
+
+
+@pytest.fixture(scope="module")
+def rig() -> Iterator[tuple[Agent, Driver]]:
+    client = RosClient("shadowhound_go2_voice_test_client")
+    driver_process = NodeProcess("-r", f"__ns:={NS}", command="sim-driver")
+    node = NodeProcess(
+        "-p",
+        "robot:=go2",
+        "-p",
+        f"robot_namespace:={NS[1:]}",
+        "-p",
+        f"speech_topic:={SPEECH}",
+    )
+    agent, driver = Agent(client, speech_topic=SPEECH), Driver(client)
+    try:
+        agent.wait_ready(node)  # also proves the node's speech writer matched this reader
+        driver.wait_ready(driver_process)
+        wait_until(
+            lambda: agent.robot_state()["connected"],
+            TIMEOUT,
+            "the node's Go2 robot to receive odometry",
+        )
+        assert f"speech on {SPEECH}" in node.output(), node.output()[-2000:]
+        yield agent, driver
+        node.check_alive()
+        driver_process.check_alive()
+    finally:
+        codes = {"node": node.stop(signal.SIGINT), "driver": driver_process.stop(signal.SIGTERM)}
+        client.close()
+    assert codes == {"node": 0, "driver": 0}, (
+        node.output()[-2000:],
+        driver_process.output()[-2000:],
+    )
+
+
+def said(speech: Inbox, mark: int) -> list[str]:
+    return [m.data for m in speech.since(mark)]
+
+
+def test_say_hello_publishes_one_string_on_the_speech_topic_and_waves(rig) -> None:
+    agent, driver = rig
+    speech = agent.speech
+    assert speech is not None
+    mark, requests = speech.mark(), driver.requests.mark()
+    final = agent.run("say hello", 60.0)
+    assert final.startswith("COMPLETED: "), final
+    assert 'said "Hello!" aloud' in final, final
+    speech.wait_for(lambda m: True, 5.0, "the words on the speech topic", mark)
+    assert 1016 in driver.api_ids(requests)  # the wave (Hello) still reaches the driver
+    # The next saying arrives after it on the same topic from the same writer: had "say
+    # hello" published twice, the second copy would be here before it.
+    final = agent.run("say good morning", 60.0)
+    assert final.startswith("COMPLETED: "), final
+    speech.wait_for(lambda m: m.data == "Good morning!", 5.0, "the second saying", mark)
+    assert said(speech, mark) == ["Hello!", "Good morning!"]
+
+
+def test_an_answer_said_aloud_is_cut_and_clean_on_the_wire(rig) -> None:
+    agent, _ = rig
+    speech = agent.speech
+    assert speech is not None
+    mark = speech.mark()
+    final = agent.run("tell me where you are and say it out loud", 60.0)
+    assert final.startswith("COMPLETED: "), final
+    speech.wait_for(lambda m: True, 5.0, "the answer on the speech topic", mark)
+    [words] = said(speech, mark)
+    assert 0 < len(words) <= 200 and words.isprintable(), words
+    assert words.startswith("Standing at x=") and "battery" in words, words
