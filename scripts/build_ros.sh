@@ -2,7 +2,8 @@
 # Install ROS 2 Jazzy (rclpy and the message packages, from PyPI) into a virtual environment and
 # build + install the project's interface packages into it: ros2/shadowhound_interfaces,
 # ros2/nav2_msgs (NavigateToPose only) unless Nav2's own nav2_msgs is importable,
-# ros2/vision_msgs (Detection2DArray and its parts) unless a vision_msgs is importable, and
+# ros2/vision_msgs (Detection2DArray and its parts) unless a vision_msgs is importable,
+# ros2/tf2_msgs (TFMessage only) unless a tf2_msgs is importable, and
 # ros2/go2_interfaces (go2_ros2_sdk's WebRtcReq and Go2State) unless a go2_interfaces with those
 # messages, field for field, is already importable from another workspace (a sourced
 # go2_ros2_sdk install; scripts/check_go2_interfaces.py compares them).
@@ -92,6 +93,16 @@ print(os.path.dirname(os.path.realpath(vision_msgs.msg.__file__)))' 2>/dev/null)
 case "$vision_origin" in
   "" | "$(cd "$VENV" && pwd -P)"/*) build_pkg vision_msgs 'from vision_msgs.msg import Detection2DArray' ;;
   *) echo "build_ros: using vision_msgs from $vision_origin (not building ros2/vision_msgs)" >&2 ;;
+esac
+
+# tf2_msgs likewise: a sourced tf2_msgs (ROS's own, which the driver and slam_toolbox use) wins;
+# ours is TFMessage only, with the fields of tf2_msgs Jazzy's (0.36.4;
+# tests/ros/test_tf2_msgs.py checks the type hash).
+tf2_origin=$(cd /tmp && "$PY" -c 'import os, tf2_msgs.msg
+print(os.path.dirname(os.path.realpath(tf2_msgs.msg.__file__)))' 2>/dev/null) || tf2_origin=""
+case "$tf2_origin" in
+  "" | "$(cd "$VENV" && pwd -P)"/*) build_pkg tf2_msgs 'from tf2_msgs.msg import TFMessage' ;;
+  *) echo "build_ros: using tf2_msgs from $tf2_origin (not building ros2/tf2_msgs)" >&2 ;;
 esac
 
 # go2_ros2_sdk's own go2_interfaces wins when it is importable from elsewhere (the user's
