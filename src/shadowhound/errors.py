@@ -24,6 +24,8 @@ what was wrong and what is allowed or what to do.
     +-- DetectionError               ros: a detection message that cannot be used (ValueError)
     +-- PlanError                    world: no safe path to the goal
     +-- GridError                    world: a map or grid query is malformed (ValueError)
+    +-- TransformUnavailable         robot: a frame transform not known at the time asked
+    |                                    (LookupError)
     +-- UnitError                    a value is not a quantity of the kind asked (ValueError)
     +-- MemoryStoreError             memory: the history database cannot be used
     |   +-- RecallStoreError         ... the retrieval store cannot be used
@@ -74,6 +76,7 @@ __all__ = [
     "SkillTimeout",
     "SkillValidationError",
     "ToolInputError",
+    "TransformUnavailable",
     "UnitError",
     "UsageError",
 ]
@@ -197,6 +200,11 @@ class DetectionError(ShadowHoundError, ValueError):
 
 class GridError(ShadowHoundError, ValueError):
     """A map or a grid query was malformed. The message says what is allowed."""
+
+
+class TransformUnavailable(ShadowHoundError, LookupError):
+    """A frame transform asked of the TF tree is unknown: a frame nobody published, frames in
+    two trees, or a time outside the history kept. The message says which and what is known."""
 
 
 class UnitError(ShadowHoundError, ValueError):
