@@ -42,15 +42,22 @@ def make_agent(time_scale: float = 0.0, **settings: Any) -> RobotAgent:
     return agent
 
 
-def wait_for(check: Callable[[], Any], timeout: float = 10.0, what: str = "condition") -> Any:
-    """Poll `check` until it returns something truthy; fail after `timeout` seconds."""
+def wait_for(
+    check: Callable[[], Any],
+    timeout: float = 10.0,
+    what: str = "condition",
+    detail: Callable[[], str] | None = None,
+) -> Any:
+    """Poll `check` until it returns something truthy; fail after `timeout` seconds (saying
+    `detail()` too, when given: what the test could see then)."""
     deadline = time.monotonic() + timeout
     while True:
         value = check()
         if value:
             return value
         if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+            seen = f": {detail()}" if detail else ""
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}{seen}")
         time.sleep(0.02)
 
 
