@@ -18,9 +18,6 @@ Skipped without rclpy or nav2_msgs unless SHADOWHOUND_REQUIRE_ROS=1 (then it fai
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -30,6 +27,7 @@ from tests.ros.needs import require
 require("rclpy", "nav2_msgs", "rosidl_generator_type_description")
 
 from tests.ros.rosclient import ROOT, RosClient, wait_until  # noqa: E402
+from tests.ros.type_hashes import computed, installed  # noqa: E402
 
 NAV2_JAZZY = {
     "nav2_msgs/action/NavigateToPose": "RIHS01_a56dba8a3234a1215e610180dc703ae25bbf406dded8b54887891c9732857eab",  # noqa: E501
@@ -41,33 +39,18 @@ NAV2_JAZZY = {
     "nav2_msgs/action/NavigateToPose_GetResult": "RIHS01_c407920357d566771e8882b4ef4d1f1a84ee922d609920ccd57faa6d6e391dc5",  # noqa: E501
 }
 OURS = ROOT / "ros2" / "nav2_msgs" / "action" / "NavigateToPose.action"
-SCRIPT = ROOT / "scripts" / "type_hash.py"
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 
 
-def computed(*files: Path, package: str = "nav2_msgs") -> dict[str, str]:
-    done = subprocess.run(
-        [sys.executable, str(SCRIPT), package, *map(str, files)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd="/tmp",
-    )
-    assert done.returncode == 0, done.stderr
-    return dict(line.split() for line in done.stdout.splitlines())
-
-
 def test_our_definition_hashes_as_nav2_jazzys() -> None:
-    hashes = computed(OURS)
+    hashes = computed("nav2_msgs", OURS)
     assert {name: hashes[name] for name in NAV2_JAZZY} == NAV2_JAZZY
 
 
 def test_the_built_package_carries_nav2_jazzys_hashes() -> None:
     import nav2_msgs
 
-    prefix = Path(nav2_msgs.__file__).resolve().parents[4]  # PREFIX/lib/pythonX/site-p..
-    path = prefix / "share" / "nav2_msgs" / "action" / "NavigateToPose.json"
-    hashes = {h["type_name"]: h["hash_string"] for h in json.loads(path.read_text())["type_hashes"]}
+    hashes = installed(nav2_msgs.__file__, "nav2_msgs", "action", "NavigateToPose")
     assert {name: hashes[name] for name in NAV2_JAZZY} == NAV2_JAZZY
 
 
@@ -77,7 +60,7 @@ def test_a_copy_with_one_other_field_type_hashes_differently(tmp_path: Path) -> 
     wrong.write_text(
         OURS.read_text().replace("float32 distance_remaining", "float64 distance_remaining")
     )
-    hashes = computed(wrong)
+    hashes = computed("nav2_msgs", wrong)
     assert (
         hashes["nav2_msgs/action/NavigateToPose_Feedback"]
         != NAV2_JAZZY["nav2_msgs/action/NavigateToPose_Feedback"]

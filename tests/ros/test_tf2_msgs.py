@@ -16,9 +16,6 @@ Skipped without rclpy or tf2_msgs unless SHADOWHOUND_REQUIRE_ROS=1 (then it fail
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -28,6 +25,7 @@ from tests.ros.needs import require
 require("rclpy", "tf2_msgs", "rosidl_generator_type_description")
 
 from tests.ros.rosclient import ROOT, RosClient, wait_until  # noqa: E402
+from tests.ros.type_hashes import computed, installed  # noqa: E402
 
 TF2_JAZZY = {
     "tf2_msgs/msg/TFMessage": "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087",  # noqa: E501
@@ -36,30 +34,15 @@ MSG = ROOT / "ros2" / "tf2_msgs" / "msg"
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 
 
-def computed(files: list[Path]) -> dict[str, str]:
-    done = subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "type_hash.py"), "tf2_msgs", *map(str, files)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd="/tmp",
-    )
-    assert done.returncode == 0, done.stderr
-    return dict(line.split() for line in done.stdout.splitlines())
-
-
 def test_our_definition_hashes_as_tf2_msgs_jazzys() -> None:
-    assert computed(sorted(MSG.glob("*.msg"))) == TF2_JAZZY
+    assert computed("tf2_msgs", *sorted(MSG.glob("*.msg"))) == TF2_JAZZY
 
 
 def test_the_installed_package_carries_tf2_msgs_jazzys_hash() -> None:
     import tf2_msgs
 
-    prefix = Path(tf2_msgs.__file__).resolve().parents[4]  # PREFIX/lib/pythonX/site-p..
-    share = prefix / "share" / "tf2_msgs" / "msg"
     for name, expected in TF2_JAZZY.items():
-        entries = json.loads((share / f"{name.rsplit('/', 1)[1]}.json").read_text())
-        hashes = {h["type_name"]: h["hash_string"] for h in entries["type_hashes"]}
+        hashes = installed(tf2_msgs.__file__, "tf2_msgs", "msg", name.rsplit("/", 1)[1])
         assert hashes[name] == expected, name
 
 
@@ -70,7 +53,7 @@ def test_a_copy_with_another_element_type_hashes_differently(tmp_path: Path) -> 
     (tmp_path / "TFMessage.msg").write_text(
         text.replace("geometry_msgs/TransformStamped[]", "geometry_msgs/Transform[]")
     )
-    hashes = computed([tmp_path / "TFMessage.msg"])
+    hashes = computed("tf2_msgs", tmp_path / "TFMessage.msg")
     name = "tf2_msgs/msg/TFMessage"
     assert hashes[name] != TF2_JAZZY[name]
 

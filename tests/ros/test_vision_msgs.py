@@ -18,9 +18,6 @@ Skipped without rclpy or vision_msgs unless SHADOWHOUND_REQUIRE_ROS=1 (then it f
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -30,6 +27,7 @@ from tests.ros.needs import require
 require("rclpy", "vision_msgs", "rosidl_generator_type_description")
 
 from tests.ros.rosclient import ROOT, RosClient, wait_until  # noqa: E402
+from tests.ros.type_hashes import computed, installed  # noqa: E402
 
 VISION_JAZZY = {
     "vision_msgs/msg/BoundingBox2D": "RIHS01_008eacbb0cf8f26e83795547bed013eec3675485ef386ec056d80eaaf1c1ce2f",  # noqa: E501
@@ -44,30 +42,15 @@ MSG = ROOT / "ros2" / "vision_msgs" / "msg"
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 
 
-def computed(files: list[Path]) -> dict[str, str]:
-    done = subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "type_hash.py"), "vision_msgs", *map(str, files)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd="/tmp",
-    )
-    assert done.returncode == 0, done.stderr
-    return dict(line.split() for line in done.stdout.splitlines())
-
-
 def test_our_definitions_hash_as_vision_msgs_jazzys() -> None:
-    assert computed(sorted(MSG.glob("*.msg"))) == VISION_JAZZY
+    assert computed("vision_msgs", *sorted(MSG.glob("*.msg"))) == VISION_JAZZY
 
 
 def test_the_installed_package_carries_vision_msgs_jazzys_hashes() -> None:
     import vision_msgs
 
-    prefix = Path(vision_msgs.__file__).resolve().parents[4]  # PREFIX/lib/pythonX/site-p..
-    share = prefix / "share" / "vision_msgs" / "msg"
     for name, expected in VISION_JAZZY.items():
-        entries = json.loads((share / f"{name.rsplit('/', 1)[1]}.json").read_text())
-        hashes = {h["type_name"]: h["hash_string"] for h in entries["type_hashes"]}
+        hashes = installed(vision_msgs.__file__, "vision_msgs", "msg", name.rsplit("/", 1)[1])
         assert hashes[name] == expected, name
 
 
@@ -79,7 +62,7 @@ def test_a_copy_with_one_other_field_type_hashes_differently(tmp_path: Path) -> 
         if file.name == "ObjectHypothesis.msg":
             text = text.replace("float64 score", "float32 score")
         (tmp_path / file.name).write_text(text)
-    hashes = computed(sorted(tmp_path.glob("*.msg")))
+    hashes = computed("vision_msgs", *sorted(tmp_path.glob("*.msg")))
     for changed in ("ObjectHypothesis", "ObjectHypothesisWithPose", "Detection2DArray"):
         name = f"vision_msgs/msg/{changed}"
         assert hashes[name] != VISION_JAZZY[name]

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 from ..errors import TransformUnavailable
 from ..state import Pose2D, normalize_angle, not_finite
+from .go2_motion import compose
 
 MAP, ODOM, BASE = "map", "odom", "base_link"
 
@@ -43,13 +44,9 @@ class Transform2D:
         return cls(pose.x, pose.y, pose.yaw)
 
     def compose(self, other: Transform2D) -> Transform2D:
-        """`self` after `other`: parent<-middle composed with middle<-child is parent<-child."""
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        return Transform2D(
-            self.x + c * other.x - s * other.y,
-            self.y + s * other.x + c * other.y,
-            normalize_angle(self.yaw + other.yaw),
-        )
+        """`self` after `other`: parent<-middle composed with middle<-child is parent<-child
+        (the pose `other` moved into `self`'s frame: go2_motion.compose)."""
+        return Transform2D(*compose((self.x, self.y, self.yaw), (other.x, other.y, other.yaw)))
 
     def inverse(self) -> Transform2D:
         c, s = math.cos(self.yaw), math.sin(self.yaw)
