@@ -104,7 +104,10 @@ def test_the_page_shows_what_the_robot_said_and_can_speak_it(serve: Serve, tmp_p
             # A new mission starts with no words under it.
             page.fill("#command", "sit down")
             page.click("#run")
-            page.wait_for_selector('#steps li[data-status="succeeded"]')
+            # Waited on the new mission itself: the last one's steps are still on the page (and
+            # succeeded) until the new one starts, so waiting on them raced the new mission.
+            page.wait_for_selector('#current-text:has-text("sit down")')
+            page.wait_for_selector('#result[data-kind="ok"]')
             assert page.locator("#spoken li").count() == 0
         finally:
             browser.close()
