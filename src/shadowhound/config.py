@@ -275,7 +275,8 @@ class ShadowHoundConfig(_Section):
     memory: MemoryConfig = Field(default_factory=MemoryConfig)
     places: dict[str, tuple[float, float]] = Field(
         default_factory=lambda: {"kitchen": (4.0, 2.5), "charging dock": (-2.1, -1.0)},
-        description="named places in the odom frame, metres",
+        description="named places, metres, in the robot's world frame: SLAM's map on a Go2 with "
+        "map -> odom on /tf, else odometry's frame",
     )
     patrol_route: list[tuple[float, float]] = Field(
         default_factory=lambda: [(2.0, 0.0), (2.0, 1.2), (0.0, 1.2)],

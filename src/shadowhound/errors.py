@@ -17,6 +17,7 @@ what was wrong and what is allowed or what to do.
     +-- RobotError                   robot: the robot refused or failed a command
     +-- SkillError                   a skill could not do what it was asked
     |   +-- SkillTimeout             ... it ran past its time-out
+    |   +-- Relocalized              ... SLAM corrected the map pose during a leg: it stopped
     +-- SafetyError                  safety: a step refused or a mission stopped for safety
     |   +-- PlanProblem              ... a step cannot be done here: a limit, the geofence, an
     |   |                                unknown place (the governor's refusals; ValueError)
@@ -68,6 +69,7 @@ __all__ = [
     "PlanProblem",
     "PlanningError",
     "RecallStoreError",
+    "Relocalized",
     "RobotError",
     "SafetyError",
     "ServeError",
@@ -166,6 +168,12 @@ class RobotError(ShadowHoundError):
 
 class SkillError(ShadowHoundError):
     """A skill could not do what it was asked. The message is for people."""
+
+
+class Relocalized(SkillError):
+    """Localization corrected the robot's map pose while a leg ran (SLAM's map -> odom jumped):
+    the leg stopped rather than walk on the old transform. A walk to a goal plans again from
+    the corrected pose; a relative move ends here."""
 
 
 class SkillTimeout(SkillError):

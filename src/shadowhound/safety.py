@@ -27,7 +27,14 @@ from .skills import SkillRegistry, default_registry, paths
 from .skills.arguments import argument_kind
 from .skills.context import PlanEnv
 from .skills.registry import ValidatedCall
-from .state import Pose2D, Posture, RobotState, normalize_angle, position_unknown
+from .state import (
+    Pose2D,
+    Posture,
+    RobotState,
+    carried,
+    normalize_angle,
+    position_unknown,
+)
 
 
 @dataclass(frozen=True)
@@ -116,8 +123,13 @@ class Governor:
         """
         if not call.skill.moves or call.skill.predict is None:
             return ""
+        # Where the step began, in the frame it ended in: when SLAM relocalized the robot on
+        # the way (map -> odom jumped), odometry, which no correction moves, carries it over.
+        began = before.pose
+        if after.relocalized != before.relocalized:
+            began = carried(began, before, after)
         try:
-            expected = call.skill.predict(before.pose, call.args, env)
+            expected = call.skill.predict(began, call.args, env)
         except PlanProblem:  # the map changed on the way (a re-plan): the skill itself
             return ""  # measured its arrival in closed loop
 

@@ -25,6 +25,20 @@ def normalize_angle(angle: float) -> float:
     return math.pi if wrapped == -math.pi else wrapped
 
 
+def compose(
+    a: tuple[float, float, float], d: tuple[float, float, float]
+) -> tuple[float, float, float]:
+    """Pose `a` moved by `d` (given in a's frame): as transforms (x, y, yaw), a after d."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return a[0] + d[0] * c - d[1] * s, a[1] + d[0] * s + d[1] * c, normalize_angle(a[2] + d[2])
+
+
+def inverse(p: tuple[float, float, float]) -> tuple[float, float, float]:
+    """The rigid motion that undoes `p` (x, y, yaw): compose(p, inverse(p)) is no motion."""
+    c, s = math.cos(p[2]), math.sin(p[2])
+    return -c * p[0] - s * p[1], s * p[0] - c * p[1], normalize_angle(-p[2])
+
+
 @dataclass(frozen=True)
 class Pose2D:
     """A planar pose in the odom frame: metres and radians, yaw counter-clockwise positive."""
@@ -49,6 +63,13 @@ def not_finite(**values: object) -> str:
 
 def _real(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def carried(pose: Pose2D, before: RobotState, after: RobotState) -> Pose2D:
+    """`pose`, seen in the frame of the state `before`, where the localization jumps between
+    `before` and `after` (SLAM's map -> odom) have put it: the same place to odometry."""
+    undone = compose(inverse(before.jumps), (pose.x, pose.y, pose.yaw))
+    return Pose2D(*compose(after.jumps, undone))
 
 
 def position_unknown(pose: Pose2D) -> str:
@@ -79,6 +100,13 @@ class RobotState:
     # What stops the body when it presses against something, as people say it ("the red ball
     # 0.35 m ahead"); empty when nothing does or the robot cannot tell.
     blocked_by: str = ""
+    # How many times localization has corrected the robot's map pose by more than a step may
+    # absorb (SLAM's map -> odom jumped): the pose moved without the robot moving. A leg that
+    # sees it change stops (skills.motion); 0 on a robot whose pose has no map correction.
+    relocalized: int = 0
+    # Those jumps composed (x, y, yaw, in the pose's frame): a place seen before them is at
+    # compose(jumps, place) after them. `carried` follows a pose across jumps with it.
+    jumps: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     @property
     def pose(self) -> Pose2D:

@@ -41,6 +41,7 @@ def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
         "scan_topic": "scan",
         "nav2_action": "navigate_to_pose",
         "speech_topic": "/tts",
+        "map_frame": "map",
     }
 
 
@@ -171,3 +172,27 @@ def test_every_driver_setting_has_a_command_line_option() -> None:
     text = parser.format_help()
     for name in DriverSettings.__dataclass_fields__:
         assert "--" + name.replace("_", "-") in text
+
+
+def test_slam_settings_of_the_node_and_the_driver_are_checked() -> None:
+    assert parse_parameters({"robot": "go2"}).go2_options()["map_frame"] == "map"
+    assert parse_parameters({"map_frame": ""}).go2_options()["map_frame"] == ""
+    with pytest.raises(ParameterError, match="map_frame '9 map' is not a frame id"):
+        parse_parameters({"map_frame": "9 map"})
+    chosen = parse_settings({"slam": True, "odom_drift": 0.05})
+    assert (chosen.slam, chosen.odom_drift) == (True, 0.05)
+    with pytest.raises(ParameterError) as info:
+        parse_settings({"slam": True, "robots": 2, "odom_drift": 0.9})
+    assert "slam is for one robot" in str(info.value)
+    assert "odom_drift must be in 0..0.5, got 0.9" in str(info.value)
+
+
+def test_a_slam_error_fault_is_read_and_shown_like_a_jump() -> None:
+    from shadowhound.ros.sim_faults import Faults
+
+    faults = Faults.from_json('{"slam_error": {"x": 0.5, "yaw_deg": 90}}')
+    assert faults.slam_error == (0.5, 0.0, math.pi / 2)
+    assert faults.to_dict()["slam_error"] == {"x": 0.5, "y": 0.0, "yaw_deg": 90.0}
+    assert not faults.lies  # it takes effect at once, not after a distance
+    with pytest.raises(ValueError, match='slam_error must be an object {"x": m'):
+        Faults.from_json('{"slam_error": [0.5, 0]}')

@@ -46,6 +46,7 @@ ARGUMENTS = {
     "scan_topic": "scan",
     "nav2_action": "navigate_to_pose",
     "speech_topic": "/tts",
+    "map_frame": "map",
 }
 
 

@@ -31,7 +31,8 @@ def normalize_place(name: str) -> str:
 
 
 class PlaceBook:
-    """Taught places, name -> (x, y, yaw) in the odom frame."""
+    """Taught places, name -> (x, y, yaw) in the robot's world frame (SLAM's map when the
+    robot has one, else odometry's): where the robot stood when taught."""
 
     def __init__(self, store: MissionHistory | None = None) -> None:
         self._store = store

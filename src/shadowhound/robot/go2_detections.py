@@ -48,6 +48,10 @@ class Frames:
 
     odom: str = "odom"
     body: str = "base_link"
+    # With SLAM: the map frame, and where odom sits in it (map -> odom, x, y, yaw) when the
+    # detection arrived. Sightings are then kept in the map: odom positions are carried over.
+    map: str = ""
+    odom_in_map: tuple[float, float, float] | None = None
 
 
 def to_sighting(
@@ -61,8 +65,9 @@ def to_sighting(
     pose: Pose2D,
     frames: Frames,
 ) -> KnownObject:
-    """One detection as a sighting in the odometry frame. `pose` is the robot's pose in that
-    frame (used for body-frame positions); `stamp` is in robot-clock seconds."""
+    """One detection as a sighting in the robot's world frame: SLAM's map when `frames` has one
+    (with map -> odom), else the odometry frame. `pose` is the robot's pose in that frame (used
+    for body-frame positions); `stamp` is in robot-clock seconds."""
     name = " ".join(str(label).split())
     if not name:
         raise DetectionError("a detection needs a label (what it is, e.g. 'red ball')")
@@ -77,16 +82,23 @@ def to_sighting(
     if not (math.isfinite(radius) and 0.0 <= radius <= 10.0):
         raise DetectionError(f"{name!r}: radius must be 0 (unknown) to 10 m, got {radius}")
     frame = frame.strip().lstrip("/")
-    if frame == frames.odom:
+    if frames.map and frame == frames.map:
         wx, wy = x, y
+    elif frame == frames.odom:
+        wx, wy = x, y
+        if frames.odom_in_map is not None:
+            mx, my, myaw = frames.odom_in_map
+            c, s = math.cos(myaw), math.sin(myaw)
+            wx, wy = mx + c * x - s * y, my + s * x + c * y
     elif frame == frames.body:
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         wx, wy = pose.x + c * x - s * y, pose.y + s * x + c * y
     else:
         raise DetectionError(
             f"{name!r}: frame {frame or '(empty)'!r} is not supported; give "
-            f"positions in {frames.odom!r} (the odometry frame) or "
-            f"{frames.body!r} (the robot's body)"
+            f"positions in {frames.odom!r} (the odometry frame)"
+            + (f", {frames.map!r} (SLAM's map)" if frames.map else "")
+            + f" or {frames.body!r} (the robot's body)"
         )
     return KnownObject(name, wx, wy, radius or DEFAULT_RADIUS, confidence, stamp)
 

@@ -29,7 +29,7 @@ import statistics
 from collections import deque
 from dataclasses import dataclass
 
-from ..state import normalize_angle
+from ..state import compose, normalize_angle
 
 # Motion control for real odometry, used with robot go2 for every field the profile (or the
 # environment) does not set: the simulator's defaults (2 mm, 0.001 degrees, 20 Hz) are exact
@@ -77,14 +77,6 @@ def relative(
     dx, dy = b[0] - a[0], b[1] - a[1]
     c, s = math.cos(a[2]), math.sin(a[2])
     return dx * c + dy * s, -dx * s + dy * c, normalize_angle(b[2] - a[2])
-
-
-def compose(
-    a: tuple[float, float, float], d: tuple[float, float, float]
-) -> tuple[float, float, float]:
-    """Pose a moved by d (given in a's frame)."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    return a[0] + d[0] * c - d[1] * s, a[1] + d[0] * s + d[1] * c, normalize_angle(a[2] + d[2])
 
 
 class MotionTracker:

@@ -23,10 +23,15 @@ Written against how the driver really behaves (docs/go2.md):
   unknown (None): the driver publishes no battery level.
 - camera: `camera/image_raw` (sensor_msgs/Image) or a topic ending in `compressed`.
 - map: nav_msgs/OccupancyGrid on `map` (slam_toolbox, map_server; transient local), read into
-  the core's grid with its origin and resolution: `belief()`. Poses are odometry's, so the map
-  is taken to be in the odometry frame; a map in another frame (SLAM's `map`) is used as if the
-  two coincided (true until odometry drifts; there is no TF here), with a warning. No map:
-  `belief()` is None and paths are straight lines.
+  the core's grid with its origin and resolution: `belief()`. No map: `belief()` is None and
+  paths are straight lines.
+- frames (TF): `/tf` and `/tf_static` (tf2_msgs/TFMessage) into a TfTree (tf_tree.py). When
+  SLAM publishes `map -> odom` (`map_frame`), the robot's world is the map: `get_state` poses,
+  taught places, sightings, the map and Nav2 goals are in it (odometry carried over with the
+  latest map -> odom); a correction larger than a leg may absorb (a jump) counts in
+  `RobotState.relocalized`, and the running leg stops (a walk plans again). Without it the world
+  is odometry's frame, and a map in another frame is used as if the two coincided, with a
+  warning.
 - scan: sensor_msgs/LaserScan on `scan`, taken at the pose odometry gave when it arrived.
 - navigation: Nav2's NavigateToPose on `navigate_to_pose` (`navigator()`, go2_nav2.py);
   `stop` and `emergency_stop` cancel its goals.
@@ -66,12 +71,13 @@ from nav_msgs.msg import Odometry
 from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, CameraInfo, CompressedImage, Image, LaserScan
 from std_msgs.msg import String
 
 from ..camera import raw_image_frame, to_camera_frame
-from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan
+from ..errors import TransformUnavailable
+from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, compose
 from ..world import DEFAULT_ROBOT_RADIUS, Belief, GridError, merge_sightings
 from ..world.image_sighting import SightingRules
 from ..world.objects import KnownObject
@@ -92,6 +98,7 @@ from .go2_odometry import OdometryFault, OdometryIntake, OdometryLimits
 from .go2_posture import STAND_UP_BOUND, STEPS, PostureWatch
 from .go2_topics import VELOCITY_TOPICS, VelocityRoute, choose_velocity_topic, node_name
 from .go2_world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
+from .tf_tree import MapCorrection, TfTree, Transform2D
 
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _SENSOR = QoSProfile(
@@ -99,6 +106,13 @@ _SENSOR = QoSProfile(
 )
 _SENSOR_DEPTH = QoSProfile(
     depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
+)
+# tf2's own QoS: /tf reliable, depth 100; /tf_static transient local (late joiners get it).
+_TF = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+_TF_STATIC = QoSProfile(
+    depth=100,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
 _KEEPALIVE_PERIOD = 0.1  # 10 Hz, as DIMOS streams Twist to the Go2
 _DRIVEN_SETTLE = 2.0  # seconds the body may still move after Nav2, a posture or a trick
@@ -161,6 +175,9 @@ class Go2RosConfig:
     # std_msgs/String for go2_ros2_sdk's tts_node, which listens on the absolute `/tts`;
     # '' = no voice (`say` raises RobotError).
     speech_topic: str = "/tts"
+    # SLAM's map frame (slam_toolbox, AMCL): with `map -> odom` on /tf the robot's world is the
+    # map; '' = read no TF (the world is odometry's frame).
+    map_frame: str = "map"
 
 
 class Go2RosRobot:
@@ -208,6 +225,11 @@ class Go2RosRobot:
         )
         self._frames = Frames()  # odometry's own frame ids replace these when it arrives
         self._odom_frame = "odom"  # odometry's header.frame_id, once it arrives
+        self._tf = TfTree()  # /tf and /tf_static; read and fed under self._lock
+        self._map_odom: Transform2D | None = None  # SLAM's latest map -> odom
+        self._map_odom_stamp = -math.inf
+        self._relocalized = 0  # map -> odom jumps seen (RobotState.relocalized)
+        self._jumps: tuple[float, float, float] = (0.0, 0.0, 0.0)  # composed (RobotState)
         self._map: Belief | None = None  # the latest map, inflated once per map
         self._scan: tuple[float, Scan] | None = None  # (receipt, scan)
         self._command = (0.0, 0.0, 0.0)
@@ -310,6 +332,16 @@ class Go2RosRobot:
             n.create_subscription(CameraInfo, c.camera_info_topic, self._on_camera_info, _SENSOR)
         if c.map_topic:
             n.create_subscription(GridMsg, c.map_topic, self._on_map, MAP_QOS)
+        if c.map_frame:
+            try:
+                from tf2_msgs.msg import TFMessage
+            except ImportError as exc:
+                raise RobotError(
+                    "reading SLAM's map frame from /tf needs the tf2_msgs package: run "
+                    f"scripts/build_ros.sh, or set map_frame to '' to read no TF ({exc})"
+                ) from exc
+            n.create_subscription(TFMessage, "/tf", self._on_tf, _TF)
+            n.create_subscription(TFMessage, "/tf_static", self._on_tf_static, _TF_STATIC)
         if c.scan_topic:
             n.create_subscription(LaserScan, c.scan_topic, self._on_scan, _SENSOR)
         n.create_timer(_KEEPALIVE_PERIOD, self._keep_alive)
@@ -437,6 +469,79 @@ class Go2RosRobot:
                 + (" The robot was stopped." if moving else "")
             )
 
+    def _on_tf(self, msg: Any) -> None:
+        self._take_transforms(msg, static=False)
+
+    def _on_tf_static(self, msg: Any) -> None:
+        self._take_transforms(msg, static=True)
+
+    def _take_transforms(self, msg: Any, static: bool) -> None:
+        """Feed the frames' tree; when SLAM's map -> odom moves the robot's map pose by more
+        than a leg may absorb, count a relocalization (a running leg stops on it)."""
+        log = self.node.get_logger()
+        for t in msg.transforms:
+            parent = str(t.header.frame_id).lstrip("/")
+            child = str(t.child_frame_id).lstrip("/")
+            q, p = t.transform.rotation, t.transform.translation
+            yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+            stamp = t.header.stamp.sec + t.header.stamp.nanosec * 1e-9
+            edge = Transform2D(float(p.x), float(p.y), yaw)
+            try:
+                with self._lock:
+                    if static:
+                        self._tf.set_static(parent, child, edge)
+                    else:
+                        self._tf.set_transform(parent, child, stamp, edge)
+                    slam = parent == self.config.map_frame and child == self._odom_frame
+                    first, jump = self._take_map_odom(stamp, edge) if slam else (False, None)
+            except TransformUnavailable as exc:
+                log.warning(f"ignored a transform on /tf: {exc}", throttle_duration_sec=10.0)
+                continue
+            if first:
+                log.info(
+                    f"SLAM's {parent} -> {child} on /tf: poses, places, objects and Nav2 goals "
+                    f"are in {parent!r} now"
+                )
+            if jump is not None:
+                log.warning(
+                    f"SLAM corrected the robot's map pose by {jump.distance:.2f} m and "
+                    f"{math.degrees(jump.yaw):.0f} degrees ({parent} -> {child}): a leg under "
+                    "way stops (a walk plans again from the corrected pose)"
+                )
+
+    def _take_map_odom(self, stamp: float, edge: Transform2D) -> tuple[bool, MapCorrection | None]:
+        """SLAM's newest map -> odom (older ones only fill the history): (whether it is the
+        first, the correction since the last one when it is a jump). With self._lock held."""
+        if stamp < self._map_odom_stamp:
+            return False, None
+        first = self._map_odom is None
+        jump = None if first else self._tf.map_to_odom_jump(self._map_odom_stamp)
+        self._map_odom, self._map_odom_stamp = edge, stamp
+        if jump is not None:  # the map moved by after * before^-1 under the robot
+            moved = jump.after.compose(jump.before.inverse())
+            self._relocalized += 1
+            self._jumps = compose((moved.x, moved.y, moved.yaw), self._jumps)
+        return first, jump
+
+    def _to_world(self, x: float, y: float, yaw: float, stamp: float | None = None) -> Pose2D:
+        """A pose in odometry's frame in the robot's world frame: the map once SLAM's map ->
+        odom is known (at `stamp`, ROS time, when the history holds it; else the latest).
+        Call with self._lock held."""
+        pose = Pose2D(x, y, yaw)
+        if self._map_odom is None:
+            return pose
+        if stamp is not None:
+            with contextlib.suppress(TransformUnavailable):
+                return self._tf.lookup(self.config.map_frame, self._odom_frame, stamp).apply(pose)
+        return self._map_odom.apply(pose)
+
+    @property
+    def world_frame(self) -> str:
+        """The frame poses, places, objects and goals are in: SLAM's map once map -> odom
+        has arrived, else odometry's frame."""
+        with self._lock:
+            return self.config.map_frame if self._map_odom is not None else self._odom_frame
+
     def _on_map(self, msg: GridMsg) -> None:
         """Hand the map to the map thread (the newest wins): reading and inflating a large
         map takes seconds, and this executor thread also reads odometry."""
@@ -464,14 +569,13 @@ class Go2RosRobot:
         except GridError as exc:
             log.warning(f"ignored a map on {self.topic(self.config.map_topic)}: {exc}")
             return
-        with self._lock:
-            odom = self._odom_frame
+        world = self.world_frame
         frame = msg.header.frame_id
-        if frame and frame.lstrip("/") != odom.lstrip("/"):
+        if frame and frame.lstrip("/") != world.lstrip("/"):
             log.warning(
-                f"the map is in frame {frame!r}, poses in {odom!r}: without TF they are "
-                "taken as one frame (right while odometry has not drifted from the "
-                "map; see docs/go2-nav2.md)",
+                f"the map is in frame {frame!r}, poses in {world!r}: without "
+                f"{frame.lstrip('/')} -> {world} on /tf they are taken as one frame (right "
+                "while odometry has not drifted from the map; see docs/go2-stack.md)",
                 throttle_duration_sec=60.0,
             )
         with self._lock:
@@ -493,14 +597,15 @@ class Go2RosRobot:
         now = time.monotonic()
         with self._lock:
             pose = self._tracker.pose(now)
+            world = self._to_world(*pose)
         try:
             scan = scan_from_msg(msg, Pose2D(*pose), now)
         except ValueError as exc:
             self.node.get_logger().warning(f"dropped a scan: {exc}", throttle_duration_sec=5.0)
             return
         with self._lock:
-            self._scan = (now, scan)
-        if self._boxes is not None:
+            self._scan = (now, replace(scan, pose=world))  # the world model's frame
+        if self._boxes is not None:  # boxes are placed in odometry's frame, then carried over
             self._boxes.on_scan(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, scan)
 
     def _on_battery(self, msg: BatteryState) -> None:
@@ -535,6 +640,9 @@ class Go2RosRobot:
         state = self.last_state()
         with self._lock:
             frames = self._frames
+            if self._map_odom is not None:
+                m = self._map_odom
+                frames = replace(frames, map=self.config.map_frame, odom_in_map=(m.x, m.y, m.yaw))
         clock = self.node.get_clock().now().nanoseconds * 1e-9
 
         def age(stamp: object) -> float:
@@ -555,9 +663,15 @@ class Go2RosRobot:
     def _on_boxes(self, msg: Any) -> None:
         assert self._boxes is not None  # subscribed only with the boxes' intake
         seen, bearings, problems = self._boxes.read(msg)
-        # Stamps are the image's (ROS clock); sightings are on the robot's clock.
+        # Stamps are the image's (ROS clock); sightings are on the robot's clock, and in the
+        # robot's world frame (the map, with SLAM, as it was when the image was taken).
         offset = self.now() - self.node.get_clock().now().nanoseconds * 1e-9
-        seen = [replace(o, stamp=o.stamp + offset) for o in seen]
+        with self._lock:
+            where = [self._to_world(o.x, o.y, 0.0, o.stamp) for o in seen]
+        seen = [
+            replace(o, x=w.x, y=w.y, stamp=o.stamp + offset)
+            for o, w in zip(seen, where, strict=True)
+        ]
         self._add_sightings(seen, problems)
         with self._lock:  # after the sightings: look() waits for a report it can read
             self._detections_at = time.monotonic()
@@ -606,7 +720,7 @@ class Go2RosRobot:
 
     def known_objects(self) -> tuple[KnownObject, ...]:
         """What the detections topic has reported and what the world model holds (sightings
-        the agent made), one per name (the latest), in the odometry frame."""
+        the agent made), one per name (the latest), in the world frame (`world_frame`)."""
         with self._lock:
             belief = self._map
         return merge_sightings(
@@ -656,17 +770,18 @@ class Go2RosRobot:
         """The last known state without raising: `connected` is False when odometry is stale."""
         now = time.monotonic()
         with self._lock:
-            x, y, yaw = self._tracker.pose(now)
+            pose = self._to_world(*self._tracker.pose(now))
             vx, vy, wz = self._tracker.velocity(now)
+            relocalized, jumps = self._relocalized, self._jumps
             odom_at, battery = self._odom_at, self._battery
             travel = (self._intake.distance, self._intake.turned, self._intake.moving)
             posture, estopped = self._posture, self._estopped
         fresh = odom_at is not None and now - odom_at <= self.config.odom_timeout
         level = battery[1] if battery and now - battery[0] <= self.config.battery_timeout else None
         return RobotState(
-            x=x,
-            y=y,
-            yaw=yaw,
+            x=pose.x,
+            y=pose.y,
+            yaw=pose.yaw,
             vx=vx,
             vy=vy,
             wz=wz,
@@ -678,6 +793,8 @@ class Go2RosRobot:
             stamp=now,
             estopped=estopped,
             connected=fresh,
+            relocalized=relocalized,
+            jumps=jumps,
         )
 
     def _odometry_problem(self) -> str:
@@ -902,11 +1019,11 @@ class Go2RosRobot:
             return self._map
 
     def navigator(self) -> Nav2Navigator | None:
-        """Nav2's NavigateToPose client (goals in the odometry frame), or None when the
-        `nav2_action` is ''. Whether a server answers is its `ready()`."""
+        """Nav2's NavigateToPose client (goals in the world frame: SLAM's map when there is
+        one, else odometry's), or None when the `nav2_action` is ''. Whether a server answers
+        is its `ready()`."""
         if self._navigator is not None:
-            with self._lock:
-                self._navigator.frame = self._odom_frame
+            self._navigator.frame = self.world_frame
         return self._navigator
 
     def close(self) -> None:

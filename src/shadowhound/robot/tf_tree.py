@@ -23,8 +23,7 @@ import math
 from dataclasses import dataclass
 
 from ..errors import TransformUnavailable
-from ..state import Pose2D, normalize_angle, not_finite
-from .go2_motion import compose
+from ..state import Pose2D, compose, normalize_angle, not_finite
 
 MAP, ODOM, BASE = "map", "odom", "base_link"
 
@@ -45,7 +44,7 @@ class Transform2D:
 
     def compose(self, other: Transform2D) -> Transform2D:
         """`self` after `other`: parent<-middle composed with middle<-child is parent<-child
-        (the pose `other` moved into `self`'s frame: go2_motion.compose)."""
+        (the pose `other` moved into `self`'s frame: state.compose)."""
         return Transform2D(*compose((self.x, self.y, self.yaw), (other.x, other.y, other.yaw)))
 
     def inverse(self) -> Transform2D:

@@ -230,7 +230,13 @@ class MissionNode(Node):
                 f"Go2 through go2_ros2_sdk: velocity on {velocity}, sport "
                 f"commands on {topic(s.webrtc_topic)}, odometry from "
                 f"{topic(s.odom_topic)}, state from {topic(s.go2_states_topic)}, battery "
-                f"{battery}, speech on {speech}"
+                f"{battery}, speech on {speech}, "
+                + (
+                    f"SLAM's {s.map_frame} -> odom from /tf (poses in {s.map_frame} once it "
+                    "arrives)"
+                    if s.map_frame
+                    else "no TF read (poses in odometry's frame)"
+                )
             )
         if ExecuteMission is None:
             log.warning(

@@ -115,6 +115,12 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
         "go2: std_msgs/String words to say out (go2_ros2_sdk's tts_node listens on "
         "/tts); '' = none: the robot does not speak aloud",
     ),
+    "map_frame": (
+        "map",
+        "go2: SLAM's map frame: with its map -> odom on /tf (slam_toolbox), poses, places, "
+        "objects, the map and Nav2 goals are in it and SLAM's corrections are followed; '' = "
+        "read no TF (the world is odometry's frame)",
+    ),
     "go2_firmware_tricks": (
         False,
         "go2: allow the tricks that need firmware support and the "
@@ -136,6 +142,7 @@ _OPTIONAL_TOPICS = (
 )
 NAVIGATION: tuple[str, ...] = get_args(ShadowHoundConfig.model_fields["navigation"].annotation)
 ROBOTS = ("sim", "go2")
+_FRAME = re.compile(r"^/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 _TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 
 
@@ -176,6 +183,7 @@ class NodeSettings:
     scan_topic: str = "scan"
     nav2_action: str = "navigate_to_pose"
     speech_topic: str = "/tts"
+    map_frame: str = "map"
 
     @property
     def camera_compressed(self) -> bool:
@@ -219,6 +227,7 @@ class NodeSettings:
             "scan_topic": self.scan_topic,
             "nav2_action": self.nav2_action,
             "speech_topic": self.speech_topic,
+            "map_frame": self.map_frame,
         }
 
 
@@ -274,6 +283,12 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
         )
         if n in out and not _TOPIC.match(out[n]) and (out[n] or n not in _OPTIONAL_TOPICS)
     ]
+    frame = out.get("map_frame", "")
+    if frame and not _FRAME.match(frame):
+        problems.append(
+            f"map_frame {frame!r} is not a frame id (letters, digits, '_' and '/' separators, "
+            "not starting with a digit); '' reads no TF"
+        )
     problems += [
         f"{n} {out[n]!r} is not a valid ROS topic name (letters, digits, '_' and "
         "'/' separators, not starting with a digit)"

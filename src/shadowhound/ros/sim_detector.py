@@ -77,13 +77,14 @@ def in_view(world: scene.World, pose: Pose2D) -> list[scene.WorldObject]:
 
 
 class SimDetector:
-    """The `detections` publisher of one simulated robot (`topic` resolved already)."""
+    """The `detections` publisher of one simulated robot (`topic` resolved already): true
+    centres in `frame` (odom, whose origin is the truth's; map with --slam, as odom drifts)."""
 
-    def __init__(self, node: Node, publisher: Any) -> None:
-        self.node, self._publisher = node, publisher
+    def __init__(self, node: Node, publisher: Any, frame: str = ODOM_FRAME) -> None:
+        self.node, self._publisher, self.frame = node, publisher, frame
 
     @classmethod
-    def create(cls, node: Node, topic: str) -> SimDetector | None:
+    def create(cls, node: Node, topic: str, frame: str = ODOM_FRAME) -> SimDetector | None:
         """The detector, or None (with a warning) when shadowhound_interfaces is missing."""
         try:
             from shadowhound_interfaces.msg import DetectionArray
@@ -93,7 +94,7 @@ class SimDetector:
                 f"scripts/build_ros.sh; --detector none hides this warning): {exc}"
             )
             return None
-        return cls(node, node.create_publisher(DetectionArray, topic, _RELIABLE))
+        return cls(node, node.create_publisher(DetectionArray, topic, _RELIABLE), frame)
 
     def publish(self, world: scene.World, pose: Pose2D) -> None:
         """One array: every object in view from `pose` (none: an empty array)."""
@@ -101,7 +102,7 @@ class SimDetector:
 
         msg = DetectionArray()
         msg.header.stamp = self.node.get_clock().now().to_msg()
-        msg.header.frame_id = ODOM_FRAME
+        msg.header.frame_id = self.frame
         for obj in in_view(world, pose):
             d = Detection(label=obj.name, confidence=1.0, radius=float(obj.radius))
             d.position.x, d.position.y = float(obj.x), float(obj.y)

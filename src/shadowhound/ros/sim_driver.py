@@ -10,7 +10,11 @@ Per robot (names prefixed `robot{i}/` with `--robots 2` or more, as go2_ros2_sdk
   an empty `topic` means the sport topic, `id` and `priority` are ignored; requests are
   queued and handed to the robot by a 10 Hz loop;
 - `odom` out: pose only (the twist stays zero), at `--odom-rate-hz`, each the true pose of
-  `--odom-delay` seconds before, stamped when published; frames odom -> base_link;
+  `--odom-delay` seconds before (drifting by `--odom-drift`), stamped when published; frames
+  odom -> base_link, also broadcast on `/tf` (tf2_msgs/TFMessage) as the driver does; with
+  `--slam` (one robot), as slam_toolbox: `map -> odom` on `/tf` with each odometry sample (the
+  correction that takes the drifting odometry onto the truth), the map in frame `map`, the
+  detections in `map` and Nav2 goals in `odom` carried into the map;
 - `go2_states` out: mode per posture, `progress` only for tricks, velocity (odom frame) and
   body height from the truth; `camera/image_raw` out (best effort);
 - `battery_state` (sensor_msgs/BatteryState) out only with `--battery PERCENT`;
@@ -199,7 +203,8 @@ sim_driver/fault in. The relay: cmd_vel, cmd_vel_joy in, cmd_vel_out out.
 Every option is also a ROS parameter with the same name in snake case (--ros-args -p
 odom_delay:=0.5); an option given here wins. -r __ns:=/NS moves every topic, the relay's too."""
 _EPILOG = """faults: publish JSON on sim_driver/fault, e.g. '{"odom": false}', '{"delay_ms": 200}',
-'{"drop_commands": true}'; odometry that lies: '{"jump": {"x": -0.5, "y": 0, "yaw_deg": 0}}',
+'{"drop_commands": true}'; SLAM mislocalized (--slam): '{"slam_error": {"x": 0.5, "y": 0}}';
+odometry that lies: '{"jump": {"x": -0.5, "y": 0, "yaw_deg": 0}}',
 '{"freeze": true}', '{"nan": 3}', '{"clock_step": -2}', and '{"fall": true}', each firing at once
 or after "after_m" metres / "after_deg" degrees of true motion; '{}' clears them (docs/go2.md).
 exit codes: 0 after Ctrl-C / SIGTERM, 2 for invalid options or parameters."""

@@ -11,6 +11,9 @@ ask for odometry that lies while it still arrives, as a real Go2's does:
 - `nan`: the next N odometry messages carry NaN instead of a pose;
 - `clock_step`: seconds added to every odometry stamp from then on (negative: set back);
 - `fall`: the robot falls (Damping, lying, Moves ignored) as it fires;
+- `slam_error`: {"x", "y" metres, "yaw_deg"}: with `--slam`, SLAM's map -> odom is published
+  this far off (SLAM mislocalized; the robot's map pose is off by it): clearing it makes the
+  correction jump back, as a loop closure does. It takes effect at once;
 - `after_m`, `after_deg`: these fire once the true robot has moved that far (straight line)
   or turned that much from where it was when the message arrived (default: at once).
 
@@ -27,7 +30,16 @@ from typing import Any
 from ..state import normalize_angle
 
 _FLAGS = ("odom", "states", "camera", "drop_commands", "freeze", "fall")
-_KNOWN = (*_FLAGS, "delay_ms", "jump", "nan", "clock_step", "after_m", "after_deg")
+_KNOWN = (
+    *_FLAGS,
+    "delay_ms",
+    "jump",
+    "nan",
+    "clock_step",
+    "after_m",
+    "after_deg",
+    "slam_error",
+)
 
 
 @dataclass(frozen=True)
@@ -46,6 +58,7 @@ class Faults:
     fall: bool = False
     after_m: float = 0.0  # metres of true motion before the odometry faults and fall fire
     after_deg: float = 0.0  # degrees of true turning, likewise
+    slam_error: tuple[float, float, float] | None = None  # map -> odom off by x, y, yaw
 
     @property
     def lies(self) -> bool:
@@ -72,15 +85,9 @@ class Faults:
         out["clock_step"] = _number(data, "clock_step", -100, 100, "seconds")
         out["after_m"] = _number(data, "after_m", 0, 100, "metres")
         out["after_deg"] = _number(data, "after_deg", 0, 3600, "degrees")
-        if "jump" in data:
-            jump = data["jump"]
-            if not isinstance(jump, dict) or set(jump) - {"x", "y", "yaw_deg"}:
-                raise ValueError('jump must be an object {"x": m, "y": m, "yaw_deg": degrees}')
-            out["jump"] = (
-                _number(jump, "x", -1000, 1000, "metres", "jump.x"),
-                _number(jump, "y", -1000, 1000, "metres", "jump.y"),
-                math.radians(_number(jump, "yaw_deg", -360, 360, "degrees", "jump.yaw_deg")),
-            )
+        for key in ("jump", "slam_error"):
+            if key in data:
+                out[key] = _motion(data[key], key)
         return cls(**out)
 
     def to_dict(self) -> dict[str, Any]:
@@ -88,12 +95,25 @@ class Faults:
         out = {k: getattr(self, k) for k in _FLAGS}
         out.update(delay_ms=self.delay * 1000.0, nan=self.nan, clock_step=self.clock_step)
         out.update(after_m=self.after_m, after_deg=self.after_deg)
-        out["jump"] = (
-            None
-            if self.jump is None
-            else {"x": self.jump[0], "y": self.jump[1], "yaw_deg": math.degrees(self.jump[2])}
-        )
+        for key in ("jump", "slam_error"):
+            value = getattr(self, key)
+            out[key] = (
+                None
+                if value is None
+                else {"x": value[0], "y": value[1], "yaw_deg": math.degrees(value[2])}
+            )
         return out
+
+
+def _motion(value: Any, key: str) -> tuple[float, float, float]:
+    """A {"x", "y", "yaw_deg"} object as (x, y, yaw radians)."""
+    if not isinstance(value, dict) or set(value) - {"x", "y", "yaw_deg"}:
+        raise ValueError(f'{key} must be an object {{"x": m, "y": m, "yaw_deg": degrees}}')
+    return (
+        _number(value, "x", -1000, 1000, "metres", f"{key}.x"),
+        _number(value, "y", -1000, 1000, "metres", f"{key}.y"),
+        math.radians(_number(value, "yaw_deg", -360, 360, "degrees", f"{key}.yaw_deg")),
+    )
 
 
 def _number(

@@ -1,10 +1,15 @@
 """One simulated Go2 of `shadowhound sim-driver`: its topics, the driver's rules between them and
 the robot (robot/sim_sport.py), its late odometry, its truth and its injected faults. It is
-also a detector (sim_detector.py): `detections` carries what its simulated camera sees.
+also a detector (sim_detector.py): `detections` carries what its simulated camera sees; and
+with `--slam`, SLAM: odometry drifts (`--odom-drift`) and `map -> odom` on /tf corrects it.
 
 Callbacks only hand commands over: to the command thread (which applies any injected delay),
 and sport requests on to the driver's 10 Hz queue. Odometry has a thread of its own, so each
 pose is published exactly `odom_delay` after it was true.
+
+Long because: it is one simulated robot's side of the driver, whose topics share one truth,
+one set of faults and its threads; what stands apart already lives apart (sim_slam, sim_detector,
+sim_nav, sim_faults).
 """
 
 from __future__ import annotations
@@ -37,6 +42,7 @@ from .sim_detector import CAMERA_FOV_DEG, CocoDetector, SimDetector
 from .sim_faults import Faults, LyingOdometry
 from .sim_nav import SimNavigator
 from .sim_options import DriverSettings
+from .sim_slam import Pose, SimSlam
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -80,6 +86,7 @@ class SimGo2:
         self._ready = threading.Condition()
         self._closing = threading.Event()
         self._odom_pub = node.create_publisher(Odometry, self.topic("odom"), _RELIABLE)
+        self._slam = SimSlam(node, settings.slam, settings.odom_drift)
         self._state_pub = node.create_publisher(Go2State, self.topic("go2_states"), _RELIABLE)
         self._camera_pub = (
             node.create_publisher(Image, self.topic("camera/image_raw"), _SENSOR)
@@ -103,7 +110,7 @@ class SimGo2:
         boxes, info = self.topic("detected_objects"), self.topic("camera/camera_info")
         width, height = settings.camera_width, settings.camera_height
         self.detector = (
-            SimDetector.create(node, self.topic("detections"))
+            SimDetector.create(node, self.topic("detections"), "map" if settings.slam else "odom")
             if settings.detector == "shadowhound"
             else CocoDetector.create(node, boxes, info, width, height, CAMERA_FOV_DEG)
             if settings.detector == "coco"
@@ -111,14 +118,20 @@ class SimGo2:
         )
         if settings.map:  # published once: transient local keeps it for late subscribers
             self._map_pub = node.create_publisher(GridMsg, self.topic("map"), MAP_QOS)
+            frame = "map" if settings.slam else "odom"  # SLAM's map is in its own frame
             self._map_pub.publish(
                 grid_to_msg(
-                    sensors.scene_grid(sim.map_world), "odom", node.get_clock().now().to_msg()
+                    sensors.scene_grid(sim.map_world), frame, node.get_clock().now().to_msg()
                 )
             )
         self.navigator = (
             SimNavigator(
-                node, self.prefix + "navigate_to_pose", self.body, self.drive, settings.nav_speed
+                node,
+                self.prefix + "navigate_to_pose",
+                self.body,
+                self.drive,
+                settings.nav_speed,
+                (lambda: self._slam.true_map_odom(self.body.truth())) if settings.slam else None,
             )
             if settings.navigate_to_pose
             else None
@@ -255,7 +268,7 @@ class SimGo2:
         """Take the true pose every period (as the faults show it); publish each one
         `odom_delay` later, in bursts of `odom_burst`: a burst waits for its last sample."""
         period, delay = 1.0 / self.settings.odom_rate_hz, self.settings.odom_delay
-        Taken = tuple[Truth, tuple[float, float, float] | None, float]
+        Taken = tuple[Truth, tuple[float, float, float] | None, float, Pose]
         due: deque[tuple[float, Taken]] = deque()
         group: list[Taken] = []  # the burst being gathered
         next_take = time.monotonic()
@@ -263,30 +276,33 @@ class SimGo2:
             now = time.monotonic()
             if now >= next_take:
                 truth = self.body.truth()
+                odom = self._slam.odometer.update((truth.x, truth.y, truth.yaw))
                 with self._lie_lock:
                     before = self._lying.fired
-                    shown, shift = self._lying.publish((truth.x, truth.y, truth.yaw))
+                    shown, shift = self._lying.publish(odom)
                     fall = self._lying.fired and not before and self._lying.faults.fall
                 if fall:
                     self.body.fall()
-                group.append((truth, shown, shift))
+                group.append((truth, shown, shift, odom))
                 if len(group) >= self.settings.odom_burst:  # it all goes when its last is due
                     due.extend((now + delay, taken) for taken in group)
                     group.clear()
                 next_take = max(next_take + period, now)
             while due and due[0][0] <= time.monotonic():
-                truth, shown, shift = due.popleft()[1]
+                truth, shown, shift, odom = due.popleft()[1]
                 if self.faults.odom:
-                    self._publish_odom(truth, shown, shift)
+                    self._publish_odom(truth, shown, shift, odom)
             wake = min(next_take, due[0][0]) if due else next_take
             if self._closing.wait(max(0.0, wake - time.monotonic())):
                 return
 
     def _publish_odom(
-        self, t: Truth, shown: tuple[float, float, float] | None, shift: float
+        self, t: Truth, shown: tuple[float, float, float] | None, shift: float, odom: Pose
     ) -> None:
         """Odometry of the true `t` as the faults show it: `shown` (None: NaN), the stamp
-        `shift` seconds off."""
+        `shift` seconds off; and on /tf odom -> base_link (as the driver broadcasts it) and,
+        with --slam, SLAM's map -> odom of the same moment (the truth over the drifting
+        `odom`, off by any `slam_error`)."""
         msg = Odometry()  # pose only: go2_ros2_sdk never fills the twist
         stamp = self.node.get_clock().now().nanoseconds + int(shift * 1e9)
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(max(0, stamp), 1_000_000_000)
@@ -298,6 +314,8 @@ class SimGo2:
         msg.pose.pose.orientation.z = math.sin(yaw / 2.0)
         msg.pose.pose.orientation.w = math.cos(yaw / 2.0)
         self._odom_pub.publish(msg)
+        if shown is not None:
+            self._slam.publish(msg.header.stamp, msg.child_frame_id, t, shown, odom, self.faults)
 
     def publish_state(self) -> None:
         """go2_states as the robot was `odom_delay` ago: the driver reads it from the same
@@ -355,6 +373,7 @@ class SimGo2:
             "faults": {**self.faults.to_dict(), "fired": self._lying.fired},
             **self._counts,
             "navigation": self.navigator.truth() if self.navigator else None,
+            **self._slam.published,
         }
 
     def publish_truth(self) -> None:

@@ -39,7 +39,7 @@ STALL_SECONDS = 5.0  # no progress for this long is a blockage (then a recovery)
 MAX_RECOVERIES = 3
 # Nav2 Jazzy's error codes (nav2_msgs: ComputePathToPose 2xx, FollowPath 1xx).
 GOAL_OCCUPIED, NO_VALID_PATH, TF_ERROR, FAILED_TO_MAKE_PROGRESS = 206, 208, 202, 105
-FRAMES = ("", "odom", "map")  # the simulator's map is exact: map and odom coincide
+FRAMES = ("", "odom", "map")  # map is the truth's frame; odom too unless odometry drifts
 
 
 def _duration(seconds: float) -> Duration:
@@ -48,7 +48,9 @@ def _duration(seconds: float) -> Duration:
 
 
 class SimNavigator:
-    """NavigateToPose on `action` for the robot `body` (truth from its simulator)."""
+    """NavigateToPose on `action` for the robot `body` (truth from its simulator). Goals in
+    `map` are in the truth's frame; goals in `odom` too, unless `odom_in_map` says where a
+    drifting odometry's frame lies in it now (--slam), as Nav2 transforms a goal with TF."""
 
     def __init__(
         self,
@@ -57,8 +59,10 @@ class SimNavigator:
         body: SimSportMode,
         drive: Callable[[float, float, float], None],
         speed: float = 0.4,
+        odom_in_map: Callable[[], tuple[float, float, float]] | None = None,
     ) -> None:
         self.body, self._drive, self.speed = body, drive, speed
+        self._odom_in_map = odom_in_map
         name = f"{parent.get_name()}_{action.strip('/').replace('/', '_')}"
         self.node = Node(
             name,
@@ -144,6 +148,11 @@ class SimNavigator:
         q = pose.pose.orientation
         yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
         goal = (float(pose.pose.position.x), float(pose.pose.position.y))
+        if self._odom_in_map is not None and frame != "map":  # carried into the map by TF
+            mx, my, myaw = self._odom_in_map()
+            c, s = math.cos(myaw), math.sin(myaw)
+            goal = (mx + c * goal[0] - s * goal[1], my + s * goal[0] + c * goal[1])
+            yaw += myaw
         started = time.monotonic()
         recoveries = 0
         follower = self._plan(handle, result, goal, yaw)
@@ -196,7 +205,7 @@ class SimNavigator:
                 continue
             self._drive(*command)
             feedback = NavigateToPose.Feedback()
-            feedback.current_pose.header.frame_id = "odom"
+            feedback.current_pose.header.frame_id = "map" if self._odom_in_map else "odom"
             feedback.current_pose.header.stamp = self.node.get_clock().now().to_msg()
             feedback.current_pose.pose.position.x, feedback.current_pose.pose.position.y = t.x, t.y
             feedback.current_pose.pose.orientation.z = math.sin(t.yaw / 2.0)

@@ -46,6 +46,8 @@ class DriverSettings:
     navigate_to_pose: bool = True
     nav_speed: float = 0.4
     detector: str = "shadowhound"
+    slam: bool = False
+    odom_drift: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -180,6 +182,21 @@ OPTIONS: dict[str, Option] = {
         metavar="KIND",
         choices=("shadowhound", "coco", "none"),
     ),
+    "slam": Option(
+        bool,
+        "act as slam_toolbox too: publish map -> odom on /tf, the correction that makes "
+        "odometry (drifting with --odom-drift) agree with the truth, and the map in frame map "
+        "(one robot only)",
+    ),
+    "odom_drift": Option(
+        float,
+        "odometry's drift: every metre walked and radian turned shows as 1 + this (0.05: 5 "
+        "percent of distance and heading), so odom wanders from the truth as a real Go2's "
+        "does; --slam corrects it on /tf",
+        0,
+        0.5,
+        "FRACTION",
+    ),
 }
 DEFAULTS = DriverSettings()
 _WANTED = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
@@ -220,6 +237,11 @@ def parse_settings(values: Mapping[str, Any]) -> DriverSettings:
             problems.append(f"{f.name} {value!r} is not a valid ROS topic name")
         else:
             out[f.name] = option.kind(value)
+    if out.get("slam") and out.get("robots", 1) > 1:
+        problems.append(
+            "slam is for one robot: with several, each would publish map -> odom for the same "
+            "frames (use --robots 1)"
+        )
     if problems:
         raise ParameterError("invalid settings: " + "; ".join(problems))
     return DriverSettings(**out)

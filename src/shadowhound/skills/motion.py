@@ -18,8 +18,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from ..errors import SkillError
-from ..state import RobotState, normalize_angle
+from ..errors import Relocalized, SkillError
+from ..state import Pose2D, RobotState, carried, normalize_angle
 from .bounds import leg_margin, leg_room, turn_margin, turn_room
 from .context import SkillContext
 
@@ -76,19 +76,26 @@ def _arrived(error: float, speed: float, tolerance: float, period: float) -> boo
     return abs(error) < tolerance and abs(speed) * period < tolerance
 
 
-def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
+def drive_local(
+    ctx: SkillContext, tx: float, ty: float, speed: float, relative: bool = False
+) -> float:
     """Translate to (tx, ty) given in the body frame at the start, holding the heading.
 
+    `relative`: the move is what a person asked ("walk forward 2 m"): when SLAM relocalizes
+    the robot on the way (map -> odom jumps), the leg's start is carried over with it, so the
+    robot still moves as asked; else the leg leads to a goal on the map and a jump stops it
+    (Relocalized), so the caller plans again from the corrected pose.
     Returns the distance actually covered (measured).
     """
     robot = ctx.robot
     m = ctx.config.motion
-    start = robot.get_state()
-    c, s = math.cos(start.yaw), math.sin(start.yaw)
+    start = prev = robot.get_state()
+    origin = start.pose  # where the leg starts (carried over SLAM's jumps when relative)
+    c, s = math.cos(origin.yaw), math.sin(origin.yaw)
     goal = math.hypot(tx, ty)
     ctx.begin_leg(start)
     margin = leg_margin(ctx.config.safety, goal)
-    leg = (tx * c - ty * s, tx * s + ty * c)  # the planned leg, odom frame, from its start
+    leg = (tx * c - ty * s, tx * s + ty * c)  # the planned leg, from its start
     stopped_for_room = False  # the loop stopped for want of room and settled
     for attempt in range(1 + _CORRECTIONS):
         best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
@@ -97,7 +104,13 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
         passes = _Passes()
         while True:
             st = robot.get_state()
-            dx, dy = st.x - start.x, st.y - start.y
+            if st.relocalized != prev.relocalized:
+                if not relative:
+                    _relocalized(ctx)
+                origin = carried(origin, prev, st)
+                c, s = math.cos(origin.yaw), math.sin(origin.yaw)
+            prev = here = st
+            dx, dy = here.x - origin.x, here.y - origin.y
             lx, ly = dx * c + dy * s, -dx * s + dy * c  # displacement in the start frame
             ex, ey = tx - lx, ty - ly
             error = math.hypot(ex, ey)
@@ -118,7 +131,7 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
                     f"no progress for {m.stall_timeout:.1f} s with {error:.2f} m to go: "
                     "the robot is blocked, stalled or ignoring velocity commands"
                 )
-            heading = start.yaw + math.atan2(ey, ex)  # where the robot goes, odom frame
+            heading = origin.yaw + math.atan2(ey, ex)  # where the robot goes
             room, why = ctx.room(heading, error + 0.5, st)
             ox, oy, _ = ctx.commanded()
             left = leg_room((ox, oy), heading, leg, margin)
@@ -133,7 +146,7 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
                 raise SkillError(f"stopped {error:.2f} m short of the goal: {why}")
             stopped_for_room = False
             v = abs(_profile(min(error, room), cap, m.linear_accel, ctx.period))
-            yaw_error = normalize_angle(start.yaw - st.yaw)
+            yaw_error = normalize_angle(origin.yaw - here.yaw)
             # Body-frame command toward the goal; the start frame and the body differ by
             # yaw_error.
             bx, by = ex / error * v, ey / error * v
@@ -144,17 +157,27 @@ def drive_local(ctx: SkillContext, tx: float, ty: float, speed: float) -> float:
             ctx.on_progress(min(1.0, 1.0 - error / goal) if goal else 1.0)
             ctx.tick()
         settle(ctx)
-        if _off(robot.get_state(), start, tx, ty) < m.position_tolerance:
+        at_rest = robot.get_state()
+        if at_rest.relocalized != prev.relocalized:  # a jump while it settled
+            if not relative:
+                _relocalized(ctx)
+            origin, prev = carried(origin, prev, at_rest), at_rest
+            c, s = math.cos(origin.yaw), math.sin(origin.yaw)
+        if _off(at_rest.pose, origin, tx, ty) < m.position_tolerance:
             break  # judged on the pose at rest, not on the one the loop stopped on
     end = robot.get_state()
-    return math.hypot(end.x - start.x, end.y - start.y)
+    if end.relocalized != prev.relocalized:
+        origin = carried(origin, prev, end)
+    return math.hypot(end.x - origin.x, end.y - origin.y)
 
 
-def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
-    """Turn in place by `angle` radians (+ counter-clockwise). Returns the measured turn."""
+def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False) -> float:
+    """Turn in place by `angle` radians (+ counter-clockwise). `relative`: the turn is what a
+    person asked, and a SLAM jump of the heading on the way is not counted as turning; else it
+    faces a goal on the map and a jump stops it (Relocalized). Returns the measured turn."""
     robot = ctx.robot
     m = ctx.config.motion
-    first = robot.get_state()
+    first = prev = robot.get_state()
     last_yaw = first.yaw
     turned = 0.0
     ctx.begin_leg(first)
@@ -166,6 +189,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
         passes = _Passes()
         while True:
             st = robot.get_state()
+            last_yaw, prev = _turn_jumped(ctx, last_yaw, prev, st, relative), st
             turned += normalize_angle(st.yaw - last_yaw)  # unwrapped, so 360 degree turns work
             last_yaw = st.yaw
             error = angle - turned
@@ -203,11 +227,37 @@ def rotate(ctx: SkillContext, angle: float, speed: float) -> float:
             ctx.on_progress(min(1.0, 1.0 - abs(error) / abs(angle)) if angle else 1.0)
             ctx.tick()
         settle(ctx)
-        yaw = robot.get_state().yaw
-        if abs(angle - turned - normalize_angle(yaw - last_yaw)) < m.yaw_tolerance:
+        st = robot.get_state()
+        last_yaw, prev = _turn_jumped(ctx, last_yaw, prev, st, relative), st
+        if abs(angle - turned - normalize_angle(st.yaw - last_yaw)) < m.yaw_tolerance:
             break  # judged on the heading at rest, not on the one the loop stopped on
-    yaw = robot.get_state().yaw
-    return turned + normalize_angle(yaw - last_yaw)
+    st = robot.get_state()
+    last_yaw = _turn_jumped(ctx, last_yaw, prev, st, relative)
+    return turned + normalize_angle(st.yaw - last_yaw)
+
+
+def _turn_jumped(
+    ctx: SkillContext, last_yaw: float, prev: RobotState, st: RobotState, relative: bool
+) -> float:
+    """The heading last seen, carried over a SLAM jump between `prev` and `st` (a relative
+    turn); a turn toward a goal on the map stops on the jump instead (Relocalized)."""
+    if st.relocalized == prev.relocalized:
+        return last_yaw
+    if not relative:
+        _relocalized(ctx)
+    return normalize_angle(last_yaw + st.jumps[2] - prev.jumps[2])
+
+
+def _relocalized(ctx: SkillContext) -> None:
+    """Stop a leg toward a goal on the map when localization has corrected the map pose on the
+    way (SLAM's map -> odom jumped): its goal was set in the frame as it was, and walking on
+    would take the robot as far wrong as the correction. Raises Relocalized once at rest."""
+    ctx.robot.stop()
+    settle(ctx)
+    raise Relocalized(
+        "localization corrected the robot's position on the map while it moved (SLAM's map -> "
+        "odom jumped): stopped rather than go on toward a goal set before the correction"
+    )
 
 
 def _disagree(commanded: float, goal: float, margin: float, measured: float) -> str:
@@ -226,7 +276,7 @@ def _disagree(commanded: float, goal: float, margin: float, measured: float) -> 
     return f"{lead}: odometry disagrees with the motion (a relocalization, a frozen stream?)"
 
 
-def _off(st: RobotState, start: RobotState, tx: float, ty: float) -> float:
+def _off(st: Pose2D, start: Pose2D, tx: float, ty: float) -> float:
     """How far `st` is from the goal (tx, ty), given in the body frame at `start`."""
     c, s = math.cos(start.yaw), math.sin(start.yaw)
     dx, dy = st.x - start.x, st.y - start.y

@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 from pydantic import ConfigDict, Field, model_validator
 
-from ..errors import PlanProblem, SkillError
+from ..errors import PlanProblem, Relocalized, SkillError
 from ..state import Pose2D, normalize_angle, not_finite, position_unknown
 from ..units import format_number as _n
 from ..world import NearGoal, PlanError, apply_scan, near_goal, plan_route
@@ -110,14 +110,14 @@ def _offset(pose: Pose2D, forward: float, left: float) -> Pose2D:
 
 def _run_move(ctx: SkillContext, a: MoveArgs) -> str:
     ctx.ensure_standing()
-    covered = motion.drive_local(ctx, a.distance, 0.0, _linear(ctx, a.speed))
+    covered = motion.drive_local(ctx, a.distance, 0.0, _linear(ctx, a.speed), relative=True)
     objects.sight_in_view(ctx)
     return f"moved {covered:.2f} m {'forward' if a.distance >= 0 else 'backward'}"
 
 
 def _run_strafe(ctx: SkillContext, a: StrafeArgs) -> str:
     ctx.ensure_standing()
-    covered = motion.drive_local(ctx, 0.0, a.distance, _linear(ctx, a.speed))
+    covered = motion.drive_local(ctx, 0.0, a.distance, _linear(ctx, a.speed), relative=True)
     objects.sight_in_view(ctx)
     return f"stepped {covered:.2f} m to the {'left' if a.distance >= 0 else 'right'}"
 
@@ -132,7 +132,7 @@ def _straight_timeout(a: MoveArgs | StrafeArgs, env: PlanEnv) -> float:
 
 def _run_rotate(ctx: SkillContext, a: RotateArgs) -> str:
     ctx.ensure_standing()
-    turned = motion.rotate(ctx, math.radians(a.degrees), _angular(ctx, a.speed))
+    turned = motion.rotate(ctx, math.radians(a.degrees), _angular(ctx, a.speed), relative=True)
     objects.sight_in_view(ctx)
     side = "left (counter-clockwise)" if a.degrees >= 0 else "right (clockwise)"
     return f"turned {abs(math.degrees(turned)):.1f} degrees {side}"
@@ -192,8 +192,9 @@ def route(env: PlanEnv, start: Pose2D, goal: tuple[float, float]) -> list[tuple[
 
 def walk(ctx: SkillContext, goal: tuple[float, float], linear: float, angular: float) -> float:
     """Walk a planned path to `goal`. When something the map did not show stops the robot
-    (the state's `blocked_by`), update the map from a scan and plan again, at most MAX_REPLANS
-    times. Returns metres covered."""
+    (the state's `blocked_by`), update the map from a scan and plan again; when localization
+    corrects the robot's map pose on the way (SLAM), plan again from the corrected pose; at most
+    MAX_REPLANS times in all. Returns metres covered."""
     walked = 0.0
     belief = ctx.env.belief
     for attempt in range(MAX_REPLANS + 1):
@@ -207,6 +208,12 @@ def walk(ctx: SkillContext, goal: tuple[float, float], linear: float, angular: f
         before = ctx.robot.get_state().distance_travelled
         try:
             return walked + motion.follow(ctx, points, linear, angular, done=walked)
+        except Relocalized as exc:
+            walked += ctx.robot.get_state().distance_travelled - before
+            if attempt == MAX_REPLANS:
+                raise
+            ctx.notes.append(f"{exc}; planned again from the corrected position")
+            continue
         except SkillError as exc:
             walked += ctx.robot.get_state().distance_travelled - before
             blocked = ctx.robot.get_state().blocked_by

@@ -214,7 +214,7 @@ def look_around(ctx: SkillContext, name: str, angular: float) -> KnownObject | N
     assert belief is not None
     for quarter in range(4):
         if quarter:
-            motion.rotate(ctx, _QUARTER, angular)
+            motion.rotate(ctx, _QUARTER, angular, relative=True)
         ctx.robot.look()  # a detector reports at its own rate: let it see this view
         sight_in_view(ctx)
         found = find(belief, name)

@@ -105,10 +105,10 @@ def _run_look_around(ctx: SkillContext, a: DescribeArgs) -> str:
     views: list[tuple[str, CameraFrame | None]] = []
     for quarter, side in enumerate(("Ahead", "To my left", "Behind me", "To my right")):
         if quarter:
-            motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed)
+            motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed, relative=True)
         sight_in_view(ctx)  # what it sees is remembered (the world model, memory)
         views.append((side, ctx.camera_frame()))
-    motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed)
+    motion.rotate(ctx, math.pi / 2, ctx.config.motion.default_angular_speed, relative=True)
     return describe_views(views, a.question, ctx.vision)
 
 

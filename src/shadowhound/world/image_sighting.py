@@ -20,7 +20,7 @@ import statistics
 from collections import deque
 from dataclasses import dataclass
 
-from ..state import Pose2D, Scan, normalize_angle
+from ..state import Pose2D, Scan, compose, normalize_angle
 from .objects import KnownObject
 
 # COCO category names (coco_detector's class_id) as the planner's words name them. Names not
@@ -77,12 +77,7 @@ class CameraModel:
 
     def origin(self, pose: Pose2D) -> Pose2D:
         """The camera's own pose in the odometry frame when the robot stands at `pose`."""
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-        return Pose2D(
-            pose.x + c * self.x - s * self.y,
-            pose.y + s * self.x + c * self.y,
-            normalize_angle(pose.yaw + self.yaw),
-        )
+        return Pose2D(*compose((pose.x, pose.y, pose.yaw), (self.x, self.y, self.yaw)))
 
 
 @dataclass(frozen=True)
