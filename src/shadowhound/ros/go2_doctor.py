@@ -30,8 +30,20 @@ UPSTREAM_HASHES = {
 MIN_ODOM_RATE = 5.0  # Hz below which the closed loop steers on too little
 DRIVER_NODE = "go2_driver_node"  # go2_ros2_sdk's driver (presentation/go2_driver_node.py)
 SIM_DRIVER_NODE = "shadowhound_sim_driver"  # `shadowhound sim-driver` (ros/sim_driver.py)
-# Nodes robot.launch.py starts beside the driver: up without it, the driver failed at start.
-LAUNCH_NODES = ("twist_mux", "robot_state_publisher", "pointcloud_to_laserscan", "rviz2")
+# Nodes robot.launch.py starts beside the driver (by the names it gives them, and their
+# executables' own): up without it, the driver failed at start.
+LAUNCH_NODES = (
+    "twist_mux",
+    "go2_robot_state_publisher",
+    "go2_pointcloud_to_laserscan",
+    "go2_rviz2",
+    "lidar_to_pointcloud",
+    "pointcloud_aggregator",
+    "tts_node",
+    "robot_state_publisher",
+    "pointcloud_to_laserscan",
+    "rviz2",
+)
 MAX_ODOM_AGE = 0.5  # seconds: the robot's odom_timeout default
 BURST_GAP = 0.01  # seconds: poses closer than this came over the link in one burst
 
