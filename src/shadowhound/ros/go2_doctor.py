@@ -6,17 +6,30 @@ plainly, since some go2_ros2_sdk commits fail at start), each topic's type and t
 hash that differs means Fast DDS silently drops every sample), odometry rate and age, which
 velocity topic reaches the driver and why, postures from go2_states, and the battery source.
 
-`observe` (go2_doctor_watch.py: rclpy, imported lazily by the CLI) gathers an `Observation`;
-`diagnose` (pure, here) turns it into findings, so every rule is testable without ROS.
+`observe` (go2_doctor_watch.py: rclpy, imported lazily by the CLI) gathers an `Observation`
+(go2_doctor_observation.py); `diagnose` (pure, here) turns it into findings, so every rule is
+testable without ROS.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 from ..robot import go2_api
 from ..robot.go2_motion import MAX_LATENCY
 from ..robot.go2_topics import TWIST_TYPE, VELOCITY_TOPICS, choose_velocity_topic
+from .go2_doctor_observation import Endpoint, Finding, Observation, topic_name
+
+# The report's types live in go2_doctor_observation; they are imported from here too.
+__all__ = [
+    "BATTERY_TYPE",
+    "ODOM_TYPE",
+    "REQUEST_TYPE",
+    "STATE_TYPE",
+    "UPSTREAM_HASHES",
+    "Endpoint",
+    "Finding",
+    "Observation",
+    "diagnose",
+]
 
 ODOM_TYPE = "nav_msgs/msg/Odometry"
 STATE_TYPE = "go2_interfaces/msg/Go2State"
@@ -48,48 +61,6 @@ MAX_ODOM_AGE = 0.5  # seconds: the robot's odom_timeout default
 BURST_GAP = 0.01  # seconds: poses closer than this came over the link in one burst
 
 
-@dataclass(frozen=True)
-class Endpoint:
-    """One publisher or subscription in the graph; `node` is the node's full name."""
-
-    node: str
-    type: str
-    hash: str = ""
-
-
-@dataclass
-class Observation:
-    """What the doctor saw. Topic keys are the robot-relative names (odom, go2_states, ...)."""
-
-    namespace: str = ""
-    nodes: list[str] = field(default_factory=list)  # full names of every node on the graph
-    names: dict[str, str] = field(default_factory=dict)  # key -> full topic name
-    publishers: dict[str, list[Endpoint]] = field(default_factory=dict)
-    subscribers: dict[str, list[Endpoint]] = field(default_factory=dict)
-    local_hashes: dict[str, str] = field(default_factory=dict)  # type -> this build's hash
-    seconds: float = 3.0  # how long it watched
-    odom_receipts: list[float] = field(default_factory=list)  # monotonic, oldest first
-    ended: float = 0.0  # monotonic time the watch ended
-    states: list[tuple[int, float]] = field(default_factory=list)  # (mode, body height)
-    cmd_vel_topic: str = ""  # configured ('' = discovered)
-    battery_topic: str = ""  # configured ('' = none)
-    battery_levels: list[float] = field(default_factory=list)  # percent, as received
-    battery_elsewhere: list[str] = field(default_factory=list)  # BatteryState topics seen
-    root_cmd_vel_subscribed: bool = False  # /cmd_vel (twist_mux is not namespaced)
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One line of the report: `level` is ok, warn or fail; `fix` says what to do."""
-
-    level: str
-    what: str
-    fix: str = ""
-
-    def __str__(self) -> str:
-        return f"{self.level:<4} {self.what}" + (f"\n     fix: {self.fix}" if self.fix else "")
-
-
 def diagnose(obs: Observation) -> list[Finding]:
     """Findings in the order a person would fix them: driver, types, data, velocity, battery."""
     out = [_driver(obs)]
@@ -99,10 +70,6 @@ def diagnose(obs: Observation) -> list[Finding]:
     out.append(_velocity(obs))
     out.append(_battery(obs))
     return out
-
-
-def _name(obs: Observation, key: str) -> str:
-    return obs.names.get(key, key)
 
 
 def _driver(obs: Observation) -> Finding:
@@ -154,7 +121,7 @@ def _types(obs: Observation) -> list[Finding]:
             out.append(
                 Finding(
                     "fail",
-                    f"{_name(obs, key)} has type {', '.join(wrong)}, expected {kind}",
+                    f"{topic_name(obs, key)} has type {', '.join(wrong)}, expected {kind}",
                     "point ShadowHound at the driver's topic (odom_topic, "
                     "go2_states_topic, webrtc_topic)",
                 )
@@ -166,7 +133,7 @@ def _types(obs: Observation) -> list[Finding]:
             out.append(
                 Finding(
                     "fail",
-                    f"{_name(obs, key)}: the driver's {kind} (type hash {differ[0]}) is not "
+                    f"{topic_name(obs, key)}: the driver's {kind} (type hash {differ[0]}) is not "
                     f"the one ShadowHound uses ({local}); DDS drops every sample although "
                     "the topic looks matched",
                     "source the go2_ros2_sdk workspace the driver runs from before starting "
@@ -185,13 +152,13 @@ def _types(obs: Observation) -> list[Finding]:
                 )
             )
         elif ends:
-            out.append(Finding("ok", f"{_name(obs, key)}: {kind}, type hash matches"))
+            out.append(Finding("ok", f"{topic_name(obs, key)}: {kind}, type hash matches"))
     return out
 
 
 def _odometry(obs: Observation) -> Finding:
     times = obs.odom_receipts
-    topic = _name(obs, "odom")
+    topic = topic_name(obs, "odom")
     if not times:
         return Finding(
             "fail",
@@ -238,7 +205,7 @@ def _odometry(obs: Observation) -> Finding:
 
 
 def _postures(obs: Observation) -> Finding:
-    topic = _name(obs, "go2_states")
+    topic = topic_name(obs, "go2_states")
     if not obs.states:
         return Finding(
             "fail",
@@ -258,26 +225,26 @@ def _velocity(obs: Observation) -> Finding:
     route = choose_velocity_topic(
         on(obs.subscribers),
         on(obs.publishers),
-        names={name: _name(obs, name) for name in VELOCITY_TOPICS},
+        names={name: topic_name(obs, name) for name in VELOCITY_TOPICS},
     )
     if obs.cmd_vel_topic:
         key = obs.cmd_vel_topic
         subscribed = [e for e in obs.subscribers.get(key, []) if e.type == TWIST_TYPE]
-        if _name(obs, key) == _name(obs, "cmd_vel") and route.topic != "cmd_vel":
+        if topic_name(obs, key) == topic_name(obs, "cmd_vel") and route.topic != "cmd_vel":
             return Finding(
                 "fail",
-                f"velocity on {_name(obs, key)} (configured) reaches no driver: {route.why}",
+                f"velocity on {topic_name(obs, key)} (configured) reaches no driver: {route.why}",
                 "leave cmd_vel_topic empty to follow the graph, or start twist_mux",
             )
         if subscribed:
             return Finding(
                 "ok",
-                f"velocity on {_name(obs, key)} (configured) reaches "
+                f"velocity on {topic_name(obs, key)} (configured) reaches "
                 f"{', '.join(sorted({e.node for e in subscribed}))}",
             )
         return Finding(
             "fail",
-            f"nothing subscribes {_name(obs, key)} (configured cmd_vel_topic)",
+            f"nothing subscribes {topic_name(obs, key)} (configured cmd_vel_topic)",
             "leave cmd_vel_topic empty to follow the graph",
         )
     if not route.reaches:
@@ -292,12 +259,12 @@ def _velocity(obs: Observation) -> Finding:
             f"velocity would reach nothing: {route.why}{hint}",
             "start the driver (it listens on cmd_vel_out) and check --namespace",
         )
-    return Finding("ok", f"velocity goes to {_name(obs, route.topic)}: {route.why}")
+    return Finding("ok", f"velocity goes to {topic_name(obs, route.topic)}: {route.why}")
 
 
 def _battery(obs: Observation) -> Finding:
     if obs.battery_topic:
-        topic = _name(obs, "battery")
+        topic = topic_name(obs, "battery")
         if obs.battery_levels:
             return Finding("ok", f"battery from {topic}: {obs.battery_levels[-1]:.0f}%")
         return Finding(

@@ -10,7 +10,8 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..robot.go2_topics import VELOCITY_TOPICS, node_name
-from .go2_doctor import BATTERY_TYPE, Endpoint, Observation
+from .go2_doctor import BATTERY_TYPE
+from .go2_doctor_observation import Endpoint, Observation
 
 BATTERY_GRACE = 5.0  # extra seconds to wait for a slow battery topic
 
