@@ -4,7 +4,9 @@ Watches the ROS graph and the driver's topics for a few seconds, then says, in w
 fine and what to fix: the driver node (go2_ros2_sdk's `go2_driver_node`; its absence first and
 plainly, since some go2_ros2_sdk commits fail at start), each topic's type and type hash (a
 hash that differs means Fast DDS silently drops every sample), odometry rate and age, which
-velocity topic reaches the driver and why, postures from go2_states, and the battery source.
+velocity topic reaches the driver and why, postures from go2_states, and the battery source;
+then the rest of a Go2 owner's stack (go2_doctor_stack.py): TF (odom -> base_link, SLAM's
+map -> odom) and the map's frame, the object detector and its camera model, and the speaker.
 
 `observe` (go2_doctor_watch.py: rclpy, imported lazily by the CLI) gathers an `Observation`
 (go2_doctor_observation.py); `diagnose` (pure, here) turns it into findings, so every rule is
@@ -17,6 +19,7 @@ from ..robot import go2_api
 from ..robot.go2_motion import MAX_LATENCY
 from ..robot.go2_topics import TWIST_TYPE, VELOCITY_TOPICS, choose_velocity_topic
 from .go2_doctor_observation import Endpoint, Finding, Observation, topic_name
+from .go2_doctor_stack import stack_findings
 
 # The report's types live in go2_doctor_observation; they are imported from here too.
 __all__ = [
@@ -62,14 +65,15 @@ BURST_GAP = 0.01  # seconds: poses closer than this came over the link in one bu
 
 
 def diagnose(obs: Observation) -> list[Finding]:
-    """Findings in the order a person would fix them: driver, types, data, velocity, battery."""
+    """Findings in the order a person would fix them: driver, types, data, velocity, battery,
+    then the rest of the stack (go2_doctor_stack: TF and the map, detector, voice)."""
     out = [_driver(obs)]
     out += _types(obs)
     out.append(_odometry(obs))
     out.append(_postures(obs))
     out.append(_velocity(obs))
     out.append(_battery(obs))
-    return out
+    return out + stack_findings(obs)
 
 
 def _driver(obs: Observation) -> Finding:

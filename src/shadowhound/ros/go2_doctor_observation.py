@@ -34,11 +34,25 @@ class Observation:
     battery_levels: list[float] = field(default_factory=list)  # percent, as received
     battery_elsewhere: list[str] = field(default_factory=list)  # BatteryState topics seen
     root_cmd_vel_subscribed: bool = False  # /cmd_vel (twist_mux is not namespaced)
+    # The rest of a Go2 owner's stack (go2_doctor_stack.py); a topic left '' is not checked.
+    coco_detections_topic: str = "detected_objects"
+    camera_info_topic: str = "camera/camera_info"
+    speech_topic: str = "/tts"
+    map_topic: str = "map"
+    unreadable: dict[str, str] = field(default_factory=dict)  # key -> why it was not read
+    detection_receipts: list[float] = field(default_factory=list)  # monotonic, per array
+    detection_classes: list[str] = field(default_factory=list)  # each box's class_id
+    camera_infos: list[tuple[int, int, float]] = field(default_factory=list)  # width, height, fx
+    map_frames: list[str] = field(default_factory=list)  # header.frame_id of each map
+    tf: dict[tuple[str, str], int] = field(default_factory=dict)  # (parent, child) -> count
+    tf_static: set[tuple[str, str]] = field(default_factory=set)  # (parent, child)
+    root_webrtc_subscribed: bool = False  # /webrtc_req, where tts_node sends the audio
 
 
 @dataclass(frozen=True)
 class Finding:
-    """One line of the report: `level` is ok, warn or fail; `fix` says what to do."""
+    """One line of the report: `level` is ok, info (an optional part is not there), warn or
+    fail (a mission could not work); `fix` says what to do."""
 
     level: str
     what: str
