@@ -144,3 +144,59 @@ def test_architecture_names_only_commands_that_exist() -> None:
     commands = next(a for a in parser._actions if a.dest == "command").choices
     for name in line.group(1).split("|"):
         assert name in commands, f"docs/architecture.md names `shadowhound {name}`: no such command"
+
+
+# -- docs/go2-stack.md -------------------------------------------------------------------------
+
+
+def go2_stack() -> str:
+    return (ROOT / "docs" / "go2-stack.md").read_text(encoding="utf-8")
+
+
+def test_go2_stack_doc_gives_each_node_parameter_with_its_default() -> None:
+    """The table of what ShadowHound reads and writes: each parameter exists, and a default
+    given as `name` (`value` ...) is the node's."""
+    from shadowhound.ros.params import PARAMETERS
+
+    rows = table_rows(section(go2_stack(), "## What ShadowHound reads and writes on each"))
+    cells = [row[-1] for row in rows[1:]]
+    named = [n for cell in cells for n in re.findall(r"`([a-z0-9_]+)`(?= \(|,|$)", cell)]
+    assert {"odom_topic", "coco_detections_topic", "speech_topic", "map_topic"} <= set(named)
+    for name in named:
+        assert name in PARAMETERS, f"docs/go2-stack.md names parameter {name}: there is none"
+    for cell in cells:
+        for name, value in re.findall(r"`([a-z0-9_]+)` \(`([^`]*)`", cell):
+            default = PARAMETERS[name][0]
+            assert ("" if value == "''" else value) == str(default), (name, value, default)
+
+
+def test_go2_stack_doc_uses_only_options_and_parameters_that_exist() -> None:
+    """Every `--option` of a `shadowhound` command in its code blocks and of the doctor in its
+    text, and every `-p name:=value` given to the node."""
+    from shadowhound.ros.params import PARAMETERS
+
+    text = go2_stack()
+    parser = build_parser()
+    commands = next(a for a in parser._actions if a.dest == "command").choices
+
+    def options(command: str) -> set[str]:
+        if command == "sim-driver":  # its options are its own parser's (ROS owns the rest)
+            from shadowhound.ros.sim_options import build_parser as driver_parser
+
+            return {s for a in driver_parser("", "", "")._actions for s in a.option_strings}
+        return {s for a in commands[command]._actions for s in a.option_strings}
+
+    blocks = re.findall(r"```bash\n(.*?)```", text, re.DOTALL)
+    runs = re.findall(r"shadowhound ([a-z-]+)((?:[^\n]|\\\n)*)", "\n".join(blocks))
+    assert {"doctor", "node", "sim-driver"} <= {command for command, _ in runs}
+    for command, args in runs:
+        assert command in commands, f"docs/go2-stack.md runs `shadowhound {command}`"
+        for name in re.findall(r"-p ([a-z0-9_]+):=", args):
+            assert name in PARAMETERS, f"docs/go2-stack.md sets node parameter {name}"
+        if command == "node":
+            continue
+        for option in re.findall(r"(?<![\w-])(--[a-z][a-z0-9-]*)", args):
+            assert option in options(command), f"`shadowhound {command} {option}`: no such option"
+    doctor = section(text, "## Checking each part: `shadowhound doctor --go2`")
+    for option in re.findall(r"`(--[a-z][a-z0-9-]*)", doctor):
+        assert option in options("doctor"), f"`shadowhound doctor {option}`: no such option"

@@ -178,3 +178,20 @@ def test_a_driver_of_another_name_serving_the_topics_is_a_warning() -> None:
 def test_a_namespaced_driver_node_counts() -> None:
     found = lines(healthy(nodes=["/robots/go2_driver_node"]))
     assert "ok   go2_ros2_sdk's driver: /robots/go2_driver_node" in found
+
+
+def test_the_launch_is_recognised_by_the_names_robot_launch_py_gives_its_nodes() -> None:
+    """go2_ros2_sdk's robot.launch.py names them go2_robot_state_publisher, go2_rviz2, ..."""
+    found = lines(
+        healthy(
+            nodes=["/go2_robot_state_publisher", "/go2_rviz2", "/tts_node"],
+            publishers={},
+            subscribers={},
+            odom_receipts=[],
+            states=[],
+        )
+    )
+    assert (
+        "(/go2_robot_state_publisher, /go2_rviz2, /tts_node up: the launch ran, its driver "
+        "did not)" in found[0]
+    ), found[0]

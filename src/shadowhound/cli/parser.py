@@ -152,6 +152,28 @@ def build_parser() -> argparse.ArgumentParser:
         "--battery-topic", default="", help="sensor_msgs/BatteryState topic ('' = none)"
     )
     doctor.add_argument(
+        "--map-topic",
+        default="map",
+        help="nav_msgs/OccupancyGrid map whose frame TF must place (default map; '' = not checked)",
+    )
+    doctor.add_argument(
+        "--coco-detections-topic",
+        default="detected_objects",
+        help="vision_msgs/Detection2DArray from the object detector (default detected_objects, "
+        "go2_ros2_sdk's coco_detector; '' = not checked)",
+    )
+    doctor.add_argument(
+        "--camera-info-topic",
+        default="camera/camera_info",
+        help="sensor_msgs/CameraInfo the detector's boxes need (default camera/camera_info)",
+    )
+    doctor.add_argument(
+        "--speech-topic",
+        default="/tts",
+        help="std_msgs/String words to say, which go2_ros2_sdk's tts_node subscribes "
+        "(default /tts; '' = not checked)",
+    )
+    doctor.add_argument(
         "--seconds", type=float, default=3.0, help="how long to watch the topics (default 3)"
     )
 

@@ -139,13 +139,17 @@ def _doctor_go2(args: argparse.Namespace) -> int:
             f"     fix: {ROS_INSTALL}; or source ROS 2 and your go2_ros2_sdk workspace"
         )
         return EXIT_USAGE
-    print(f"...  watching the Go2 driver's topics for {args.seconds:g} s")
+    print(f"...  watching the Go2 driver's and its stack's topics for {args.seconds:g} s")
     findings = diagnose(
         observe(
             args.namespace,
             seconds=args.seconds,
             cmd_vel_topic=args.cmd_vel_topic,
             battery_topic=args.battery_topic,
+            coco_detections_topic=args.coco_detections_topic,
+            camera_info_topic=args.camera_info_topic,
+            speech_topic=args.speech_topic,
+            map_topic=args.map_topic,
         )
     )
     for finding in findings:

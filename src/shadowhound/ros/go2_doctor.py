@@ -4,19 +4,35 @@ Watches the ROS graph and the driver's topics for a few seconds, then says, in w
 fine and what to fix: the driver node (go2_ros2_sdk's `go2_driver_node`; its absence first and
 plainly, since some go2_ros2_sdk commits fail at start), each topic's type and type hash (a
 hash that differs means Fast DDS silently drops every sample), odometry rate and age, which
-velocity topic reaches the driver and why, postures from go2_states, and the battery source.
+velocity topic reaches the driver and why, postures from go2_states, and the battery source;
+then the rest of a Go2 owner's stack (go2_doctor_stack.py): TF (odom -> base_link, SLAM's
+map -> odom) and the map's frame, the object detector and its camera model, and the speaker.
 
-`observe` (go2_doctor_watch.py: rclpy, imported lazily by the CLI) gathers an `Observation`;
-`diagnose` (pure, here) turns it into findings, so every rule is testable without ROS.
+`observe` (go2_doctor_watch.py: rclpy, imported lazily by the CLI) gathers an `Observation`
+(go2_doctor_observation.py); `diagnose` (pure, here) turns it into findings, so every rule is
+testable without ROS.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 from ..robot import go2_api
 from ..robot.go2_motion import MAX_LATENCY
 from ..robot.go2_topics import TWIST_TYPE, VELOCITY_TOPICS, choose_velocity_topic
+from .go2_doctor_observation import Endpoint, Finding, Observation, topic_name
+from .go2_doctor_stack import stack_findings
+
+# The report's types live in go2_doctor_observation; they are imported from here too.
+__all__ = [
+    "BATTERY_TYPE",
+    "ODOM_TYPE",
+    "REQUEST_TYPE",
+    "STATE_TYPE",
+    "UPSTREAM_HASHES",
+    "Endpoint",
+    "Finding",
+    "Observation",
+    "diagnose",
+]
 
 ODOM_TYPE = "nav_msgs/msg/Odometry"
 STATE_TYPE = "go2_interfaces/msg/Go2State"
@@ -30,67 +46,34 @@ UPSTREAM_HASHES = {
 MIN_ODOM_RATE = 5.0  # Hz below which the closed loop steers on too little
 DRIVER_NODE = "go2_driver_node"  # go2_ros2_sdk's driver (presentation/go2_driver_node.py)
 SIM_DRIVER_NODE = "shadowhound_sim_driver"  # `shadowhound sim-driver` (ros/sim_driver.py)
-# Nodes robot.launch.py starts beside the driver: up without it, the driver failed at start.
-LAUNCH_NODES = ("twist_mux", "robot_state_publisher", "pointcloud_to_laserscan", "rviz2")
+# Nodes robot.launch.py starts beside the driver (by the names it gives them, and their
+# executables' own): up without it, the driver failed at start.
+LAUNCH_NODES = (
+    "twist_mux",
+    "go2_robot_state_publisher",
+    "go2_pointcloud_to_laserscan",
+    "go2_rviz2",
+    "lidar_to_pointcloud",
+    "pointcloud_aggregator",
+    "tts_node",
+    "robot_state_publisher",
+    "pointcloud_to_laserscan",
+    "rviz2",
+)
 MAX_ODOM_AGE = 0.5  # seconds: the robot's odom_timeout default
 BURST_GAP = 0.01  # seconds: poses closer than this came over the link in one burst
 
 
-@dataclass(frozen=True)
-class Endpoint:
-    """One publisher or subscription in the graph; `node` is the node's full name."""
-
-    node: str
-    type: str
-    hash: str = ""
-
-
-@dataclass
-class Observation:
-    """What the doctor saw. Topic keys are the robot-relative names (odom, go2_states, ...)."""
-
-    namespace: str = ""
-    nodes: list[str] = field(default_factory=list)  # full names of every node on the graph
-    names: dict[str, str] = field(default_factory=dict)  # key -> full topic name
-    publishers: dict[str, list[Endpoint]] = field(default_factory=dict)
-    subscribers: dict[str, list[Endpoint]] = field(default_factory=dict)
-    local_hashes: dict[str, str] = field(default_factory=dict)  # type -> this build's hash
-    seconds: float = 3.0  # how long it watched
-    odom_receipts: list[float] = field(default_factory=list)  # monotonic, oldest first
-    ended: float = 0.0  # monotonic time the watch ended
-    states: list[tuple[int, float]] = field(default_factory=list)  # (mode, body height)
-    cmd_vel_topic: str = ""  # configured ('' = discovered)
-    battery_topic: str = ""  # configured ('' = none)
-    battery_levels: list[float] = field(default_factory=list)  # percent, as received
-    battery_elsewhere: list[str] = field(default_factory=list)  # BatteryState topics seen
-    root_cmd_vel_subscribed: bool = False  # /cmd_vel (twist_mux is not namespaced)
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One line of the report: `level` is ok, warn or fail; `fix` says what to do."""
-
-    level: str
-    what: str
-    fix: str = ""
-
-    def __str__(self) -> str:
-        return f"{self.level:<4} {self.what}" + (f"\n     fix: {self.fix}" if self.fix else "")
-
-
 def diagnose(obs: Observation) -> list[Finding]:
-    """Findings in the order a person would fix them: driver, types, data, velocity, battery."""
+    """Findings in the order a person would fix them: driver, types, data, velocity, battery,
+    then the rest of the stack (go2_doctor_stack: TF and the map, detector, voice)."""
     out = [_driver(obs)]
     out += _types(obs)
     out.append(_odometry(obs))
     out.append(_postures(obs))
     out.append(_velocity(obs))
     out.append(_battery(obs))
-    return out
-
-
-def _name(obs: Observation, key: str) -> str:
-    return obs.names.get(key, key)
+    return out + stack_findings(obs)
 
 
 def _driver(obs: Observation) -> Finding:
@@ -142,7 +125,7 @@ def _types(obs: Observation) -> list[Finding]:
             out.append(
                 Finding(
                     "fail",
-                    f"{_name(obs, key)} has type {', '.join(wrong)}, expected {kind}",
+                    f"{topic_name(obs, key)} has type {', '.join(wrong)}, expected {kind}",
                     "point ShadowHound at the driver's topic (odom_topic, "
                     "go2_states_topic, webrtc_topic)",
                 )
@@ -154,7 +137,7 @@ def _types(obs: Observation) -> list[Finding]:
             out.append(
                 Finding(
                     "fail",
-                    f"{_name(obs, key)}: the driver's {kind} (type hash {differ[0]}) is not "
+                    f"{topic_name(obs, key)}: the driver's {kind} (type hash {differ[0]}) is not "
                     f"the one ShadowHound uses ({local}); DDS drops every sample although "
                     "the topic looks matched",
                     "source the go2_ros2_sdk workspace the driver runs from before starting "
@@ -173,13 +156,13 @@ def _types(obs: Observation) -> list[Finding]:
                 )
             )
         elif ends:
-            out.append(Finding("ok", f"{_name(obs, key)}: {kind}, type hash matches"))
+            out.append(Finding("ok", f"{topic_name(obs, key)}: {kind}, type hash matches"))
     return out
 
 
 def _odometry(obs: Observation) -> Finding:
     times = obs.odom_receipts
-    topic = _name(obs, "odom")
+    topic = topic_name(obs, "odom")
     if not times:
         return Finding(
             "fail",
@@ -226,7 +209,7 @@ def _odometry(obs: Observation) -> Finding:
 
 
 def _postures(obs: Observation) -> Finding:
-    topic = _name(obs, "go2_states")
+    topic = topic_name(obs, "go2_states")
     if not obs.states:
         return Finding(
             "fail",
@@ -246,26 +229,26 @@ def _velocity(obs: Observation) -> Finding:
     route = choose_velocity_topic(
         on(obs.subscribers),
         on(obs.publishers),
-        names={name: _name(obs, name) for name in VELOCITY_TOPICS},
+        names={name: topic_name(obs, name) for name in VELOCITY_TOPICS},
     )
     if obs.cmd_vel_topic:
         key = obs.cmd_vel_topic
         subscribed = [e for e in obs.subscribers.get(key, []) if e.type == TWIST_TYPE]
-        if _name(obs, key) == _name(obs, "cmd_vel") and route.topic != "cmd_vel":
+        if topic_name(obs, key) == topic_name(obs, "cmd_vel") and route.topic != "cmd_vel":
             return Finding(
                 "fail",
-                f"velocity on {_name(obs, key)} (configured) reaches no driver: {route.why}",
+                f"velocity on {topic_name(obs, key)} (configured) reaches no driver: {route.why}",
                 "leave cmd_vel_topic empty to follow the graph, or start twist_mux",
             )
         if subscribed:
             return Finding(
                 "ok",
-                f"velocity on {_name(obs, key)} (configured) reaches "
+                f"velocity on {topic_name(obs, key)} (configured) reaches "
                 f"{', '.join(sorted({e.node for e in subscribed}))}",
             )
         return Finding(
             "fail",
-            f"nothing subscribes {_name(obs, key)} (configured cmd_vel_topic)",
+            f"nothing subscribes {topic_name(obs, key)} (configured cmd_vel_topic)",
             "leave cmd_vel_topic empty to follow the graph",
         )
     if not route.reaches:
@@ -280,12 +263,12 @@ def _velocity(obs: Observation) -> Finding:
             f"velocity would reach nothing: {route.why}{hint}",
             "start the driver (it listens on cmd_vel_out) and check --namespace",
         )
-    return Finding("ok", f"velocity goes to {_name(obs, route.topic)}: {route.why}")
+    return Finding("ok", f"velocity goes to {topic_name(obs, route.topic)}: {route.why}")
 
 
 def _battery(obs: Observation) -> Finding:
     if obs.battery_topic:
-        topic = _name(obs, "battery")
+        topic = topic_name(obs, "battery")
         if obs.battery_levels:
             return Finding("ok", f"battery from {topic}: {obs.battery_levels[-1]:.0f}%")
         return Finding(
