@@ -46,6 +46,7 @@ BASE = {
     "jsonout",
     "plan",
     "result",
+    "robot_config",
     "speech",
     "state",
     "typos",

@@ -28,7 +28,6 @@ from .config import ShadowHoundConfig
 from .conversation import Chat, ChatContext, ModelChat, answer_offline
 from .crew import Crew, StopSignal, vision_for
 from .diagnostics import Diagnostics, MissionTracker
-from .errors import ConfigError
 from .memory.places import known_places
 from .memory.service import AgentMemory
 from .mission import MissionRun
@@ -97,14 +96,9 @@ class RobotAgent:
             return True
         s = self.settings
         if self._robot is None:
-            if s.robot != "sim":
-                raise ConfigError(
-                    f"robot {s.robot!r} needs a robot object (e.g. Go2RosRobot); "
-                    "only the simulated robot ('sim') is built automatically"
-                )
-            from .robot.sim import SimRobot
+            from .robot.factory import make_robot
 
-            self._robot = SimRobot(s.sim)
+            self._robot = make_robot(s)
         self._robot.watch_estop(lambda on: self.estop() if on else self.release_estop())
         if self._backend is None and s.backend != "offline":
             from .llm.backend import LLMBackend

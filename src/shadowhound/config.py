@@ -4,6 +4,9 @@ Precedence (lowest first): model defaults < profile file < environment variables
 (`SHADOWHOUND_<SECTION>__<FIELD>`, e.g. `SHADOWHOUND_SAFETY__MAX_LINEAR_SPEED=0.3`) < explicit
 overrides (CLI options, ROS parameters). Secrets (API keys) are read from the environment
 variable a profile names and are never stored in the model.
+
+Long because: it is the one typed model of every setting, a section per class, and its loader;
+the robot backends' settings live apart (robot_config.py).
 """
 
 from __future__ import annotations
@@ -18,6 +21,12 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from .errors import ConfigError
 from .geofence import MAX_VERTICES, polygon_problem
+from .robot_config import (
+    GO2_MOTION,
+    ROBOT_TYPES,
+    RobotSettings,
+    SimRobotSettings,
+)
 from .state import not_finite
 
 ENV_PREFIX = "SHADOWHOUND_"
@@ -260,7 +269,11 @@ class ShadowHoundConfig(_Section):
 
     profile: str = "offline"
     backend: Literal["offline", "openai", "ollama", "vllm", "llamacpp"] = "offline"
-    robot: Literal["sim", "go2"] = "sim"
+    robot: RobotSettings = Field(
+        default_factory=SimRobotSettings,
+        description="the robot backend and its settings: 'sim', 'go2', or {type: go2, "
+        "namespace: robot0, ...}",
+    )
     navigation: Literal["auto", "nav2", "direct"] = Field(
         "auto",
         description="nav.goto: auto = the robot's Nav2 (navigate_to_pose) when it "
@@ -282,6 +295,28 @@ class ShadowHoundConfig(_Section):
         default_factory=lambda: [(2.0, 0.0), (2.0, 1.2), (0.0, 1.2)],
         description="waypoints visited by nav.patrol before it returns to where it started",
     )
+
+    @field_validator("robot", mode="before")
+    @classmethod
+    def _robot(cls, value: Any) -> Any:
+        """`robot: go2` is `robot: {type: go2}`."""
+        if isinstance(value, str):
+            if value not in ROBOT_TYPES:
+                raise ValueError(f"must be one of {', '.join(ROBOT_TYPES)}, got {value!r}")
+            return {"type": value}
+        return value
+
+    @model_validator(mode="after")
+    def _robot_motion(self) -> ShadowHoundConfig:
+        """A Go2's motion settings default to its own (GO2_MOTION) where the profile and the
+        environment leave them unset."""
+        if self.robot.type == "go2":
+            unset = {k: v for k, v in GO2_MOTION.items() if k not in self.motion.model_fields_set}
+            if unset:
+                motion = self.motion.model_copy(update=unset)
+                motion.model_fields_set.difference_update(unset)  # still the robot's defaults
+                object.__setattr__(self, "motion", motion)
+        return self
 
     @field_validator("places", mode="before")
     @classmethod

@@ -31,7 +31,7 @@ from shadowhound_interfaces.action import ExecuteMission
 from shadowhound_interfaces.srv import Approve, Chat
 from std_msgs.msg import Empty, String
 
-from shadowhound.robot.estop_listener import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC
+from shadowhound.robot_config import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC
 
 RELIABLE = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 ROOT = Path(__file__).resolve().parents[2]

@@ -147,7 +147,7 @@ class _Progress:
 def cmd_estop(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     """Publish on /shadowhound/estop (or estop_release) once subscribed, and say who got it."""
     try:
-        from ..robot.estop_listener import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC
+        from ..robot_config import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC
         from ..ros.client import NodeClient
     except ImportError as exc:
         return needs_ros("shadowhound estop", exc)

@@ -73,7 +73,7 @@ def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
 def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     go2 = args.go2 or settings.robot == "go2"
-    robot = repr(settings.robot)
+    robot = repr(settings.robot.type)
     if go2 and settings.robot != "go2":  # the Go2 is what is checked, whatever the profile says
         robot = f"'go2' (--go2; the profile's robot is {robot})"
     print(

@@ -116,27 +116,8 @@ def main(
 
 
 def _robot(settings: ShadowHoundConfig) -> Any:
-    """None for the simulator (the agent builds it); a Go2 over go2_ros2_sdk's default topics
-    for `robot: go2`, with the Go2 motion settings the profile leaves unset (as the node)."""
-    if settings.robot != "go2":
-        return None
-    from ..errors import ConfigError
+    """The profile's robot (robot/factory.py): the simulator, or a Go2 with the profile's
+    namespace and topics."""
+    from ..robot.factory import make_robot
 
-    try:
-        from ..robot.go2_motion import GO2_MOTION
-        from ..robot.go2_ros import Go2RosConfig, Go2RosRobot
-    except ImportError as exc:
-        raise ConfigError(
-            f"robot go2 needs rclpy and the go2_interfaces package ('ros' extra; "
-            f"source your go2_ros2_sdk workspace or run scripts/build_ros.sh): "
-            f"{exc}"
-        ) from exc
-    from ..robot.base import RobotError
-
-    try:
-        robot = Go2RosRobot(Go2RosConfig())
-    except RobotError as exc:
-        raise ConfigError(f"robot go2: {exc}") from exc
-    unset = {k: v for k, v in GO2_MOTION.items() if k not in settings.motion.model_fields_set}
-    settings.motion = settings.motion.model_copy(update=unset)
-    return robot
+    return make_robot(settings)

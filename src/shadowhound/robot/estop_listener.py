@@ -20,9 +20,6 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from std_msgs.msg import Empty
 
-ESTOP_TOPIC = "/shadowhound/estop"  # std_msgs/Empty: stop now and latch
-ESTOP_RELEASE_TOPIC = "/shadowhound/estop_release"  # std_msgs/Empty: a person releases it
-
 
 class EstopListener:
     """Calls `on_estop` / `on_release` for messages on the two topics, on its own thread."""

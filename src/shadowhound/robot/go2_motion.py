@@ -29,16 +29,13 @@ import statistics
 from collections import deque
 from dataclasses import dataclass
 
+from .. import robot_config
 from ..state import compose, normalize_angle
 
 # Motion control for real odometry, used with robot go2 for every field the profile (or the
 # environment) does not set: the simulator's defaults (2 mm, 0.001 degrees, 20 Hz) are exact
 # only for the exact simulator; odometry over DDS arrives late and noisy.
-GO2_MOTION = {
-    "position_tolerance": 0.02,
-    "yaw_tolerance": math.radians(0.5),
-    "control_rate_hz": 10.0,
-}
+GO2_MOTION = robot_config.GO2_MOTION  # the Go2's motion settings (the profile applies them)
 
 _DT = 0.01  # seconds per model integration step
 _TRACE_SECONDS = 10.0  # model history kept: more than a fit window plus the largest latency

@@ -60,8 +60,8 @@ import math
 import threading
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, replace
-from typing import Any
+from dataclasses import replace
+from typing import Any, TypeAlias
 
 import rclpy
 from geometry_msgs.msg import Twist
@@ -77,13 +77,14 @@ from std_msgs.msg import String
 
 from ..camera import raw_image_frame, to_camera_frame
 from ..errors import TransformUnavailable
+from ..robot_config import Go2RobotSettings
 from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, compose
-from ..world import DEFAULT_ROBOT_RADIUS, Belief, GridError, merge_sightings
+from ..world import Belief, GridError, merge_sightings
 from ..world.image_sighting import SightingRules
 from ..world.objects import KnownObject
 from . import go2_api
 from .base import RobotError
-from .estop_listener import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC, EstopListener
+from .estop_listener import EstopListener
 from .go2_detections import (
     COCO_CLASSES,
     BoxIntake,
@@ -127,57 +128,8 @@ _NAME = {
 }
 
 
-@dataclass(frozen=True)
-class Go2RosConfig:
-    """Where go2_ros2_sdk's topics are, how long to wait for them, and how the robot moves.
-
-    Topic names are relative to `namespace` (e.g. `robot0` for go2_ros2_sdk's multi-robot
-    `robot{i}/` prefix) unless they start with '/'. An empty `cmd_vel_topic` is discovered
-    (see go2_topics); an empty camera or battery topic turns that off.
-    """
-
-    namespace: str = ""
-    cmd_vel_topic: str = ""
-    webrtc_topic: str = "webrtc_req"
-    odom_topic: str = "odom"
-    state_topic: str = "go2_states"
-    camera_topic: str = "camera/image_raw"
-    battery_topic: str = ""  # sensor_msgs/BatteryState; '' = no source: battery unknown
-    detections_topic: str = ""  # shadowhound_interfaces/DetectionArray; '' = none
-    # The names the detector can report ("chair", "red ball"): what a search may look for,
-    # besides the names it has already reported.
-    detector_classes: tuple[str, ...] = ()
-    # vision_msgs/Detection2DArray (coco_detector: `detected_objects`); '' = none. Needs
-    # camera_info (K) on `camera_info_topic`, odometry and the scan to place a box.
-    coco_detections_topic: str = ""
-    camera_info_topic: str = "camera/camera_info"
-    camera_mount: CameraMount = CameraMount()
-    coco_max_range: float = 6.0  # metres; a box farther away is a bearing only
-    battery_timeout: float = 30.0  # seconds after which a battery reading is unknown again
-    odom_timeout: float = 0.5  # seconds without odometry before get_state raises
-    odom_latency: float | None = None  # seconds odometry lags the robot; None = measured
-    command_timeout: float = 10.0  # seconds a posture (or a trick beyond its length) may take
-    max_linear_speed: float = 1.0  # m/s, the Go2 caps DIMOS uses
-    max_angular_speed: float = 2.0  # rad/s
-    linear_accel: float = 1.0  # m/s^2 the robot speeds up and brakes at (prediction model)
-    angular_accel: float = 3.0  # rad/s^2
-    firmware_tricks: bool = False  # flips, handstand, 1301-1305: only if the firmware has them
-    map_topic: str = "map"  # nav_msgs/OccupancyGrid; '' = no map: straight-line paths
-    scan_topic: str = "scan"  # sensor_msgs/LaserScan; '' = none
-    scan_timeout: float = 1.0  # seconds after which a scan is too old to use
-    nav2_action: str = "navigate_to_pose"  # Nav2's NavigateToPose; '' = no Nav2
-    robot_radius: float = DEFAULT_ROBOT_RADIUS  # metres kept from obstacles on the map
-    node_name: str = "shadowhound_go2"
-    # ShadowHound's e-stop topics (std_msgs/Empty), absolute; '' = not listened to here (the
-    # mission node listens itself). Wherever else a Go2 runs (MCP, scripts) they stop it.
-    estop_topic: str = ESTOP_TOPIC
-    estop_release_topic: str = ESTOP_RELEASE_TOPIC
-    # std_msgs/String for go2_ros2_sdk's tts_node, which listens on the absolute `/tts`;
-    # '' = no voice (`say` raises RobotError).
-    speech_topic: str = "/tts"
-    # SLAM's map frame (slam_toolbox, AMCL): with `map -> odom` on /tf the robot's world is the
-    # map; '' = read no TF (the world is odometry's frame).
-    map_frame: str = "map"
+# The Go2's settings: the profile's `robot: {type: go2, ...}` (robot_config.Go2RobotSettings).
+Go2RosConfig: TypeAlias = Go2RobotSettings
 
 
 class Go2RosRobot:
@@ -219,7 +171,10 @@ class Go2RosRobot:
         self._frame: CameraFrame | None = None
         self._sightings = SightingBoard()
         self._boxes = (
-            BoxIntake(c.camera_mount, SightingRules(max_range=c.coco_max_range))
+            BoxIntake(
+                CameraMount(c.camera_x, c.camera_y, c.camera_yaw),
+                SightingRules(max_range=c.coco_max_range),
+            )
             if c.coco_detections_topic
             else None
         )

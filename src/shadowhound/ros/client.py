@@ -35,7 +35,7 @@ from rclpy.signals import SignalHandlerOptions
 from std_msgs.msg import Empty, String
 
 from ..errors import NodeNotFound
-from ..robot.estop_listener import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC
+from ..robot_config import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC
 from .convert import shorten
 from .params import PARAMETERS
 

@@ -29,7 +29,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import ParameterDescriptor
@@ -45,10 +45,13 @@ from .. import events as ev
 from .. import jsonout
 from ..agent import RobotAgent, RobotAgentConfig
 from ..camera import raw_image_frame, to_camera_frame
-from ..errors import ParameterError
+from ..config import ShadowHoundConfig
+from ..errors import ConfigError, ParameterError
 from ..result import MissionResult
 from ..robot.base import RobotError
-from ..robot.estop_listener import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC, EstopListener
+from ..robot.estop_listener import EstopListener
+from ..robot.factory import make_robot
+from ..robot_config import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC
 from ..worker import MissionJob, MissionWorker
 from .camera_intake import CameraIntake
 from .convert import (
@@ -63,6 +66,7 @@ from .process import run_node
 from .rviz import RvizPublisher
 
 if TYPE_CHECKING:
+    from ..robot.base import Robot
     from ..robot.go2_ros import Go2RosRobot
 
 try:  # built by scripts/build_ros.sh (ros2/shadowhound_interfaces)
@@ -101,8 +105,9 @@ class MissionNode(Node):
         self._go2: Go2RosRobot | None = None  # the Go2 this node built (its topics are logged)
         if agent is None:
             settings = self.settings.agent_settings()
-            robot = self._make_go2_robot() if self.settings.robot == "go2" else None
-            agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
+            agent = RobotAgent(
+                RobotAgentConfig(robot=self._make_robot(settings), settings=settings)
+            )
         agent.initialize()
         self.agent = agent
         self._frames = {"received": 0, "dropped": 0}
@@ -133,30 +138,22 @@ class MissionNode(Node):
             values[name] = self.declare_parameter(name, default, descriptor).value
         return values
 
-    def _make_go2_robot(self) -> Go2RosRobot:
-        """A Go2RosRobot on this node's context. Its camera is off: the node's own camera
-        subscription (`camera_topic`) gives the agent its frames."""
-        try:
-            from ..robot.go2_ros import Go2RosConfig, Go2RosRobot
-        except ImportError as exc:
-            raise ParameterError(
-                f"robot go2 needs the go2_interfaces package: source your "
-                f"go2_ros2_sdk workspace or run scripts/build_ros.sh ({exc})"
-            ) from exc
-        try:
-            # The node listens for the e-stop itself (and drops queued missions with it).
-            self._go2 = Go2RosRobot(
-                Go2RosConfig(
-                    **self.settings.go2_options(),
-                    camera_topic="",
-                    estop_topic="",
-                    estop_release_topic="",
-                ),
-                context=self.context,
+    def _make_robot(self, settings: ShadowHoundConfig) -> Robot:
+        """The profile's robot as the parameters fill it (robot/factory.py), on this node's
+        context. A Go2's camera is off here (the node's own camera subscription,
+        `camera_topic`, gives the agent its frames) and so are its e-stop topics (the node
+        listens itself, and drops queued missions with it)."""
+        if settings.robot.type == "go2":
+            settings.robot = settings.robot.model_copy(
+                update={"camera_topic": "", "estop_topic": "", "estop_release_topic": ""}
             )
-        except RobotError as exc:
-            raise ParameterError(f"robot go2: {exc}") from exc
-        return self._go2
+        try:
+            robot = make_robot(settings, context=self.context)
+        except ConfigError as exc:
+            raise ParameterError(str(exc)) from exc
+        if settings.robot.type == "go2":
+            self._go2 = cast("Go2RosRobot", robot)
+        return robot
 
     def _build_interfaces(self) -> None:
         s = self.settings

@@ -14,8 +14,7 @@ from typing import Any, get_args
 
 from ..config import ShadowHoundConfig, load_config
 from ..errors import ParameterError
-from ..robot.go2_detections import CameraMount
-from ..robot.go2_motion import GO2_MOTION, MAX_LATENCY
+from ..robot.go2_motion import MAX_LATENCY
 
 NODE_NAME = "shadowhound_mission_agent"
 
@@ -192,19 +191,22 @@ class NodeSettings:
         return self.camera_type == "compressed"
 
     def agent_settings(self) -> ShadowHoundConfig:
-        """The agent's configuration: the profile, then these parameters on top; for go2,
-        GO2_MOTION fills the motion settings the profile and environment leave unset."""
-        overrides: dict[str, Any] = {"robot": self.robot, "sim": {"time_scale": self.time_scale}}
+        """The agent's configuration: the profile, then these parameters on top. For go2 the
+        parameters fill the profile's `robot` settings (a parameter left at its default keeps
+        the profile's value); the Go2's motion settings come with `robot: go2` (config)."""
+        overrides: dict[str, Any] = {"sim": {"time_scale": self.time_scale}}
         if self.navigation:
             overrides["navigation"] = self.navigation
-        config = load_config(self.backend_config, overrides)
-        if self.robot == "go2":
-            unset = {k: v for k, v in GO2_MOTION.items() if k not in config.motion.model_fields_set}
-            config.motion = config.motion.model_copy(update=unset)
-        return config
+        if self.robot == "go2":  # merged into the profile's robot settings (load_config)
+            defaults = NodeSettings().go2_options()
+            given = {k: v for k, v in self.go2_options().items() if v != defaults[k]}
+            overrides["robot"] = {**given, "type": "go2"}
+        else:
+            overrides["robot"] = self.robot  # a name replaces the profile's settings whole
+        return load_config(self.backend_config, overrides)
 
     def go2_options(self) -> dict[str, Any]:
-        """Keyword arguments for Go2RosConfig."""
+        """The Go2's settings these parameters give (config.Go2RobotSettings's fields)."""
         return {
             "namespace": self.robot_namespace,
             "cmd_vel_topic": self.cmd_vel_topic,
@@ -220,7 +222,9 @@ class NodeSettings:
             ),
             "coco_detections_topic": self.coco_detections_topic,
             "camera_info_topic": self.camera_info_topic,
-            "camera_mount": CameraMount(self.camera_x, self.camera_y, self.camera_yaw),
+            "camera_x": self.camera_x,
+            "camera_y": self.camera_y,
+            "camera_yaw": self.camera_yaw,
             "coco_max_range": self.coco_max_range,
             "firmware_tricks": self.go2_firmware_tricks,
             "map_topic": self.map_topic,

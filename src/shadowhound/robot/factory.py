@@ -1,0 +1,43 @@
+"""make_robot: the one place a robot's name becomes a robot.
+
+The profile names the backend and holds its settings (`robot: {type: go2, namespace: robot0}`,
+config.RobotSettings); the agent, the ROS node, the web server, the MCP server and the CLI all
+build their robot here. A backend's code is imported only when it is chosen, so the simulator
+never pulls in rclpy.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from ..errors import ConfigError, RobotError
+
+if TYPE_CHECKING:
+    from ..config import ShadowHoundConfig
+    from .base import Robot
+
+__all__ = ["make_robot"]
+
+
+def make_robot(settings: ShadowHoundConfig, *, context: Any = None) -> Robot:
+    """The robot `settings.robot` chooses, built with its settings. `context`: the rclpy
+    context a ROS backend joins (None: the running one, else a private one). Raises
+    ConfigError naming what is missing when the backend cannot be built."""
+    choice = settings.robot
+    if choice.type == "sim":
+        from .sim import SimRobot
+
+        return SimRobot(settings.sim)
+    if choice.type == "go2":
+        try:
+            from .go2_ros import Go2RosRobot
+        except ImportError as exc:
+            raise ConfigError(
+                "robot go2 needs rclpy and the go2_interfaces package (the 'ros' extra; source "
+                f"your go2_ros2_sdk workspace or run scripts/build_ros.sh): {exc}"
+            ) from exc
+        try:
+            return Go2RosRobot(choice, context=context)
+        except RobotError as exc:
+            raise ConfigError(f"robot go2: {exc}") from exc
+    raise ConfigError(f"no robot backend {choice.type!r}")  # the settings' union forbids it

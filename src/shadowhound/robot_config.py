@@ -1,0 +1,103 @@
+"""The robot backends' settings: one typed model per backend, chosen by `type` in the profile
+(`robot: go2` or `robot: {type: go2, namespace: robot0, ...}`). robot/factory.py builds the
+robot from them; ROS parameters only fill them (ros/params.py).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+__all__ = [
+    "ESTOP_RELEASE_TOPIC",
+    "ESTOP_TOPIC",
+    "GO2_MOTION",
+    "ROBOT_TYPES",
+    "Go2RobotSettings",
+    "RobotSettings",
+    "SimRobotSettings",
+]
+
+# The Go2's odometry-driven motion: what the motion section takes for a Go2 when the profile and
+# the environment leave it unset (its closed loop needs finer tolerances than the simulator's).
+GO2_MOTION: dict[str, float] = {
+    "position_tolerance": 0.02,
+    "yaw_tolerance": math.radians(0.5),
+    "control_rate_hz": 10.0,
+}
+ESTOP_TOPIC = "/shadowhound/estop"  # std_msgs/Empty: stop now and latch
+ESTOP_RELEASE_TOPIC = "/shadowhound/estop_release"  # std_msgs/Empty: a person releases it
+
+
+class _Backend(BaseModel):
+    """A robot backend's settings. Equal to the backend's name, so `settings.robot == "go2"`
+    reads as it did when the robot was only a name."""
+
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, str):
+            return bool(getattr(self, "type", None) == other)
+        return super().__eq__(other)
+
+    __hash__ = None  # type: ignore[assignment]  # mutable settings
+
+
+class SimRobotSettings(_Backend):
+    """The simulated Go2 (SimRobot); its world and physics are the `sim` section."""
+
+    type: Literal["sim"] = "sim"
+
+
+class Go2RobotSettings(_Backend):
+    """A Unitree Go2 through go2_ros2_sdk's ROS 2 topics (docs/go2.md). Topic names are
+    relative to `namespace` (e.g. `robot0`, go2_ros2_sdk's multi-robot prefix) unless they start
+    with '/'; an empty `cmd_vel_topic` is discovered; an empty optional topic turns it off."""
+
+    type: Literal["go2"] = "go2"
+    namespace: str = ""
+    cmd_vel_topic: str = ""
+    webrtc_topic: str = "webrtc_req"
+    odom_topic: str = "odom"
+    state_topic: str = "go2_states"
+    camera_topic: str = "camera/image_raw"
+    battery_topic: str = Field("", description="sensor_msgs/BatteryState; '' = battery unknown")
+    detections_topic: str = Field("", description="shadowhound_interfaces/DetectionArray")
+    detector_classes: tuple[str, ...] = Field(
+        (), description="names the detector can report: what a search may look for"
+    )
+    coco_detections_topic: str = Field(
+        "", description="vision_msgs/Detection2DArray (coco_detector: detected_objects)"
+    )
+    camera_info_topic: str = "camera/camera_info"
+    camera_x: float = Field(0.3, ge=-2, le=2, description="the camera's mount, metres ahead")
+    camera_y: float = Field(0.0, ge=-2, le=2, description="metres left of the body's centre")
+    camera_yaw: float = Field(0.0, ge=-math.pi, le=math.pi, description="radians, left +")
+    coco_max_range: float = Field(6.0, ge=0.5, le=30, description="metres; beyond: a bearing")
+    battery_timeout: float = Field(30.0, gt=0, description="seconds a battery reading lasts")
+    odom_timeout: float = Field(0.5, gt=0, description="seconds without odometry: blind")
+    odom_latency: float | None = Field(
+        None, ge=0, le=5, description="seconds odometry lags the robot; None = measured"
+    )
+    command_timeout: float = Field(10.0, gt=0, description="seconds a posture may take")
+    max_linear_speed: float = Field(1.0, gt=0, le=3, description="m/s, the Go2's own cap")
+    max_angular_speed: float = Field(2.0, gt=0, le=6, description="rad/s")
+    linear_accel: float = Field(1.0, gt=0, description="m/s^2 (the tracker's model)")
+    angular_accel: float = Field(3.0, gt=0, description="rad/s^2")
+    firmware_tricks: bool = Field(False, description="flips, handstand: firmware that has them")
+    map_topic: str = Field("map", description="nav_msgs/OccupancyGrid; '' = no map")
+    scan_topic: str = Field("scan", description="sensor_msgs/LaserScan; '' = none")
+    scan_timeout: float = Field(1.0, gt=0, description="seconds a scan stays usable")
+    nav2_action: str = Field("navigate_to_pose", description="Nav2's action; '' = no Nav2")
+    robot_radius: float = Field(0.35, gt=0, le=2, description="metres kept from obstacles")
+    node_name: str = "shadowhound_go2"
+    estop_topic: str = Field(ESTOP_TOPIC, description="std_msgs/Empty; '' = not listened to")
+    estop_release_topic: str = ESTOP_RELEASE_TOPIC
+    speech_topic: str = Field("/tts", description="std_msgs/String for tts_node; '' = mute")
+    map_frame: str = Field("map", description="SLAM's map frame on /tf; '' = read no TF")
+
+
+RobotSettings = Annotated[SimRobotSettings | Go2RobotSettings, Field(discriminator="type")]
+ROBOT_TYPES: tuple[str, ...] = ("sim", "go2")
