@@ -73,7 +73,7 @@ from std_msgs.msg import String
 from ..camera import raw_image_frame, to_camera_frame
 from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan
 from ..world import DEFAULT_ROBOT_RADIUS, Belief, GridError, merge_sightings
-from ..world.image_sighting import SightingRules
+from ..world.image_sighting import Bearing, SightingRules
 from ..world.objects import KnownObject
 from . import go2_api
 from .base import RobotError
@@ -603,6 +603,10 @@ class Go2RosRobot:
         reported = (o.name for o in self.known_objects())
         coco = COCO_CLASSES if self.config.coco_detections_topic else ()
         return frozenset((*self.config.detector_classes, *coco, *reported))
+
+    def bearings(self) -> tuple[Bearing, ...]:
+        """The 2-D detector's boxes that had no usable range (BoxIntake keeps the latest)."""
+        return self._boxes.bearings() if self._boxes is not None else ()
 
     def known_objects(self) -> tuple[KnownObject, ...]:
         """What the detections topic has reported and what the world model holds (sightings
