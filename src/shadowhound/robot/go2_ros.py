@@ -378,8 +378,8 @@ class Go2RosRobot:
                 )
         if fault is not None:
             self._odometry_fault(fault)
-        elif self._boxes is not None:
-            self._boxes.on_pose(stamp, Pose2D(p.x, p.y, yaw))
+        elif self._boxes is not None:  # the pose was the robot's `after` seconds before its stamp
+            self._boxes.on_pose(stamp - after, Pose2D(p.x, p.y, yaw))
         if abs(after - before) >= 0.01:
             self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 

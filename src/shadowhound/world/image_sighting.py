@@ -37,6 +37,7 @@ COCO_NAMES = {
     "hair drier": "hair dryer",
 }
 
+STILL = 0.005  # metres (and radians) between the last two poses of a robot at rest
 MIN_RADIUS = 0.1  # metres: the smallest footprint a sighting is given
 MAX_RADIUS = 1.5  # metres: the largest (as the map's own estimate, world/objects.py)
 
@@ -143,6 +144,23 @@ class PoseHistory:
         while self._stamps and self._stamps[0] < stamp - self._window:
             self._stamps.popleft()
             self._poses.popleft()
+
+    def known(self, stamp: float) -> bool:
+        """Whether the pose at `stamp` can be told now: the history reaches it, or it ends at
+        rest (its last two poses alike), where a later stamp finds the robot still. Late
+        odometry reaches a moving robot's present only later: until then its last pose is where
+        the robot was, not where it is."""
+        stamps, poses = self._stamps, self._poses
+        if not stamps:
+            return False
+        if stamp <= stamps[-1]:
+            return True
+        if len(stamps) < 2:
+            return False
+        a, b = poses[-2], poses[-1]
+        return (
+            math.hypot(b.x - a.x, b.y - a.y) < STILL and abs(normalize_angle(b.yaw - a.yaw)) < STILL
+        )
 
     def at(self, stamp: float) -> Pose2D | None:
         """The pose at `stamp`, interpolated between the poses around it; the nearest one up
