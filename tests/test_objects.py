@@ -25,7 +25,7 @@ from shadowhound.robot.sim import SimRobot
 from shadowhound.skills import default_registry
 from shadowhound.world import Belief, KnownObject
 from shadowhound.world.image_sighting import Bearing
-from shadowhound.world.standoff import PERSON_STANDOFF
+from shadowhound.world.standoff import PERSON_MARGIN, PERSON_STANDOFF
 
 from .llm_server import ScriptedLLM, json_plan, model_settings
 
@@ -48,10 +48,10 @@ def never_touched(robot):
 
 
 def stands_before(robot, name, gap=None, within=0.05):
-    """The true pose is `gap` from the object's surface (the standoff: 0.6 m, a person 1 m),
-    facing its centre."""
+    """The true pose is `gap` from the object's surface (the standoff: 0.6 m, a person 1 m and
+    the margin), facing its centre."""
     if gap is None:
-        gap = PERSON_STANDOFF if name == "person" else 0.6
+        gap = PERSON_STANDOFF + PERSON_MARGIN if name == "person" else 0.6
     obj = robot.world.find(name)
     x, y, yaw = robot.true_path[-1][1], robot.true_path[-1][2], robot.get_state().yaw
     assert math.hypot(obj.x - x, obj.y - y) - obj.radius == pytest.approx(gap, abs=within)
