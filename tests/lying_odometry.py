@@ -19,6 +19,7 @@ from shadowhound.state import CameraFrame, Posture, RobotState, Scan
 if TYPE_CHECKING:
     from shadowhound.robot.navigator import Navigator
     from shadowhound.world import Belief, KnownObject
+    from shadowhound.world.image_sighting import Bearing
 
 
 class LyingOdometry:
@@ -93,6 +94,9 @@ class LyingOdometry:
 
     def vocabulary(self) -> frozenset[str]:
         return self.sim.vocabulary()
+
+    def bearings(self) -> tuple[Bearing, ...]:
+        return self.sim.bearings()
 
     def known_objects(self) -> tuple[KnownObject, ...]:
         return self.sim.known_objects()

@@ -183,6 +183,9 @@ class LateRobot:
     def vocabulary(self) -> frozenset[str]:
         return self.sim.vocabulary()
 
+    def bearings(self) -> tuple[()]:
+        return ()
+
     def known_objects(self) -> tuple[()]:
         return ()
 

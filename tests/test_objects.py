@@ -24,7 +24,8 @@ from shadowhound.robot.sensors import penetration, scene_grid
 from shadowhound.robot.sim import SimRobot
 from shadowhound.skills import default_registry
 from shadowhound.world import Belief, KnownObject
-from shadowhound.world.standoff import PERSON_STANDOFF
+from shadowhound.world.image_sighting import Bearing
+from shadowhound.world.standoff import PERSON_MARGIN, PERSON_STANDOFF
 
 from .llm_server import ScriptedLLM, json_plan, model_settings
 
@@ -47,10 +48,10 @@ def never_touched(robot):
 
 
 def stands_before(robot, name, gap=None, within=0.05):
-    """The true pose is `gap` from the object's surface (the standoff: 0.6 m, a person 1 m),
-    facing its centre."""
+    """The true pose is `gap` from the object's surface (the standoff: 0.6 m, a person 1 m and
+    the margin), facing its centre."""
     if gap is None:
-        gap = PERSON_STANDOFF if name == "person" else 0.6
+        gap = PERSON_STANDOFF + PERSON_MARGIN if name == "person" else 0.6
     obj = robot.world.find(name)
     x, y, yaw = robot.true_path[-1][1], robot.true_path[-1][2], robot.get_state().yaw
     assert math.hypot(obj.x - x, obj.y - y) - obj.radius == pytest.approx(gap, abs=within)
@@ -185,6 +186,35 @@ def test_a_search_that_finds_nothing_says_where_it_looked():
     assert "search.max_seconds" in result.response
     assert robot.true_odometer <= 5 + 0.05
     never_touched(robot)
+
+
+class SeesInDirections(SimRobot):
+    """A simulated robot whose detector also saw things in a direction only (a 2-D box with no
+    range, as the Go2's BoxIntake keeps them)."""
+
+    def bearings(self) -> tuple[Bearing, ...]:
+        return (
+            Bearing("unicorn", 0.0, 0.0, 0.0, 0.9, 1.0, "no scan at the image's time"),
+            Bearing("red ball", 0.0, 0.0, 0.0, 0.9, 2.0, "9.0 m away, beyond 6 m"),
+        )
+
+
+def test_a_search_that_saw_the_thing_only_in_a_direction_says_so():
+    """Issue 24: a box with no range is a direction, never a goal; a search that had only that
+    ends without it, and says why."""
+    hidden = World(objects=(*DEFAULT_WORLD.objects, WorldObject("unicorn", 7.5, 0.0, 0.3)))
+    cfg = ShadowHoundConfig(**_NO_PLACES, search=SearchConfig(max_seconds=60, max_distance=2))
+    robot = SeesInDirections(cfg.sim, time_scale=0.0, world=hidden)
+    result = RobotAgent(RobotAgentConfig(robot=robot, settings=cfg)).execute_mission(
+        "find the unicorn"
+    )
+    assert not result.success
+    assert (
+        "The unicorn was seen only in a direction (0 degrees from (0.0, 0.0)), at no known "
+        "distance (no scan at the image's time): a direction is never a place to go."
+    ) in result.response, result.response
+    assert "red ball was seen only" not in result.response
+    assert robot.true_odometer <= 2 + 0.05
 
 
 def test_a_name_the_robot_cannot_recognise_is_refused_before_moving():

@@ -233,3 +233,54 @@ def test_boxes_become_sightings_with_the_pose_and_scan_at_the_images_stamp() -> 
     assert intake.read(_box_msg(5.0, ("chair", 640.0, 50.0, 0.9)))[2] == [
         "'chair': no odometry pose at the image's time 5.00"
     ]
+
+
+def _couch_in_view() -> tuple[BoxIntake, NS, object]:
+    """An intake with a camera, and the box of a couch 3 m ahead of a robot at the origin
+    facing +x, stamped 10 s, with the scan of that moment."""
+    from shadowhound.robot.scene import World, WorldObject
+    from shadowhound.robot.sensors import cast_scan
+    from shadowhound.world.image_sighting import CameraModel
+
+    intake = BoxIntake(CameraMount(0.3, 0.0, 0.0))
+    intake.on_camera_info([370.0, 0.0, 640.0, 0.0, 370.0, 360.0, 0.0, 0.0, 1.0])
+    couch = WorldObject("couch", 3.0, 0.0, 0.4)
+    intake.on_scan(10.0, cast_scan(World(objects=(couch,)), Pose2D()))
+    half = math.asin(couch.radius / (couch.x - 0.3))
+    camera = CameraModel(370.0, 640.0, 0.3)
+    left, right = camera.column_of(half), camera.column_of(-half)
+    return intake, _box_msg(10.0, ("couch", (left + right) / 2, right - left, 0.8)), couch
+
+
+def test_a_box_seen_while_turning_waits_for_the_odometry_of_its_time() -> None:
+    """Issue 24: odometry comes late (go2_ros2_sdk's, 0.2 s and more). A box seen while the
+    robot turned, newer than the last odometry, is not placed from that older pose (seen from
+    there the couch would land 0.8 m off): it waits for the pose of its time."""
+    intake, box, couch = _couch_in_view()
+    for k in range(9):  # turning right at 1.5 rad/s, odometry so far up to 9.8 s
+        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.15 * (10 - k - 1) + 0.15))
+    assert intake.read(box) == ([], [], [])  # held
+    intake.on_pose(9.9, Pose2D(0.0, 0.0, 0.15))
+    intake.on_pose(10.0, Pose2D())
+    seen, bearings, problems = intake.read(_box_msg(10.5))  # the next array: nothing in view
+    assert problems == [] and bearings == []
+    assert [o.name for o in seen] == ["sofa"] and seen[0].stamp == 10.0
+    assert math.hypot(seen[0].x - couch.x, seen[0].y - couch.y) < 0.05
+    assert intake.read(_box_msg(11.0)) == ([], [], [])  # placed once
+
+
+def test_a_box_seen_at_rest_is_placed_at_once_and_one_whose_odometry_never_comes_is_refused():
+    intake, box, couch = _couch_in_view()
+    for k in range(9):  # standing still: odometry up to 9.8 s, late, but the robot is there
+        intake.on_pose(9.0 + k / 10, Pose2D())
+    seen, _bearings, problems = intake.read(box)
+    assert problems == [] and [o.name for o in seen] == ["sofa"]
+    assert math.hypot(seen[0].x - couch.x, seen[0].y - couch.y) < 0.05
+    turning, box, _couch = _couch_in_view()
+    for k in range(9):
+        turning.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.1 * k))
+    assert turning.read(box) == ([], [], [])  # held...
+    assert turning.read(_box_msg(11.9)) == ([], [], [])  # ... up to 2 s
+    assert turning.read(_box_msg(12.1))[2] == [
+        "'couch': no odometry pose at the image's time 10.00"
+    ]

@@ -17,6 +17,7 @@ from .navigator import Navigator
 
 if TYPE_CHECKING:
     from ..world import Belief, KnownObject
+    from ..world.image_sighting import Bearing
 
 
 @runtime_checkable
@@ -115,6 +116,12 @@ class Robot(Protocol):
     def known_objects(self) -> tuple[KnownObject, ...]:
         """Every object the robot knows, one per name (the latest sighting): its world model's,
         and those it was told of without a map (a detector on ROS)."""
+        ...
+
+    def bearings(self) -> tuple[Bearing, ...]:
+        """What it saw in a direction only, at no usable distance (a 2-D detector's box with no
+        scan return in it, or beyond its range), the latest last: hints a search names when it
+        ends without the thing, never a place to go. Empty when all it sees is placed."""
         ...
 
     def look(self) -> None:

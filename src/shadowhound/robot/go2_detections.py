@@ -172,6 +172,8 @@ _COCO = (
 )
 COCO_CLASSES = tuple(planner_name(name) for name in _COCO.split(", "))
 MAX_BEARINGS = 50  # bearing-only sightings kept (the latest), for diagnostics
+HOLD_SECONDS = 2.0  # image seconds a box waits for the odometry of its time
+MAX_HELD = 100  # boxes waiting at most
 
 
 @dataclass(frozen=True)
@@ -192,7 +194,8 @@ def _seconds(stamp: Any) -> float:
 class BoxIntake:
     """vision_msgs/Detection2DArray -> sightings, with the camera model from camera_info, the
     robot's poses from odometry and the scans that range the boxes, all by their stamps (the
-    ROS clock of the headers). Thread-safe; messages are read by attribute (no rclpy)."""
+    ROS clock of the headers; an odometry pose by the time it was the robot's, which late
+    odometry stamps later). Thread-safe; messages are read by attribute (no rclpy)."""
 
     def __init__(
         self, mount: CameraMount = CameraMount(), rules: SightingRules | None = None
@@ -204,6 +207,7 @@ class BoxIntake:
         self._poses = PoseHistory()
         self._scans: deque[Scan] = deque(maxlen=20)
         self._bearings: deque[Bearing] = deque(maxlen=MAX_BEARINGS)
+        self._held: deque[BoxDetection] = deque(maxlen=MAX_HELD)
 
     def on_camera_info(self, k: Any) -> str | None:
         """camera_info's K (row-major 3x3): fx = K[0], cx = K[2]. A problem, or None."""
@@ -218,15 +222,15 @@ class BoxIntake:
         return None
 
     def on_pose(self, stamp: float, pose: Pose2D) -> None:
+        """The robot's pose at `stamp` (when it was there: odometry's stamp less its lag)."""
         with self._lock:
             self._poses.add(stamp, pose)
 
     def on_scan(self, stamp: float, scan: Scan) -> None:
-        """A scan taken at `stamp`; placed at the robot's pose then (the latest known pose
-        when the history has none for it)."""
+        """A scan taken at `stamp`; placed at the robot's pose then when a box needs it (its
+        own pose only when the history has none for it)."""
         with self._lock:
-            pose = self._poses.at(stamp)
-            self._scans.append(replace(scan, pose=pose or scan.pose, stamp=stamp))
+            self._scans.append(replace(scan, stamp=stamp))
 
     @property
     def has_camera(self) -> bool:
@@ -240,33 +244,39 @@ class BoxIntake:
 
     def read(self, msg: Any) -> tuple[list[KnownObject], list[Bearing], list[str]]:
         """A Detection2DArray as sightings (stamped with the image's header time), bearings
-        (no range, or beyond max_range) and what was refused."""
-        seen: list[KnownObject] = []
-        bearings: list[Bearing] = []
+        (no range, or beyond max_range) and what was refused. A box seen while the robot moved,
+        before odometry (late) reached its time, waits for it: it comes out of a later read,
+        placed by the pose it was seen from, or is refused after HOLD_SECONDS. Placed by the
+        last pose instead, a box seen while turning lands tens of centimetres off."""
         problems: list[str] = []
         with self._lock:
             camera = self._camera
         if camera is None:
-            return seen, bearings, ["no camera_info yet: the boxes cannot be turned into bearings"]
+            return [], [], ["no camera_info yet: the boxes cannot be turned into bearings"]
+        boxes = []
         for d in msg.detections:
             stamp = d.header.stamp if (d.header.stamp.sec or d.header.stamp.nanosec) else None
-            at = _seconds(stamp if stamp is not None else msg.header.stamp)
             if not d.results:
                 problems.append("a detection without a class (results is empty)")
                 continue
             best = max(d.results, key=lambda r: float(r.hypothesis.score))
-            box = BoxDetection(
-                str(best.hypothesis.class_id),
-                float(d.bbox.center.position.x),
-                float(d.bbox.size_x),
-                float(best.hypothesis.score),
-                at,
+            boxes.append(
+                BoxDetection(
+                    str(best.hypothesis.class_id),
+                    float(d.bbox.center.position.x),
+                    float(d.bbox.size_x),
+                    float(best.hypothesis.score),
+                    _seconds(stamp if stamp is not None else msg.header.stamp),
+                )
             )
-            with self._lock:
-                pose = self._poses.at(at)
-                scan = nearest_scan(tuple(self._scans), at, self._rules.scan_slack)
+        ready = self._ready(boxes, _seconds(msg.header.stamp))
+        seen: list[KnownObject] = []
+        bearings: list[Bearing] = []
+        for box, pose, scan in ready:
             if pose is None:
-                problems.append(f"{box.label!r}: no odometry pose at the image's time {at:.2f}")
+                problems.append(
+                    f"{box.label!r}: no odometry pose at the image's time {box.stamp:.2f}"
+                )
                 continue
             try:
                 found = locate(box, camera, pose, scan, self._rules)
@@ -280,3 +290,27 @@ class BoxIntake:
         with self._lock:
             self._bearings.extend(bearings)
         return seen, bearings, problems
+
+    def _ready(
+        self, boxes: list[BoxDetection], now: float
+    ) -> list[tuple[BoxDetection, Pose2D | None, Scan | None]]:
+        """The boxes held and `boxes` whose time odometry has reached (their scan's too), with
+        the pose and the scan (placed) of that time; the rest held, up to HOLD_SECONDS before
+        `now` (image time), then given no pose."""
+        out: list[tuple[BoxDetection, Pose2D | None, Scan | None]] = []
+        with self._lock:
+            waiting = [*self._held, *boxes]
+            self._held.clear()
+            now = max([now, *(b.stamp for b in waiting)])
+            for box in waiting:
+                scan = nearest_scan(tuple(self._scans), box.stamp, self._rules.scan_slack)
+                known = self._poses.known(box.stamp) and (
+                    scan is None or self._poses.known(scan.stamp)
+                )
+                if not known and now - box.stamp <= HOLD_SECONDS:
+                    self._held.append(box)
+                    continue
+                if scan is not None:
+                    scan = replace(scan, pose=self._poses.at(scan.stamp) or scan.pose)
+                out.append((box, self._poses.at(box.stamp) if known else None, scan))
+        return out

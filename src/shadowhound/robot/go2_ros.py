@@ -80,7 +80,7 @@ from ..errors import TransformUnavailable
 from ..robot_config import Go2RobotSettings
 from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, compose
 from ..world import Belief, GridError, merge_sightings
-from ..world.image_sighting import SightingRules
+from ..world.image_sighting import Bearing, SightingRules
 from ..world.objects import KnownObject
 from . import go2_api
 from .base import RobotError
@@ -365,8 +365,8 @@ class Go2RosRobot:
                 )
         if fault is not None:
             self._odometry_fault(fault)
-        elif self._boxes is not None:
-            self._boxes.on_pose(stamp, Pose2D(p.x, p.y, yaw))
+        elif self._boxes is not None:  # the pose was the robot's `after` seconds before its stamp
+            self._boxes.on_pose(stamp - after, Pose2D(p.x, p.y, yaw))
         if abs(after - before) >= 0.01:
             self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
@@ -672,6 +672,10 @@ class Go2RosRobot:
         reported = (o.name for o in self.known_objects())
         coco = COCO_CLASSES if self.config.coco_detections_topic else ()
         return frozenset((*self.config.detector_classes, *coco, *reported))
+
+    def bearings(self) -> tuple[Bearing, ...]:
+        """The 2-D detector's boxes that had no usable range (BoxIntake keeps the latest)."""
+        return self._boxes.bearings() if self._boxes is not None else ()
 
     def known_objects(self) -> tuple[KnownObject, ...]:
         """What the detections topic has reported and what the world model holds (sightings

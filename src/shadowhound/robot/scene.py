@@ -224,6 +224,8 @@ DEFAULT_WORLD = World(
         WorldObject("person", 1.5, -4.0, radius=0.25, height=1.7, color=(140, 70, 170)),
         WorldObject("charging dock", -3.0, -1.0, radius=0.3, height=0.15, color=(0, 170, 170)),
         WorldObject("white fridge", 4.8, 3.2, radius=0.4, height=1.8, color=(235, 235, 230)),
+        # Small, out of view at the start: what a 2-D detector calls a "bottle" (issue 24).
+        WorldObject("water bottle", -2.5, -4.0, radius=0.06, height=0.3, color=(90, 200, 230)),
     )
 )
 

@@ -39,6 +39,7 @@ from typing import Any
 from ..config import SimConfig
 from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
 from ..world import Belief, KnownObject
+from ..world.image_sighting import Bearing
 from . import renderer, scene, sensors
 from .base import RobotError
 from .go2_api import TRICKS
@@ -349,6 +350,10 @@ class SimRobot:
     def vocabulary(self) -> frozenset[str]:
         """What its camera can label: the names of the objects of its world."""
         return frozenset(o.name for o in self.world.objects)
+
+    def bearings(self) -> tuple[Bearing, ...]:
+        """Its camera places everything it labels: none."""
+        return ()
 
     def watch_estop(self, listener: Callable[[bool], None]) -> None:
         """The simulator has no e-stop source of its own: `listener` is never called."""

@@ -293,8 +293,24 @@ def search(ctx: SkillContext, name: str, linear: float, angular: float) -> Known
         f"did not find {the(name)}: looked around from {places}, walked {walked:.1f} m in "
         f"{robot.now() - start.stamp:.0f} s; {why} (budget {cfg.max_seconds:g} s, "
         f"{max_walk:g} m: search.max_seconds, search.max_distance). Objects seen: "
-        f"{seen_list(belief)}"
+        f"{seen_list(belief)}{direction_only(robot, name)}"
     )
+
+
+def direction_only(robot: Robot, name: str) -> str:
+    """What the robot saw of `name` in a direction only (its latest such sighting), as a
+    sentence to follow another (". The chair was seen only in a direction ..."); "" if none."""
+    key = object_key(name)
+    for b in reversed(robot.bearings()):
+        seen = object_key(b.name)
+        if seen == key or key.endswith(" " + seen) or seen.endswith(" " + key):
+            where = f"{math.degrees(b.direction):.0f} degrees from ({b.x:.1f}, {b.y:.1f})"
+            said = the(b.name)
+            return (
+                f". {said[0].upper()}{said[1:]} was seen only in a direction ({where}), at no "
+                f"known distance ({b.why}): a direction is never a place to go"
+            )
+    return ""
 
 
 def inside_fences(limits: SafetyConfig, p: tuple[float, float]) -> bool:

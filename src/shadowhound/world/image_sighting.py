@@ -3,10 +3,11 @@
 The box gives a direction only: its centre column through a pinhole camera model (fx, cx of
 camera_info's K) is a bearing from the camera, which is mounted on the robot at (x, y, yaw) in
 base_link. The distance comes from a laser scan taken at about the image's time: the median
-distance, from the camera, of the scan's returns that fall within the box's angular width. The
-robot's pose at the image's time comes from odometry history. Without such a scan, with no
-return in the box, or farther than `max_range`, the result is a `Bearing`: kept as a hint of a
-direction, never a place to go.
+distance, from the camera, of the scan's returns that fall within the box's angular width; the
+centre is where those returns put the centre of a round object as wide as the box. The robot's
+pose at the image's time comes from odometry history. Without such a scan, with no return in
+the box, or farther than `max_range`, the result is a `Bearing`: kept as a hint of a direction,
+never a place to go.
 
 Pure Python (no rclpy): the Go2 backend feeds it messages read by attribute, tests feed it
 dataclasses.
@@ -36,6 +37,7 @@ COCO_NAMES = {
     "hair drier": "hair dryer",
 }
 
+STILL = 0.005  # metres (and radians) between the last two poses of a robot at rest
 MIN_RADIUS = 0.1  # metres: the smallest footprint a sighting is given
 MAX_RADIUS = 1.5  # metres: the largest (as the map's own estimate, world/objects.py)
 
@@ -138,6 +140,23 @@ class PoseHistory:
             self._stamps.popleft()
             self._poses.popleft()
 
+    def known(self, stamp: float) -> bool:
+        """Whether the pose at `stamp` can be told now: the history reaches it, or it ends at
+        rest (its last two poses alike), where a later stamp finds the robot still. Late
+        odometry reaches a moving robot's present only later: until then its last pose is where
+        the robot was, not where it is."""
+        stamps, poses = self._stamps, self._poses
+        if not stamps:
+            return False
+        if stamp <= stamps[-1]:
+            return True
+        if len(stamps) < 2:
+            return False
+        a, b = poses[-2], poses[-1]
+        return (
+            math.hypot(b.x - a.x, b.y - a.y) < STILL and abs(normalize_angle(b.yaw - a.yaw)) < STILL
+        )
+
     def at(self, stamp: float) -> Pose2D | None:
         """The pose at `stamp`, interpolated between the poses around it; the nearest one up
         to `slack` seconds beyond either end; None beyond that (no pose known then)."""
@@ -165,11 +184,11 @@ def nearest_scan(scans: list[Scan] | tuple[Scan, ...], stamp: float, slack: floa
     return best if best is not None and abs(best.stamp - stamp) <= slack else None
 
 
-def box_range(scan: Scan, camera: Pose2D, left: float, right: float) -> tuple[float, int] | None:
-    """The median distance from the camera (at `camera`, odometry frame) of the scan's returns
-    whose direction from the camera lies between `right` and `left` (radians from the camera's
-    axis), and how many there were; None without any."""
-    distances = []
+def box_returns(scan: Scan, camera: Pose2D, left: float, right: float) -> list[tuple[float, float]]:
+    """The scan's returns whose direction from the camera (at `camera`, odometry frame) lies
+    between `right` and `left` (radians from the camera's axis): (distance from the camera,
+    direction from its axis) each."""
+    found = []
     for i, r in enumerate(scan.ranges):
         if not scan.is_hit(r):
             continue
@@ -178,10 +197,25 @@ def box_range(scan: Scan, camera: Pose2D, left: float, right: float) -> tuple[fl
         dx, dy = hx - camera.x, hy - camera.y
         along = normalize_angle(math.atan2(dy, dx) - camera.yaw)
         if right <= along <= left:
-            distances.append(math.hypot(dx, dy))
-    if not distances:
-        return None
-    return statistics.median(distances), len(distances)
+            found.append((math.hypot(dx, dy), along))
+    return found
+
+
+def centre_distance(returns: list[tuple[float, float]], middle: float, radius: float) -> float:
+    """How far from the camera, along the direction `middle` (from its axis), stands the centre
+    of a round object of `radius` whose near face gave `returns` (distance, direction): the
+    median of where each return puts it. A return off the middle lies behind the face's closest
+    point; taking the median return as that point (and the centre one radius behind it) puts the
+    centre too far, by about an eighth of the radius, and a robot that stands off from it too
+    close. Returns farther off the middle than the radius (not on the object) are not used."""
+    centres = []
+    for d, a in returns:
+        off = d * math.sin(a - middle)
+        if abs(off) < radius:
+            centres.append(d * math.cos(a - middle) + math.sqrt(radius * radius - off * off))
+    if not centres:  # nothing on the circle: its closest point is the median return
+        return statistics.median(d for d, _ in returns) + radius
+    return statistics.median(centres)
 
 
 def locate(
@@ -193,8 +227,8 @@ def locate(
 ) -> KnownObject | Bearing:
     """Where `detection` is, seen by `camera` with the robot at `pose` (its pose at the image's
     stamp) and ranged by `scan` (taken at about that stamp, or None): a sighting (a KnownObject
-    in the odometry frame, its centre behind the surface the scan saw by the radius the box's
-    width makes at that distance) or, without a usable range, a Bearing."""
+    in the odometry frame, its centre where the returns on its near face put a round object as
+    wide as the box at that distance) or, without a usable range, a Bearing."""
     name = planner_name(detection.label)
     if not name:
         raise ValueError("a detection needs a class name")
@@ -205,7 +239,8 @@ def locate(
     right = camera.angle_of(detection.u + detection.width / 2)
     # Halfway between the edges' directions, not the centre column's: off the axis the image
     # stretches, and the column halfway is no longer the object's middle.
-    direction = normalize_angle(eye.yaw + (left + right) / 2)
+    middle = (left + right) / 2
+    direction = normalize_angle(eye.yaw + middle)
     confidence = min(1.0, max(0.0, detection.score))
 
     def bearing(why: str) -> Bearing:
@@ -213,17 +248,20 @@ def locate(
 
     if scan is None:
         return bearing("no scan at the image's time")
-    measured = box_range(scan, eye, left, right)
-    if measured is None or measured[1] < rules.min_returns:
+    returns = box_returns(scan, eye, left, right)
+    if not returns or len(returns) < rules.min_returns:
         return bearing("no laser return within the box")
-    distance = measured[0]
+    distance = statistics.median(d for d, _ in returns)
     if distance > rules.max_range:
         return bearing(f"{distance:.1f} m away, beyond {rules.max_range:g} m")
     # A round object of radius R whose near surface is `distance` away fills sin(h) = R /
     # (distance + R) of the view's half-angle h.
     s = min(0.9, math.sin(max(0.0, (left - right) / 2)))
     radius = min(MAX_RADIUS, max(MIN_RADIUS, distance * s / (1 - s)))
-    reach = distance + radius
+    # The median return lies behind the closest point: the radius it gives is a little large.
+    # The centre it places gives the radius again (sin(h) = R / centre's distance), once.
+    radius = min(MAX_RADIUS, max(MIN_RADIUS, centre_distance(returns, middle, radius) * s))
+    reach = centre_distance(returns, middle, radius)
     return KnownObject(
         name,
         eye.x + reach * math.cos(direction),

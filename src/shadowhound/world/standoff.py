@@ -12,6 +12,9 @@ from .planner import Path, plan_path, require_finite
 
 DEFAULT_STANDOFF = 0.6  # metres between the object's surface and the robot's centre
 PERSON_STANDOFF = 1.0  # metres: the least a person is given, whatever the standoff asked
+# Metres more than that aimed at: what a sighting (a camera box ranged by a scan) and the stop
+# may be off by. Aimed at exactly, the least is broken whenever they err towards the person.
+PERSON_MARGIN = 0.05
 _PEOPLE = frozenset({"person", "people", "man", "woman", "child", "kid", "boy", "girl", "human"})
 _STEP_DEG = 15
 
@@ -37,12 +40,12 @@ def standoff_point(
     gap: float = DEFAULT_STANDOFF,
 ) -> Standoff:
     """The reachable standoff nearest the robot's side of the object (tried every 15 degrees,
-    starting with the direction towards `start`). A person is given at least PERSON_STANDOFF.
-    Raises PlanError when none is reachable."""
+    starting with the direction towards `start`). A person is given at least PERSON_STANDOFF,
+    with PERSON_MARGIN to spare. Raises PlanError when none is reachable."""
     if not (math.isfinite(gap) and gap > 0):
         raise ValueError(f"standoff gap must be > 0 metres, got {gap}")
     if is_person(target):
-        gap = max(gap, PERSON_STANDOFF)
+        gap = max(gap, PERSON_STANDOFF + PERSON_MARGIN)
     require_finite(start, (target.x, target.y))
     reach = target.radius + max(gap, belief.robot_radius)
     towards = math.atan2(start[1] - target.y, start[0] - target.x)
