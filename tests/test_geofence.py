@@ -327,7 +327,9 @@ margins = st.sampled_from([0.0, 0.0, 0.1, 0.4]) | st.floats(0, 1)
 @given(st.data())
 def test_polygon_legs_agree_with_dense_sampling(data):
     poly = data.draw(polygons)
-    assert polygon_problem(poly) == ""
+    # A star of random radii rounded to millimetres can, rarely, touch itself (a CI failure):
+    # such a fence is refused at load (polygon_problem), so legs are judged on valid ones.
+    assume(polygon_problem(poly) == "")
     a, b = data.draw(points_near(poly)), data.draw(points_near(poly))
     margin = data.draw(margins)
     fence = PolygonFence(poly)
