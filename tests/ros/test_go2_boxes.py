@@ -26,7 +26,6 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import CameraInfo, LaserScan  # noqa: E402
 from vision_msgs.msg import Detection2D, Detection2DArray, ObjectHypothesisWithPose  # noqa: E402
 
-from shadowhound.robot.go2_detections import CameraMount  # noqa: E402
 from shadowhound.robot.go2_ros import Go2RosConfig, Go2RosRobot  # noqa: E402
 from shadowhound.robot.go2_world_msgs import scan_to_msg  # noqa: E402
 from shadowhound.robot.scene import World, WorldObject  # noqa: E402
@@ -58,7 +57,7 @@ def robot(client: RosClient) -> Iterator[Go2RosRobot]:
             namespace=NS,
             node_name="shadowhound_go2_boxes",
             coco_detections_topic="detected_objects",
-            camera_mount=CameraMount(0.3, 0.0, 0.0),
+            camera_x=0.3,
             map_topic="",
             nav2_action="",
             estop_topic="",

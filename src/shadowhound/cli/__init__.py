@@ -62,8 +62,8 @@ def _settings(args: argparse.Namespace, planner: str | None = None) -> ShadowHou
             profile = backend  # --backend ollama alone means the ollama profile
     if args.time_scale is not None:
         overrides["sim"] = {"time_scale": args.time_scale}
-    if getattr(args, "robot", None):
-        overrides["robot"] = args.robot
+    if getattr(args, "robot", None) and load_config(profile).robot.type != args.robot:
+        overrides["robot"] = args.robot  # another backend: the profile's settings go
     llm = {
         k: v
         for k, v in (("model", args.model), ("base_url", args.base_url), ("mode", args.mode))

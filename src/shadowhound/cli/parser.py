@@ -12,6 +12,7 @@ from .. import __version__
 from ..config import available_profiles
 from ..errors import UsageError
 from ..mcp.limits import DEFAULT_IDLE_TIMEOUT, DEFAULT_MAX_SESSIONS
+from ..robot_config import ROBOT_TYPES
 
 
 class Parser(argparse.ArgumentParser):
@@ -22,6 +23,17 @@ class Parser(argparse.ArgumentParser):
 
 
 BACKENDS = ["offline", "openai", "ollama", "vllm", "llamacpp"]
+
+
+def _robot_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--robot",
+        choices=ROBOT_TYPES,
+        default=None,
+        help="robot to drive (default: the profile's, normally sim); go2 needs the 'ros' extra "
+        "and go2_ros2_sdk's driver (or shadowhound sim-driver), with the profile's robot "
+        "settings (robot: {type: go2, namespace: ...})",
+    )
 
 
 def _common(parser: argparse.ArgumentParser, suppress: bool, compare: bool = False) -> None:
@@ -199,6 +211,7 @@ def build_parser() -> argparse.ArgumentParser:
         "serve", help="run the web dashboard and HTTP API (needs the 'web' extra)"
     )
     _common(serve, suppress=True)
+    _robot_option(serve)
     serve.add_argument(
         "--host",
         default="127.0.0.1",
@@ -221,13 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
         "HTTP (--http).",
     )
     _common(mcp, suppress=True)
-    mcp.add_argument(
-        "--robot",
-        choices=["sim", "go2"],
-        default=None,
-        help="robot to drive (default: the profile's, normally sim; go2 needs the "
-        "'ros' extra and go2_ros2_sdk)",
-    )
+    _robot_option(mcp)
     mcp.add_argument(
         "--http",
         action="store_true",
