@@ -10,8 +10,8 @@ import statistics
 import time
 
 from results import write_section
-from shadowhound.robot.scene import World, WorldObject
-from shadowhound.robot.sensors import cast_scan, scene_grid
+from shadowhound.robot.sim.scene import World, WorldObject
+from shadowhound.robot.sim.sensors import cast_scan, scene_grid
 from shadowhound.state import Pose2D
 from shadowhound.world import OCCUPIED, OccupancyGrid, apply_scan, inflate, plan_path
 

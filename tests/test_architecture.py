@@ -33,6 +33,7 @@ LEVELS: tuple[tuple[str, ...], ...] = (
     ("planning",),  # text -> Plan: offline rules, the model planner's prompts, parsing, schema
     ("core",),  # RobotAgent, the safety governor, plan checking, chat, the worker, evaluation
     ("web", "ros", "mcp"),  # the humble interfaces, over the public API
+    ("sim_driver",),  # `shadowhound sim-driver`: a simulated driver built on the simulator
     ("cli",),  # the `shadowhound` command: an interface itself, and it starts the others
 )
 BASE = {
@@ -243,11 +244,11 @@ def test_known_crossings_are_still_there() -> None:
 def test_the_checks_catch_what_they_forbid() -> None:
     """The graph reader sees the imports this test is about (so a silent reader cannot pass)."""
     edges = module_edges()
-    assert "shadowhound.camera" in edges["shadowhound.robot.go2_ros"]
+    assert "shadowhound.camera" in edges["shadowhound.robot.go2.robot"]
     assert "shadowhound.planning.prompts" in edges["shadowhound.planning.llm"]
     assert "shadowhound.llm.backend" in edges["shadowhound.planning.llm"]
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
-    assert room_of("shadowhound.robot.go2_ros") == "robot"
+    assert room_of("shadowhound.robot.go2.robot") == "robot"
     assert LEVEL_OF["robot"] < LEVEL_OF["ros"] and LEVEL_OF["llm"] < LEVEL_OF["skills"]
     assert LEVEL_OF["llm"] < LEVEL_OF["planning"] and LEVEL_OF["world"] < LEVEL_OF["robot"]
 

@@ -1,8 +1,8 @@
 import pytest
 
 from shadowhound.camera import image_size, raw_image_frame, to_camera_frame
-from shadowhound.robot.renderer import encode_png, render
-from shadowhound.robot.scene import DEFAULT_WORLD
+from shadowhound.robot.sim.renderer import encode_png, render
+from shadowhound.robot.sim.scene import DEFAULT_WORLD
 from shadowhound.state import CameraFrame, Pose2D
 from tests.images import tiny_jpeg
 

@@ -181,7 +181,7 @@ def test_go2_stack_doc_uses_only_options_and_parameters_that_exist() -> None:
 
     def options(command: str) -> set[str]:
         if command == "sim-driver":  # its options are its own parser's (ROS owns the rest)
-            from shadowhound.ros.sim_options import build_parser as driver_parser
+            from shadowhound.sim_driver.options import build_parser as driver_parser
 
             return {s for a in driver_parser("", "", "")._actions for s in a.option_strings}
         return {s for a in commands[command]._actions for s in a.option_strings}

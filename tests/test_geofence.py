@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot, SkillCall
 from shadowhound.config import ConfigError, load_config
 from shadowhound.geofence import CircleFence, PolygonFence, leg_breach, polygon_problem
-from shadowhound.robot.scene import World
+from shadowhound.robot.sim.scene import World
 
 U_FENCE = [(0, 0), (3, 0), (3, 3), (2, 3), (2, 1), (1, 1), (1, 3), (0, 3)]
 

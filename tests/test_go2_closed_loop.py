@@ -22,10 +22,10 @@ from hypothesis import strategies as st
 from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import ShadowHoundConfig
 from shadowhound.errors import RobotError
-from shadowhound.robot.go2_motion import GO2_MOTION, MotionTracker
-from shadowhound.robot.go2_odometry import OdometryIntake
-from shadowhound.robot.sim import SimRobot
-from shadowhound.ros.sim_faults import Faults, LyingOdometry
+from shadowhound.robot.go2.motion import GO2_MOTION, MotionTracker
+from shadowhound.robot.go2.odometry import OdometryIntake
+from shadowhound.robot.sim.robot import SimRobot
+from shadowhound.sim_driver.faults import Faults, LyingOdometry
 from shadowhound.state import CameraFrame, Posture, RobotState
 
 

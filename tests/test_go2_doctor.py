@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from shadowhound.robot.go2_topics import TWIST_TYPE
+from shadowhound.robot.go2.topics import TWIST_TYPE
 from shadowhound.ros.go2_doctor import (
     ODOM_TYPE,
     REQUEST_TYPE,

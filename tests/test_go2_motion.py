@@ -10,9 +10,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shadowhound.robot.go2_motion import MotionTracker, compose, relative
-from shadowhound.robot.go2_stamps import StampClock
-from shadowhound.robot.sim import SimRobot
+from shadowhound.robot.go2.motion import MotionTracker, compose, relative
+from shadowhound.robot.go2.stamps import StampClock
+from shadowhound.robot.sim.robot import SimRobot
 
 
 class DelayedOdometry:

@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shadowhound.budget import MissionBudget
-from shadowhound.robot.go2_motion import MotionTracker
-from shadowhound.robot.go2_odometry import OdometryIntake
+from shadowhound.robot.go2.motion import MotionTracker
+from shadowhound.robot.go2.odometry import OdometryIntake
 from shadowhound.state import RobotState
 
 

@@ -12,8 +12,8 @@ import time
 import pytest
 
 from shadowhound.errors import RobotError
-from shadowhound.robot.go2_api import BODY_HEIGHT, SportMode
-from shadowhound.robot.go2_posture import SETTLE, PostureWatch
+from shadowhound.robot.go2.api import BODY_HEIGHT, SportMode
+from shadowhound.robot.go2.posture import SETTLE, PostureWatch
 from shadowhound.state import Posture
 
 STANDING = (int(SportMode.BALANCE_STAND), BODY_HEIGHT[Posture.STANDING])

@@ -7,7 +7,7 @@ echo`, a rosbag recorder, a foxglove bridge) reaches no driver.
 
 from __future__ import annotations
 
-from shadowhound.robot.go2_topics import TWIST_TYPE, choose_velocity_topic
+from shadowhound.robot.go2.topics import TWIST_TYPE, choose_velocity_topic
 
 DRIVER = ("/go2_driver_node", TWIST_TYPE)
 MUX = ("/twist_mux", TWIST_TYPE)

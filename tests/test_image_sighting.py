@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shadowhound.robot.scene import World, WorldObject
-from shadowhound.robot.sensors import cast_scan
+from shadowhound.robot.sim.scene import World, WorldObject
+from shadowhound.robot.sim.sensors import cast_scan
 from shadowhound.state import Pose2D, normalize_angle
 from shadowhound.world import Belief, KnownObject, merge_sightings
 from shadowhound.world.grid import OccupancyGrid

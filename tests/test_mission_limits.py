@@ -25,8 +25,8 @@ from shadowhound import (
 )
 from shadowhound import events as ev
 from shadowhound.budget import MissionBudget
-from shadowhound.robot.go2_api import TRICKS
-from shadowhound.robot.scene import World
+from shadowhound.robot.go2.api import TRICKS
+from shadowhound.robot.sim.scene import World
 from shadowhound.safety import Governor
 from shadowhound.skills import NoArgs, PlanEnv, Skill
 from tests.llm_server import Reply, ScriptedLLM, json_plan, model_settings, text, tool_calls

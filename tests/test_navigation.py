@@ -18,8 +18,8 @@ from shadowhound import (
     SkillCall,
     default_registry,
 )
-from shadowhound.robot.scene import DEFAULT_WORLD, World, WorldObject
-from shadowhound.robot.sensors import penetration
+from shadowhound.robot.sim.scene import DEFAULT_WORLD, World, WorldObject
+from shadowhound.robot.sim.sensors import penetration
 from shadowhound.skills import PlanEnv, SkillContext
 from shadowhound.skills.context import robot_belief
 

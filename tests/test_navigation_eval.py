@@ -10,8 +10,8 @@ import pytest
 
 from shadowhound.config import ShadowHoundConfig
 from shadowhound.evaluation import load_cases, run_case
-from shadowhound.robot.scene import DEFAULT_WORLD, visible_objects
-from shadowhound.robot.sensors import scene_belief
+from shadowhound.robot.sim.scene import DEFAULT_WORLD, visible_objects
+from shadowhound.robot.sim.sensors import scene_belief
 from shadowhound.state import Pose2D
 from shadowhound.world import plan_path
 

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
 from shadowhound.config import ConfigError, load_config
 from shadowhound.robot.navigator import nav2_error_words
-from shadowhound.robot.scene import DEFAULT_WORLD
-from shadowhound.robot.sensors import penetration, scene_belief
+from shadowhound.robot.sim.scene import DEFAULT_WORLD
+from shadowhound.robot.sim.sensors import penetration, scene_belief
 from shadowhound.state import Pose2D
 from shadowhound.world import plan_route
 from shadowhound.world.follow import PathFollower

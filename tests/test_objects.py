@@ -19,9 +19,9 @@ from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import MemoryConfig, SafetyConfig, SearchConfig, ShadowHoundConfig
 from shadowhound.planning.prompts import system_prompt
 from shadowhound.planning.rules import RulePlanner
-from shadowhound.robot.scene import DEFAULT_WORLD, World, WorldObject
-from shadowhound.robot.sensors import penetration, scene_grid
-from shadowhound.robot.sim import SimRobot
+from shadowhound.robot.sim.robot import SimRobot
+from shadowhound.robot.sim.scene import DEFAULT_WORLD, World, WorldObject
+from shadowhound.robot.sim.sensors import penetration, scene_grid
 from shadowhound.skills import default_registry
 from shadowhound.world import Belief, KnownObject
 from shadowhound.world.image_sighting import Bearing

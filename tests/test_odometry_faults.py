@@ -19,10 +19,10 @@ from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import ShadowHoundConfig
-from shadowhound.robot.go2_motion import GO2_MOTION
-from shadowhound.robot.scene import World
-from shadowhound.robot.sim import SimRobot
-from shadowhound.ros.sim_faults import Faults
+from shadowhound.robot.go2.motion import GO2_MOTION
+from shadowhound.robot.sim.robot import SimRobot
+from shadowhound.robot.sim.scene import World
+from shadowhound.sim_driver.faults import Faults
 from tests.test_go2_closed_loop import LateRobot
 
 BEYOND = 0.10  # metres the truth may go past a step's planned leg

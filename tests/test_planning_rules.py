@@ -10,7 +10,7 @@ import pytest
 
 from shadowhound.plan import Plan, PlanningError
 from shadowhound.planning.rules import MAX_CHARS, RulePlanner
-from shadowhound.robot.go2_api import TRICKS
+from shadowhound.robot.go2.api import TRICKS
 
 PLANNER = RulePlanner()
 

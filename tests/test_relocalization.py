@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import ShadowHoundConfig
-from shadowhound.robot.scene import World
-from shadowhound.robot.sim import SimRobot
+from shadowhound.robot.sim.robot import SimRobot
+from shadowhound.robot.sim.scene import World
 from shadowhound.state import Pose2D, RobotState, carried
 from tests.relocalizing import Relocalizing
 
@@ -108,7 +108,7 @@ def test_carried_follows_a_pose_across_the_jumps_between_two_states() -> None:
 
 
 def test_the_simulated_odometry_drifts_by_its_fraction_of_distance_and_heading() -> None:
-    from shadowhound.ros.sim_slam import DriftingOdometer
+    from shadowhound.sim_driver.slam import DriftingOdometer
 
     odometer = DriftingOdometer(0.05)
     for i in range(101):  # 2 m straight on, in 2 cm steps

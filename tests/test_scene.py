@@ -9,8 +9,8 @@ import zlib
 
 import pytest
 
-from shadowhound.robot.renderer import camera_frame, encode_png, render
-from shadowhound.robot.scene import DEFAULT_WORLD, World, WorldObject, visible_objects
+from shadowhound.robot.sim.renderer import camera_frame, encode_png, render
+from shadowhound.robot.sim.scene import DEFAULT_WORLD, World, WorldObject, visible_objects
 from shadowhound.state import Pose2D
 
 W, H = 160, 120

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
-from shadowhound.robot.go2_detections import (
+from shadowhound.robot.go2.detections import (
     DEFAULT_RADIUS,
     BoxIntake,
     CameraMount,
@@ -196,8 +196,8 @@ def _box_msg(t: float, *boxes: tuple[str, float, float, float]) -> NS:
 
 
 def test_boxes_become_sightings_with_the_pose_and_scan_at_the_images_stamp() -> None:
-    from shadowhound.robot.scene import World, WorldObject
-    from shadowhound.robot.sensors import cast_scan
+    from shadowhound.robot.sim.scene import World, WorldObject
+    from shadowhound.robot.sim.sensors import cast_scan
     from shadowhound.world.image_sighting import Bearing, CameraModel
 
     intake = BoxIntake(CameraMount(0.3, 0.0, 0.0))
@@ -238,8 +238,8 @@ def test_boxes_become_sightings_with_the_pose_and_scan_at_the_images_stamp() -> 
 def _couch_in_view() -> tuple[BoxIntake, NS, object]:
     """An intake with a camera, and the box of a couch 3 m ahead of a robot at the origin
     facing +x, stamped 10 s, with the scan of that moment."""
-    from shadowhound.robot.scene import World, WorldObject
-    from shadowhound.robot.sensors import cast_scan
+    from shadowhound.robot.sim.scene import World, WorldObject
+    from shadowhound.robot.sim.sensors import cast_scan
     from shadowhound.world.image_sighting import CameraModel
 
     intake = BoxIntake(CameraMount(0.3, 0.0, 0.0))

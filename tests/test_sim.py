@@ -8,8 +8,8 @@ from hypothesis import strategies as st
 
 from shadowhound import Posture, RobotAgent, RobotAgentConfig, RobotError, SimRobot
 from shadowhound.config import SimConfig
-from shadowhound.robot.scene import DEFAULT_WORLD, World
-from shadowhound.robot.sensors import penetration
+from shadowhound.robot.sim.scene import DEFAULT_WORLD, World
+from shadowhound.robot.sim.sensors import penetration
 
 
 def test_starts_standing_at_origin_with_full_battery(robot):

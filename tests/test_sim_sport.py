@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shadowhound.config import SimConfig
-from shadowhound.robot import go2_api
-from shadowhound.robot.go2_api import (
+from shadowhound.robot.go2 import api as go2_api
+from shadowhound.robot.go2.api import (
     BODY_HEIGHT,
     MODE_POSTURES,
     POSTURE_CHANGES,
@@ -22,8 +22,8 @@ from shadowhound.robot.go2_api import (
     move_parameter,
     posture_of,
 )
-from shadowhound.robot.sim import SimRobot
-from shadowhound.robot.sim_sport import SimSportMode
+from shadowhound.robot.sim.robot import SimRobot
+from shadowhound.sim_driver.sport import SimSportMode
 from shadowhound.state import Posture
 
 POSTURE_SECONDS = 0.2  # short, so the tests are quick; the behaviour does not depend on it

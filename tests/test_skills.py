@@ -271,7 +271,7 @@ def test_status_reports_pose_and_battery(registry, robot):
 
 def test_unknown_place_is_a_plan_problem_without_a_map(registry):
     from shadowhound.config import SimConfig
-    from shadowhound.robot.sim import SimRobot
+    from shadowhound.robot.sim.robot import SimRobot
 
     robot = SimRobot(SimConfig(collisions=False), time_scale=0.0)  # no map: nothing to search
     with pytest.raises(

@@ -10,8 +10,8 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from shadowhound.robot.scene import DEFAULT_WORLD, World, WorldObject
-from shadowhound.robot.sensors import cast_scan, scene_belief, scene_grid
+from shadowhound.robot.sim.scene import DEFAULT_WORLD, World, WorldObject
+from shadowhound.robot.sim.sensors import cast_scan, scene_belief, scene_grid
 from shadowhound.state import Pose2D, Scan
 from shadowhound.world import (
     FREE,

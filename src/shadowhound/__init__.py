@@ -17,7 +17,7 @@ from .events import MissionEvent
 from .plan import Plan, PlanningError, SkillCall, Usage
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing
 from .robot.base import Robot, RobotError
-from .robot.sim import MockRobot, SimRobot
+from .robot.sim.robot import MockRobot, SimRobot
 from .skills import Skill, SkillRegistry, SkillValidationError, default_registry
 from .state import CameraFrame, Pose2D, Posture, RobotState
 

@@ -25,9 +25,9 @@ from .agent import RobotAgent, RobotAgentConfig
 from .config import MemoryConfig, ShadowHoundConfig
 from .errors import CaseFileError, ConfigError
 from .plan import Usage
-from .robot.scene import World
-from .robot.sensors import penetration
-from .robot.sim import SimRobot
+from .robot.sim.robot import SimRobot
+from .robot.sim.scene import World
+from .robot.sim.sensors import penetration
 
 POSITION_TOLERANCE = 0.05  # metres
 YAW_TOLERANCE_DEG = 3.0

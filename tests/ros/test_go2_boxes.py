@@ -26,10 +26,10 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import CameraInfo, LaserScan  # noqa: E402
 from vision_msgs.msg import Detection2D, Detection2DArray, ObjectHypothesisWithPose  # noqa: E402
 
-from shadowhound.robot.go2_ros import Go2RosConfig, Go2RosRobot  # noqa: E402
-from shadowhound.robot.go2_world_msgs import scan_to_msg  # noqa: E402
-from shadowhound.robot.scene import World, WorldObject  # noqa: E402
-from shadowhound.robot.sensors import cast_scan  # noqa: E402
+from shadowhound.robot.go2.robot import Go2RosConfig, Go2RosRobot  # noqa: E402
+from shadowhound.robot.go2.world_msgs import scan_to_msg  # noqa: E402
+from shadowhound.robot.sim.scene import World, WorldObject  # noqa: E402
+from shadowhound.robot.sim.sensors import cast_scan  # noqa: E402
 from shadowhound.state import Pose2D  # noqa: E402
 from shadowhound.world.image_sighting import CameraModel  # noqa: E402
 from tests.ros.rosclient import RosClient, wait_until  # noqa: E402
@@ -137,8 +137,8 @@ def test_a_box_becomes_a_known_object_where_it_stands_and_a_far_one_a_bearing(
 def test_the_simulated_coco_box_is_where_the_renderer_draws_the_object(
     obj: WorldObject, pose: Pose2D
 ) -> None:
-    from shadowhound.robot.renderer import render
-    from shadowhound.ros.sim_detector import CocoDetector
+    from shadowhound.robot.sim.renderer import render
+    from shadowhound.sim_driver.detector import CocoDetector
 
     width, height = 160, 120
     detector = CocoDetector(None, None, None, width, height, 90.0)  # type: ignore[arg-type]

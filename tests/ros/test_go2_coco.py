@@ -33,8 +33,8 @@ from tests.ros.needs import require
 
 require("rclpy", "shadowhound_interfaces", "go2_interfaces", "nav2_msgs", "vision_msgs")
 
-from shadowhound.robot.scene import DEFAULT_WORLD, WorldObject  # noqa: E402
-from shadowhound.ros.sim_detector import coco_class  # noqa: E402
+from shadowhound.robot.sim.scene import DEFAULT_WORLD, WorldObject  # noqa: E402
+from shadowhound.sim_driver.detector import coco_class  # noqa: E402
 from shadowhound.world.standoff import PERSON_MARGIN, PERSON_STANDOFF  # noqa: E402
 from tests.ros.rosclient import RosClient  # noqa: E402
 from tests.ros.test_go2_truth import Rig, start_rig  # noqa: E402

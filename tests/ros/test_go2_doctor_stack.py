@@ -35,7 +35,7 @@ from std_msgs.msg import String  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 from vision_msgs.msg import Detection2D, Detection2DArray, ObjectHypothesisWithPose  # noqa: E402
 
-from shadowhound.robot.go2_world_msgs import MAP_QOS  # noqa: E402
+from shadowhound.robot.go2.world_msgs import MAP_QOS  # noqa: E402
 from tests.ros.rosclient import ROOT, NodeProcess, RosClient  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")

@@ -30,7 +30,7 @@ require("rclpy", "shadowhound_interfaces", "go2_interfaces")
 from nav_msgs.msg import Odometry  # noqa: E402
 from std_msgs.msg import Empty, String  # noqa: E402
 
-from shadowhound.ros.sim_faults import Faults  # noqa: E402
+from shadowhound.sim_driver.faults import Faults  # noqa: E402
 from tests.ros.rosclient import RosClient, wait_until  # noqa: E402
 from tests.ros.test_go2_truth import TIMEOUT, Rig, frame_of, start_rig  # noqa: E402
 

@@ -30,7 +30,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E
 from std_msgs.msg import Empty  # noqa: E402
 from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
-from shadowhound.robot.scene import DEFAULT_WORLD  # noqa: E402
+from shadowhound.robot.sim.scene import DEFAULT_WORLD  # noqa: E402
 from tests.ros.rosclient import RosClient, wait_until  # noqa: E402
 from tests.ros.test_go2_truth import TIMEOUT, Rig, start_rig  # noqa: E402
 

@@ -22,8 +22,8 @@ from hypothesis import strategies as st  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
 from shadowhound.robot.base import RobotError  # noqa: E402
-from shadowhound.robot.go2_ros import Go2RosConfig, Go2RosRobot  # noqa: E402
-from shadowhound.ros.sim_driver import Faults, SimDriver  # noqa: E402
+from shadowhound.robot.go2.robot import Go2RosConfig, Go2RosRobot  # noqa: E402
+from shadowhound.sim_driver.driver import Faults, SimDriver  # noqa: E402
 from shadowhound.state import Posture  # noqa: E402
 from tests.ros.rosclient import ROOT, Inbox, RosClient, wait_until  # noqa: E402
 
@@ -399,8 +399,8 @@ def test_a_large_map_is_read_off_the_odometry_thread(
 ) -> None:
     """A 2000 x 2000 map takes seconds to read and inflate: odometry keeps arriving meanwhile
     (it once stalled on the same executor thread, and missions failed "no odometry")."""
-    from shadowhound.robot import sensors
-    from shadowhound.robot.go2_world_msgs import MAP_QOS, grid_to_msg
+    from shadowhound.robot.go2.world_msgs import MAP_QOS, grid_to_msg
+    from shadowhound.robot.sim import sensors
     from shadowhound.world import OccupancyGrid
 
     big = OccupancyGrid(2000, 2000, 0.05, cells=bytearray(2000 * 2000))

@@ -31,7 +31,7 @@ require("rclpy", "shadowhound_interfaces", "go2_interfaces", "nav2_msgs", "tf2_m
 
 from std_msgs.msg import String  # noqa: E402
 
-from shadowhound.ros.sim_faults import Faults  # noqa: E402
+from shadowhound.sim_driver.faults import Faults  # noqa: E402
 from tests.ros.rosclient import RosClient  # noqa: E402
 from tests.ros.test_go2_truth import Rig, start_rig  # noqa: E402
 

@@ -6,10 +6,10 @@ import math
 
 import pytest
 
-from shadowhound.robot.go2_detections import CameraMount
-from shadowhound.robot.go2_motion import GO2_MOTION
+from shadowhound.robot.go2.detections import CameraMount
+from shadowhound.robot.go2.motion import GO2_MOTION
 from shadowhound.ros.params import ParameterError, parse_parameters
-from shadowhound.ros.sim_options import DriverSettings, build_parser, parse_settings
+from shadowhound.sim_driver.options import DriverSettings, build_parser, parse_settings
 
 
 def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
@@ -188,7 +188,7 @@ def test_slam_settings_of_the_node_and_the_driver_are_checked() -> None:
 
 
 def test_a_slam_error_fault_is_read_and_shown_like_a_jump() -> None:
-    from shadowhound.ros.sim_faults import Faults
+    from shadowhound.sim_driver.faults import Faults
 
     faults = Faults.from_json('{"slam_error": {"x": 0.5, "yaw_deg": 90}}')
     assert faults.slam_error == (0.5, 0.0, math.pi / 2)

@@ -19,11 +19,11 @@ from tests.ros.needs import require
 require("rclpy", "shadowhound_interfaces", "go2_interfaces", "nav2_msgs")
 
 from shadowhound.errors import RobotError  # noqa: E402
-from shadowhound.robot.go2_ros import Go2RosConfig, Go2RosRobot  # noqa: E402
-from shadowhound.robot.go2_world_msgs import MAP_QOS, grid_to_msg  # noqa: E402
+from shadowhound.robot.go2.robot import Go2RosConfig, Go2RosRobot  # noqa: E402
+from shadowhound.robot.go2.world_msgs import MAP_QOS, grid_to_msg  # noqa: E402
 from shadowhound.robot.navigator import NavStatus  # noqa: E402
-from shadowhound.robot.sensors import scene_grid  # noqa: E402
-from shadowhound.ros.sim_driver import SimDriver  # noqa: E402
+from shadowhound.robot.sim.sensors import scene_grid  # noqa: E402
+from shadowhound.sim_driver.driver import SimDriver  # noqa: E402
 from shadowhound.state import Pose2D  # noqa: E402
 from shadowhound.world import OCCUPIED, OccupancyGrid  # noqa: E402
 from tests.ros.rosclient import RosClient, wait_until  # noqa: E402

@@ -22,10 +22,10 @@ from shadowhound_interfaces.msg import Detection, DetectionArray  # noqa: E402
 from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot  # noqa: E402
-from shadowhound.robot.go2_ros import Go2RosConfig, Go2RosRobot  # noqa: E402
+from shadowhound.robot.go2.robot import Go2RosConfig, Go2RosRobot  # noqa: E402
 from shadowhound.ros.node import MissionNode  # noqa: E402
 from shadowhound.ros.params import parse_parameters  # noqa: E402
-from shadowhound.ros.sim_driver import SimDriver  # noqa: E402
+from shadowhound.sim_driver.driver import SimDriver  # noqa: E402
 from shadowhound.skills.context import robot_objects  # noqa: E402
 from tests.ros.rosclient import RosClient, wait_until  # noqa: E402
 

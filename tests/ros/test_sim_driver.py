@@ -31,8 +31,8 @@ from nav_msgs.msg import Odometry  # noqa: E402
 from sensor_msgs.msg import BatteryState  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 
-from shadowhound.robot import go2_api  # noqa: E402
-from shadowhound.robot.go2_api import SportMode  # noqa: E402
+from shadowhound.robot.go2 import api as go2_api  # noqa: E402
+from shadowhound.robot.go2.api import SportMode  # noqa: E402
 from shadowhound.state import Posture  # noqa: E402
 from tests.ros.rosclient import (  # noqa: E402
     ROOT,
@@ -413,7 +413,7 @@ def test_several_robots_get_robot_i_names_and_twist_mux_feeds_none_of_them(
 
 
 def test_in_process_the_truth_is_one_call_away(client: RosClient) -> None:
-    from shadowhound.ros.sim_driver import SimDriver
+    from shadowhound.sim_driver.driver import SimDriver
 
     driver = SimDriver(
         context=client.context,
@@ -454,9 +454,9 @@ def test_the_driver_detects_what_its_camera_sees_in_the_odom_frame(client: RosCl
     from shadowhound_interfaces.msg import DetectionArray
 
     from shadowhound.config import SimConfig
-    from shadowhound.robot.scene import World, WorldObject
-    from shadowhound.robot.sim import SimRobot
-    from shadowhound.ros.sim_driver import Faults, SimDriver
+    from shadowhound.robot.sim.robot import SimRobot
+    from shadowhound.robot.sim.scene import World, WorldObject
+    from shadowhound.sim_driver.driver import Faults, SimDriver
 
     world = World(
         objects=(
@@ -509,7 +509,7 @@ def test_the_driver_detects_what_its_camera_sees_in_the_odom_frame(client: RosCl
 
 
 def test_the_relay_gives_the_joystick_priority_while_it_speaks() -> None:
-    from shadowhound.ros.twist_mux import MuxInput, forwards
+    from shadowhound.sim_driver.twist_mux import MuxInput, forwards
 
     joy, nav = MuxInput("cmd_vel_joy", 10, 0.5), MuxInput("cmd_vel", 5, 0.5)
     inputs = [joy, nav]

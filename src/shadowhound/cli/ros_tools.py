@@ -42,7 +42,7 @@ def cmd_node(ros_argv: list[str]) -> int:
 
 def cmd_sim_driver(argv: list[str]) -> int:
     try:
-        from ..ros.sim_driver import main as driver_main
+        from ..sim_driver.driver import main as driver_main
     except ImportError as exc:
         return needs_ros("the simulated Go2 driver (rclpy and go2_interfaces)", exc)
     return driver_main(argv)

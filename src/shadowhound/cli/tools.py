@@ -108,7 +108,7 @@ def _doctor_places(settings: ShadowHoundConfig) -> None:
     """The profile's places on the simulator's map, from the origin: each one the body can
     reach, or why not (a place inside an object's clearance is reached at the nearest point
     that keeps the body clear)."""
-    from ..robot.sim import SimRobot
+    from ..robot.sim.robot import SimRobot
     from ..world import place_problem
 
     belief = SimRobot(settings.sim, time_scale=0.0).belief()

@@ -7,7 +7,7 @@ postures and shapes. The patterns that find these words in a clause are in `_phr
 from __future__ import annotations
 
 from shadowhound.planning._text import words
-from shadowhound.robot.go2_api import TRICKS
+from shadowhound.robot.go2.api import TRICKS
 
 FAST = 0.5
 SLOW = 0.2

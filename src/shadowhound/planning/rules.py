@@ -28,7 +28,7 @@ from shadowhound.planning._errors import CAPABILITIES, NotUnderstood, describe, 
 from shadowhound.planning._memory_phrases import memory_steps
 from shadowhound.planning._speech_phrases import SpeechRequest, speech_request
 from shadowhound.planning._text import canon
-from shadowhound.robot.go2_api import TRICKS
+from shadowhound.robot.go2.api import TRICKS
 from shadowhound.skills import default_registry
 from shadowhound.units import format_number
 

@@ -25,12 +25,12 @@ def make_robot(settings: ShadowHoundConfig, *, context: Any = None) -> Robot:
     ConfigError naming what is missing when the backend cannot be built."""
     choice = settings.robot
     if choice.type == "sim":
-        from .sim import SimRobot
+        from .sim.robot import SimRobot
 
         return SimRobot(settings.sim)
     if choice.type == "go2":
         try:
-            from .go2_ros import Go2RosRobot
+            from .go2.robot import Go2RosRobot
         except ImportError as exc:
             raise ConfigError(
                 "robot go2 needs rclpy and the go2_interfaces package (the 'ros' extra; source "

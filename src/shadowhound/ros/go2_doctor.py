@@ -15,9 +15,9 @@ testable without ROS.
 
 from __future__ import annotations
 
-from ..robot import go2_api
-from ..robot.go2_motion import MAX_LATENCY
-from ..robot.go2_topics import TWIST_TYPE, VELOCITY_TOPICS, choose_velocity_topic
+from ..robot.go2 import api as go2_api
+from ..robot.go2.motion import MAX_LATENCY
+from ..robot.go2.topics import TWIST_TYPE, VELOCITY_TOPICS, choose_velocity_topic
 from .go2_doctor_observation import Endpoint, Finding, Observation, topic_name
 from .go2_doctor_stack import stack_findings
 

@@ -10,7 +10,7 @@ import time
 from collections.abc import Sequence
 from typing import Any
 
-from ..robot.go2_topics import VELOCITY_TOPICS, node_name
+from ..robot.go2.topics import VELOCITY_TOPICS, node_name
 from .go2_doctor import BATTERY_TYPE
 from .go2_doctor_observation import Endpoint, Observation
 
@@ -149,7 +149,7 @@ def _watch_stack(node: Any, obs: Observation) -> list[str]:
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import CameraInfo
 
-    from ..robot.go2_world_msgs import MAP_QOS
+    from ..robot.go2.world_msgs import MAP_QOS
 
     # Best effort takes a reliable publisher's samples too (coco_detector's are reliable, the
     # driver's camera_info best effort).

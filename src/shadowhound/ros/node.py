@@ -67,7 +67,7 @@ from .rviz import RvizPublisher
 
 if TYPE_CHECKING:
     from ..robot.base import Robot
-    from ..robot.go2_ros import Go2RosRobot
+    from ..robot.go2.robot import Go2RosRobot
 
 try:  # built by scripts/build_ros.sh (ros2/shadowhound_interfaces)
     from shadowhound_interfaces.action import ExecuteMission

@@ -14,8 +14,8 @@ from typing import Any, get_args
 
 from ..config import ShadowHoundConfig, load_config
 from ..errors import ParameterError
-from ..robot.go2_detections import CameraMount
-from ..robot.go2_motion import MAX_LATENCY
+from ..robot.go2.detections import CameraMount
+from ..robot.go2.motion import MAX_LATENCY
 
 NODE_NAME = "shadowhound_mission_agent"
 

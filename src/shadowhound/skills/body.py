@@ -6,7 +6,7 @@ from typing import Literal
 
 from pydantic import Field
 
-from ..robot.go2_api import TRICKS
+from ..robot.go2.api import TRICKS
 from ..state import Posture
 from .arguments import NoArgs, SkillArgs
 from .context import SkillContext

@@ -20,9 +20,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TypeVar
 
-from ..state import Posture
-from . import go2_api
-from .base import RobotError
+from ...state import Posture
+from ..base import RobotError
+from . import api as go2_api
 
 _T = TypeVar("_T")
 _POLL = 0.02  # seconds between looks at go2_states while a posture runs

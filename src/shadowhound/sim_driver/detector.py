@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from ..robot import scene
+from ..robot.sim import scene
 from ..state import Pose2D
 
 if TYPE_CHECKING:

@@ -36,14 +36,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..config import SimConfig
-from ..state import CameraFrame, Posture, RobotState, Scan, normalize_angle
-from ..world import Belief, KnownObject
-from ..world.image_sighting import Bearing
+from ...config import SimConfig
+from ...state import CameraFrame, Posture, RobotState, Scan, normalize_angle
+from ...world import Belief, KnownObject
+from ...world.image_sighting import Bearing
+from ..base import RobotError
+from ..go2.api import TRICKS
+from ..navigator import Navigator
 from . import renderer, scene, sensors
-from .base import RobotError
-from .go2_api import TRICKS
-from .navigator import Navigator
 
 _SUBSTEP = 0.01  # seconds of physics per integration step
 _CONTROLLER_GRACE = 0.25  # wall seconds between sleeps that still count as one ticking loop

@@ -28,11 +28,11 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
 from rclpy.node import Node
 
-from ..robot.sensors import scene_belief
-from ..robot.sim_sport import SimSportMode
+from ..robot.sim.sensors import scene_belief
 from ..state import Pose2D
 from ..world import Belief, PlanError, apply_scan, plan_route
 from ..world.follow import PathFollower
+from .sport import SimSportMode
 
 PERIOD = 0.1  # s: the controller's 10 Hz, as Nav2's controller server defaults to 20 Hz
 STALL_SECONDS = 5.0  # no progress for this long is a blockage (then a recovery)

@@ -22,9 +22,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass, replace
 from typing import Any
 
-from ..errors import DetectionError
-from ..state import Pose2D, Scan
-from ..world.image_sighting import (
+from ...errors import DetectionError
+from ...state import Pose2D, Scan
+from ...world.image_sighting import (
     Bearing,
     BoxDetection,
     CameraModel,
@@ -34,7 +34,7 @@ from ..world.image_sighting import (
     nearest_scan,
     planner_name,
 )
-from ..world.objects import KnownObject, merge_sightings
+from ...world.objects import KnownObject, merge_sightings
 
 DEFAULT_RADIUS = 0.25  # metres, a detection that gives no footprint
 MAX_LABEL = 100  # characters; a label is a name people say, not a paragraph

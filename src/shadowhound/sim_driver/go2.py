@@ -32,17 +32,18 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, Image, LaserScan
 from std_msgs.msg import String
 
-from ..robot import go2_api, renderer, scene, sensors
-from ..robot.go2_api import SportMode
-from ..robot.go2_world_msgs import MAP_QOS, grid_to_msg, scan_to_msg
-from ..robot.sim import SimRobot
-from ..robot.sim_sport import SimSportMode, Truth
+from ..robot.go2 import api as go2_api
+from ..robot.go2.api import SportMode
+from ..robot.go2.world_msgs import MAP_QOS, grid_to_msg, scan_to_msg
+from ..robot.sim import renderer, scene, sensors
+from ..robot.sim.robot import SimRobot
 from ..state import Posture
-from .sim_detector import CAMERA_FOV_DEG, CocoDetector, SimDetector
-from .sim_faults import Faults, LyingOdometry
-from .sim_nav import SimNavigator
-from .sim_options import DriverSettings
-from .sim_slam import Pose, SimSlam
+from .detector import CAMERA_FOV_DEG, CocoDetector, SimDetector
+from .faults import Faults, LyingOdometry
+from .nav import SimNavigator
+from .options import DriverSettings
+from .slam import Pose, SimSlam
+from .sport import SimSportMode, Truth
 
 if TYPE_CHECKING:
     from rclpy.node import Node

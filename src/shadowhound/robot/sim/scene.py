@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from ..state import Pose2D, Sighting, normalize_angle
+from ...state import Pose2D, Sighting, normalize_angle
 
 Color = tuple[int, int, int]
 

@@ -47,11 +47,11 @@ from rclpy.node import Node
 
 from ..config import SimConfig
 from ..errors import ParameterError
-from ..robot.go2_api import SportMode
-from ..robot.sim import SimRobot
-from .process import run_node
-from .sim_go2 import Faults, SimGo2, Truth
-from .sim_options import (
+from ..robot.go2.api import SportMode
+from ..robot.sim.robot import SimRobot
+from ..ros.process import run_node
+from .go2 import Faults, SimGo2, Truth
+from .options import (
     DETECTIONS_RATE_HZ,
     OPTIONS,
     DriverSettings,

@@ -1,7 +1,7 @@
 """SimSportMode: the Go2's sport-mode service as go2_ros2_sdk reaches it, over a SimRobot.
 
 What the robot itself does with the commands the driver forwards (no ROS here; the simulated
-driver in `shadowhound.ros.sim_driver` puts the topics around it):
+driver in `shadowhound.sim_driver.driver` puts the topics around it):
 
 - Move (1008) sets the walking velocity, which lapses after `move_timeout` seconds unless a
   new Move renews it; StopMove (1003) stops at once. Moves are obeyed only in a walking mode
@@ -30,10 +30,9 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
-from ..state import Posture
-from . import go2_api
-from .base import RobotError
-from .go2_api import (
+from ..robot.base import RobotError
+from ..robot.go2 import api as go2_api
+from ..robot.go2.api import (
     BODY_HEIGHT,
     BODY_HEIGHT_TOLERANCE,
     POSTURE_CHANGES,
@@ -41,7 +40,8 @@ from .go2_api import (
     PostureChange,
     SportMode,
 )
-from .sim import SimRobot
+from ..robot.sim.robot import SimRobot
+from ..state import Posture
 
 Report = Callable[[bool, str], None]  # (accepted, note) once the robot acts on a request
 _TRICKS_BY_ID = {t.api_id: t for t in go2_api.TRICKS.values()}

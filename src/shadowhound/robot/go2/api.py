@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass
 from enum import IntEnum
 
-from ..state import Posture
+from ...state import Posture
 
 SPORT_TOPIC = "rt/api/sport/request"
 

@@ -22,8 +22,8 @@ from nav2_msgs.action import NavigateToPose
 from rclpy.action import ActionClient
 from rclpy.node import Node
 
-from .base import RobotError
-from .navigator import NavFeedback, NavReport, NavStatus, nav2_error_words
+from ..base import RobotError
+from ..navigator import NavFeedback, NavReport, NavStatus, nav2_error_words
 
 _ENDED = {
     GoalStatus.STATUS_SUCCEEDED: NavStatus.SUCCEEDED,

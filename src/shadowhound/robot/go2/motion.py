@@ -29,8 +29,8 @@ import statistics
 from collections import deque
 from dataclasses import dataclass
 
-from .. import robot_config
-from ..state import compose, normalize_angle
+from ... import robot_config
+from ...state import compose, normalize_angle
 
 # Motion control for real odometry, used with robot go2 for every field the profile (or the
 # environment) does not set: the simulator's defaults (2 mm, 0.001 degrees, 20 Hz) are exact

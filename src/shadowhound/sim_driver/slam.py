@@ -14,8 +14,8 @@ from ..state import compose, inverse
 if TYPE_CHECKING:
     from rclpy.node import Node
 
-    from ..robot.sim_sport import Truth
-    from .sim_faults import Faults
+    from .faults import Faults
+    from .sport import Truth
 
 __all__ = ["DriftingOdometer", "Pose", "SimSlam"]
 

@@ -27,9 +27,9 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-from ..state import normalize_angle
-from .go2_motion import MotionTracker
-from .go2_stamps import StampClock
+from ...state import normalize_angle
+from .motion import MotionTracker
+from .stamps import StampClock
 
 MAX_COORDINATE = 1.0e5  # metres: farther than any robot's odometry frame can honestly reach
 _CHANGED = 0.001  # metres (and radians) a pose must change by to count as new

@@ -13,7 +13,7 @@ import time
 import zlib
 from functools import lru_cache
 
-from ..state import CameraFrame, Pose2D
+from ...state import CameraFrame, Pose2D
 from .scene import CAMERA_HEIGHT, RAY_EPS, Color, World, ray_box, visible_objects
 
 DISTANCE_FALLOFF = 0.12  # brightness = 1 / (1 + falloff * metres): a cheap depth cue

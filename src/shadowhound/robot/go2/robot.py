@@ -75,17 +75,18 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from sensor_msgs.msg import BatteryState, CameraInfo, CompressedImage, Image, LaserScan
 from std_msgs.msg import String
 
-from ..camera import raw_image_frame, to_camera_frame
-from ..errors import TransformUnavailable
-from ..robot_config import Go2RobotSettings
-from ..state import CameraFrame, Pose2D, Posture, RobotState, Scan, compose
-from ..world import Belief, GridError, merge_sightings
-from ..world.image_sighting import Bearing, SightingRules
-from ..world.objects import KnownObject
-from . import go2_api
-from .base import RobotError
-from .estop_listener import EstopListener
-from .go2_detections import (
+from ...camera import raw_image_frame, to_camera_frame
+from ...errors import TransformUnavailable
+from ...robot_config import Go2RobotSettings
+from ...state import CameraFrame, Pose2D, Posture, RobotState, Scan, compose
+from ...world import Belief, GridError, merge_sightings
+from ...world.image_sighting import Bearing, SightingRules
+from ...world.objects import KnownObject
+from ..base import RobotError
+from ..estop_listener import EstopListener
+from ..tf_tree import MapCorrection, TfTree, Transform2D
+from . import api as go2_api
+from .detections import (
     COCO_CLASSES,
     BoxIntake,
     CameraMount,
@@ -93,13 +94,12 @@ from .go2_detections import (
     SightingBoard,
     sightings_from_msg,
 )
-from .go2_motion import MAX_LATENCY, MotionTracker
-from .go2_nav2 import Nav2Navigator
-from .go2_odometry import OdometryFault, OdometryIntake, OdometryLimits
-from .go2_posture import STAND_UP_BOUND, STEPS, PostureWatch
-from .go2_topics import VELOCITY_TOPICS, VelocityRoute, choose_velocity_topic, node_name
-from .go2_world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
-from .tf_tree import MapCorrection, TfTree, Transform2D
+from .motion import MAX_LATENCY, MotionTracker
+from .nav2 import Nav2Navigator
+from .odometry import OdometryFault, OdometryIntake, OdometryLimits
+from .posture import STAND_UP_BOUND, STEPS, PostureWatch
+from .topics import VELOCITY_TOPICS, VelocityRoute, choose_velocity_topic, node_name
+from .world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _SENSOR = QoSProfile(

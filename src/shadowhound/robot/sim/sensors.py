@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import math
 
-from ..state import Pose2D, Scan
-from ..world.grid import DEFAULT_RESOLUTION, OCCUPIED, OccupancyGrid
-from ..world.objects import Belief, KnownObject
+from ...state import Pose2D, Scan
+from ...world.grid import DEFAULT_RESOLUTION, OCCUPIED, OccupancyGrid
+from ...world.objects import Belief, KnownObject
 from .scene import World, ray_box, ray_circle
 
 SCAN_BEAMS = 360

@@ -15,8 +15,8 @@ from nav_msgs.msg import OccupancyGrid as GridMsg
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import LaserScan
 
-from ..state import Pose2D, Scan
-from ..world.grid import OccupancyGrid
+from ...state import Pose2D, Scan
+from ...world.grid import OccupancyGrid
 
 # map_server and slam_toolbox publish `map` reliable and transient-local (a late subscriber
 # still gets the last map), depth 1.
