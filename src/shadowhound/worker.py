@@ -62,14 +62,7 @@ class MissionWorker:
     for jobs that `estop`, `cancel` or `drop_queued` end before they start: those are reported
     on the calling thread."""
 
-    def __init__(
-        self,
-        agent: RobotAgent,
-        *,
-        on_start: JobListener | None = None,
-        on_finish: JobListener | None = None,
-        max_queue: int = 8,
-    ) -> None:
+    def __init__(self, agent: RobotAgent, *, max_queue: int = 8) -> None:
         self._agent = agent
         self._max_queue = max_queue
         self._lock = threading.Lock()
@@ -79,9 +72,6 @@ class MissionWorker:
         self._current: MissionJob | None = None
         self._stopping = False
         self._listeners: dict[str, list[JobListener]] = {name: [] for name in JOB_EVENTS}
-        for event, listener in (("started", on_start), ("finished", on_finish)):
-            if listener is not None:  # until every interface registers with `on`
-                self._listeners[event].append(listener)
         self._unsubscribe = agent.add_listener(self._forward)
         self._thread = threading.Thread(target=self._run, name="shadowhound-mission", daemon=True)
         self._thread.start()
