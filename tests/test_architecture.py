@@ -270,6 +270,25 @@ def test_interfaces_run_missions_only_through_the_worker() -> None:
     assert not starts, "missions started outside the worker:\n" + "\n".join(starts)
 
 
+def test_interfaces_stop_and_cancel_only_through_the_worker() -> None:
+    """The e-stop sequence and the cancel of a job are the worker's (`estop`, `cancel`): no
+    interface drops the queue or flags a job cancelled itself."""
+    interfaces = [m for m in MODULES if room_of(m) in LEVELS[-2] + LEVELS[-1]]
+    rebuilt = []
+    for module in interfaces:
+        for node in ast.walk(ast.parse(MODULES[module].read_text(encoding="utf-8"))):
+            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)):
+                continue
+            target = node.func.value
+            if node.func.attr == "drop_queued" or (
+                node.func.attr == "set"
+                and isinstance(target, ast.Attribute)
+                and target.attr == "cancelled"
+            ):
+                rebuilt.append(f"{module}, line {node.lineno}: {ast.unparse(node.func)}")
+    assert not rebuilt, "stop or cancel rebuilt outside the worker:\n" + "\n".join(rebuilt)
+
+
 # -- module size -------------------------------------------------------------------------
 
 MAX_LINES = 400

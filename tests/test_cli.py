@@ -387,7 +387,7 @@ def test_json_answers_are_strict_json_and_chat_status_says_the_pose_is_unknown_w
 
     agent = RobotAgent(RobotAgentConfig(robot=LyingOdometry(x=math.nan, y=-math.inf)))
     agent.initialize()
-    worker = MissionWorker(agent, on_start=lambda job: None, on_finish=lambda job: None)
+    worker = MissionWorker(agent)
     try:
         status = _chat_line(agent, worker, "/status")
         result = agent.execute_mission("sit down")

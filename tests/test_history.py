@@ -141,7 +141,7 @@ QUEUE = """
     cfg = ShadowHoundConfig(memory={{"enabled": True, "data_dir": {data!r}}})
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(cfg.sim, time_scale=1.0), settings=cfg))
     agent.initialize()
-    worker = MissionWorker(agent, on_start=lambda job: None, on_finish=lambda job: None)
+    worker = MissionWorker(agent)
     jobs = [MissionJob(text, source="web") for text in
             ("wait 60 seconds", "walk forward 1 meter", "turn left 90 degrees")]
     for job in jobs:
@@ -177,7 +177,7 @@ def _worker(data: Path) -> tuple[RobotAgent, MissionWorker]:
     cfg = ShadowHoundConfig(memory={"enabled": True, "data_dir": str(data)})
     agent = RobotAgent(RobotAgentConfig(robot=SimRobot(cfg.sim, time_scale=1.0), settings=cfg))
     agent.initialize()
-    return agent, MissionWorker(agent, on_start=lambda job: None, on_finish=lambda job: None)
+    return agent, MissionWorker(agent)
 
 
 def _running(agent: RobotAgent) -> None:

@@ -18,17 +18,13 @@ from shadowhound.skills.context import robot_belief
 from shadowhound.worker import MissionJob, MissionWorker
 
 
-def _noop(_job: MissionJob) -> None:
-    return None
-
-
 def test_a_mission_from_another_interface_makes_mcp_busy():
     settings = ShadowHoundConfig()
     agent = RobotAgent(
         RobotAgentConfig(robot=SimRobot(settings.sim, time_scale=1.0), settings=settings)
     )
     agent.initialize()
-    worker = MissionWorker(agent, on_start=_noop, on_finish=_noop)  # e.g. the ROS node's
+    worker = MissionWorker(agent)  # e.g. the ROS node's
     desk = McpDesk(agent, worker=worker)
     try:
         ros_job = MissionJob("walk forward 0.3 meters", source="topic")

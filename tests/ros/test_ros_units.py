@@ -18,7 +18,7 @@ from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobo
 from shadowhound.ros import convert
 from shadowhound.ros.dds import LOOPBACK_PROFILE, loopback_env, session_domain_id
 from shadowhound.ros.params import NodeSettings, ParameterError, parse_parameters
-from shadowhound.worker import MissionJob, MissionWorker
+from shadowhound.worker import JobListener, MissionJob, MissionWorker
 
 # -- parameters --------------------------------------------------------------------------
 
@@ -204,6 +204,12 @@ class _Recorder:
         self.finished.append(job)
 
 
+def _listened(worker: MissionWorker, start: JobListener, finish: JobListener) -> MissionWorker:
+    worker.on("started", start)
+    worker.on("finished", finish)
+    return worker
+
+
 @pytest.fixture
 def worker_agent() -> RobotAgent:
     agent = RobotAgent(
@@ -215,7 +221,7 @@ def worker_agent() -> RobotAgent:
 
 def test_topic_missions_queue_and_run_in_order(worker_agent: RobotAgent) -> None:
     seen = _Recorder()
-    worker = MissionWorker(worker_agent, on_start=seen.start, on_finish=seen.finish)
+    worker = _listened(MissionWorker(worker_agent), seen.start, seen.finish)
     jobs = [MissionJob(c) for c in ("turn left 10 degrees", "", "turn right 10 degrees")]
     assert all(worker.submit(j) is None for j in jobs)
     for job in jobs:
@@ -235,7 +241,7 @@ def test_action_jobs_start_only_when_idle_and_the_estop_drops_waiting_ones(
         seen.start(job)
         gate.wait(10)
 
-    worker = MissionWorker(worker_agent, on_start=slow_start, on_finish=seen.finish, max_queue=1)
+    worker = _listened(MissionWorker(worker_agent, max_queue=1), slow_start, seen.finish)
     first, waiting = MissionJob("turn left 10 degrees"), MissionJob("turn left 20 degrees")
     assert worker.submit(first) is None and worker.submit(waiting) is None
     for _ in range(1000):  # until the worker holds the first job
@@ -257,7 +263,7 @@ def test_action_jobs_start_only_when_idle_and_the_estop_drops_waiting_ones(
 
 def test_events_reach_only_the_running_job(worker_agent: RobotAgent) -> None:
     kinds: list[str] = []
-    worker = MissionWorker(worker_agent, on_start=lambda j: None, on_finish=lambda j: None)
+    worker = MissionWorker(worker_agent)
     job = MissionJob("turn left 10 degrees", on_event=lambda e: kinds.append(e.kind))
     worker.submit(job)
     assert job.done.wait(10)
@@ -268,7 +274,7 @@ def test_events_reach_only_the_running_job(worker_agent: RobotAgent) -> None:
 
 
 def test_a_job_cancelled_before_it_starts_never_runs(worker_agent: RobotAgent) -> None:
-    worker = MissionWorker(worker_agent, on_start=lambda j: None, on_finish=lambda j: None)
+    worker = MissionWorker(worker_agent)
     job = MissionJob("turn left 10 degrees")
     job.cancelled.set()
     worker.submit(job)
@@ -282,7 +288,8 @@ def test_a_cancel_between_pick_up_and_start_still_stops_the_mission(
     def cancel_now(job: MissionJob) -> None:  # as if the cancel arrived right here
         job.cancelled.set()
 
-    worker = MissionWorker(worker_agent, on_start=cancel_now, on_finish=lambda j: None)
+    worker = MissionWorker(worker_agent)
+    worker.on("started", cancel_now)
     job = MissionJob("walk forward 1 meter")
     worker.submit(job)
     assert job.done.wait(10) and job.result is not None

@@ -19,7 +19,7 @@ from ..exit_codes import EXIT_OK
 from ..result import MissionStatus
 from ..worker import MissionJob, MissionWorker
 from ._base import make_agent
-from .missions import nothing, progress
+from .missions import progress
 
 if TYPE_CHECKING:
     from ..diagnostics import Diagnostics
@@ -32,7 +32,7 @@ _CHAT_HELP = (
 
 def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
     agent = make_agent(settings)
-    worker = MissionWorker(agent, on_start=nothing, on_finish=nothing)
+    worker = MissionWorker(agent)
     screen = _ChatScreen(prompting=sys.stdin.isatty())
     agent.add_listener(screen.locked(progress(sys.stderr, agent.registry)))
     if screen.prompting:
@@ -72,7 +72,7 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
         if screen.gone:
             raise BrokenPipeError("the chat's output was closed")  # main() ends quietly
     except KeyboardInterrupt:
-        agent.estop()
+        worker.estop()
     finally:
         worker.stop(timeout=0.0)  # the mission (if any) was stopped; do not wait for it
         agent.cleanup()
@@ -145,7 +145,7 @@ def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
     commands: dict[str, Callable[[], str]] = {
         "/status": lambda: _status(agent.diagnostics()),
         "/skills": lambda: ", ".join(s["name"] for s in agent.get_available_skills()),
-        "/estop": lambda: (agent.estop(), "e-stop latched; /release to release it")[1],
+        "/estop": lambda: (worker.estop(), "e-stop latched; /release to release it")[1],
         "/release": lambda: (agent.release_estop(), "e-stop released")[1],
         "/help": lambda: _CHAT_HELP,
     }

@@ -132,22 +132,21 @@ def _run_on_worker(agent: Any, job: MissionJob) -> bool:
     """
     worker: MissionWorker | None = None
     try:
-        worker = MissionWorker(agent, on_start=nothing, on_finish=nothing)
+        worker = MissionWorker(agent)  # the command line reports the mission after it ends
         worker.submit(job)  # the only job of a fresh worker: never refused
         while not job.done.wait(0.1):
             pass
     except KeyboardInterrupt:
-        agent.estop()
+        if worker is not None:
+            worker.estop()
+        else:  # no job was given to a worker yet: only the latch is left to set
+            agent.estop()
         job.done.wait(5.0)
         return True
     finally:
         if worker is not None:  # a mission still running after Ctrl-C is not waited for
             worker.stop(timeout=5.0 if job.done.is_set() else 0.0)
     return False
-
-
-def nothing(job: MissionJob) -> None:
-    """The command line reports a mission itself, after it ends."""
 
 
 def _answer(result: Any, code: int) -> dict[str, Any]:

@@ -24,7 +24,7 @@ from ..events import MissionEvent
 from ..memory.places import known_places
 from ..plan import SkillCall
 from ..skills import SkillValidationError
-from ..worker import ESTOP_DROP_REASON, MissionJob, MissionWorker
+from ..worker import MissionJob, MissionWorker
 
 BUSY = "busy: another mission is running; wait for it to finish or call cancel_mission"
 IMAGE_MAX_SIDE = 512  # pixels: enough to see, small enough for a client model's context
@@ -64,7 +64,7 @@ class McpDesk:
         self.agent = agent
         self.allow_release_estop = allow_release_estop
         self._own_worker = worker is None
-        self.worker = worker or MissionWorker(agent, on_start=_ignore, on_finish=_ignore)
+        self.worker = worker or MissionWorker(agent)
         # Risky calls ask the person through the client (elicitation); the server answers
         # every approval request, refusing it where the client cannot ask.
         agent.enable_approvals()
@@ -81,7 +81,8 @@ class McpDesk:
         """Accept a mission now or raise ToolInputError (bad text, busy, e-stop latched).
 
         `on_event` sees the mission's events on the mission thread; `on_done` runs there too,
-        once the job's result (or why it never ran) is set.
+        once the job's result (or why it never ran) is set (on the cancelling thread for a job
+        cancelled before it started).
         """
         text = self._mission_text(text)
         if not isinstance(dry_run, bool):
@@ -130,11 +131,8 @@ class McpDesk:
 
     def abandon(self, job: MissionJob) -> None:
         """The client went away (or cancelled the call): stop this job if it still runs."""
-        if job.done.is_set():
-            return
-        job.cancelled.set()  # not started yet: the worker skips it
-        if self.worker.current is job:
-            self.agent.cancel()  # the robot stops within one control tick
+        if not job.done.is_set():
+            self.worker.cancel(job.mission_id)  # the robot stops within one control tick
 
     def plan(self, text: Any) -> dict[str, Any]:
         """The dry run: steps, predicted path and refusals; nothing moves."""
@@ -150,8 +148,7 @@ class McpDesk:
 
     def estop(self) -> dict[str, Any]:
         """Stop the robot at once and latch; waiting missions are dropped."""
-        self.agent.estop()  # first: the robot stops before any bookkeeping
-        dropped = len(self.worker.drop_queued(ESTOP_DROP_REASON))
+        dropped = len(self.worker.estop())  # the robot stops first, then the queue is dropped
         return {
             "estop_latched": True,
             "dropped": dropped,
@@ -177,8 +174,7 @@ class McpDesk:
         if job is None and not self.worker.busy:
             return {"cancelled": False, "response": "no mission is running"}
         if job is not None:
-            job.cancelled.set()
-        self.agent.cancel()
+            self.worker.cancel(job.mission_id)
         return {
             "cancelled": True,
             "mission_id": job.mission_id if job else None,
@@ -237,10 +233,6 @@ class McpDesk:
         self.agent.cancel()
         if self._own_worker:
             self.worker.stop()
-
-
-def _ignore(_job: MissionJob) -> None:
-    return None
 
 
 def _check_finite(skill: str, arguments: dict[str, Any]) -> None:

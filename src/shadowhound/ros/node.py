@@ -113,9 +113,9 @@ class MissionNode(Node):
         self._frames = {"received": 0, "dropped": 0}
         self._last_frame = ""
         self._last_camera_error = ""
-        self._worker = MissionWorker(
-            agent, on_start=self._on_mission_start, on_finish=self._on_mission_finish
-        )
+        self._worker = MissionWorker(agent)
+        self._worker.on("started", self._on_mission_start)
+        self._worker.on("finished", self._on_mission_finish)
         self._chat_thread = ThreadPoolExecutor(1, thread_name_prefix="shadowhound-chat")
         self._web: Any = None
         self._build_interfaces()
@@ -253,8 +253,7 @@ class MissionNode(Node):
             raise ParameterError(
                 f"enable_web_ui needs the 'web' extra (pip install 'shadowhound[web]'): {exc}"
             ) from exc
-        app = create_app(self.agent, worker=self._worker)
-        self._desk = app.state.web.desk
+        app = create_app(self.agent, worker=self._worker)  # the page listens to it too
         try:
             self._web = WebServer(app, "127.0.0.1", self.settings.web_interface_port).start()
         except ServeError as exc:
@@ -287,14 +286,10 @@ class MissionNode(Node):
             self._publish_status(f"FAILED: {refused}")
 
     def _on_mission_start(self, job: MissionJob) -> None:
-        if self._web is not None:
-            self._desk.job_started(job)
         if not job.dry_run:
             self._publish_status(f"EXECUTING: {shorten(job.command)}")
 
     def _on_mission_finish(self, job: MissionJob) -> None:
-        if self._web is not None:
-            self._desk.job_finished(job)
         if job.dry_run:
             return
         if job.dropped or job.result is None:
@@ -311,8 +306,7 @@ class MissionNode(Node):
 
     def _on_estop(self) -> None:
         """On the e-stop listener's own thread (see robot/estop_listener.py)."""
-        self.agent.estop()
-        dropped = self._worker.drop_queued("the e-stop was pressed before it started")
+        dropped = self._worker.estop()  # the robot stops first, then the queue is dropped
         self.get_logger().warning(
             f"E-STOP latched: robot stopped, {len(dropped)} waiting "
             f"mission(s) dropped; publish on {ESTOP_RELEASE_TOPIC} to "
@@ -334,13 +328,8 @@ class MissionNode(Node):
     def _on_cancel(self, goal_handle: Any) -> CancelResponse:
         job = self._goals.get(bytes(goal_handle.goal_id.uuid))
         if job is not None:
-            self._cancel(job)
+            self._worker.cancel(job.mission_id)
         return CancelResponse.ACCEPT
-
-    def _cancel(self, job: MissionJob) -> None:
-        job.cancelled.set()
-        if self._worker.current is job:
-            self.agent.cancel()
 
     async def _execute_goal(self, goal_handle: Any) -> Any:
         request = goal_handle.request

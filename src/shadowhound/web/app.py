@@ -58,8 +58,8 @@ def create_app(
     """The FastAPI app for `agent` (initialized here if it is not yet).
 
     - `token`: required on every /api/ and /ws/ request but `GET /api/health` (see security.py).
-    - `worker`: an existing MissionWorker to share (forward its hooks to the desk: see
-      `MissionDesk`); by default the app makes one and stops it at shutdown.
+    - `worker`: an existing MissionWorker to share (the desk registers its own listeners on
+      it); by default the app makes one and stops it at shutdown.
     - `allowed_hosts`: Host names accepted without a token (None: any).
     - `approvals`: the page can approve risky plans, so the agent may ask instead of refusing.
     - `secrets`: further values to mask in answers (the token and the API key always are).

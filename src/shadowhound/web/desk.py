@@ -16,7 +16,7 @@ from typing import Any
 from ..admission import ESTOP_LATCHED
 from ..agent import RobotAgent
 from ..events import MissionEvent
-from ..worker import ESTOP_DROP_REASON, MissionJob, MissionWorker
+from ..worker import MissionJob, MissionWorker
 from .feed import EventFeed
 
 
@@ -65,8 +65,8 @@ class MissionDesk:
     """Queues web missions on a `MissionWorker` and publishes every agent event to `feed`.
 
     With `worker=None` the desk makes its own worker. An interface that already has one (the
-    ROS node) passes it in and forwards its worker's `on_start`/`on_finish` to `job_started` /
-    `job_finished` (jobs that are not the desk's are ignored there).
+    ROS node) passes it in; either way the desk listens to the worker's `started` / `finished`
+    jobs (another interface's jobs on a shared worker are ignored there).
     """
 
     def __init__(
@@ -84,9 +84,11 @@ class MissionDesk:
         self._lock = threading.Lock()
         self._records: OrderedDict[str, WebMission] = OrderedDict()
         self._own_worker = worker is None
-        self.worker = worker or MissionWorker(
-            agent, on_start=self.job_started, on_finish=self.job_finished, max_queue=max_queue
-        )
+        self.worker = worker or MissionWorker(agent, max_queue=max_queue)
+        self._unlisten = [
+            self.worker.on("started", self._job_started),
+            self.worker.on("finished", self._job_finished),
+        ]
         self._unsubscribe = agent.add_listener(self._on_event)
 
     # -- missions --------------------------------------------------------------------------
@@ -141,15 +143,12 @@ class MissionDesk:
             return None, "not_found"
         if record.job.done.is_set():
             return record, "finished"
-        record.job.cancelled.set()  # a queued job is skipped when its turn comes
-        if self.worker.current is record.job:
-            self.agent.cancel()
+        self.worker.cancel(record.id)  # a queued one is dropped, a running one stopped
         return record, "cancelled"
 
     def estop(self) -> int:
         """Stop the robot at once, latch, and drop waiting missions. Returns how many."""
-        self.agent.estop()  # first: the robot stops before any bookkeeping
-        return len(self.worker.drop_queued(ESTOP_DROP_REASON))
+        return len(self.worker.estop())
 
     def running(self) -> WebMission | None:
         job = self.worker.current
@@ -162,16 +161,19 @@ class MissionDesk:
     def close(self) -> None:
         self._unsubscribe()
         if self._own_worker:
-            self.worker.stop()
+            self.worker.stop()  # the jobs it drops still finish their records
+        else:  # a shared worker runs on without this desk
+            for unlisten in self._unlisten:
+                unlisten()
 
-    # -- worker hooks (on the worker's thread) ------------------------------------------------
+    # -- worker listeners (on the worker's thread, or the one that dropped the job) ----------
 
-    def job_started(self, job: MissionJob) -> None:
+    def _job_started(self, job: MissionJob) -> None:
         record = self._record_of(job)
         if record is not None:
             record.started = time.time()
 
-    def job_finished(self, job: MissionJob) -> None:
+    def _job_finished(self, job: MissionJob) -> None:
         record = self._record_of(job)
         if record is not None:
             record.finished = time.time()
