@@ -328,17 +328,17 @@ class RobotAgent:
         except RobotError as exc:
             problem = str(exc)
         return Diagnostics(
-            progress,
-            errors,
-            self.estop_latched,
-            self.settings.backend,
-            state,
-            problem,
-            last.summary() if last else None,
-            list(last.refusals) if last else [],
-            self._approvals.pending(),
-            self.settings.safety,
-            self._memory.status(),
+            progress=progress,
+            errors=errors,
+            estop=self.estop_latched,
+            backend=self.settings.backend,
+            robot=state,
+            robot_error=problem,
+            last_mission=last.summary() if last else None,
+            refusals=list(last.refusals) if last else [],
+            pending_approval=self._approvals.pending(),
+            limits=self.settings.safety,
+            memory=self._memory.status(),
         )
 
     def get_diagnostics(self) -> dict[str, Any]:

@@ -70,7 +70,15 @@ def check_plan(
     else:
         for s, c in zip(steps, valid, strict=True):
             s.args = c.args_dict()
-    return CheckedPlan(steps, valid, problems, approvals, verdict.path, invalid, forecasts)
+    return CheckedPlan(
+        steps=steps,
+        calls=valid,
+        problems=problems,
+        approvals=approvals,
+        path=verdict.path,
+        invalid=invalid,
+        forecasts=forecasts,
+    )
 
 
 def _validate(

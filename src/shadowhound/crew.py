@@ -75,13 +75,13 @@ class Crew:
         belief = self.robot.belief()
         seen = {o.name: (o.x, o.y) for o in belief.objects} if belief is not None else {}
         return PlanningContext(
-            self.registry,
-            state,
-            self.places(),
-            self.summaries(),
-            self.stop.cancelled,
-            self.memory.search(text) if rag and text else [],
-            seen,
+            registry=self.registry,
+            state=state,
+            places=self.places(),
+            history=self.summaries(),
+            cancelled=self.stop.cancelled,
+            memories=self.memory.search(text) if rag and text else [],
+            objects=seen,
         )
 
     def note_error(self, text: str) -> None:

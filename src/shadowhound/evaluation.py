@@ -137,16 +137,16 @@ def scorecard(planner: str, outcomes: list[CaseOutcome]) -> Scorecard:
     times = sorted(o.planning_seconds for o in outcomes) or [0.0]
     p95 = statistics.quantiles(times, n=20, method="inclusive")[18] if len(times) > 1 else times[0]
     return Scorecard(
-        planner,
-        len(outcomes),
-        sum(o.passed for o in outcomes),
-        sum(o.usage.round_trips for o in outcomes),
-        sum(o.usage.prompt_tokens for o in outcomes),
-        sum(o.usage.completion_tokens for o in outcomes),
-        sum(o.usage.invalid_plans for o in outcomes),
-        sum(o.planned_by == "offline" for o in outcomes),
-        statistics.median(times),
-        p95,
+        planner=planner,
+        cases=len(outcomes),
+        passed=sum(o.passed for o in outcomes),
+        model_calls=sum(o.usage.round_trips for o in outcomes),
+        prompt_tokens=sum(o.usage.prompt_tokens for o in outcomes),
+        completion_tokens=sum(o.usage.completion_tokens for o in outcomes),
+        invalid_plans=sum(o.usage.invalid_plans for o in outcomes),
+        offline_planned=sum(o.planned_by == "offline" for o in outcomes),
+        latency_p50=statistics.median(times),
+        latency_p95=p95,
     )
 
 
@@ -286,14 +286,14 @@ def run_case(case: MissionCase, settings: ShadowHoundConfig) -> CaseOutcome:
             failures.append(f"{key}: expected {want!r}, got {got!r}")
     agent.cleanup()
     return CaseOutcome(
-        case,
-        not failures,
-        failures,
-        actual,
-        result.response,
-        result.usage,
-        result.timing.agent_duration,
-        result.plan.planned_by if result.plan else "",
+        case=case,
+        passed=not failures,
+        failures=failures,
+        actual=actual,
+        response=result.response,
+        usage=result.usage,
+        planning_seconds=result.timing.agent_duration,
+        planned_by=result.plan.planned_by if result.plan else "",
     )
 
 

@@ -121,20 +121,20 @@ class MissionRun:
             if checked.approvals:
                 response += " It needs approval: " + "; ".join(checked.approvals) + "."
         return MissionResult(
-            self.id,
-            self.text,
-            not problems,
-            response,
-            MissionStatus.IDLE,
-            checked.steps,
-            self.robot.get_state(),
-            self.timing,
-            plan.usage,
-            plan,
-            problems,
-            None if not problems else response,
-            True,
-            checked.path,
+            mission_id=self.id,
+            mission=self.text,
+            success=not problems,
+            response=response,
+            status=MissionStatus.IDLE,
+            steps=checked.steps,
+            robot=self.robot.get_state(),
+            timing=self.timing,
+            usage=plan.usage,
+            plan=plan,
+            refusals=problems,
+            error=None if not problems else response,
+            dry_run=True,
+            predicted_path=checked.path,
         )
 
     # 1. Read: the text, the e-stop, and the robot's state, once, before planning.
@@ -158,10 +158,10 @@ class MissionRun:
         see_at_start(self.robot, belief, self.crew.memory)  # objects in view count as known
         self.env = PlanEnv(
             self.crew.settings,
-            self.start.pose,
-            self.crew.places(),
-            MissionBudget.start(self.start, self.robot.now),
-            belief,
+            mission_start=self.start.pose,
+            places=self.crew.places(),
+            budget=MissionBudget.start(self.start, self.robot.now),
+            belief=belief,
             vocabulary=self.robot.vocabulary(),
         )
         return None
@@ -211,11 +211,11 @@ class MissionRun:
                 + "; ".join(reasons)
             ]
         request = ApprovalRequest(
-            self.id,
-            self.text,
-            [s.to_dict() for s in steps],
-            reasons,
-            c.settings.safety.approval_timeout,
+            mission_id=self.id,
+            mission=self.text,
+            steps=[s.to_dict() for s in steps],
+            reasons=reasons,
+            timeout=c.settings.safety.approval_timeout,
         )
         c.approvals.open(request)  # before the event, so an instant answer finds it
         self.emit(ev.ApprovalRequired(self.id, request))
@@ -459,18 +459,18 @@ class MissionRun:
             c.note_error(error)
         self.timing.total_duration = self._elapsed()
         result = MissionResult(
-            self.id,
-            self.text,
-            status is MissionStatus.SUCCEEDED,
-            response,
-            status,
-            self.steps,
-            self._state_or_none(),
-            self.timing,
-            usage or (plan.usage if plan else Usage()),
-            plan,
-            refusals or [],
-            error,
+            mission_id=self.id,
+            mission=self.text,
+            success=status is MissionStatus.SUCCEEDED,
+            response=response,
+            status=status,
+            steps=self.steps,
+            robot=self._state_or_none(),
+            timing=self.timing,
+            usage=usage or (plan.usage if plan else Usage()),
+            plan=plan,
+            refusals=refusals or [],
+            error=error,
             planner=c.planner_kind,
         )
         c.history.append(result)
@@ -481,11 +481,11 @@ class MissionRun:
     def refuse(self, reason: str, record: bool = True) -> MissionResult:
         """Refused before anything started (no mission events)."""
         result = MissionResult(
-            self.id,
-            str(self.text),
-            False,
-            f"Refused: {reason.rstrip('.')}.",
-            MissionStatus.FAILED,
+            mission_id=self.id,
+            mission=str(self.text),
+            success=False,
+            response=f"Refused: {reason.rstrip('.')}.",
+            status=MissionStatus.FAILED,
             robot=self._state_or_none(),
             error=reason,
             refusals=[reason],
