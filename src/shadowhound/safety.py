@@ -304,6 +304,8 @@ class Watchdog:
     Skills beat through their SkillContext on every tick and command. A daemon thread checks
     every `timeout / 5`; when the last command was a motion and no beat came for `timeout`
     seconds (a hung skill, a stalled model), it calls `stop` and reports through `on_trip`.
+    The thread starts when the watchdog is first armed: an agent whose robot never needs
+    guarding (a simulator at time scale 0) runs none.
     """
 
     def __init__(self, stop: Callable[[], None], on_trip: Callable[[str], None]) -> None:
@@ -317,7 +319,6 @@ class Watchdog:
         self.trips = 0
         self._closed = threading.Event()
         self._thread = threading.Thread(target=self._run, name="shadowhound-watchdog", daemon=True)
-        self._thread.start()
 
     def arm(self, timeout: float) -> None:
         with self._lock:
@@ -327,6 +328,8 @@ class Watchdog:
                 time.monotonic(),
                 False,
             )
+            if self._thread.ident is None and not self._closed.is_set():
+                self._thread.start()
 
     def disarm(self) -> None:
         with self._lock:
@@ -340,8 +343,11 @@ class Watchdog:
 
     def close(self) -> None:
         """End the watchdog's thread (within one check period)."""
-        self._closed.set()
-        self._thread.join(1.0)
+        with self._lock:
+            self._closed.set()
+            started = self._thread.ident is not None
+        if started:
+            self._thread.join(1.0)
 
     def _run(self) -> None:
         while not self._closed.wait(max(0.005, self.timeout / 5)):
