@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections import deque
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -26,9 +25,10 @@ from .camera import to_camera_frame
 from .checking import new_mission_id
 from .config import ShadowHoundConfig
 from .conversation import Chat, ChatContext, ModelChat, answer_offline
-from .crew import Crew, StopSignal, vision_for
+from .crew import CameraFeed, Crew, StopSignal, vision_for
 from .diagnostics import Diagnostics, MissionTracker
-from .memory.places import known_places
+from .logbook import Logbook
+from .memory.places import Places
 from .memory.service import AgentMemory
 from .mission import MissionRun
 from .plan import Plan, PlanningError, SkillCall
@@ -80,10 +80,8 @@ class RobotAgent:
         self._events = ev.EventBus()
         self._mission_lock = threading.Lock()
         self._tracker = MissionTracker()
-        self._camera_frame: CameraFrame | None = None
-        self._history: deque[MissionResult] = deque(
-            maxlen=max(1, self.settings.agent.conversation_history_size)
-        )
+        self._camera = CameraFeed()
+        self._logbook = Logbook(self._memory, self.settings.agent.conversation_history_size)
         self._chat: Chat = answer_offline
         self._crew: Crew | None = None
 
@@ -100,6 +98,8 @@ class RobotAgent:
 
             self._robot = make_robot(s)
         self._robot.watch_estop(lambda on: self.estop() if on else self.release_estop())
+        self._camera.attach(self._robot)
+        watchdog = self._watchdog = Watchdog(self._robot.stop, self._watchdog_tripped)
         if self._backend is None and s.backend != "offline":
             from .llm.backend import LLMBackend
 
@@ -113,24 +113,25 @@ class RobotAgent:
         if s.memory.enabled or s.memory.enable_rag:
             self._memory = AgentMemory.open(s, self._backend, skills=self.registry)
             self.add_listener(self._memory.on_event)
+            # Reads the history database from now on (nothing is logged before initialize).
+            self._logbook = Logbook(self._memory, s.agent.conversation_history_size)
         self._crew = Crew(
-            s,
-            self.registry,
-            self.governor,
-            self._robot,
-            self._memory,
-            self._events,
-            self._tracker,
-            self._stop,
-            self._approvals,
-            self._history,
-            self._planner.kind,
-            self.latest_frame,
-            vision_for(self._backend, self.settings, self._stop),
-            self._arm_watchdog,
-            self._known_places,
-            self.recent_summaries,
-            Voice(s),
+            settings=s,
+            registry=self.registry,
+            governor=self.governor,
+            robot=self._robot,
+            memory=self._memory,
+            events=self._events,
+            tracker=self._tracker,
+            stop=self._stop,
+            approvals=self._approvals,
+            logbook=self._logbook,
+            planner_kind=self._planner.kind,
+            camera=self._camera,
+            vision=vision_for(self._backend, self.settings, self._stop),
+            watchdog=watchdog,
+            places=Places(s.places, self._memory.places),
+            voice=Voice(s),
         )
         return True
 
@@ -266,20 +267,6 @@ class RobotAgent:
     def estop_latched(self) -> bool:
         return self._stop.estop_latched
 
-    def _arm_watchdog(self) -> Watchdog | None:
-        """Watch robots whose clock runs in real time (a simulator at time scale 0 only moves
-        when the loop ticks, so there is nothing to guard)."""
-        robot = self.robot
-        if not robot.realtime:
-            return None
-        if self._watchdog is None:
-            self._watchdog = Watchdog(robot.stop, self._watchdog_tripped)
-        period = 1.0 / self.settings.motion.control_rate_hz
-        self._watchdog.arm(
-            max(self.settings.safety.watchdog_timeout, 3 * period * robot.time_scale)
-        )
-        return self._watchdog
-
     def _watchdog_tripped(self, message: str) -> None:
         log.error(message)
         self._tracker.note_error(message)
@@ -321,7 +308,7 @@ class RobotAgent:
     def diagnostics(self) -> Diagnostics:
         """What the agent is doing now, as one typed snapshot."""
         progress, errors = self._tracker.snapshot()
-        last = self._history[-1] if self._history else None
+        last = self._logbook.last()
         state, problem = None, None
         try:
             state = self.robot.get_state()
@@ -360,23 +347,20 @@ class RobotAgent:
 
     @property
     def history(self) -> list[MissionResult]:
-        return list(self._history)
+        return self._logbook.results()
 
     def update_camera_image(self, frame: Any) -> None:
         """Store the latest camera frame (CameraFrame, JPEG/PNG bytes or an HxW[x3] array).
 
         Raises ValueError for data that is not an image.
         """
-        self._camera_frame = to_camera_frame(frame)
+        self._camera.give(to_camera_frame(frame))
 
     def latest_frame(self) -> CameraFrame | None:
         """The latest camera frame: the one an interface gave, else the robot's own camera."""
-        return self._camera_frame or self.robot.get_camera_frame()
-
-    def _known_places(self) -> dict[str, tuple[float, float]]:
-        """The profile's places, then taught ones (which win)."""
-        known = known_places(self.settings.places, self._memory.places)
-        return {name: place.position for name, place in known.items()}
+        if self._camera.given is None:
+            self.initialize()  # the robot's own camera: the robot is built on first use
+        return self._camera.latest()
 
     @property
     def memory(self) -> AgentMemory:
@@ -386,15 +370,11 @@ class RobotAgent:
     def recent_missions(self, limit: int = 10) -> list[dict[str, Any]]:
         """Newest first: id, mission, status, success, response, started_at. From the history
         database when memory is enabled (so it survives restarts), else from this process."""
-        rows = self._memory.recent_missions(limit)
-        if rows or self._memory.history is not None:
-            return rows
-        return [r.history_row() for r in reversed(self._history)][:limit]
+        return self._logbook.recent(limit)
 
     def recent_summaries(self) -> list[str]:
         """Oldest first, as one line each, for prompts and chat."""
-        rows = self.recent_missions(self.settings.agent.conversation_history_size)
-        return [f"{r['status']}: {r['mission']!r} -> {r['response']}" for r in reversed(rows)]
+        return self._logbook.summaries()
 
 
 MissionExecutor = RobotAgent

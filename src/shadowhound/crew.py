@@ -1,10 +1,14 @@
 """What every mission of one agent shares: the `Crew` the agent builds once and hands to each
-`MissionRun`, and the `StopSignal` that cancel, the e-stop and the watchdog set."""
+`MissionRun`, the `StopSignal` that cancel, the e-stop and the watchdog set, and the
+`CameraFeed` skills and chat look through.
+
+The crew holds services, not the agent's methods: the places (`memory.places.Places`), the
+missions run (`logbook.Logbook`), the memory, the camera feed, the watchdog, the voice.
+"""
 
 from __future__ import annotations
 
 import threading
-from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -14,9 +18,10 @@ from .config import ShadowHoundConfig
 from .diagnostics import MissionTracker
 from .errors import MissionCancelled
 from .llm.backend import LLMBackend
+from .logbook import Logbook
+from .memory.places import Places
 from .memory.service import AgentMemory
 from .planning import Planner, PlanningContext
-from .result import MissionResult
 from .robot.base import Robot
 from .safety import Governor, Watchdog
 from .skills import SkillRegistry
@@ -39,29 +44,54 @@ class StopSignal:
         return self.cause or "mission cancelled"
 
 
+class CameraFeed:
+    """The latest camera frame: the one an interface gave last, else the robot's own camera
+    (once `attach`ed). Safe from any thread: a frame is replaced whole."""
+
+    def __init__(self) -> None:
+        self._given: CameraFrame | None = None
+        self._robot: Robot | None = None
+
+    def give(self, frame: CameraFrame) -> None:
+        self._given = frame
+
+    @property
+    def given(self) -> CameraFrame | None:
+        """The frame an interface gave, None before one."""
+        return self._given
+
+    def attach(self, robot: Robot) -> None:
+        """Look through `robot`'s camera when no interface gave a frame."""
+        self._robot = robot
+
+    def latest(self) -> CameraFrame | None:
+        if self._given is not None:
+            return self._given
+        return self._robot.get_camera_frame() if self._robot is not None else None
+
+
 Vision = Callable[[CameraFrame, str], str]
 
 
-@dataclass
+@dataclass(kw_only=True)
 class Crew:
-    """What every mission of one agent shares. Built once by the agent."""
+    """What every mission of one agent shares. Built once by the agent, with keywords."""
 
     settings: ShadowHoundConfig
     registry: SkillRegistry
     governor: Governor
     robot: Robot
-    memory: AgentMemory
+    memory: AgentMemory  # taught places and sightings, recall
     events: ev.EventBus
     tracker: MissionTracker
     stop: StopSignal
     approvals: ApprovalDesk
-    history: deque[MissionResult]
+    logbook: Logbook  # every result is added; recent missions for prompts
     planner_kind: str  # the planning configured (what MissionResult.planner records)
-    camera: Callable[[], CameraFrame | None]
+    camera: CameraFeed
     vision: Vision | None
-    arm_watchdog: Callable[[], Watchdog | None]
-    places: Callable[[], dict[str, tuple[float, float]]]  # the profile's, then taught ones
-    summaries: Callable[[], list[str]]  # recent missions, one line each, oldest first
+    watchdog: Watchdog  # armed per step on a robot whose clock runs in real time
+    places: Places  # the profile's, then taught ones
     voice: Voice  # what the robot says passes here: cleaned, cut, rate-limited
 
     def planning_context(
@@ -77,8 +107,8 @@ class Crew:
         return PlanningContext(
             registry=self.registry,
             state=state,
-            places=self.places(),
-            history=self.summaries(),
+            places=self.places.positions(),
+            history=self.logbook.summaries(),
             cancelled=self.stop.cancelled,
             memories=self.memory.search(text) if rag and text else [],
             objects=seen,
@@ -86,6 +116,16 @@ class Crew:
 
     def note_error(self, text: str) -> None:
         self.tracker.note_error(text)
+
+    def arm_watchdog(self) -> Watchdog | None:
+        """Arm the watchdog for a step on a robot whose clock runs in real time (a simulator
+        at time scale 0 only moves when the loop ticks, so there is nothing to guard)."""
+        robot = self.robot
+        if not robot.realtime:
+            return None
+        period = 1.0 / self.settings.motion.control_rate_hz
+        self.watchdog.arm(max(self.settings.safety.watchdog_timeout, 3 * period * robot.time_scale))
+        return self.watchdog
 
 
 def vision_for(

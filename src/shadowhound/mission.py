@@ -159,7 +159,7 @@ class MissionRun:
         self.env = PlanEnv(
             self.crew.settings,
             mission_start=self.start.pose,
-            places=self.crew.places(),
+            places=self.crew.places.positions(),
             budget=MissionBudget.start(self.start, self.robot.now),
             belief=belief,
             vocabulary=self.robot.vocabulary(),
@@ -378,7 +378,7 @@ class MissionRun:
             robot,
             env,
             c.stop.cancelled,
-            camera=c.camera,
+            camera=c.camera.latest,
             vision=c.vision,
             memory=c.memory,
             on_progress=lambda f: c.tracker.step_progress(step.index, f),
@@ -473,7 +473,7 @@ class MissionRun:
             error=error,
             planner=c.planner_kind,
         )
-        c.history.append(result)
+        c.logbook.add(result)
         c.tracker.finished(status)
         self.emit(ev.MissionFinished(self.id, result))
         return result
@@ -493,7 +493,7 @@ class MissionRun:
         result.timing.total_duration = self._elapsed()
         if record:
             self.crew.note_error(reason)
-            self.crew.history.append(result)
+            self.crew.logbook.add(result)
             self.crew.tracker.set_status(MissionStatus.FAILED)
         return result
 

@@ -5,13 +5,14 @@ from __future__ import annotations
 
 from ..errors import MemoryStoreError, RecallStoreError
 from .history import MissionHistory
-from .places import KnownPlace, PlaceBook, known_places
+from .places import KnownPlace, PlaceBook, Places, known_places
 
 __all__ = [
     "KnownPlace",
     "MemoryStoreError",
     "MissionHistory",
     "PlaceBook",
+    "Places",
     "RecallStoreError",
     "known_places",
 ]

@@ -3,7 +3,8 @@
 Places from the profile are fixed; taught places live here, in the history database when
 memory is enabled (so they survive restarts), else for the life of the process.
 `known_places` is the one merge of the two that every reader uses (the agent's plans, the
-places.list skill, the CLI, the MCP server and the web map).
+places.list skill, the CLI, the MCP server and the web map); `Places` holds the two together
+for an agent's missions.
 
 A place's position is finite numbers, wherever it comes from (odometry can lie): `remember`
 refuses any other with a PlaceError, and a row read back from the database that is not is
@@ -110,3 +111,20 @@ def known_places(
     }
     known.update({name: KnownPlace(x, y, "taught", yaw) for name, (x, y, yaw) in taught.items()})
     return known
+
+
+class Places:
+    """The places one agent knows: its profile's (fixed) and the taught ones (a PlaceBook),
+    merged by `known_places` on every read, so a place taught a moment ago is known."""
+
+    def __init__(self, profile: Mapping[str, tuple[float, float]], book: PlaceBook) -> None:
+        self.profile = profile
+        self.book = book
+
+    def known(self) -> dict[str, KnownPlace]:
+        """Every place, the profile's then taught ones (a taught place wins its name)."""
+        return known_places(self.profile, self.book)
+
+    def positions(self) -> dict[str, tuple[float, float]]:
+        """name -> (x, y) of every known place: what plans and their checks read."""
+        return {name: place.position for name, place in self.known().items()}
