@@ -31,7 +31,7 @@ from .logbook import Logbook
 from .memory.places import Places
 from .memory.service import AgentMemory
 from .mission import MissionRun
-from .plan import Plan, PlanningError, SkillCall
+from .plan import Plan, SkillCall
 from .planning import FixedPlanner, Planner, make_planner
 from .result import MissionResult
 from .robot.base import Robot, RobotError
@@ -285,24 +285,16 @@ class RobotAgent:
         self.initialize()
         crew = self._crew
         assert crew is not None
-
-        def is_command(text: str) -> bool:
-            try:
-                self.planner.plan(text)
-            except PlanningError:
-                return False
-            return True
-
         return ChatContext(
-            state=self.get_robot_state,
-            progress=lambda: self._tracker.snapshot()[0],
+            robot=crew.robot,
+            camera=crew.camera,
+            tracker=crew.tracker,
             estop=self.estop_latched,
-            examples=lambda: [e for s in self.registry if (e := s.example()) is not None],
-            recent_missions=self.recent_missions,
-            recall=self._memory.search,
-            frame=self.latest_frame,
-            is_command=is_command,
-            planning=lambda text: crew.planning_context(text, None, self.get_robot_state()),
+            skills=crew.registry,
+            missions=crew.logbook,
+            memory=crew.memory,
+            planner=self.planner,
+            briefing=crew,
         )
 
     def diagnostics(self) -> Diagnostics:

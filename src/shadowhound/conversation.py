@@ -1,7 +1,8 @@
 """Answers to questions about the robot and its missions. Never moves the robot.
 
 The agent hands a chat a `ChatContext` (what it may read, nothing it could move the robot
-with); the offline answers and the model's answers have one signature, `Chat`.
+with: each service is typed by the few reading methods a chat uses); the offline answers and
+the model's answers have one signature, `Chat`.
 """
 
 from __future__ import annotations
@@ -10,33 +11,89 @@ import math
 import re
 import threading
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
-from .planning import TRAVEL_QUESTION
+from .plan import PlanningError
+from .planning import TRAVEL_QUESTION, Planner
 from .skills.sense import describe_frame, travel_report
 
 if TYPE_CHECKING:
     from .diagnostics import Progress
     from .llm.backend import LLMBackend
     from .planning import PlanningContext
+    from .skills import Skill
     from .state import CameraFrame, RobotState
 
 
-@dataclass(frozen=True)
-class ChatContext:
-    """What a chat may read. The callables are read only when a question needs them."""
+class RobotReadings(Protocol):
+    """What a chat reads of the robot (`Robot`): its state, never a command."""
 
-    state: Callable[[], RobotState]  # raises RobotError when the robot cannot say
-    progress: Callable[[], Progress]
+    def get_state(self) -> RobotState:
+        """Raises RobotError when the robot cannot say."""
+        ...
+
+
+class CameraView(Protocol):
+    """The latest camera frame (`crew.CameraFeed`)."""
+
+    def latest(self) -> CameraFrame | None: ...
+
+
+class ProgressReadings(Protocol):
+    """The mission now and the last errors (`diagnostics.MissionTracker`)."""
+
+    def snapshot(self) -> tuple[Progress, list[str]]: ...
+
+
+class MissionRecords(Protocol):
+    """The missions run (`logbook.Logbook`)."""
+
+    def recent(self, limit: int) -> list[dict[str, Any]]:
+        """Newest first."""
+        ...
+
+
+class Recall(Protocol):
+    """Memories about a question (`memory.service.AgentMemory`)."""
+
+    def search(self, query: str) -> list[str]: ...
+
+
+class Briefing(Protocol):
+    """What a planner, or a model's chat, may know (`crew.Crew`)."""
+
+    def planning_context(
+        self, text: str, planner: Planner | None, state: RobotState
+    ) -> PlanningContext | None: ...
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChatContext:
+    """What a chat may read. Its services are read only when a question needs them."""
+
+    robot: RobotReadings
+    camera: CameraView
+    tracker: ProgressReadings
     estop: bool
-    examples: Callable[[], list[str]]  # missions people may say, one per skill (Skill.example)
-    recent_missions: Callable[[int], list[dict[str, Any]]]  # newest first
-    recall: Callable[[str], list[str]]  # memories about a question
-    frame: Callable[[], CameraFrame | None]
-    is_command: Callable[[str], bool]  # would the planner plan this as a mission?
-    planning: Callable[[str], PlanningContext | None]  # what a model may know, for a question
+    skills: Iterable[Skill]  # the registry: missions people may say (Skill.example)
+    missions: MissionRecords
+    memory: Recall
+    planner: Planner  # plans a question only to tell whether it is a mission
+    briefing: Briefing
+
+    def is_command(self, text: str) -> bool:
+        """Would the planner plan this as a mission?"""
+        try:
+            self.planner.plan(text)
+        except PlanningError:
+            return False
+        return True
+
+    def planning(self, text: str) -> PlanningContext | None:
+        """What a model may know, for a question (the robot's state read now)."""
+        return self.briefing.planning_context(text, None, self.robot.get_state())
 
 
 Chat = Callable[[str, ChatContext], str]
@@ -79,18 +136,18 @@ def answer_offline(text: str, chat: ChatContext) -> str:
             "I can answer questions about where I am, my battery, what I see, what I did "
             "and what I can do. For anything else a language-model backend is needed."
         )
-    st = chat.state()
+    st = chat.robot.get_state()
     answers = []
     for topic in dict.fromkeys(topics):
         if topic == "greet":
             answers.append("Hello! I am ShadowHound.")
         elif topic == "recall":
-            found = chat.recall(text)
+            found = chat.memory.search(text)
             answers.append(
                 "I remember: " + " | ".join(found) if found else "I remember nothing about that."
             )
         elif topic == "see":
-            answers.append(describe_frame(chat.frame(), text))
+            answers.append(describe_frame(chat.camera.latest(), text))
         elif topic == "battery":
             answers.append(
                 f"My battery is at {st.battery:.1f}%."
@@ -109,7 +166,8 @@ def answer_offline(text: str, chat: ChatContext) -> str:
         elif topic == "skills":
             answers.append(_what_i_can_do(chat))
         elif topic == "status":
-            status = chat.progress().status.value
+            progress, _errors = chat.tracker.snapshot()
+            status = progress.status.value
             answers.append(
                 f"I am {st.posture.value}, status {status}, battery "
                 f"{st.battery_text}" + (", e-stop latched." if chat.estop else ".")
@@ -119,7 +177,8 @@ def answer_offline(text: str, chat: ChatContext) -> str:
 
 def _what_i_can_do(chat: ChatContext) -> str:
     """Missions said as a person says them (from the skills), and the questions answered."""
-    said = "; ".join(f'"{example}"' for example in chat.examples())
+    examples = [e for skill in chat.skills if (e := skill.example()) is not None]
+    said = "; ".join(f'"{example}"' for example in examples)
     return (
         f'Missions I understand, for example: {said}. Join them with "then" or commas; run '
         'one with `/run MISSION` in the chat or `shadowhound run "MISSION"`. I also answer '
@@ -128,7 +187,7 @@ def _what_i_can_do(chat: ChatContext) -> str:
 
 
 def _history(chat: ChatContext) -> str:
-    recent = chat.recent_missions(3)  # from the history database when memory is enabled
+    recent = chat.missions.recent(3)  # from the history database when memory is enabled
     if not recent:
         return "I have not run any mission yet."
     lines = [f"{r['mission']!r}: {r['status']} ({r['response']})" for r in reversed(recent)]
