@@ -3,13 +3,13 @@
 `CameraFeed` skills and chat look through.
 
 The crew holds services, not the agent's methods: the places (`memory.places.Places`), the
-missions run (`logbook.Logbook`), the memory, the camera feed, the watchdog, the voice.
+missions run (`logbook.Logbook`), the memory, the camera feed, the model's vision, the
+watchdog, the voice.
 """
 
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable
 from dataclasses import dataclass
 
 from . import events as ev
@@ -70,7 +70,23 @@ class CameraFeed:
         return self._robot.get_camera_frame() if self._robot is not None else None
 
 
-Vision = Callable[[CameraFrame, str], str]
+class ModelVision:
+    """The model's image describer; a cancel or e-stop abandons its request and cancels the
+    step."""
+
+    def __init__(self, backend: LLMBackend, max_side: int, stop: StopSignal) -> None:
+        self.backend = backend
+        self.max_side = max_side
+        self.stop = stop
+
+    def describe(self, frame: CameraFrame, question: str) -> str:
+        from .llm.vision import describe_image
+
+        stop = self.stop
+        answer = describe_image(self.backend, frame, question, self.max_side, stop.cancelled)
+        if stop.cancelled.is_set():  # the request was abandoned: the step is cancelled
+            raise MissionCancelled(stop.reason())
+        return answer
 
 
 @dataclass(kw_only=True)
@@ -89,7 +105,7 @@ class Crew:
     logbook: Logbook  # every result is added; recent missions for prompts
     planner_kind: str  # the planning configured (what MissionResult.planner records)
     camera: CameraFeed
-    vision: Vision | None
+    vision: ModelVision | None  # None: no vision-capable model is configured
     watchdog: Watchdog  # armed per step on a robot whose clock runs in real time
     places: Places  # the profile's, then taught ones
     voice: Voice  # what the robot says passes here: cleaned, cut, rate-limited
@@ -130,19 +146,8 @@ class Crew:
 
 def vision_for(
     backend: LLMBackend | None, settings: ShadowHoundConfig, stop: StopSignal
-) -> Vision | None:
-    """The model's image describer when it is configured as vision-capable; a cancel or e-stop
-    abandons its request and cancels the step."""
+) -> ModelVision | None:
+    """The model's image describer when it is configured as vision-capable, else None."""
     if not settings.llm.vision or backend is None:
         return None
-    from .llm.vision import describe_image
-
-    max_side = settings.llm.vision_max_side
-
-    def look(frame: CameraFrame, question: str) -> str:
-        answer = describe_image(backend, frame, question, max_side, stop.cancelled)
-        if stop.cancelled.is_set():  # the request was abandoned: the step is cancelled
-            raise MissionCancelled(stop.reason())
-        return answer
-
-    return look
+    return ModelVision(backend, settings.llm.vision_max_side, stop)

@@ -379,7 +379,7 @@ class MissionRun:
             env,
             c.stop.cancelled,
             camera=c.camera.latest,
-            vision=c.vision,
+            vision=c.vision.describe if c.vision is not None else None,
             memory=c.memory,
             on_progress=lambda f: c.tracker.step_progress(step.index, f),
             heartbeat=watchdog.beat if watchdog else lambda _moving: None,
