@@ -189,7 +189,10 @@ def test_the_page_says_one_thing_at_a_time_in_words_for_people(
             robot = _panel(page, "#robot")
             assert robot["moving"] == "no" and robot["e-stop"] == "released", robot
             assert robot["travelled"] == "0.00 m" and robot["heading"] == "0°", robot
-            assert robot["battery"] == "100.0 %", robot
+            # One decimal and a unit; the simulator drains it as its clock runs (under load
+            # the page may come up after 99.95 % has gone: a CI failure read 99.9 %).
+            battery = re.fullmatch(r"(\d{1,3}\.\d) %", robot["battery"])
+            assert battery and 99.0 <= float(battery.group(1)) <= 100.0, robot
             assert not {"true", "false"} & set(robot.values()), robot
 
             # 2. A dry run is a dry run in the history, not "idle".
@@ -238,7 +241,14 @@ def test_the_page_says_one_thing_at_a_time_in_words_for_people(
             # 5. The e-stop's refusal note goes with the e-stop.
             page.click("#estop")
             page.wait_for_selector("#estop-banner", state="visible")
-            assert _panel(page, "#robot")["e-stop"] == "latched"
+            # The banner is the click's answer; the robot panel follows the server's next
+            # status (it read "released" for a moment under load): wait for it.
+            wait_for(
+                lambda: _panel(page, "#robot")["e-stop"] == "latched",
+                5,
+                "the robot panel to show the e-stop latched",
+                lambda: str(_panel(page, "#robot")),
+            )
             page.fill("#command", "walk forward 1 meter")
             page.click("#run")
             page.wait_for_selector('#mission-msg:has-text("e-stop is latched")')
