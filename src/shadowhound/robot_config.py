@@ -6,7 +6,7 @@ robot from them; ROS parameters only fill them (ros/params.py).
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -36,6 +36,9 @@ class _Backend(BaseModel):
     reads as it did when the robot was only a name."""
 
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    # The motion section's defaults this robot needs where the profile and the environment
+    # leave them unset (config.ShadowHoundConfig applies them); none: the motion section's own.
+    motion_defaults: ClassVar[dict[str, float]] = {}
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, str):
@@ -57,6 +60,7 @@ class Go2RobotSettings(_Backend):
     with '/'; an empty `cmd_vel_topic` is discovered; an empty optional topic turns it off."""
 
     type: Literal["go2"] = "go2"
+    motion_defaults: ClassVar[dict[str, float]] = GO2_MOTION
     namespace: str = ""
     cmd_vel_topic: str = ""
     webrtc_topic: str = "webrtc_req"
