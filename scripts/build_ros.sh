@@ -3,7 +3,8 @@
 # build + install the project's interface packages into it: ros2/shadowhound_interfaces,
 # ros2/nav2_msgs (NavigateToPose only) unless Nav2's own nav2_msgs is importable,
 # ros2/vision_msgs (Detection2DArray and its parts) unless a vision_msgs is importable,
-# ros2/tf2_msgs (TFMessage only) unless a tf2_msgs is importable, and
+# ros2/tf2_msgs (TFMessage only) unless a tf2_msgs is importable, ros2/unitree_api and
+# ros2/unitree_go (unitree_ros2's sport request/response and sport/low state) unless importable, and
 # ros2/go2_interfaces (go2_ros2_sdk's WebRtcReq and Go2State) unless a go2_interfaces with those
 # messages, field for field, is already importable from another workspace (a sourced
 # go2_ros2_sdk install; scripts/check_go2_interfaces.py compares them).
@@ -104,6 +105,20 @@ case "$tf2_origin" in
   "" | "$(cd "$VENV" && pwd -P)"/*) build_pkg tf2_msgs 'from tf2_msgs.msg import TFMessage' ;;
   *) echo "build_ros: using tf2_msgs from $tf2_origin (not building ros2/tf2_msgs)" >&2 ;;
 esac
+
+# unitree_ros2's unitree_api and unitree_go likewise (the Go2 EDU's interface over CycloneDDS): a
+# sourced unitree_ros2 workspace wins; ours are only the sport request/response and the sport and
+# low state, field for field as upstream (tests/ros/test_unitree_msgs.py checks the type hashes).
+for spec in "unitree_api:from unitree_api.msg import Request, Response" \
+    "unitree_go:from unitree_go.msg import SportModeState, LowState"; do
+  name=${spec%%:*} check=${spec#*:}
+  origin=$(cd /tmp && "$PY" -c "import os, $name.msg
+print(os.path.dirname(os.path.realpath($name.msg.__file__)))" 2>/dev/null) || origin=""
+  case "$origin" in
+    "" | "$(cd "$VENV" && pwd -P)"/*) build_pkg "$name" "$check" ;;
+    *) echo "build_ros: using $name from $origin (not building ros2/$name)" >&2 ;;
+  esac
+done
 
 # go2_ros2_sdk's own go2_interfaces wins when it is importable from elsewhere (the user's
 # sourced workspace): the driver speaks that one. It is compared field by field with ours

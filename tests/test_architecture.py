@@ -253,6 +253,35 @@ def test_the_checks_catch_what_they_forbid() -> None:
     assert LEVEL_OF["llm"] < LEVEL_OF["planning"] and LEVEL_OF["world"] < LEVEL_OF["robot"]
 
 
+# What of robot/go2/ is not go2_ros2_sdk's: the sport API table, late-pose tracking, posture.
+GO2_SHARED = {
+    "shadowhound.robot.go2.api",
+    "shadowhound.robot.go2.motion",
+    "shadowhound.robot.go2.odometry",
+    "shadowhound.robot.go2.posture",
+    "shadowhound.robot.go2.stamps",
+}
+
+
+def test_the_go2_edu_backend_is_a_room_of_the_robot_and_reuses_only_go2s_shared_parts() -> None:
+    """robot/go2_edu/ (the Go2 EDU over unitree_ros2) is a backend folder in the robot room; of
+    robot/go2/ it imports only what is not go2_ros2_sdk's (imported, never copied), and no
+    other backend imports it: the factory is the one place its name becomes a robot."""
+    edu = [m for m in MODULES if m.startswith("shadowhound.robot.go2_edu")]
+    assert "shadowhound.robot.go2_edu.robot" in edu
+    assert {room_of(m) for m in edu} == {"robot"}
+    edges = module_edges()
+    used = {t for m in edu for t in edges.get(m, set()) if t.startswith("shadowhound.robot.go2.")}
+    assert used and used <= GO2_SHARED, used - GO2_SHARED
+    importers = {
+        m
+        for m, targets in edges.items()
+        for t in targets
+        if t.startswith("shadowhound.robot.go2_edu")
+    }
+    assert importers - set(edu) <= {"shadowhound.robot.factory"}, importers
+
+
 def test_interfaces_run_missions_only_through_the_worker() -> None:
     """One mission at a time, for every interface: only worker.py starts a mission that moves
     the robot (a dry run moves nothing, so an interface may ask for one directly)."""

@@ -22,7 +22,6 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from .errors import ConfigError
 from .geofence import MAX_VERTICES, polygon_problem
 from .robot_config import (
-    GO2_MOTION,
     ROBOT_TYPES,
     RobotSettings,
     SimRobotSettings,
@@ -308,10 +307,11 @@ class ShadowHoundConfig(_Section):
 
     @model_validator(mode="after")
     def _robot_motion(self) -> ShadowHoundConfig:
-        """A Go2's motion settings default to its own (GO2_MOTION) where the profile and the
-        environment leave them unset."""
-        if self.robot.type == "go2":
-            unset = {k: v for k, v in GO2_MOTION.items() if k not in self.motion.model_fields_set}
+        """A robot's motion settings default to its own (a Go2's: GO2_MOTION) where the profile
+        and the environment leave them unset."""
+        defaults = self.robot.motion_defaults
+        if defaults:
+            unset = {k: v for k, v in defaults.items() if k not in self.motion.model_fields_set}
             if unset:
                 motion = self.motion.model_copy(update=unset)
                 motion.model_fields_set.difference_update(unset)  # still the robot's defaults

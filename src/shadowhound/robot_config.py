@@ -6,7 +6,7 @@ robot from them; ROS parameters only fill them (ros/params.py).
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -15,6 +15,7 @@ __all__ = [
     "ESTOP_TOPIC",
     "GO2_MOTION",
     "ROBOT_TYPES",
+    "Go2EduRobotSettings",
     "Go2RobotSettings",
     "RobotSettings",
     "SimRobotSettings",
@@ -36,6 +37,9 @@ class _Backend(BaseModel):
     reads as it did when the robot was only a name."""
 
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
+    # The motion section's defaults this robot needs where the profile and the environment
+    # leave them unset (config.ShadowHoundConfig applies them); none: the motion section's own.
+    motion_defaults: ClassVar[dict[str, float]] = {}
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, str):
@@ -57,6 +61,7 @@ class Go2RobotSettings(_Backend):
     with '/'; an empty `cmd_vel_topic` is discovered; an empty optional topic turns it off."""
 
     type: Literal["go2"] = "go2"
+    motion_defaults: ClassVar[dict[str, float]] = GO2_MOTION
     namespace: str = ""
     cmd_vel_topic: str = ""
     webrtc_topic: str = "webrtc_req"
@@ -99,5 +104,31 @@ class Go2RobotSettings(_Backend):
     map_frame: str = Field("map", description="SLAM's map frame on /tf; '' = read no TF")
 
 
-RobotSettings = Annotated[SimRobotSettings | Go2RobotSettings, Field(discriminator="type")]
-ROBOT_TYPES: tuple[str, ...] = ("sim", "go2")
+class Go2EduRobotSettings(_Backend):
+    """A Unitree Go2 EDU through Unitree's own ROS 2 interface (unitree_ros2, CycloneDDS on the
+    robot): sport requests out, sport and low state in. Topic names are relative to `namespace`
+    unless they start with '/' (the robot's own are at the root)."""
+
+    type: Literal["go2_edu"] = "go2_edu"
+    motion_defaults: ClassVar[dict[str, float]] = GO2_MOTION
+    namespace: str = ""
+    request_topic: str = Field("/api/sport/request", description="unitree_api/Request out")
+    state_topic: str = Field("lf/sportmodestate", description="unitree_go/SportModeState in")
+    low_state_topic: str = Field("lf/lowstate", description="unitree_go/LowState (battery) in")
+    battery_timeout: float = Field(30.0, gt=0, description="seconds a battery reading lasts")
+    state_timeout: float = Field(0.5, gt=0, description="seconds without sport state: blind")
+    state_latency: float | None = Field(
+        None, ge=0, le=5, description="seconds the sport state lags the robot; None = measured"
+    )
+    command_timeout: float = Field(10.0, gt=0, description="seconds a posture may take")
+    max_linear_speed: float = Field(1.0, gt=0, le=3, description="m/s, the Go2's own cap")
+    max_angular_speed: float = Field(2.0, gt=0, le=6, description="rad/s")
+    linear_accel: float = Field(1.0, gt=0, description="m/s^2 (the tracker's model)")
+    angular_accel: float = Field(3.0, gt=0, description="rad/s^2")
+    node_name: str = "shadowhound_go2_edu"
+
+
+RobotSettings = Annotated[
+    SimRobotSettings | Go2RobotSettings | Go2EduRobotSettings, Field(discriminator="type")
+]
+ROBOT_TYPES: tuple[str, ...] = ("sim", "go2", "go2_edu")

@@ -1,6 +1,7 @@
 """Type hashes of ROS interface definitions, for the tests that pin the project's shipped copies
-(nav2_msgs, vision_msgs, tf2_msgs) to the upstream packages': computed from definition files
-with rosidl's own generators (scripts/type_hash.py), or read from an installed package.
+(nav2_msgs, vision_msgs, tf2_msgs, unitree_api, unitree_go) to the upstream packages': computed
+from definition files with rosidl's own generators (scripts/type_hash.py), or read from an
+installed package.
 No rclpy import here."""
 
 from __future__ import annotations

@@ -40,4 +40,17 @@ def make_robot(settings: ShadowHoundConfig, *, context: Any = None) -> Robot:
             return Go2RosRobot(choice, context=context)
         except RobotError as exc:
             raise ConfigError(f"robot go2: {exc}") from exc
+    if choice.type == "go2_edu":
+        try:
+            from .go2_edu.robot import Go2EduRobot
+        except ImportError as exc:
+            raise ConfigError(
+                "robot go2_edu needs rclpy and the unitree_api and unitree_go packages (the "
+                "'ros' extra; source your unitree_ros2 workspace or run scripts/build_ros.sh): "
+                f"{exc}"
+            ) from exc
+        try:
+            return Go2EduRobot(choice, context=context)
+        except RobotError as exc:
+            raise ConfigError(f"robot go2_edu: {exc}") from exc
     raise ConfigError(f"no robot backend {choice.type!r}")  # the settings' union forbids it

@@ -27,8 +27,9 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     ),
     "robot": (
         "sim",
-        "sim (simulated Go2 in this process) or go2 (a Go2 through go2_ros2_sdk's "
-        "topics, or `shadowhound sim-driver`)",
+        "sim (simulated Go2 in this process), go2 (a Go2 through go2_ros2_sdk's "
+        "topics, or `shadowhound sim-driver`) or go2_edu (a Go2 EDU through Unitree's "
+        "unitree_ros2, or `shadowhound sim-driver --interface unitree_ros2`)",
     ),
     "time_scale": (
         1.0,
@@ -141,7 +142,7 @@ _OPTIONAL_TOPICS = (
     "speech_topic",
 )
 NAVIGATION: tuple[str, ...] = get_args(ShadowHoundConfig.model_fields["navigation"].annotation)
-ROBOTS = ("sim", "go2")
+ROBOTS = ("sim", "go2", "go2_edu")
 _FRAME = re.compile(r"^/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 _TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 
@@ -314,7 +315,10 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
             f"profile's), got {out['navigation']!r}"
         )
     if "robot" in out and out["robot"] not in ROBOTS:
-        problems.append(f"robot must be sim or go2, got {out['robot']!r}")
+        problems.append(
+            f"robot must be sim or go2, got {out['robot']!r} (or go2_edu: a Go2 EDU through "
+            "unitree_ros2)"
+        )
     namespace = out.get("robot_namespace", "")
     if namespace.strip("/") and not _TOPIC.match(namespace.strip("/")):
         problems.append(f"robot_namespace {namespace!r} is not a valid ROS namespace (e.g. robot0)")

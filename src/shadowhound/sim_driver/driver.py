@@ -34,6 +34,10 @@ Per robot (names prefixed `robot{i}/` with `--robots 2` or more, as go2_ros2_sdk
   publishes; `sim_driver/requests` out: one JSON record per sport request; `sim_driver/fault`
   in: fault injection ({"odom": false}, {"states": false}, {"camera": false},
   {"delay_ms": 200}, {"drop_commands": true}; {} clears them).
+
+With `--interface unitree_ros2` the robots speak Unitree's own interface instead (a Go2 EDU;
+sim_driver/unitree.py): `api/sport/request` in, `api/sport/response`, `lf/sportmodestate` and
+`lf/lowstate` out, besides `sim_driver/*`; none of go2_ros2_sdk's topics, relay or servers.
 """
 
 from __future__ import annotations
@@ -104,12 +108,13 @@ class SimDriver(Node):
             if s.relay
             else None
         )
+        first = self.robots[0]
         self.create_timer(0.1, self._forward_requests)  # the driver's 10 Hz request loop
         self.create_timer(1.0 / s.state_rate_hz, self._each("publish_state"))
         self.create_timer(1.0 / s.truth_rate_hz, self._each("publish_truth"))
         if s.camera_rate_hz > 0:
             self.create_timer(1.0 / s.camera_rate_hz, self._each("publish_camera"))
-        if s.battery is not None:
+        if s.battery is not None or first.unitree is not None:
             self.create_timer(1.0, self._each("publish_battery"))
         if s.scan_rate_hz > 0:
             self.create_timer(1.0 / s.scan_rate_hz, self._each("publish_scan"))
@@ -117,7 +122,14 @@ class SimDriver(Node):
             self.create_timer(1.0 / DETECTIONS_RATE_HZ, self._each("publish_detections"))
         for robot in self.robots:
             robot.start()
-        first = self.robots[0]
+        if first.unitree is not None:
+            self.get_logger().info(
+                f"simulated Go2 EDU x{s.robots} (unitree_ros2) ready: "
+                f"{first.unitree.request_topic} in; {first.topic('lf/sportmodestate')} "
+                f"{s.state_rate_hz:g} Hz {s.odom_delay:g} s late, {first.topic('lf/lowstate')} "
+                f"1 Hz out; truth on {first.topic('sim_driver/truth')}"
+            )
+            return
         self.get_logger().info(
             f"simulated Go2 x{s.robots} ready: {first.topic('cmd_vel_out')} and "
             f"{first.topic('webrtc_req')} in"
@@ -199,6 +211,11 @@ navigate_to_pose (Nav2's NavigateToPose action, served with the project's planne
 --no-navigate-to-pose: none);
 sim_driver/truth (JSON ground truth), sim_driver/requests (JSON per sport request) out;
 sim_driver/fault in. The relay: cmd_vel, cmd_vel_joy in, cmd_vel_out out.
+
+--interface unitree_ros2: a Go2 EDU behind Unitree's unitree_ros2 instead (run a mission with
+-p robot:=go2_edu): api/sport/request (unitree_api/Request) in; api/sport/response,
+lf/sportmodestate (unitree_go/SportModeState), lf/lowstate (unitree_go/LowState) out; the
+sim_driver/ topics as above; nothing of go2_ros2_sdk's.
 
 Every option is also a ROS parameter with the same name in snake case (--ros-args -p
 odom_delay:=0.5); an option given here wins. -r __ns:=/NS moves every topic, the relay's too."""

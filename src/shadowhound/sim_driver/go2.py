@@ -44,6 +44,7 @@ from .nav import SimNavigator
 from .options import DriverSettings
 from .slam import Pose, SimSlam
 from .sport import SimSportMode, Truth
+from .unitree import UnitreeLink
 
 if TYPE_CHECKING:
     from rclpy.node import Node
@@ -86,9 +87,16 @@ class SimGo2:
         self._order = itertools.count()
         self._ready = threading.Condition()
         self._closing = threading.Event()
-        self._odom_pub = node.create_publisher(Odometry, self.topic("odom"), _RELIABLE)
+        # go2_ros2_sdk's topics, or unitree_ros2's (unitree.py) with --interface unitree_ros2
+        sdk = settings.interface == "go2_ros2_sdk"
+        self.unitree = None if sdk else UnitreeLink(node, self.topic, self._on_unitree_request)
+        self._odom_pub = (
+            node.create_publisher(Odometry, self.topic("odom"), _RELIABLE) if sdk else None
+        )
         self._slam = SimSlam(node, settings.slam, settings.odom_drift)
-        self._state_pub = node.create_publisher(Go2State, self.topic("go2_states"), _RELIABLE)
+        self._state_pub = (
+            node.create_publisher(Go2State, self.topic("go2_states"), _RELIABLE) if sdk else None
+        )
         self._camera_pub = (
             node.create_publisher(Image, self.topic("camera/image_raw"), _SENSOR)
             if settings.camera_rate_hz > 0
@@ -100,7 +108,7 @@ class SimGo2:
         )
         self._battery_pub = (
             node.create_publisher(BatteryState, self.topic(settings.battery_topic), _RELIABLE)
-            if settings.battery is not None
+            if settings.battery is not None and sdk
             else None
         )
         self._scan_pub = (
@@ -137,8 +145,11 @@ class SimGo2:
             if settings.navigate_to_pose
             else None
         )
-        node.create_subscription(Twist, self.topic("cmd_vel_out"), self._on_twist, _RELIABLE)
-        node.create_subscription(WebRtcReq, self.topic("webrtc_req"), self._on_request, _RELIABLE)
+        if sdk:
+            node.create_subscription(Twist, self.topic("cmd_vel_out"), self._on_twist, _RELIABLE)
+            node.create_subscription(
+                WebRtcReq, self.topic("webrtc_req"), self._on_request, _RELIABLE
+            )
         node.create_subscription(String, self.topic("sim_driver/fault"), self._on_fault, _RELIABLE)
         self._threads = [
             threading.Thread(
@@ -205,6 +216,32 @@ class SimGo2:
             )
             return
         self._pending.append((api_id, parameter, topic or go2_api.SPORT_TOPIC, arrived))
+
+    def _on_unitree_request(
+        self, api_id: int, text: str, answer: Callable[[bool, str], None]
+    ) -> None:
+        """A unitree_api Request: straight to the robot (no driver's queue between)."""
+        if self.faults.drop_commands:
+            self._record(api_id, time.monotonic(), None, False, "lost (fault injection)")
+            return
+
+        def act() -> None:
+            arrived = time.monotonic()
+            report = self._reporter(api_id, arrived, arrived)
+            try:
+                parameter = "" if text == "" else json.loads(text)
+            except ValueError as exc:
+                report(False, f"ignored: parameter is not JSON ({exc})")
+                answer(False, f"parameter is not JSON ({exc})")
+                return
+
+            def both(accepted: bool, note: str) -> None:
+                report(accepted, note)
+                answer(accepted, note)
+
+            self.body.request(api_id, parameter, go2_api.SPORT_TOPIC, both)
+
+        self._schedule(act)
 
     def forward_requests(self) -> None:
         """The driver's 10 Hz loop: every queued request goes to the robot, in order."""
@@ -304,6 +341,8 @@ class SimGo2:
         `shift` seconds off; and on /tf odom -> base_link (as the driver broadcasts it) and,
         with --slam, SLAM's map -> odom of the same moment (the truth over the drifting
         `odom`, off by any `slam_error`)."""
+        if self._odom_pub is None:  # unitree_ros2: the pose is in SportModeState
+            return
         msg = Odometry()  # pose only: go2_ros2_sdk never fills the twist
         stamp = self.node.get_clock().now().nanoseconds + int(shift * 1e9)
         msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(max(0, stamp), 1_000_000_000)
@@ -331,6 +370,10 @@ class SimGo2:
         if shown is None or not self.faults.states:
             return
         _taken, t, progress = shown
+        if self.unitree is not None:
+            self.unitree.publish_state(t, progress)
+            return
+        assert self._state_pub is not None
         c, s = math.cos(t.yaw), math.sin(t.yaw)
         standing = t.posture is Posture.STANDING and not t.changing
         self._state_pub.publish(
@@ -351,7 +394,11 @@ class SimGo2:
         return None if start is None else max(0.0, start - (100.0 - t.battery))
 
     def publish_battery(self) -> None:
-        level = self.battery_level(self.body.truth())
+        t = self.body.truth()
+        level = self.battery_level(t)
+        if self.unitree is not None:  # LowState always carries the charge
+            self.unitree.publish_low_state(t.battery if level is None else level)
+            return
         if self._battery_pub is None or level is None:
             return
         msg = BatteryState(

@@ -15,6 +15,16 @@ from typing import Any
 
 from ..errors import ParameterError
 
+INTERFACES = ("go2_ros2_sdk", "unitree_ros2")
+# What a robot on unitree_ros2 does not have: go2_ros2_sdk's relay, sensors and Nav2 are off.
+_UNITREE_OFF = {
+    "relay": False,
+    "camera_rate_hz": 0.0,
+    "scan_rate_hz": 0.0,
+    "map": False,
+    "navigate_to_pose": False,
+    "detector": "none",
+}
 DETECTIONS_RATE_HZ = 2.0  # the simulated detector's rate: modest, as a camera detector runs
 _TOPIC = re.compile(r"^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 
@@ -24,6 +34,7 @@ class DriverSettings:
     """Checked settings of the simulated driver."""
 
     robots: int = 1
+    interface: str = "go2_ros2_sdk"
     start_posture: str = "standing"
     stand_up_mode: int = 6
     relay: bool = True
@@ -70,6 +81,16 @@ OPTIONS: dict[str, Option] = {
         1,
         8,
         "N",
+    ),
+    "interface": Option(
+        str,
+        "the robot's ROS 2 interface: go2_ros2_sdk (cmd_vel_out, webrtc_req, odom, go2_states "
+        "and the rest) or unitree_ros2 (a Go2 EDU through Unitree's own: unitree_api/Request on "
+        "api/sport/request, unitree_go/SportModeState on lf/sportmodestate, unitree_go/LowState "
+        "on lf/lowstate; nothing of go2_ros2_sdk's: no relay, camera, scan, map, detector, "
+        "navigate_to_pose)",
+        metavar="INTERFACE",
+        choices=INTERFACES,
     ),
     "start_posture": Option(
         str,
@@ -242,6 +263,10 @@ def parse_settings(values: Mapping[str, Any]) -> DriverSettings:
             "slam is for one robot: with several, each would publish map -> odom for the same "
             "frames (use --robots 1)"
         )
+    if out.get("interface") == "unitree_ros2":
+        if out.get("slam"):
+            problems.append("slam is go2_ros2_sdk's side: not with interface unitree_ros2")
+        out.update(_UNITREE_OFF)
     if problems:
         raise ParameterError("invalid settings: " + "; ".join(problems))
     return DriverSettings(**out)
