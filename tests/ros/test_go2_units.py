@@ -196,3 +196,10 @@ def test_a_slam_error_fault_is_read_and_shown_like_a_jump() -> None:
     assert not faults.lies  # it takes effect at once, not after a distance
     with pytest.raises(ValueError, match='slam_error must be an object {"x": m'):
         Faults.from_json('{"slam_error": [0.5, 0]}')
+
+
+def test_a_go2_edu_takes_the_namespace_parameter() -> None:
+    settings = parse_parameters({"robot": "go2_edu", "robot_namespace": "edu"}).agent_settings()
+    assert settings.robot.type == "go2_edu" and settings.robot.namespace == "edu"
+    plain = parse_parameters({"robot": "go2_edu"}).agent_settings()
+    assert plain.robot.type == "go2_edu" and plain.robot.namespace == ""

@@ -203,6 +203,9 @@ class NodeSettings:
             defaults = NodeSettings().robot_settings()
             given = {k: v for k, v in self.robot_settings().items() if v != defaults[k]}
             overrides["robot"] = {**given, "type": "go2"}
+        elif self.robot == "go2_edu":  # the namespace is the one parameter it shares
+            namespace = {"namespace": self.robot_namespace} if self.robot_namespace else {}
+            overrides["robot"] = {**namespace, "type": "go2_edu"}
         else:
             overrides["robot"] = self.robot  # a name replaces the profile's settings whole
         return load_config(self.backend_config, overrides)
