@@ -16,7 +16,6 @@ Skipped without rclpy or the interface packages unless SHADOWHOUND_REQUIRE_ROS=1
 
 from __future__ import annotations
 
-import json
 import math
 import threading
 from collections.abc import Iterator
@@ -29,10 +28,9 @@ from tests.ros.needs import require
 
 require("rclpy", "shadowhound_interfaces", "go2_interfaces", "nav2_msgs", "tf2_msgs")
 
-from std_msgs.msg import String  # noqa: E402
 
-from shadowhound.sim_driver.faults import Faults  # noqa: E402
 from tests.ros.rosclient import RosClient  # noqa: E402
+from tests.ros.test_go2_faults import send_fault  # noqa: E402
 from tests.ros.test_go2_truth import Rig, start_rig  # noqa: E402
 
 KITCHEN = (4.0, 2.5)  # the profile's places, map frame (the truth's)
@@ -71,15 +69,6 @@ def rig(client: RosClient, tmp_path_factory: pytest.TempPathFactory) -> Iterator
     )
     yield rig
     stop()
-
-
-def send_fault(rig: Rig, fault: dict[str, Any]) -> None:
-    """Publish a fault message and wait until the driver's truth shows it in force."""
-    want = Faults.from_json(json.dumps(fault)).to_dict()
-    rig.truth.fault.publish(String(data=json.dumps(fault)))
-    rig.truth.wait(
-        lambda t: {k: t["faults"][k] for k in want} == want, f"the driver to take {fault}"
-    )
 
 
 def off(truth: dict[str, Any], place: tuple[float, float]) -> float:
