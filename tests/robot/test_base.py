@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from shadowhound.robot.base import BaseRobot, Robot, RobotError
+from shadowhound.robot.sim.robot import SimRobot
 from shadowhound.state import Posture, RobotState
 
 
@@ -70,3 +71,11 @@ def test_what_every_robot_must_say_for_itself_is_abstract() -> None:
     with pytest.raises(TypeError, match="abstract"):
         Nameless()  # type: ignore[abstract]
 
+
+def test_the_simulator_inherits_the_defaults_it_shares() -> None:
+    robot = SimRobot(time_scale=0.0)
+    assert isinstance(robot, BaseRobot)
+    assert robot.bearings() == () and robot.navigator() is None and robot.latency == 0.0
+    assert robot.time_scale == 0.0 and not robot.realtime  # its own clock, not the wall's
+    robot.say("hello")  # its own voice: the record
+    assert robot.spoken == ["hello"]
