@@ -4,10 +4,17 @@ Skills drive robots only through this protocol. Motion is commanded as body-fram
 and closed on the measured pose (`get_state`), so the same skill code runs on the simulator
 and on a Go2 through ROS 2. Everything the agent, the skills and the interfaces use of a robot
 is declared here, so nobody probes a robot for what it can do.
+
+`BaseRobot` is the protocol with sensible defaults (a wall clock, no sensors, no map, no
+navigator, no voice, no tricks, no e-stop source of its own): a new backend inherits it and
+writes only what it has. tests/robot/test_contract.py holds every backend to the contract the
+docstrings below state.
 """
 
 from __future__ import annotations
 
+import time
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
@@ -48,7 +55,10 @@ class Robot(Protocol):
 
     def get_state(self) -> RobotState:
         """The latest state (pose from odometry, posture, battery). Raises RobotError when the
-        robot cannot say (e.g. no odometry yet)."""
+        robot is blind where it matters: its odometry went stale while motion is under way
+        (velocity commanded since the last `stop`), or it does not trust its odometry. At rest
+        a robot that has lost its odometry returns its last state with `connected` False, so
+        reports and plans still work; one that cannot lose it (the simulator) never raises."""
         ...
 
     def last_state(self) -> RobotState:
@@ -56,19 +66,27 @@ class Robot(Protocol):
         ...
 
     def send_velocity(self, vx: float, vy: float, wz: float) -> None:
-        """Command body-frame velocity (m/s, m/s, rad/s). Ignored unless standing."""
+        """Command body-frame velocity (m/s, m/s, rad/s). Ignored, without an error, while
+        the robot is not standing or the e-stop is latched: the robot does not move, and the
+        command is not kept for later (standing up or a release does not start a walk).
+        Raises RobotError for values that are not finite, and when the robot is blind (it
+        refuses to start moving without odometry)."""
         ...
 
     def stop(self) -> None:
-        """Zero velocity now. Safe to call from any thread, at any time."""
+        """Zero velocity now; the robot comes to rest. Safe to call from any thread, at any
+        time, any number of times, also from many threads at once."""
         ...
 
     def emergency_stop(self) -> None:
-        """Stop now and refuse motion and postures until `release_estop`. Thread-safe."""
+        """Stop now and latch (`get_state().estopped`) until `release_estop`: meanwhile
+        velocity is ignored (as `send_velocity` says) and `set_posture` and `perform` raise
+        RobotError. Thread-safe."""
         ...
 
     def release_estop(self) -> None:
-        """Accept commands again after `emergency_stop`."""
+        """Accept commands again after `emergency_stop`. The robot stays at rest until it is
+        commanded again."""
         ...
 
     def watch_estop(self, listener: Callable[[bool], None]) -> None:
@@ -78,11 +96,14 @@ class Robot(Protocol):
         ...
 
     def set_posture(self, posture: Posture) -> None:
-        """Stand, sit or lie down; returns when the transition is done. Raises RobotError."""
+        """Stand, sit or lie down; returns when the transition is done (`get_state().posture`
+        shows it). Raises RobotError when it cannot, or while the e-stop is latched."""
         ...
 
     def perform(self, trick: str) -> None:
-        """Run a sport-mode trick by name (see go2_api.TRICKS); returns when done."""
+        """Run a sport-mode trick by name (see go2_api.TRICKS); returns when done. Raises
+        RobotError for a trick it does not know, while not standing or while the e-stop is
+        latched."""
         ...
 
     def say(self, text: str) -> None:
@@ -143,3 +164,98 @@ class Robot(Protocol):
     def close(self) -> None:
         """Stop and release resources."""
         ...
+
+
+class BaseRobot(ABC):
+    """The `Robot` protocol with defaults for what a robot may lack: a backend inherits it and
+    writes only what it has. A robot is, unless it says otherwise: on the wall clock
+    (`time_scale` 1, `realtime`), knowing its pose at once (`latency` 0), blind to its
+    surroundings (no camera frame, no scan, no map, no objects, no bearings, recognising
+    nothing), without a navigation server, a voice, tricks or an e-stop source of its own.
+    Closing it stops it.
+
+    What every robot must say for itself is abstract: its name, its state, velocity, stops,
+    the e-stop latch and postures."""
+
+    name: str
+    description: str
+
+    @property
+    def time_scale(self) -> float:
+        return 1.0
+
+    @property
+    def latency(self) -> float:
+        return 0.0
+
+    @property
+    def realtime(self) -> bool:
+        return True
+
+    @abstractmethod
+    def get_state(self) -> RobotState: ...
+
+    @abstractmethod
+    def last_state(self) -> RobotState: ...
+
+    @abstractmethod
+    def send_velocity(self, vx: float, vy: float, wz: float) -> None: ...
+
+    @abstractmethod
+    def stop(self) -> None: ...
+
+    @abstractmethod
+    def emergency_stop(self) -> None: ...
+
+    @abstractmethod
+    def release_estop(self) -> None: ...
+
+    def watch_estop(self, listener: Callable[[bool], None]) -> None:  # noqa: B027 (a default)
+        """No e-stop source of its own: `listener` is never called."""
+
+    @abstractmethod
+    def set_posture(self, posture: Posture) -> None: ...
+
+    def perform(self, trick: str) -> None:
+        """No tricks: every one is refused."""
+        raise RobotError(f"{self.description} performs no tricks (asked for {trick!r})")
+
+    def say(self, text: str) -> None:
+        """No voice."""
+        raise RobotError(f"{self.description} has no voice")
+
+    def now(self) -> float:
+        """The wall clock (monotonic seconds)."""
+        return time.monotonic()
+
+    def sleep(self, seconds: float) -> None:
+        if seconds > 0:
+            time.sleep(seconds)
+
+    def get_camera_frame(self) -> CameraFrame | None:
+        return None
+
+    def get_scan(self) -> Scan | None:
+        return None
+
+    def belief(self) -> Belief | None:
+        return None
+
+    def known_objects(self) -> tuple[KnownObject, ...]:
+        return ()
+
+    def bearings(self) -> tuple[Bearing, ...]:
+        return ()
+
+    def look(self) -> None:  # noqa: B027 (a default: nothing to do)
+        """Nothing to wait for: no detector runs behind its camera."""
+
+    def vocabulary(self) -> frozenset[str] | None:
+        """It recognises nothing."""
+        return frozenset()
+
+    def navigator(self) -> Navigator | None:
+        return None
+
+    def close(self) -> None:
+        self.stop()

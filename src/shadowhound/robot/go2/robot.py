@@ -82,7 +82,7 @@ from ...state import CameraFrame, Pose2D, Posture, RobotState, Scan, compose
 from ...world import Belief, GridError, merge_sightings
 from ...world.image_sighting import Bearing, SightingRules
 from ...world.objects import KnownObject
-from ..base import RobotError
+from ..base import BaseRobot, RobotError
 from ..estop_listener import EstopListener
 from ..tf_tree import MapCorrection, TfTree, Transform2D
 from . import api as go2_api
@@ -132,8 +132,8 @@ _NAME = {
 Go2RosConfig: TypeAlias = Go2RobotSettings
 
 
-class Go2RosRobot:
-    """The Robot protocol over go2_ros2_sdk."""
+class Go2RosRobot(BaseRobot):
+    """The Robot protocol over go2_ros2_sdk. A real robot: on the wall clock (BaseRobot's)."""
 
     def __init__(
         self, config: Go2RosConfig | None = None, *, context: Context | None = None
@@ -947,12 +947,6 @@ class Go2RosRobot:
         finally:
             self._postures.commanded = False
             self._driven_until = time.monotonic() + _DRIVEN_SETTLE
-
-    time_scale = 1.0  # a real robot's clock is the wall clock
-    realtime = True
-
-    def now(self) -> float:
-        return time.monotonic()
 
     def sleep(self, seconds: float) -> None:
         if seconds > 0:

@@ -32,17 +32,14 @@ import math
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ...config import SimConfig
 from ...state import CameraFrame, Posture, RobotState, Scan, normalize_angle
 from ...world import Belief, KnownObject
-from ...world.image_sighting import Bearing
-from ..base import RobotError
+from ..base import BaseRobot, RobotError
 from ..go2.api import TRICKS
-from ..navigator import Navigator
 from . import renderer, scene, sensors
 
 _SUBSTEP = 0.01  # seconds of physics per integration step
@@ -80,8 +77,13 @@ class _Counters:
     by_kind: dict[str, int] = field(default_factory=dict)
 
 
-class SimRobot:
-    """A simulated Go2. `SimRobot()` starts standing at the origin with a full battery."""
+class SimRobot(BaseRobot):
+    """A simulated Go2. `SimRobot()` starts standing at the origin with a full battery.
+
+    From BaseRobot it takes: no e-stop source of its own, no navigation server (it walks with
+    the project's own planner; `shadowhound sim-driver` serves navigate_to_pose over ROS),
+    no bearings (its camera places everything it labels) and nothing to wait for in `look`
+    (its camera labels every frame)."""
 
     def __init__(
         self,
@@ -342,21 +344,9 @@ class SimRobot:
             self._state = replace(self._state, estopped=False)
             self._record("estop_release", None, True)
 
-    latency = 0.0  # its state is its truth, at once
-
-    def look(self) -> None:
-        """Its camera labels every frame: nothing to wait for."""
-
     def vocabulary(self) -> frozenset[str]:
         """What its camera can label: the names of the objects of its world."""
         return frozenset(o.name for o in self.world.objects)
-
-    def bearings(self) -> tuple[Bearing, ...]:
-        """Its camera places everything it labels: none."""
-        return ()
-
-    def watch_estop(self, listener: Callable[[bool], None]) -> None:
-        """The simulator has no e-stop source of its own: `listener` is never called."""
 
     def set_posture(self, posture: Posture, seconds: float | None = None) -> None:
         """Change posture, taking the Go2's typical time (or `seconds` for the whole change)."""
@@ -441,11 +431,6 @@ class SimRobot:
             told = sensors.scene_belief(self.map_world, self.config.body_radius)
             self._belief = Belief(told.grid, (), told.robot_radius, told.room, labels=told.objects)
         return self._belief
-
-    def navigator(self) -> Navigator | None:
-        """None: the simulator walks with the project's own planner (`shadowhound sim-driver`
-        serves navigate_to_pose over ROS)."""
-        return None
 
     def close(self) -> None:
         self.stop()
