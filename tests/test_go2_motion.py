@@ -67,7 +67,7 @@ def test_latency_is_measured_and_the_pose_predicted_while_moving(
     tracker = MotionTracker(linear_accel=1.0, angular_accel=3.0)
     robot = DelayedOdometry(tracker, rate, delay)
     robot.run(1.0)
-    if abs(vx) < 0.05 and abs(wz) < 0.1:
+    if abs(vx) < 0.05 and abs(wz) <= 0.1:  # as the last check reads "turning": |wz| > 0.1
         vx = 0.3
     robot.command(vx, 0.0, wz)
     robot.run(1.5)
