@@ -102,6 +102,12 @@ class PostureWatch:
             self._reports.append(report)
             return self._settled(lambda r: r.posture)
 
+    def observe(self, mode: int, body_height: float) -> Posture | None:
+        """`update`, with a fallen robot (limp, or getting up after a fall) lying: it does
+        not stand."""
+        posture = self.update(mode, body_height)
+        return Posture.LYING if self.fallen() else posture
+
     def fallen(self) -> bool:
         """The last reports (two or more, over `SETTLE`) show a mode of a fallen robot."""
         with self._lock:

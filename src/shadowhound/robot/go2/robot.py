@@ -406,9 +406,7 @@ class Go2RosRobot:
             self._odometry_fault(fault)
 
     def _on_state(self, msg: Go2State) -> None:
-        posture = self._postures.update(int(msg.mode), float(msg.body_height))
-        if self._postures.fallen():
-            posture = Posture.LYING  # limp or getting up after a fall: it does not stand
+        posture = self._postures.observe(int(msg.mode), float(msg.body_height))
         if posture is None:
             return
         with self._lock:

@@ -160,9 +160,7 @@ class Go2EduRobot:
             moving = not self._halted
         if fault is not None and moving:
             self.stop()  # the pose is not believable: never steer on it
-        posture = self._postures.update(int(msg.mode), float(msg.body_height))
-        if self._postures.fallen():
-            posture = Posture.LYING  # limp or getting up after a fall: it does not stand
+        posture = self._postures.observe(int(msg.mode), float(msg.body_height))
         if posture is None:
             return
         with self._lock:
