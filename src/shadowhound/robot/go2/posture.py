@@ -13,10 +13,12 @@ report and a check for the e-stop.
 
 from __future__ import annotations
 
+import contextlib
+import math
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TypeVar
 
@@ -99,6 +101,12 @@ class PostureWatch:
             self._report = report
             self._reports.append(report)
             return self._settled(lambda r: r.posture)
+
+    def observe(self, mode: int, body_height: float) -> Posture | None:
+        """`update`, with a fallen robot (limp, or getting up after a fall) lying: it does
+        not stand."""
+        posture = self.update(mode, body_height)
+        return Posture.LYING if self.fallen() else posture
 
     def fallen(self) -> bool:
         """The last reports (two or more, over `SETTLE`) show a mode of a fallen robot."""
@@ -200,3 +208,145 @@ class PostureWatch:
         while time.monotonic() < end:
             self._check_estop(f"waiting for {what}")
             time.sleep(min(_POLL * 5, max(0.0, end - time.monotonic())))
+
+
+# The sport requests a posture change sends, by name (for messages).
+STEP_NAMES = {
+    go2_api.STAND_UP: "StandUp",
+    go2_api.BALANCE_STAND: "BalanceStand",
+    go2_api.RISE_SIT: "RiseSit",
+    go2_api.SIT: "Sit",
+    go2_api.STAND_DOWN: "StandDown",
+}
+
+
+def plan(current: Posture, posture: Posture) -> list[tuple[Posture, tuple[int, ...]]]:
+    """The postures from `current` to `posture` (sitting <-> lying goes through standing), each
+    with the sport api ids that lead to it. Standing with locked joints (after a StandUp from
+    elsewhere) only needs balancing."""
+    path = [current, posture]
+    if Posture.STANDING not in path:
+        path = [current, Posture.STANDING, posture]
+    steps = (
+        [(go2_api.BALANCE_STAND,)]
+        if current is posture
+        else [STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
+    )
+    return list(zip(path[1:], steps, strict=True))
+
+
+class SportBody:
+    """Posture changes and tricks through the sport API, as both Go2 backends run them.
+
+    `watch` is the robot's PostureWatch; `request(api_id)` sends one sport request; `halt()`
+    stops the robot if it moves. `estopped` is the e-stop latch, read and written under the
+    robot's `lock`. `driven_until` (monotonic) is when the body may stop moving without a
+    velocity command, after a posture or trick of ours (`settle` seconds after its end).
+    """
+
+    def __init__(
+        self,
+        watch: PostureWatch,
+        request: Callable[[int], None],
+        halt: Callable[[], None],
+        lock: threading.Lock,
+        settle: float,
+    ) -> None:
+        self.watch, self._request, self._halt = watch, request, halt
+        self._lock, self._settle = lock, settle
+        self.estopped = False
+        self.driven_until = 0.0
+
+    def latch(self, latched: bool) -> None:
+        """Latch the e-stop (True) or release it (False)."""
+        with self._lock:
+            self.estopped = latched
+
+    def check_estop(self, doing: str) -> None:
+        """RobotError while the e-stop is latched (`doing` says what it refuses)."""
+        with self._lock:
+            estopped = self.estopped
+        if estopped:
+            raise RobotError(f"e-stop is latched; release it before {doing}")
+
+    @contextlib.contextmanager
+    def commanded(self) -> Iterator[None]:
+        """A posture or trick of ours runs: its posture changes are no fall, and the body may
+        move without a velocity command (for a while after, too)."""
+        self.watch.commanded = True
+        try:
+            yield
+        finally:
+            self.watch.commanded = False
+            self.driven_until = time.monotonic() + self._settle
+
+    def set_posture(
+        self, posture: Posture, late_stand: Callable[[str], None] | None = None
+    ) -> None:
+        """Go to `posture` through standing, one sport request at a time, each done when the
+        state shows the posture it leads to; nothing is sent when already there. After StandUp
+        (or RiseSit), BalanceStand waits for the body to stand (`watch.stood_up`), and
+        `late_stand(what)` hears when that wait ran out."""
+        posture = Posture(posture)
+        self.check_estop("changing posture")
+        watch = self.watch
+        current = watch.current()
+        if current is posture and (posture is not Posture.STANDING or watch.balanced()):
+            return
+        self._halt()  # the robot must be still before it changes posture
+        with self.commanded():
+            for target, api_ids in plan(current, posture):
+                for api_id, then in zip(api_ids, (*api_ids[1:], None), strict=True):
+                    balance = api_id == go2_api.BALANCE_STAND
+                    if balance and watch.balanced():
+                        continue  # RiseSit already ends balanced: no redundant command
+                    self._request(api_id)
+                    what = f"{STEP_NAMES[api_id]} (api id {api_id})"
+                    if then == go2_api.BALANCE_STAND:
+                        if not watch.stood_up(what) and late_stand is not None:
+                            late_stand(what)
+                    else:  # the posture shows (after BalanceStand: in a mode that walks)
+                        watch.reach(target, what, balance)
+
+    def perform(self, trick: str, before: Callable[[], None] | None = None) -> None:
+        """Run the trick `trick` (go2_api.TRICKS, checked by the caller) from standing and wait
+        until the robot stands again; `before()` runs first, inside the command."""
+        info = go2_api.TRICKS[trick]
+        self.check_estop(f"performing {trick}")
+        posture = self.watch.current()
+        if posture is not Posture.STANDING:
+            raise RobotError(
+                f"cannot perform {trick} while the robot is {posture.value}; stand up first"
+            )
+        with self.commanded():
+            if before is not None:
+                before()
+            self._request(info.api_id)
+            self.watch.pause(info.duration, f"{trick} (api id {info.api_id})")
+            self.watch.reach(Posture.STANDING, trick)
+
+
+def trick_info(trick: str) -> go2_api.Trick:
+    """The trick's entry in go2_api.TRICKS; RobotError naming the known ones otherwise."""
+    info = go2_api.TRICKS.get(trick)
+    if info is None:
+        raise RobotError(f"unknown trick {trick!r}; known: {', '.join(go2_api.TRICKS)}")
+    return info
+
+
+def finite_velocity(vx: float, vy: float, wz: float) -> tuple[float, float, float]:
+    """A body-frame velocity as floats; RobotError unless all are finite."""
+    values = (float(vx), float(vy), float(wz))
+    if not all(math.isfinite(v) for v in values):
+        raise RobotError(f"velocity must be finite numbers, got {values}")
+    return values
+
+
+def capped(
+    values: tuple[float, float, float], max_linear: float, max_angular: float
+) -> tuple[float, float, float]:
+    """The velocity within the caps: the planar speed scaled down to `max_linear`, the turn
+    rate clipped to `max_angular`."""
+    norm = math.hypot(values[0], values[1])
+    scale = max_linear / norm if norm > max_linear else 1.0
+    return values[0] * scale, values[1] * scale, max(-max_angular, min(max_angular, values[2]))

@@ -59,7 +59,7 @@ import logging
 import math
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any, TypeAlias
 
@@ -97,7 +97,14 @@ from .detections import (
 from .motion import MAX_LATENCY, MotionTracker
 from .nav2 import Nav2Navigator
 from .odometry import OdometryFault, OdometryIntake, OdometryLimits
-from .posture import STAND_UP_BOUND, STEPS, PostureWatch
+from .posture import (
+    STAND_UP_BOUND,
+    PostureWatch,
+    SportBody,
+    capped,
+    finite_velocity,
+    trick_info,
+)
 from .topics import VELOCITY_TOPICS, VelocityRoute, choose_velocity_topic, node_name
 from .world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 
@@ -119,13 +126,6 @@ _KEEPALIVE_PERIOD = 0.1  # 10 Hz, as DIMOS streams Twist to the Go2
 _DRIVEN_SETTLE = 2.0  # seconds the body may still move after Nav2, a posture or a trick
 _PUBLISHERS_PERIOD = 0.5  # seconds between looks for a second odometry publisher
 _LOOK_SECONDS = 1.5  # longest wait for the detector's report on a view (2 Hz detectors, DDS)
-_NAME = {
-    go2_api.STAND_UP: "StandUp",
-    go2_api.BALANCE_STAND: "BalanceStand",
-    go2_api.RISE_SIT: "RiseSit",
-    go2_api.SIT: "Sit",
-    go2_api.STAND_DOWN: "StandDown",
-}
 
 
 # The Go2's settings: the profile's `robot: {type: go2, ...}` (robot_config.Go2RobotSettings).
@@ -163,7 +163,6 @@ class Go2RosRobot(BaseRobot):
                 max_speed=c.max_linear_speed + 0.25, max_yaw_rate=c.max_angular_speed + 0.5
             ),
         )
-        self._driven_until = 0.0  # Nav2, a posture or a trick may move the body until then
         self._detections_at: float | None = None  # monotonic receipt of the last detections
         self._posture = Posture.STANDING  # until go2_states says otherwise
         self._posture_seen = False  # go2_states has shown a posture (a change then means news)
@@ -190,12 +189,15 @@ class Go2RosRobot(BaseRobot):
         self._command = (0.0, 0.0, 0.0)
         self._halted = True  # no velocity commanded since the last stop()
         self._last_sent = 0.0
-        self._estopped = False
         self._closed = False
         self._started = time.monotonic()
         self._route: VelocityRoute | None = None  # where velocity goes (discovered)
         self._postures = PostureWatch(
             self._check_estop, "", c.command_timeout, stale=max(1.0, c.odom_timeout)
+        )
+        # Nav2, a posture or a trick may move the body until self._body.driven_until.
+        self._body = SportBody(
+            self._postures, self._request, self._halt, self._lock, _DRIVEN_SETTLE
         )
         # use_global_arguments=False: the mission node's own remappings and parameters
         # (`-r __ns:=...`) must not move the robot's topics; `namespace` does that explicitly.
@@ -351,8 +353,8 @@ class Go2RosRobot(BaseRobot):
         now = time.monotonic()
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         if self._navigator is not None and self._navigator.driving:
-            self._driven_until = now + _DRIVEN_SETTLE + self.odom_latency
-        elsewhere = now < self._driven_until
+            self._body.driven_until = now + _DRIVEN_SETTLE + self.odom_latency
+        elsewhere = now < self._body.driven_until
         with self._lock:
             before = self._tracker.latency
             fault = self._intake.receive(now, stamp, p.x, p.y, yaw, driven_elsewhere=elsewhere)
@@ -404,9 +406,7 @@ class Go2RosRobot(BaseRobot):
             self._odometry_fault(fault)
 
     def _on_state(self, msg: Go2State) -> None:
-        posture = self._postures.update(int(msg.mode), float(msg.body_height))
-        if self._postures.fallen():
-            posture = Posture.LYING  # limp or getting up after a fall: it does not stand
+        posture = self._postures.observe(int(msg.mode), float(msg.body_height))
         if posture is None:
             return
         with self._lock:
@@ -695,7 +695,7 @@ class Go2RosRobot(BaseRobot):
         with self._send_lock:
             with self._lock:
                 command, due = self._command, time.monotonic() - self._last_sent >= 0.08
-                estopped = self._estopped
+                estopped = self._body.estopped
             if any(command) and due and not estopped:
                 self._publish_twist(command, topic)
 
@@ -734,7 +734,7 @@ class Go2RosRobot(BaseRobot):
             relocalized, jumps = self._relocalized, self._jumps
             odom_at, battery = self._odom_at, self._battery
             travel = (self._intake.distance, self._intake.turned, self._intake.moving)
-            posture, estopped = self._posture, self._estopped
+            posture, estopped = self._posture, self._body.estopped
         fresh = odom_at is not None and now - odom_at <= self.config.odom_timeout
         level = battery[1] if battery and now - battery[0] <= self.config.battery_timeout else None
         return RobotState(
@@ -773,9 +773,7 @@ class Go2RosRobot(BaseRobot):
     def send_velocity(self, vx: float, vy: float, wz: float) -> None:
         """Body-frame velocity; all zero is a stop (StopMove), since the driver drops zero
         Twists."""
-        values = (float(vx), float(vy), float(wz))
-        if not all(math.isfinite(v) for v in values):
-            raise RobotError(f"velocity must be finite numbers, got {values}")
+        values = finite_velocity(vx, vy, wz)
         if not any(values):
             with self._lock:
                 halted = self._halted
@@ -783,19 +781,14 @@ class Go2RosRobot(BaseRobot):
                 self.stop()
             return
         c = self.config
-        norm = math.hypot(values[0], values[1])
-        scale = c.max_linear_speed / norm if norm > c.max_linear_speed else 1.0
+        vx, vy, wz = capped(values, c.max_linear_speed, c.max_angular_speed)
         # As the driver will send it (2 decimals), so the tracker models what the robot does;
         # the last millimetres of an approach would otherwise round to standing still.
-        command = (
-            go2_api.movable(values[0] * scale),
-            go2_api.movable(values[1] * scale),
-            go2_api.movable(max(-c.max_angular_speed, min(c.max_angular_speed, values[2]))),
-        )
+        command = (go2_api.movable(vx), go2_api.movable(vy), go2_api.movable(wz))
         if not self.last_state().connected:
             raise RobotError(self._odometry_problem() + " Not moving without odometry.")
         with self._lock:
-            starting, estopped = self._halted, self._estopped
+            starting, estopped = self._halted, self._body.estopped
         if starting:
             self._check_publishers()  # two odometry sources: found before the first step
             if self.joints_held and not estopped:
@@ -816,7 +809,7 @@ class Go2RosRobot(BaseRobot):
         topic = self._discover_velocity_topic()
         with self._send_lock:
             with self._lock:
-                if self._estopped:
+                if self._body.estopped:
                     return  # like the simulator: motion is ignored while the e-stop is latched
                 self._command = command
                 self._halted = False
@@ -842,13 +835,11 @@ class Go2RosRobot(BaseRobot):
 
     def emergency_stop(self) -> None:
         """StopMove now; motion and postures are refused until `release_estop`."""
-        with self._lock:
-            self._estopped = True
+        self._body.latch(True)
         self.stop()
 
     def release_estop(self) -> None:
-        with self._lock:
-            self._estopped = False
+        self._body.latch(False)
 
     def watch_estop(self, listener: Callable[[bool], None]) -> None:
         """Call `listener(True)` after an e-stop on `estop_topic` stopped the robot, and
@@ -872,51 +863,26 @@ class Go2RosRobot(BaseRobot):
     def set_posture(self, posture: Posture) -> None:
         """Go to `posture` through standing, one sport command at a time, each done when
         go2_states shows the posture it leads to. Nothing is sent when already there."""
-        posture = Posture(posture)
-        self._check_estop("changing posture")
-        current = self._postures.current()
-        if current is posture and (posture is not Posture.STANDING or self._postures.balanced()):
-            return
+        self._body.set_posture(posture, self._stand_before_balancing)
+
+    def _halt(self) -> None:
         with self._lock:
             moving = not self._halted
         if moving:
-            self.stop()  # the robot must be still before it changes posture
-        path = [current, posture]
-        if Posture.STANDING not in path:  # sitting <-> lying goes through standing
-            path = [current, Posture.STANDING, posture]
-        # Standing with locked joints (after a StandUp from elsewhere) only needs balancing.
-        steps = (
-            [(go2_api.BALANCE_STAND,)]
-            if current is posture
-            else [STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
-        )
-        with self._body_commanded():
-            for b, api_ids in zip(path[1:], steps, strict=True):
-                for api_id, then in zip(api_ids, (*api_ids[1:], None), strict=True):
-                    balance = api_id == go2_api.BALANCE_STAND
-                    if balance and self._postures.balanced():
-                        continue  # RiseSit already ends balanced: no redundant command
-                    self._request(api_id)
-                    what = f"{_NAME[api_id]} (api id {api_id})"
-                    if then == go2_api.BALANCE_STAND:
-                        self._stand_before_balancing(what)
-                    else:  # the posture shows (after BalanceStand: in a mode that walks)
-                        self._postures.reach(b, what, balance)
+            self.stop()
 
     def _stand_before_balancing(self, what: str) -> None:
-        """After StandUp (or RiseSit): BalanceStand once go2_states shows the body standing,
-        whatever the mode (firmware differ: JointLock 6, Damping 7), or after a bounded wait."""
-        if not self._postures.stood_up(what):
-            self.node.get_logger().warning(
-                f"{what} sent, but {self._postures.topic} shows {self._postures.describe()} "
-                f"after {STAND_UP_BOUND:g} s; sending BalanceStand anyway (the robot queues "
-                "posture commands)"
-            )
+        """After StandUp (or RiseSit): BalanceStand went once go2_states showed the body
+        standing, whatever the mode (firmware differ: JointLock 6, Damping 7), or after a
+        bounded wait; this says when the wait ran out."""
+        self.node.get_logger().warning(
+            f"{what} sent, but {self._postures.topic} shows {self._postures.describe()} "
+            f"after {STAND_UP_BOUND:g} s; sending BalanceStand anyway (the robot queues "
+            "posture commands)"
+        )
 
     def perform(self, trick: str) -> None:
-        info = go2_api.TRICKS.get(trick)
-        if info is None:
-            raise RobotError(f"unknown trick {trick!r}; known: {', '.join(go2_api.TRICKS)}")
+        info = trick_info(trick)
         ai_mode = info.api_id in go2_api.AI_MODE_TRICKS
         if ai_mode and not self.config.firmware_tricks:
             raise RobotError(
@@ -924,29 +890,11 @@ class Go2RosRobot(BaseRobot):
                 "'ai' motion mode; it is off unless enabled (ROS parameter "
                 "go2_firmware_tricks, see docs/go2.md)"
             )
-        self._check_estop(f"performing {trick}")
-        posture = self._postures.current()
-        if posture is not Posture.STANDING:
-            raise RobotError(
-                f"cannot perform {trick} while the robot is {posture.value}; stand up first"
-            )
-        with self._body_commanded():
-            if ai_mode:  # recent firmware runs these only in the "ai" motion mode
-                self._request(go2_api.MOTION_SWITCH, {"name": "ai"}, go2_api.MOTION_SWITCHER_TOPIC)
-            self._request(info.api_id)
-            self._postures.pause(info.duration, f"{trick} (api id {info.api_id})")
-            self._postures.reach(Posture.STANDING, trick)
 
-    @contextlib.contextmanager
-    def _body_commanded(self) -> Iterator[None]:
-        """A posture command or trick of ours runs: its posture changes are no fall, and the
-        body may move without a velocity command (for a while after, too)."""
-        self._postures.commanded = True
-        try:
-            yield
-        finally:
-            self._postures.commanded = False
-            self._driven_until = time.monotonic() + _DRIVEN_SETTLE
+        def ai() -> None:  # recent firmware runs these only in the "ai" motion mode
+            self._request(go2_api.MOTION_SWITCH, {"name": "ai"}, go2_api.MOTION_SWITCHER_TOPIC)
+
+        self._body.perform(trick, ai if ai_mode else None)
 
     def sleep(self, seconds: float) -> None:
         if seconds > 0:
@@ -1080,7 +1028,4 @@ class Go2RosRobot(BaseRobot):
     # -- postures ------------------------------------------------------------------------
 
     def _check_estop(self, doing: str) -> None:
-        with self._lock:
-            estopped = self._estopped
-        if estopped:
-            raise RobotError(f"e-stop is latched; release it before {doing}")
+        self._body.check_estop(doing)

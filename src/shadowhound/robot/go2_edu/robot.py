@@ -24,12 +24,10 @@ imported (go2/api: the sport API table, go2/motion and go2/odometry: late poses,
 
 from __future__ import annotations
 
-import contextlib
 import json
-import math
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from itertools import count
 
 import rclpy
@@ -49,7 +47,7 @@ from ..base import RobotError
 from ..go2 import api as go2_api
 from ..go2.motion import MAX_LATENCY, MotionTracker
 from ..go2.odometry import OdometryIntake, OdometryLimits
-from ..go2.posture import STEPS, PostureWatch
+from ..go2.posture import PostureWatch, SportBody, capped, finite_velocity, trick_info
 from ..navigator import Navigator
 
 __all__ = ["Go2EduRobot"]
@@ -57,13 +55,6 @@ __all__ = ["Go2EduRobot"]
 _RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)  # type: ignore[no-untyped-call]  # rclpy
 _KEEPALIVE_PERIOD = 0.1  # Moves renewed at 10 Hz
 _DRIVEN_SETTLE = 2.0  # seconds the body may still move after a posture or a trick
-_NAME = {
-    go2_api.STAND_UP: "StandUp",
-    go2_api.BALANCE_STAND: "BalanceStand",
-    go2_api.RISE_SIT: "RiseSit",
-    go2_api.SIT: "Sit",
-    go2_api.STAND_DOWN: "StandDown",
-}
 
 
 class Go2EduRobot:
@@ -101,18 +92,20 @@ class Go2EduRobot:
             ),
         )
         self._state_at: float | None = None  # monotonic receipt of the last sport state
-        self._driven_until = 0.0  # a posture or a trick may move the body until then
         self._posture = Posture.STANDING  # until the sport state says otherwise
         self._posture_seen = False  # the sport state has shown a posture (then a change is news)
         self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._command = (0.0, 0.0, 0.0)
         self._halted = True  # no velocity commanded since the last stop()
-        self._estopped = False
         self._closed = False
         self._started = time.monotonic()
         self._ids = count(1)  # request ids (header.identity.id)
         self._postures = PostureWatch(
             self._check_estop, "", c.command_timeout, stale=max(1.0, c.state_timeout)
+        )
+        # a posture or a trick may move the body until self._body.driven_until
+        self._body = SportBody(
+            self._postures, self._request, self._halt, self._lock, _DRIVEN_SETTLE
         )
         # use_global_arguments=False: the mission node's remappings must not move these topics.
         self.node = Node(
@@ -160,16 +153,14 @@ class Go2EduRobot:
         now = time.monotonic()
         stamp = msg.stamp.sec + msg.stamp.nanosec * 1e-9
         x, y, yaw = float(msg.position[0]), float(msg.position[1]), float(msg.imu_state.rpy[2])
-        elsewhere = now < self._driven_until
+        elsewhere = now < self._body.driven_until
         with self._lock:
             fault = self._intake.receive(now, stamp, x, y, yaw, driven_elsewhere=elsewhere)
             self._state_at = now
             moving = not self._halted
         if fault is not None and moving:
             self.stop()  # the pose is not believable: never steer on it
-        posture = self._postures.update(int(msg.mode), float(msg.body_height))
-        if self._postures.fallen():
-            posture = Posture.LYING  # limp or getting up after a fall: it does not stand
+        posture = self._postures.observe(int(msg.mode), float(msg.body_height))
         if posture is None:
             return
         with self._lock:
@@ -191,7 +182,7 @@ class Go2EduRobot:
     def _keep_alive(self) -> None:
         with self._send_lock:
             with self._lock:
-                command, estopped = self._command, self._estopped
+                command, estopped = self._command, self._body.estopped
             if any(command) and not estopped:
                 self._move(command)
 
@@ -217,7 +208,7 @@ class Go2EduRobot:
             vx, vy, wz = self._tracker.velocity(now)
             state_at, battery = self._state_at, self._battery
             travel = (self._intake.distance, self._intake.turned, self._intake.moving)
-            posture, estopped = self._posture, self._estopped
+            posture, estopped = self._posture, self._body.estopped
         fresh = state_at is not None and now - state_at <= self.config.state_timeout
         level = battery[1] if battery and now - battery[0] <= self.config.battery_timeout else None
         return RobotState(
@@ -249,9 +240,7 @@ class Go2EduRobot:
 
     def send_velocity(self, vx: float, vy: float, wz: float) -> None:
         """Body-frame velocity as Moves (renewed at 10 Hz); all zero is a stop (StopMove)."""
-        values = (float(vx), float(vy), float(wz))
-        if not all(math.isfinite(v) for v in values):
-            raise RobotError(f"velocity must be finite numbers, got {values}")
+        values = finite_velocity(vx, vy, wz)
         if not any(values):
             with self._lock:
                 halted = self._halted
@@ -259,17 +248,11 @@ class Go2EduRobot:
                 self.stop()
             return
         c = self.config
-        norm = math.hypot(values[0], values[1])
-        scale = c.max_linear_speed / norm if norm > c.max_linear_speed else 1.0
-        command = (
-            values[0] * scale,
-            values[1] * scale,
-            max(-c.max_angular_speed, min(c.max_angular_speed, values[2])),
-        )
+        command = capped(values, c.max_linear_speed, c.max_angular_speed)
         if not self.last_state().connected:
             raise RobotError(self._state_problem() + " Not moving without a pose.")
         with self._lock:
-            starting, estopped = self._halted, self._estopped
+            starting, estopped = self._halted, self._body.estopped
             untrusted = self._intake.problem(time.monotonic())
             lag = self._tracker.latency
         if untrusted:
@@ -281,7 +264,7 @@ class Go2EduRobot:
             self.set_posture(Posture.STANDING)  # joints held after a StandUp: balance first
         with self._send_lock:
             with self._lock:
-                if self._estopped:
+                if self._body.estopped:
                     return  # motion is ignored while the e-stop is latched
                 self._command, self._halted = command, False
                 walks = self._posture is Posture.STANDING  # else the robot ignores it
@@ -302,13 +285,11 @@ class Go2EduRobot:
 
     def emergency_stop(self) -> None:
         """StopMove now; motion and postures are refused until `release_estop`."""
-        with self._lock:
-            self._estopped = True
+        self._body.latch(True)
         self.stop()
 
     def release_estop(self) -> None:
-        with self._lock:
-            self._estopped = False
+        self._body.latch(False)
 
     def watch_estop(self, listener: Callable[[bool], None]) -> None:
         """No e-stop source of its own (the mission node and the dashboard have theirs)."""
@@ -316,63 +297,19 @@ class Go2EduRobot:
     def set_posture(self, posture: Posture) -> None:
         """Go to `posture` through standing, one sport request at a time (go2/posture.py's
         steps), each done when the sport state shows the posture it leads to."""
-        posture = Posture(posture)
-        self._check_estop("changing posture")
-        current = self._postures.current()
-        if current is posture and (posture is not Posture.STANDING or self._postures.balanced()):
-            return
+        self._body.set_posture(posture)
+
+    def _halt(self) -> None:
         with self._lock:
             moving = not self._halted
         if moving:
-            self.stop()  # the robot must be still before it changes posture
-        path = [current, posture]
-        if Posture.STANDING not in path:  # sitting <-> lying goes through standing
-            path = [current, Posture.STANDING, posture]
-        steps = (
-            [(go2_api.BALANCE_STAND,)]
-            if current is posture
-            else [STEPS[(a, b)] for a, b in zip(path, path[1:], strict=False)]
-        )
-        with self._body_commanded():
-            for target, api_ids in zip(path[1:], steps, strict=True):
-                for api_id, then in zip(api_ids, (*api_ids[1:], None), strict=True):
-                    balance = api_id == go2_api.BALANCE_STAND
-                    if balance and self._postures.balanced():
-                        continue
-                    self._request(api_id)
-                    what = f"{_NAME[api_id]} (api id {api_id})"
-                    if then == go2_api.BALANCE_STAND:
-                        self._postures.stood_up(what)  # BalanceStand goes after a bound anyway
-                    else:
-                        self._postures.reach(target, what, balance)
+            self.stop()
 
     def perform(self, trick: str) -> None:
-        info = go2_api.TRICKS.get(trick)
-        if info is None:
-            raise RobotError(f"unknown trick {trick!r}; known: {', '.join(go2_api.TRICKS)}")
+        info = trick_info(trick)
         if info.api_id in go2_api.AI_MODE_TRICKS:
             raise RobotError(f"{trick} (api id {info.api_id}) needs the 'ai' motion mode")
-        self._check_estop(f"performing {trick}")
-        posture = self._postures.current()
-        if posture is not Posture.STANDING:
-            raise RobotError(
-                f"cannot perform {trick} while the robot is {posture.value}; stand up first"
-            )
-        with self._body_commanded():
-            self._request(info.api_id)
-            self._postures.pause(info.duration, f"{trick} (api id {info.api_id})")
-            self._postures.reach(Posture.STANDING, trick)
-
-    @contextlib.contextmanager
-    def _body_commanded(self) -> Iterator[None]:
-        """A posture or trick of ours runs: its posture changes are no fall, and the body may
-        move without a velocity command (for a while after, too)."""
-        self._postures.commanded = True
-        try:
-            yield
-        finally:
-            self._postures.commanded = False
-            self._driven_until = time.monotonic() + _DRIVEN_SETTLE
+        self._body.perform(trick)
 
     def say(self, text: str) -> None:
         raise RobotError("this Go2 EDU has no voice here (unitree_ros2 carries no speech)")
@@ -438,7 +375,4 @@ class Go2EduRobot:
         self._request_pub.publish(msg)
 
     def _check_estop(self, doing: str) -> None:
-        with self._lock:
-            estopped = self._estopped
-        if estopped:
-            raise RobotError(f"e-stop is latched; release it before {doing}")
+        self._body.check_estop(doing)
