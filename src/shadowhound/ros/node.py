@@ -101,7 +101,11 @@ class MissionNode(Node):
         self, agent: RobotAgent | None = None, *, node_name: str = NODE_NAME, **node_kwargs: Any
     ) -> None:
         super().__init__(node_name, **node_kwargs)
-        self.settings = parse_parameters(self._declare_parameters())
+        try:
+            self.settings = parse_parameters(self._declare_parameters())
+        except BaseException:  # no half-made node left for ROS's shutdown to find
+            Node.destroy_node(self)  # rclpy's own: this node's destroy_node needs what follows
+            raise
         self._go2: Go2RosRobot | None = None  # the Go2 this node built (its topics are logged)
         if agent is None:
             settings = self.settings.agent_settings()
