@@ -168,7 +168,31 @@ def drive_local(
     end = robot.get_state()
     if end.relocalized != prev.relocalized:
         origin = carried(origin, prev, end)
+    _agrees(ctx, end, origin, start.yaw, margin)
     return math.hypot(end.x - origin.x, end.y - origin.y)
+
+
+def _agrees(ctx: SkillContext, end: RobotState, origin: Pose2D, yaw0: float, margin: float) -> None:
+    """A leg odometry says is done must agree with what its commands did: where odometry
+    puts the robot (from the leg's start, in its frame) and where the commands alone put it
+    (the ledger, from the same start) may differ by at most the leg's margin. A jump of the
+    odometry too small to be seen as one (within what the robot could move between two
+    samples) otherwise ends the leg early or late by as much, reported as done."""
+    c, s = math.cos(origin.yaw), math.sin(origin.yaw)
+    dx, dy = end.x - origin.x, end.y - origin.y
+    measured = (dx * c + dy * s, -dx * s + dy * c)
+    ox, oy, _ = ctx.commanded()  # in the frame the leg began in (odometry's, before any jump)
+    c, s = math.cos(yaw0), math.sin(yaw0)
+    commanded = (ox * c + oy * s, -ox * s + oy * c)
+    apart = math.hypot(measured[0] - commanded[0], measured[1] - commanded[1])
+    if apart > margin:
+        ctx.robot.stop()
+        raise SkillError(
+            f"odometry shows the leg done ({math.hypot(*measured):.2f} m), yet its commands "
+            f"took the robot {math.hypot(*commanded):.2f} m, {apart:.2f} m apart (at most "
+            f"{margin:.2f}: safety.step_travel_margin, step_travel_slack): odometry disagrees "
+            "with the motion (a small jump, a slipping or lifted robot?)"
+        )
 
 
 def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False) -> float:
@@ -233,7 +257,17 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
             break  # judged on the heading at rest, not on the one the loop stopped on
     st = robot.get_state()
     last_yaw = _turn_jumped(ctx, last_yaw, prev, st, relative)
-    return turned + normalize_angle(st.yaw - last_yaw)
+    turned += normalize_angle(st.yaw - last_yaw)
+    commanded = ctx.commanded()[2]
+    if abs(turned - commanded) > margin:  # a heading jump too small to be seen as one
+        robot.stop()
+        raise SkillError(
+            f"odometry shows the turn done ({math.degrees(turned):.0f} degrees), yet its "
+            f"commands turned the robot {math.degrees(commanded):.0f} degrees (at most "
+            f"{math.degrees(margin):.0f} apart: safety.step_turn_margin_deg, step_travel_slack): "
+            "odometry disagrees with the motion (a small jump of the heading?)"
+        )
+    return turned
 
 
 def _turn_jumped(
