@@ -5,7 +5,7 @@ from shadowhound.config import ConfigError, available_profiles, load_config
 
 def test_offline_profile_is_the_default():
     cfg = load_config(environ={})
-    assert cfg.backend == "offline" and cfg.robot == "sim" and cfg.profile == "offline"
+    assert cfg.backend == "offline" and cfg.robot.type == "sim" and cfg.profile == "offline"
     assert cfg.safety.max_linear_speed == 0.5 and cfg.safety.max_angular_speed == 1.0
     assert "offline" in available_profiles()
 

@@ -33,20 +33,12 @@ ESTOP_RELEASE_TOPIC = "/shadowhound/estop_release"  # std_msgs/Empty: a person r
 
 
 class _Backend(BaseModel):
-    """A robot backend's settings. Equal to the backend's name, so `settings.robot == "go2"`
-    reads as it did when the robot was only a name."""
+    """A robot backend's settings: `type` names the backend (`settings.robot.type`)."""
 
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
     # The motion section's defaults this robot needs where the profile and the environment
     # leave them unset (config.ShadowHoundConfig applies them); none: the motion section's own.
     motion_defaults: ClassVar[dict[str, float]] = {}
-
-    def __eq__(self, other: object) -> bool:
-        if isinstance(other, str):
-            return bool(getattr(self, "type", None) == other)
-        return super().__eq__(other)
-
-    __hash__ = None  # type: ignore[assignment]  # mutable settings
 
 
 class SimRobotSettings(_Backend):

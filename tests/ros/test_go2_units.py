@@ -6,7 +6,6 @@ import math
 
 import pytest
 
-from shadowhound.robot.go2.detections import CameraMount
 from shadowhound.robot.go2.motion import GO2_MOTION
 from shadowhound.ros.params import ParameterError, parse_parameters
 from shadowhound.sim_driver.options import DriverSettings, build_parser, parse_settings
@@ -34,7 +33,9 @@ def test_go2_is_accepted_with_its_topics_and_namespace() -> None:
         "detector_classes": (),
         "coco_detections_topic": "",
         "camera_info_topic": "camera/camera_info",
-        "camera_mount": CameraMount(0.3, 0.0, 0.0),
+        "camera_x": 0.3,
+        "camera_y": 0.0,
+        "camera_yaw": 0.0,
         "coco_max_range": 6.0,
         "firmware_tricks": False,
         "map_topic": "map",
@@ -57,7 +58,7 @@ def test_a_coco_detector_its_camera_and_its_range_are_checked() -> None:
     )
     options = settings.go2_options()
     assert options["coco_detections_topic"] == "detected_objects"
-    assert options["camera_mount"] == CameraMount(0.33, 0.0, 0.1)
+    assert (options["camera_x"], options["camera_y"], options["camera_yaw"]) == (0.33, 0.0, 0.1)
     assert options["coco_max_range"] == 4.0
     with pytest.raises(ParameterError) as info:
         parse_parameters(

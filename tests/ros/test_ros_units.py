@@ -90,7 +90,9 @@ def test_every_problem_is_reported_at_once() -> None:
 def test_agent_settings_take_the_profile_then_the_parameters() -> None:
     settings = parse_parameters({"backend_config": "offline", "time_scale": 0.5})
     config = settings.agent_settings()
-    assert config.backend == "offline" and config.sim.time_scale == 0.5 and config.robot == "sim"
+    assert (
+        config.backend == "offline" and config.sim.time_scale == 0.5 and config.robot.type == "sim"
+    )
     with pytest.raises(Exception, match="unknown config profile 'nope'"):
         parse_parameters({"backend_config": "nope"}).agent_settings()
 

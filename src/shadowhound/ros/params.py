@@ -14,7 +14,6 @@ from typing import Any, get_args
 
 from ..config import ShadowHoundConfig, load_config
 from ..errors import ParameterError
-from ..robot.go2.detections import CameraMount
 from ..robot.go2.motion import MAX_LATENCY
 
 NODE_NAME = "shadowhound_mission_agent"
@@ -200,8 +199,8 @@ class NodeSettings:
         if self.navigation:
             overrides["navigation"] = self.navigation
         if self.robot == "go2":  # merged into the profile's robot settings (load_config)
-            defaults = NodeSettings().robot_settings()
-            given = {k: v for k, v in self.robot_settings().items() if v != defaults[k]}
+            defaults = NodeSettings().go2_options()
+            given = {k: v for k, v in self.go2_options().items() if v != defaults[k]}
             overrides["robot"] = {**given, "type": "go2"}
         elif self.robot == "go2_edu":  # the namespace is the one parameter it shares
             namespace = {"namespace": self.robot_namespace} if self.robot_namespace else {}
@@ -210,15 +209,9 @@ class NodeSettings:
             overrides["robot"] = self.robot  # a name replaces the profile's settings whole
         return load_config(self.backend_config, overrides)
 
-    def robot_settings(self) -> dict[str, Any]:
-        """go2_options as the profile's `robot:` section takes them."""
-        options = self.go2_options()
-        mount = options.pop("camera_mount")
-        return {**options, "camera_x": mount.x, "camera_y": mount.y, "camera_yaw": mount.yaw}
-
     def go2_options(self) -> dict[str, Any]:
-        """The Go2's settings these parameters give (robot_config.Go2RobotSettings's fields;
-        the camera's mount as one CameraMount: `robot_settings` spells it out)."""
+        """The Go2's settings these parameters give, as the profile's `robot:` section takes
+        them (robot_config.Go2RobotSettings's fields)."""
         return {
             "namespace": self.robot_namespace,
             "cmd_vel_topic": self.cmd_vel_topic,
@@ -234,7 +227,9 @@ class NodeSettings:
             ),
             "coco_detections_topic": self.coco_detections_topic,
             "camera_info_topic": self.camera_info_topic,
-            "camera_mount": CameraMount(self.camera_x, self.camera_y, self.camera_yaw),
+            "camera_x": self.camera_x,
+            "camera_y": self.camera_y,
+            "camera_yaw": self.camera_yaw,
             "coco_max_range": self.coco_max_range,
             "firmware_tricks": self.go2_firmware_tricks,
             "map_topic": self.map_topic,

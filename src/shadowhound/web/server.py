@@ -142,7 +142,7 @@ def serve(
     try:
         check_binding(host, token)
         if agent is None:
-            if settings.robot == "sim" and settings.sim.time_scale == 0:
+            if settings.robot.type == "sim" and settings.sim.time_scale == 0:
                 sim = settings.sim.model_copy(update={"time_scale": 1.0})
                 settings = settings.model_copy(update={"sim": sim})
             agent = RobotAgent(settings)
