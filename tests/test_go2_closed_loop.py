@@ -44,6 +44,7 @@ class LateRobot:
         burst: int = 1,
     ) -> None:
         self.sim = sim or SimRobot(time_scale=0)
+        self.tricks = self.sim.tricks  # a simulated Go2: its tricks
         self.burst = burst  # samples that travel together: held back, then 1 ms apart
         self._group: list[tuple[tuple[float, float, float] | None, float]] = []
         self.tracker = tracker or MotionTracker()

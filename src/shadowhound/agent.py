@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import logging
 import threading
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -34,7 +35,7 @@ from .mission import MissionRun
 from .plan import Plan, SkillCall
 from .planning import FixedPlanner, Planner, make_planner
 from .result import MissionResult
-from .robot.base import Robot, RobotError
+from .robot.base import NO_TRICKS, Robot, RobotError, TrickInfo
 from .safety import Governor, Watchdog
 from .skills import SkillRegistry, default_registry
 from .speech import Voice
@@ -65,7 +66,7 @@ class RobotAgent:
             config = RobotAgentConfig(settings=config)
         self.config = config or RobotAgentConfig()
         self.settings = self.config.settings
-        self.registry = self.config.registry or default_registry()
+        self.registry = self.config.registry or default_registry(self._tricks())
         self.governor = Governor(
             self.settings.safety, self.settings.motion.auto_stand, self.registry
         )
@@ -84,6 +85,15 @@ class RobotAgent:
         self._logbook = Logbook(self._memory, self.settings.agent.conversation_history_size)
         self._chat: Chat = answer_offline
         self._crew: Crew | None = None
+
+    def _tricks(self) -> Mapping[str, TrickInfo]:
+        """The tricks `body.sport` offers: the given robot's (one that names none has none),
+        else those of the backend the profile chooses, known before it is built."""
+        if self.config.robot is not None:
+            return getattr(self.config.robot, "tricks", NO_TRICKS)
+        from .robot.factory import tricks_of
+
+        return tricks_of(self.settings.robot)
 
     # -- life cycle ------------------------------------------------------------------------
 
@@ -105,7 +115,7 @@ class RobotAgent:
 
             self._backend = LLMBackend(s.backend, s.llm)
         if self._planner is None:
-            self._planner = make_planner(s, self._backend)
+            self._planner = make_planner(s, self._backend, tricks=self.registry.tricks())
         if self._backend is not None:
             if s.llm.check_on_start:
                 self._backend.check()

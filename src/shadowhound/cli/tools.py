@@ -19,9 +19,11 @@ from .ros_tools import ROS_INSTALL
 
 
 def cmd_skills(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
+    from ..robot.factory import tricks_of
     from ..skills import default_registry
 
-    described = default_registry().describe()
+    # The skills of the robot the profile chooses (its tricks are its own).
+    described = default_registry(tricks_of(settings.robot)).describe()
     if args.json:
         jsonout.dump(described, sys.stdout, indent=2)
         sys.stdout.write("\n")
@@ -72,9 +74,11 @@ def cmd_config(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
 
 
 def cmd_doctor(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
-    go2 = args.go2 or settings.robot == "go2"
+    go2 = args.go2 or settings.robot.type == "go2"
     robot = repr(settings.robot.type)
-    if go2 and settings.robot != "go2":  # the Go2 is what is checked, whatever the profile says
+    if (
+        go2 and settings.robot.type != "go2"
+    ):  # the Go2 is what is checked, whatever the profile says
         robot = f"'go2' (--go2; the profile's robot is {robot})"
     print(
         f"ok  configuration: profile {settings.profile!r}, backend {settings.backend!r}, "

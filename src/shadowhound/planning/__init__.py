@@ -8,7 +8,7 @@ whole mission; a `ReplanningPlanner` can also plan the rest of one after a step 
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
@@ -89,18 +89,24 @@ class FixedPlanner:
         return self._plan
 
 
-def make_planner(settings: ShadowHoundConfig, backend: LLMBackend | None = None) -> Planner:
+def make_planner(
+    settings: ShadowHoundConfig,
+    backend: LLMBackend | None = None,
+    *,
+    tricks: Collection[str] | None = None,
+) -> Planner:
     """The planner for `settings`: the offline rules, or a language model behind them.
 
     With a model configured, plan mode is hybrid unless `llm.hybrid` is off: the offline rules
     plan what they understand whole, at no model call, and the model plans the rest. React
     mode is the model's loop from the first step. `backend` is the one client of the model
-    (the agent builds it once and shares it with chat, vision and memory).
+    (the agent builds it once and shares it with chat, vision and memory). `tricks`: the
+    names of the robot's tricks (None: every trick the offline rules have words for).
     """
     from .rules import RulePlanner
 
     if settings.backend == "offline":
-        return RulePlanner()
+        return RulePlanner(tricks=tricks)
     from .llm import LLMPlanner, ReactPlanner
 
     if settings.llm.mode == "react":
@@ -109,7 +115,7 @@ def make_planner(settings: ShadowHoundConfig, backend: LLMBackend | None = None)
     if settings.llm.hybrid:
         from .hybrid import HybridPlanner
 
-        return HybridPlanner(RulePlanner(), model)
+        return HybridPlanner(RulePlanner(tricks=tricks), model)
     return model
 
 

@@ -7,7 +7,6 @@ postures and shapes. The patterns that find these words in a clause are in `_phr
 from __future__ import annotations
 
 from shadowhound.planning._text import words
-from shadowhound.robot.go2.api import TRICKS
 
 FAST = 0.5
 SLOW = 0.2
@@ -112,10 +111,11 @@ _TRICK_WORDS = {
     "handstand": "handstand|hand stand|stand on hands|stand on front legs|stand on front paws",
     "bound": "bound|bounding|bound in place",
 }
-TRICK_NAMES: dict[str, str] = {name.replace("_", " "): name for name in TRICKS}
+# Words for the tricks robots perform (a Go2's sport-mode names). Which of them a robot offers
+# is its own (Robot.tricks, the registry's body.sport): the planner is told, not this table.
+TRICK_NAMES: dict[str, str] = {name.replace("_", " "): name for name in _TRICK_WORDS}
 for _trick, _phrases in _TRICK_WORDS.items():
-    if _trick in TRICKS:  # the table in go2_api is the authority on which tricks exist
-        TRICK_NAMES.update(dict.fromkeys(_phrases.split("|"), _trick))
+    TRICK_NAMES.update(dict.fromkeys(_phrases.split("|"), _trick))
 
 POSTURE_SKILL = {"lie": "body.lie_down", "sit": "body.sit", "stand": "body.stand"}
 

@@ -15,6 +15,7 @@ modules above.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from functools import cache
 from typing import Any
 
@@ -28,7 +29,6 @@ from shadowhound.planning._errors import CAPABILITIES, NotUnderstood, describe, 
 from shadowhound.planning._memory_phrases import memory_steps
 from shadowhound.planning._speech_phrases import SpeechRequest, speech_request
 from shadowhound.planning._text import canon
-from shadowhound.robot.go2.api import TRICKS
 from shadowhound.skills import default_registry
 from shadowhound.units import format_number
 
@@ -56,7 +56,10 @@ class RulePlanner:
         default_turn_degrees: float = 90.0,
         default_wait: float = 1.0,
         default_square_side: float = 1.0,
+        tricks: Collection[str] | None = None,
     ) -> None:
+        # The robot's tricks (its registry's body.sport); None: any trick there are words for.
+        self.tricks = None if tricks is None else frozenset(tricks)
         self.default_distance = float(default_distance)
         self.default_turn_degrees = float(default_turn_degrees)
         self.default_wait = float(default_wait)
@@ -162,7 +165,7 @@ class RulePlanner:
         if speech.text is not None:
             said = SkillCall("voice.say", {"text": speech.text}, label)
             steps = [said]
-            if speech.greeting and "hello" in TRICKS:  # a greeting is said with the wave
+            if speech.greeting and self._offers("hello"):  # a greeting is said with the wave
                 steps.append(SkillCall("body.sport", {"trick": "hello"}, label))
             _check_size(before, len(before) + len(steps) * speech.count)
             return steps * speech.count
@@ -340,12 +343,23 @@ class RulePlanner:
         key = phrases.TRICK_PREFIX.sub("", text, count=1)
         key = canon(phrases.TRICK_STOPWORDS.sub(" ", key))
         key = phrases.TRICK_TAIL.sub("", key)
-        trick = vocab.TRICK_NAMES.get(key) or vocab.TRICK_NAMES.get(canon(text))
-        if trick is None and phrases.GREET.match(text) and "hello" in TRICKS:
+        own = {n.replace("_", " "): n for n in self.tricks or ()}  # a robot's own names
+        trick = vocab.TRICK_NAMES.get(key) or vocab.TRICK_NAMES.get(canon(text)) or own.get(key)
+        if trick is None and phrases.GREET.match(text) and self._offers("hello"):
             trick = "hello"
         if trick is None:
             return None
+        if not self._offers(trick):
+            offers = ", ".join(sorted(self.tricks or ())) or "none"
+            raise NotUnderstood(
+                f"this robot does not perform the {trick.replace('_', ' ')} trick (its tricks: "
+                f"{offers})"
+            )
         return [SkillCall("body.sport", {"trick": trick}, label)]
+
+    def _offers(self, trick: str) -> bool:
+        """The robot performs `trick` (any trick when the planner was not told its tricks)."""
+        return self.tricks is None or trick in self.tricks
 
     def _goto(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
         m = phrases.GOTO.match(text)

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from ..errors import RobotError as RobotError
@@ -27,6 +28,30 @@ if TYPE_CHECKING:
     from ..world.image_sighting import Bearing
 
 
+class TrickInfo(Protocol):
+    """A trick a robot performs in place (a Go2's sport-mode "hello", "dance1"): what the
+    `body.sport` skill offers and the safety layer weighs."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def description(self) -> str: ...
+
+    @property
+    def duration(self) -> float:
+        """Seconds the robot is busy with it."""
+        ...
+
+    @property
+    def risky(self) -> bool:
+        """It can hurt people or the robot: it needs a person's explicit approval."""
+        ...
+
+
+NO_TRICKS: Mapping[str, TrickInfo] = MappingProxyType({})
+
+
 @runtime_checkable
 class Robot(Protocol):
     """A quadruped the agent can drive. Implementations must make `stop` thread-safe."""
@@ -35,6 +60,9 @@ class Robot(Protocol):
     # What the robot is and how it is reached, in a person's words ("simulated Go2", "Go2
     # over ROS (namespace /robot0)"): dashboards say which robot they drive.
     description: str
+    # The tricks it performs, by name (`perform`); empty: none, and no `body.sport` skill is
+    # offered. robot.factory.tricks_of says the same of a backend before it is built.
+    tricks: Mapping[str, TrickInfo]
 
     @property
     def time_scale(self) -> float:
@@ -101,9 +129,8 @@ class Robot(Protocol):
         ...
 
     def perform(self, trick: str) -> None:
-        """Run a sport-mode trick by name (see go2_api.TRICKS); returns when done. Raises
-        RobotError for a trick it does not know, while not standing or while the e-stop is
-        latched."""
+        """Run one of its `tricks` by name; returns when done. Raises RobotError for a trick it
+        does not offer, while not standing or while the e-stop is latched."""
         ...
 
     def say(self, text: str) -> None:
@@ -179,6 +206,7 @@ class BaseRobot(ABC):
 
     name: str
     description: str
+    tricks: Mapping[str, TrickInfo] = NO_TRICKS
 
     @property
     def time_scale(self) -> float:

@@ -8,15 +8,31 @@ never pulls in rclpy.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ConfigError, RobotError
 
 if TYPE_CHECKING:
     from ..config import ShadowHoundConfig
-    from .base import Robot
+    from ..robot_config import RobotSettings
+    from .base import Robot, TrickInfo
 
-__all__ = ["make_robot"]
+__all__ = ["make_robot", "tricks_of"]
+
+
+def tricks_of(choice: RobotSettings) -> Mapping[str, TrickInfo]:
+    """The tricks the backend `choice` will perform (its robot's `tricks`), known before it is
+    built: the skills it is offered (`body.sport`) are set from them."""
+    from .go2 import api as go2_api  # pure data: no ROS
+
+    if choice.type == "sim":
+        return go2_api.offered(ai_mode=True)  # the simulated Go2 performs every one
+    if choice.type == "go2":
+        return go2_api.offered(ai_mode=choice.firmware_tricks)
+    if choice.type == "go2_edu":
+        return go2_api.offered(ai_mode=False)
+    raise ConfigError(f"no robot backend {choice.type!r}")
 
 
 def make_robot(settings: ShadowHoundConfig, *, context: Any = None) -> Robot:

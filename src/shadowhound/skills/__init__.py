@@ -7,6 +7,9 @@ is one file.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
 from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout, SkillValidationError
 from . import body, facing, memory, nav, sense, voice
 from .arguments import (
@@ -27,11 +30,30 @@ from .arguments import (
 from .context import PlanEnv, SkillContext
 from .registry import Skill, SkillRegistry, ValidatedCall
 
+if TYPE_CHECKING:
+    from ..robot.base import TrickInfo
 
-def default_registry() -> SkillRegistry:
-    """A fresh registry with every built-in skill."""
+
+def default_registry(tricks: Mapping[str, TrickInfo] | None = None) -> SkillRegistry:
+    """A fresh registry with every built-in skill, `body.sport` offering `tricks` (a robot's
+    `Robot.tricks`; none: no `body.sport`). Without `tricks`, those of the default robot (the
+    simulated Go2)."""
+    if tricks is None:
+        from ..robot.factory import tricks_of
+        from ..robot_config import SimRobotSettings
+
+        tricks = tricks_of(SimRobotSettings())
+    sport = body.sport_skill(tricks)
     return SkillRegistry(
-        [*nav.SKILLS, *facing.SKILLS, *body.SKILLS, *sense.SKILLS, *voice.SKILLS, *memory.SKILLS]
+        [
+            *nav.SKILLS,
+            *facing.SKILLS,
+            *body.SKILLS,
+            *([sport] if sport else []),
+            *sense.SKILLS,
+            *voice.SKILLS,
+            *memory.SKILLS,
+        ]
     )
 
 

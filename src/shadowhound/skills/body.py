@@ -2,23 +2,22 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, create_model
 
-from ..robot.go2.api import TRICKS
+from ..robot.base import TrickInfo
 from ..state import Posture
 from .arguments import NoArgs, SkillArgs
 from .context import SkillContext
 from .registry import Skill
 
-TrickName = Literal[tuple(TRICKS)]  # type: ignore[valid-type]
-
 
 class SportArgs(SkillArgs):
-    trick: TrickName = Field(  # type: ignore[valid-type]
-        description="a trick (flips, jumps, pounce, handstand, bound: risky, need approval)"
-    )
+    """`body.sport`'s arguments; `sport_skill` narrows `trick` to the robot's tricks."""
+
+    trick: str = Field(description="a trick the robot performs")
 
 
 def _posture_runner(target: Posture, done: str):  # type: ignore[no-untyped-def]
@@ -38,12 +37,6 @@ def _run_sport(ctx: SkillContext, a: SportArgs) -> str:
     ctx.robot.perform(a.trick)
     ctx.check()
     return f"performed {str(a.trick).replace('_', ' ')}"
-
-
-def _risk(a: SportArgs) -> str:
-    if not TRICKS[a.trick].risky:
-        return ""
-    return f"{a.trick} is a risky trick (it can hurt people or the robot)"
 
 
 SKILLS = (
@@ -76,15 +69,38 @@ SKILLS = (
         low_battery=True,
         phrase=lambda a: "lie down",
     ),
-    Skill(
-        "body.sport",
-        "Perform a Unitree sport-mode trick in place.",
-        SportArgs,
-        _run_sport,
-        timeout=lambda a, env: TRICKS[a.trick].duration + 15.0,
-        needs_standing=True,
-        risk=_risk,
-        seconds=lambda a: TRICKS[a.trick].duration,
-        phrase=lambda a: f"do the {a.trick} trick",
-    ),
 )
+
+
+def sport_skill(tricks: Mapping[str, TrickInfo]) -> Skill | None:
+    """`body.sport` for a robot that performs `tricks` (its `Robot.tricks`): its `trick`
+    argument takes exactly their names; None for a robot without tricks (no such skill)."""
+    if not tricks:
+        return None
+    table = dict(tricks)
+    risky = ", ".join(n for n, t in table.items() if t.risky)
+    args = create_model(
+        "SportArgs",
+        __base__=SportArgs,
+        trick=(  # type: ignore[arg-type]  # a Literal built at run time
+            Literal[tuple(table)],
+            Field(description=f"a trick ({risky}: risky, need approval)" if risky else "a trick"),
+        ),
+    )
+
+    def risk(a: SportArgs) -> str:
+        if not table[a.trick].risky:
+            return ""
+        return f"{a.trick} is a risky trick (it can hurt people or the robot)"
+
+    return Skill(
+        "body.sport",
+        "Perform a sport-mode trick in place.",
+        args,
+        _run_sport,
+        timeout=lambda a, env: table[a.trick].duration + 15.0,
+        needs_standing=True,
+        risk=risk,
+        seconds=lambda a: table[a.trick].duration,
+        phrase=lambda a: f"do the {a.trick} trick",
+    )

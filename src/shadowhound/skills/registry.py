@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, get_args
 
 from pydantic import ValidationError
 
@@ -206,6 +206,13 @@ class SkillRegistry:
     @property
     def names(self) -> list[str]:
         return list(self._skills)
+
+    def tricks(self) -> frozenset[str]:
+        """The trick names `body.sport` takes here: the robot's tricks (empty: it has none)."""
+        sport = self._skills.get("body.sport")
+        if sport is None:
+            return frozenset()
+        return frozenset(get_args(sport.args_model.model_fields["trick"].annotation))
 
     def find(self, name: str) -> Skill | None:
         """The skill called `name` (or its tool name), None when there is none."""

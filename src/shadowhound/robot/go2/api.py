@@ -10,8 +10,10 @@ simulator's figures (firmware knowledge: check them on a robot).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import IntEnum
+from types import MappingProxyType
 
 from ...state import Posture
 
@@ -74,6 +76,14 @@ TRICKS: dict[str, Trick] = {
 # Tricks the robot performs only on firmware that has them and after switching to the "ai"
 # motion mode (MOTION_SWITCH with {"name": "ai"}); otherwise it ignores them.
 AI_MODE_TRICKS = frozenset({1042, 1043, 1044, 1301, 1302, 1303, 1304, 1305})
+
+
+def offered(ai_mode: bool) -> Mapping[str, Trick]:
+    """The tricks a Go2 performs: all of them when it may switch to the "ai" motion mode
+    (firmware that has them), else those that run in the normal mode."""
+    if ai_mode:
+        return MappingProxyType(TRICKS)
+    return MappingProxyType({n: t for n, t in TRICKS.items() if t.api_id not in AI_MODE_TRICKS})
 
 
 class SportMode(IntEnum):

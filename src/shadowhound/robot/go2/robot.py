@@ -141,6 +141,7 @@ class Go2RosRobot(BaseRobot):
         self.config = c = config or Go2RosConfig()
         namespace = c.namespace.strip("/")
         self.name = f"go2 ({namespace})" if namespace else "go2"
+        self.tricks = go2_api.offered(ai_mode=c.firmware_tricks)
         self.description = "Go2 over ROS" + (f" (namespace /{namespace})" if namespace else "")
         self._own_context = context is None and not rclpy.ok()
         if self._own_context:

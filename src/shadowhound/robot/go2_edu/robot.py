@@ -27,7 +27,7 @@ from __future__ import annotations
 import json
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from itertools import count
 
 import rclpy
@@ -43,7 +43,7 @@ from ...state import CameraFrame, Posture, RobotState, Scan
 from ...world import Belief
 from ...world.image_sighting import Bearing
 from ...world.objects import KnownObject
-from ..base import RobotError
+from ..base import RobotError, TrickInfo
 from ..go2 import api as go2_api
 from ..go2.motion import MAX_LATENCY, MotionTracker
 from ..go2.odometry import OdometryIntake, OdometryLimits
@@ -62,6 +62,9 @@ class Go2EduRobot:
 
     time_scale = 1.0  # a real robot's clock is the wall clock
     realtime = True
+    tricks: Mapping[str, TrickInfo] = go2_api.offered(
+        ai_mode=False
+    )  # unitree_ros2 does not switch motion modes
 
     def __init__(
         self, config: Go2EduRobotSettings | None = None, *, context: Context | None = None

@@ -39,7 +39,7 @@ from ...config import SimConfig
 from ...state import CameraFrame, Posture, RobotState, Scan, normalize_angle
 from ...world import Belief, KnownObject
 from ..base import BaseRobot, RobotError
-from ..go2.api import TRICKS
+from ..go2 import api as go2_api
 from . import renderer, scene, sensors
 
 _SUBSTEP = 0.01  # seconds of physics per integration step
@@ -101,6 +101,7 @@ class SimRobot(BaseRobot):
             raise ValueError("time_scale must be a finite number >= 0 (0 = as fast as possible)")
         self.name = name
         self.description = "simulated Go2"
+        self.tricks = go2_api.offered(ai_mode=True)
         self._world = world
         self.world: scene.World = world if world is not None else scene.DEFAULT_WORLD
         # What the robot's map was made of: the scene itself, or an older one (a stale map).
@@ -372,12 +373,12 @@ class SimRobot(BaseRobot):
                 self._state = replace(self._state, posture=b)
 
     def perform(self, trick: str) -> None:
-        info = TRICKS.get(trick)
+        info = self.tricks.get(trick)
         with self._lock:
             self._catch_up()
             if info is None:
                 self._record("trick", trick, False, "unknown trick")
-                raise RobotError(f"unknown trick {trick!r}; known: {', '.join(TRICKS)}")
+                raise RobotError(f"unknown trick {trick!r}; known: {', '.join(self.tricks)}")
             if self._state.estopped or self._state.posture is not Posture.STANDING:
                 why = "e-stop latched" if self._state.estopped else self._state.posture.value
                 self._record("trick", trick, False, f"ignored: {why}")
