@@ -11,6 +11,7 @@ from shadowhound.evaluation import load_cases, run_case
 DATA = Path(__file__).parent / "data"
 HELD_OUT = load_cases(DATA / "missions_heldout.yaml")
 WORLD = load_cases(DATA / "missions_world.yaml")
+WATCHES = load_cases(DATA / "missions_watches.yaml")
 
 
 @pytest.mark.parametrize("case", HELD_OUT, ids=[c.mission[:50] for c in HELD_OUT])
@@ -22,6 +23,13 @@ def test_held_out_case(case):
 @pytest.mark.parametrize("case", WORLD, ids=[c.mission[:50] for c in WORLD])
 def test_world_case(case):
     """Going to things, places and points, names it cannot recognise, facing, travel."""
+    outcome = run_case(case, ShadowHoundConfig())
+    assert outcome.passed, f"{outcome.failures} -> {outcome.response}"
+
+
+@pytest.mark.parametrize("case", WATCHES, ids=[c.mission[:50] for c in WATCHES])
+def test_watch_case(case):
+    """Until, unless, stop if: what fired and what it refused, in the default scene."""
     outcome = run_case(case, ShadowHoundConfig())
     assert outcome.passed, f"{outcome.failures} -> {outcome.response}"
 

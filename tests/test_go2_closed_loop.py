@@ -26,7 +26,7 @@ from shadowhound.robot.go2.motion import GO2_MOTION, MotionTracker
 from shadowhound.robot.go2.odometry import OdometryIntake
 from shadowhound.robot.sim.robot import SimRobot
 from shadowhound.sim_driver.faults import Faults, LyingOdometry
-from shadowhound.state import CameraFrame, Posture, RobotState
+from shadowhound.state import CameraFrame, Posture, RobotState, Sighting
 
 
 class LateRobot:
@@ -111,6 +111,9 @@ class LateRobot:
 
     def perform(self, trick: str) -> None:
         self.sim.perform(trick)
+
+    def in_view(self) -> tuple[Sighting, ...]:
+        return self.sim.in_view()  # its camera is not late: what the simulator shows now
 
     def now(self) -> float:
         return self.sim.now()

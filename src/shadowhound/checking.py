@@ -12,10 +12,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from .config import ShadowHoundConfig
-from .plan import Plan
+from .plan import Plan, Watch
 from .result import StepResult, StepStatus
+from .robot.base import Robot
 from .safety import Governor
 from .skills import PlanEnv, SkillRegistry, SkillValidationError, ValidatedCall
+from .skills.watches import check_watches
 from .state import Pose2D, RobotState
 
 
@@ -40,11 +42,22 @@ def check_plan(
     env: PlanEnv,
     start: RobotState,
     first: int = 1,
+    robot: Robot | None = None,
 ) -> CheckedPlan:
-    """Validate every step and run the governor over the whole plan from `start`."""
+    """Validate every step and run the governor over the whole plan from `start` (as if no
+    watch ever fired: a watch only shortens a step). Each step's watches must be observable on
+    `robot`, or the plan is refused naming them."""
     calls, problems, invalid = _validate(plan, registry, settings)
+    for i, c in enumerate(calls, first):
+        if c is None or not c.watches:
+            continue
+        if robot is None:
+            problems.append(f"step {i}: its conditions can only be checked against the robot")
+            continue
+        problems += [f"step {i}: {p}" for p in check_watches(c.watches, robot, env.vocabulary)]
     steps = [
-        StepResult(i, c.skill, plain_args(c.args), c.label) for i, c in enumerate(plan.steps, first)
+        StepResult(i, c.skill, plain_args(c.args), c.label, watches=_watch_records(c))
+        for i, c in enumerate(plan.steps, first)
     ]
     verdict = governor.check_plan(calls, start, env)
     forecasts = [
@@ -104,6 +117,12 @@ def _validate(
             invalid.append(list(exc.problems))
             problems.extend(f"step {index}: {p}" for p in exc.problems)
     return calls, problems, invalid
+
+
+def _watch_records(call: Any) -> list[dict[str, Any]]:
+    """A proposed step's watches for the record (whatever a planner sent)."""
+    watches = getattr(call, "watches", ())
+    return [w.to_dict() for w in watches if isinstance(w, Watch)] if watches else []
 
 
 def plain_args(args: Any) -> dict[str, Any]:

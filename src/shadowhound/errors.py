@@ -22,6 +22,8 @@ what was wrong and what is allowed or what to do.
     |   +-- PlanProblem              ... a step cannot be done here: a limit, the geofence, an
     |   |                                unknown place (the governor's refusals; ValueError)
     |   +-- MissionCancelled         ... cancel or e-stop stopped the running skill
+    |   +-- WatchFired               ... a watched condition held: the step stopped (until:
+    |                                    the step is done; unless: the mission ends there)
     +-- DetectionError               ros: a detection message that cannot be used (ValueError)
     +-- PlanError                    world: no safe path to the goal
     +-- GridError                    world: a map or grid query is malformed (ValueError)
@@ -81,6 +83,7 @@ __all__ = [
     "TransformUnavailable",
     "UnitError",
     "UsageError",
+    "WatchFired",
 ]
 
 
@@ -196,6 +199,16 @@ class MissionCancelled(SafetyError):
 
 
 # -- world model, units ----------------------------------------------------------------------
+
+
+class WatchFired(SafetyError):
+    """A step's watched condition held (`watch`, a plan.Watch): the robot was stopped.
+    `observed` says what was seen ("red ball seen 2.3 m away")."""
+
+    def __init__(self, watch: object, observed: str) -> None:
+        super().__init__(observed)
+        self.watch = watch
+        self.observed = observed
 
 
 class PlanError(ShadowHoundError):

@@ -35,6 +35,7 @@ ESTOP = "estop"
 APPROVAL_REQUIRED = "approval_required"
 APPROVAL_DECIDED = "approval_decided"
 SPOKEN = "spoken"
+WATCH_FIRED = "watch_fired"
 
 
 @dataclass(frozen=True)
@@ -169,6 +170,19 @@ class Spoken(MissionEvent):
             "aloud": self.aloud,
             "why_silent": self.why_silent,
         }
+
+
+@dataclass(frozen=True)
+class WatchFiredEvent(MissionEvent):
+    """A step's watched condition held and stopped it (`text`: "stopped: red ball seen 2.3 m
+    away (until red ball is seen)"); the step's record says the same."""
+
+    kind: ClassVar[str] = WATCH_FIRED
+    step: int  # the step's index in the mission
+    text: str
+
+    def payload(self) -> dict[str, Any]:
+        return {"step": self.step, "text": self.text}
 
 
 Listener = Callable[[MissionEvent], None]

@@ -17,6 +17,7 @@ in order; each stage is a short method.
 from __future__ import annotations
 
 import logging
+import math
 import time
 from typing import Any
 
@@ -26,6 +27,7 @@ from .approval import ApprovalRequest
 from .budget import MissionBudget
 from .checking import CheckedPlan, check_plan
 from .crew import Crew
+from .errors import WatchFired
 from .plan import Plan, PlanningError, SkillCall, Usage
 from .planning import Planner, PlanningContext, ReplanningPlanner, StepwisePlanner
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing, compose_response
@@ -38,8 +40,9 @@ from .skills import (
     ValidatedCall,
 )
 from .skills.objects import see_at_start
+from .skills.watches import fired_text
 from .speech import Saying
-from .state import RobotState
+from .state import RobotState, normalize_angle
 
 log = logging.getLogger(__name__)
 
@@ -194,7 +197,9 @@ class MissionRun:
 
     def check(self, plan: Plan, start: RobotState, first: int) -> CheckedPlan:
         c = self.crew
-        return check_plan(plan, c.registry, c.governor, c.settings, self._env(), start, first)
+        return check_plan(
+            plan, c.registry, c.governor, c.settings, self._env(), start, first, self.robot
+        )
 
     # 4. Approve: risky plans wait for a person.
 
@@ -392,6 +397,7 @@ class MissionRun:
             if refused:
                 raise SkillError("refused by the safety governor: " + "; ".join(refused))
             ctx.start_clock(call.skill.timeout_for(call.args, env))
+            ctx.watch(call.watches)
             ctx.check()
             output = call.skill.run(ctx, call.args)
             off_target = c.governor.check_outcome(call, before, robot.get_state(), env)
@@ -399,6 +405,16 @@ class MissionRun:
                 raise SkillError(off_target)
             step.output = "; ".join([*ctx.notes, output])
             step.status = StepStatus.SUCCEEDED
+        except WatchFired as fired:  # the robot is stopped; what it did counts, as far as it got
+            robot.stop()
+            said = f"{_so_far(before, robot)}, {fired_text(fired.watch, fired.observed)}"  # type: ignore[arg-type]
+            step.output = "; ".join([*ctx.notes, said])
+            self.emit(ev.WatchFiredEvent(self.id, step.index, said))
+            if getattr(fired.watch, "when", "") == "until":
+                step.status = StepStatus.SUCCEEDED  # done: what it waited for came
+            else:
+                step.status, step.error = StepStatus.CANCELLED, said
+                status = MissionStatus.STOPPED
         except MissionCancelled:
             robot.stop()
             step.status, step.error = StepStatus.CANCELLED, c.stop.reason()
@@ -527,3 +543,13 @@ class MissionRun:
         except RobotError as exc:
             log.warning("robot state unavailable: %s", exc)
             return None
+
+
+def _so_far(before: RobotState, robot: Any) -> str:
+    """What a step stopped by a watch did: "moved 1.84 m, turned 12 degrees" ("did not move")."""
+    now = robot.last_state()
+    moved = math.hypot(now.x - before.x, now.y - before.y)
+    turned = abs(math.degrees(normalize_angle(now.yaw - before.yaw)))
+    parts = [f"moved {moved:.2f} m"] if moved >= 0.01 else []
+    parts += [f"turned {turned:.0f} degrees"] if turned >= 1 else []
+    return ", ".join(parts) or "did not move"

@@ -8,19 +8,72 @@ from typing import Any
 from .errors import PlanningError as PlanningError
 from .usage import Usage as Usage
 
+WATCH_KINDS = ("seen", "in_the_way", "battery_below")
+WATCH_WHEN = ("until", "unless")
+
+
+@dataclass(frozen=True)
+class Watch:
+    """A condition the runtime watches while a step runs, at control rate (never a model).
+
+    `when`: "until" ends the step when the condition holds and the mission goes on; "unless"
+    (also "stop if") stops the step and ends the mission there, saying why. A watch can only
+    shorten a step: the plan is checked as if it never fired.
+    `kind`: "seen" (`name` in view, within `within` metres when given), "in_the_way"
+    (something in the robot's path within `within` metres of its body), "battery_below"
+    (`percent`). `words`: the request's words for it, for people.
+    """
+
+    when: str
+    kind: str
+    name: str = ""
+    within: float | None = None
+    percent: float | None = None
+    words: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"when": self.when, "kind": self.kind}
+        if self.name:
+            out["name"] = self.name
+        if self.within is not None:
+            out["within"] = self.within
+        if self.percent is not None:
+            out["percent"] = self.percent
+        if self.words:
+            out["words"] = self.words
+        return out
+
+    def describe(self) -> str:
+        """In a person's words: "until the red ball is seen", "unless something is within 1 m
+        of the path"."""
+        if self.kind == "seen":
+            what = f"{self.name or 'anything'} is seen"
+            if self.within is not None:
+                what += f" within {self.within:g} m"
+        elif self.kind == "in_the_way":
+            what = f"something is in the way (within {self.within or 0:g} m)"
+        else:
+            what = f"the battery is below {self.percent or 0:g}%"
+        return f"{self.when} {what}"
+
 
 @dataclass(frozen=True)
 class SkillCall:
-    """One proposed step: a registered skill name and its (not yet validated) arguments."""
+    """One proposed step: a registered skill name and its (not yet validated) arguments, and
+    the conditions watched while it runs."""
 
     skill: str
     args: dict[str, Any] = field(default_factory=dict)
     label: str = ""  # the words of the request this step came from, for people
+    watches: tuple[Watch, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         # A language model may propose anything; keep the record JSON-safe whatever it is.
         args = dict(self.args) if isinstance(self.args, dict) else {"_invalid": repr(self.args)}
-        return {"skill": self.skill, "args": args, "label": self.label}
+        out: dict[str, Any] = {"skill": self.skill, "args": args, "label": self.label}
+        if self.watches:
+            out["watches"] = [w.to_dict() for w in self.watches]
+        return out
 
 
 @dataclass

@@ -62,9 +62,11 @@ class StepResult:
     robot_duration: float = 0.0
     output: str = ""
     error: str | None = None
+    # The conditions watched while it runs (plan.Watch.to_dict each); none for most steps.
+    watches: list[dict[str, Any]] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out = {
             "index": self.index,
             "skill": self.skill,
             "args": self.args,
@@ -76,6 +78,13 @@ class StepResult:
             "output": self.output,
             "error": self.error,
         }
+        if self.watches:
+            out["watches"] = self.watches
+        return out
+
+    def watching(self) -> str:
+        """The conditions in the person's words: "until you see the red ball" ("")."""
+        return "; ".join(str(w.get("words") or w.get("kind", "")) for w in self.watches)
 
 
 @dataclass

@@ -36,7 +36,8 @@ def progress(stream: TextIO, registry: SkillRegistry) -> ev.Listener:
         elif isinstance(event, ev.StepStarted):
             step = event.step
             args = ", ".join(f"{k}={v}" for k, v in step.args.items())
-            print(f"  [{step.index}] {step.skill}({args}) ...", file=stream, flush=True)
+            watching = f" {step.watching()}" if step.watches else ""
+            print(f"  [{step.index}] {step.skill}({args}){watching} ...", file=stream, flush=True)
         elif isinstance(event, ev.StepFinished):
             step = event.step
             ok = step.status is StepStatus.SUCCEEDED
@@ -163,7 +164,8 @@ def _show_dry_run(result: Any, args: argparse.Namespace) -> int:
     else:
         for step in result.steps:
             params = ", ".join(f"{k}={v}" for k, v in step.args.items())
-            print(f"  [{step.index}] {step.skill}({params})")
+            watching = f" {step.watching()}" if step.watches else ""
+            print(f"  [{step.index}] {step.skill}({params}){watching}")
         points = result.predicted_path
         path = " -> ".join(f"({p.x:.2f}, {p.y:.2f})" for p in points)
         if path:

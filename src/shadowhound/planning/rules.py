@@ -15,16 +15,19 @@ modules above.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Collection
+from dataclasses import replace
 from functools import cache
 from typing import Any
 
-from shadowhound.plan import Plan, PlanningError, SkillCall
+from shadowhound.plan import Plan, PlanningError, SkillCall, Watch
 from shadowhound.planning import _english as en
 from shadowhound.planning import _numbers as nums
 from shadowhound.planning import _phrases as phrases
 from shadowhound.planning import _spelling as spelling
 from shadowhound.planning import _vocabulary as vocab
+from shadowhound.planning import _watches as watching
 from shadowhound.planning._errors import CAPABILITIES, NotUnderstood, describe, failure
 from shadowhound.planning._memory_phrases import memory_steps
 from shadowhound.planning._speech_phrases import SpeechRequest, speech_request
@@ -58,6 +61,7 @@ class RulePlanner:
         default_square_side: float = 1.0,
         tricks: Collection[str] | None = None,
     ) -> None:
+        self.default_watch_distance = 5.0  # metres a walk "until ..." goes at most
         # The robot's tricks (its registry's body.sport); None: any trick there are words for.
         self.tricks = None if tricks is None else frozenset(tricks)
         self.default_distance = float(default_distance)
@@ -83,6 +87,7 @@ class RulePlanner:
         notes: list[str] = []
         failed: list[tuple[str, str]] = []
         last_verb = ""
+        previous = 0  # where the last clause's steps begin
         for label in en.split_clauses(text):
             speech = speech_request(label)
             if speech is not None:
@@ -102,6 +107,13 @@ class RulePlanner:
                 continue
             try:
                 norm, clause_notes = en.normalize(label)
+                stop_if = watching.STOP_IF.match(norm)
+                if stop_if:  # "(and) stop if you see a person": watches the clause before
+                    if not steps:
+                        raise NotUnderstood("say what to do before when to stop")
+                    watch = watching.watch_of("stop if", stop_if["cond"])
+                    steps[previous:] = [_watched(s, watch) for s in steps[previous:]]
+                    continue
                 read = self._forgiving(norm, label, clause_notes, last_verb, bool(steps))
                 if read is None:
                     continue  # only fillers such as "please" or "hey dog"
@@ -128,6 +140,7 @@ class RulePlanner:
                     _check_size(steps, len(steps) + len(new) * count)
                     new = new * count
             _check_size(steps, len(steps) + len(new))
+            previous = len(steps)
             steps.extend(new)
             notes.extend(clause_notes)
         if failed:
@@ -251,6 +264,9 @@ class RulePlanner:
             return [SkillCall("nav.stop", {}, label)], ""
         if phrases.NEGATION.search(text):
             raise NotUnderstood("I do not plan around 'not'; say what to do instead")
+        watched = watching.WATCHED.match(text)
+        if watched and not phrases.CONDITION.search(watched["action"]):
+            return self._watched(watched, label, notes, last_verb)
         condition = phrases.CONDITION.search(text)
         if condition:
             raise NotUnderstood(
@@ -295,6 +311,34 @@ class RulePlanner:
         if phrases.REPORT.match(text):
             return [SkillCall("sys.status", {}, label)], ""
         return None, ""
+
+    def _watched(
+        self, m: re.Match[str], label: str, notes: list[str], last_verb: str
+    ) -> tuple[list[SkillCall] | None, str]:
+        """ "ACTION until|unless CONDITION": the action's steps, each watching the condition.
+        Waiting for something ("until you see ...") with no distance or angle given goes at
+        most `default_watch_distance` metres or a full turn."""
+        watch = watching.watch_of(m["when"], m["cond"])
+        bounded = self
+        if watch.when == "until":
+            bounded = RulePlanner(
+                default_distance=self.default_watch_distance,
+                default_turn_degrees=360.0,
+                default_wait=self.default_wait,
+                default_square_side=self.default_square_side,
+                tricks=self.tricks,
+            )
+        before = len(notes)
+        steps, verb = bounded._clause(m["action"], label, notes, last_verb)
+        if bounded is not self:  # a default reach is the most it goes, not where it ends
+            notes[before:] = [
+                n.replace(": used ", ": at most ").replace(": turned ", ": at most ")
+                + f" ({watch.describe()})"
+                for n in notes[before:]
+            ]
+        if not steps:
+            raise NotUnderstood(f"I do not know what to do {m['when']} {m['cond']}")
+        return [_watched(s, watch) for s in steps], verb
 
     def _duration(self, rest: str, label: str, notes: list[str]) -> float | None:
         """Seconds named in `rest`; None if no time is given. Raises on words it cannot use."""
@@ -618,3 +662,8 @@ def _check_size(steps: list[SkillCall], size: int) -> None:
             f"The plan would have {size} steps; the limit is {MAX_STEPS}. Ask for fewer repeats.",
             understood=[describe(s) for s in steps[:20]],
         )
+
+
+def _watched(step: SkillCall, watch: Watch) -> SkillCall:
+    """`step` also watching `watch`."""
+    return replace(step, watches=(*step.watches, watch))

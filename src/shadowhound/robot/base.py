@@ -20,7 +20,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from ..errors import RobotError as RobotError
-from ..state import CameraFrame, Posture, RobotState, Scan
+from ..state import CameraFrame, Posture, RobotState, Scan, Sighting
 from .navigator import Navigator
 
 if TYPE_CHECKING:
@@ -172,6 +172,12 @@ class Robot(Protocol):
         ends without the thing, never a place to go. Empty when all it sees is placed."""
         ...
 
+    def in_view(self) -> tuple[Sighting, ...] | None:
+        """What its camera or detector labels in view now (name, distance, bearing), cheap
+        enough to read every control tick (a step's watches read it), nearest first. None
+        when it cannot tell what is in view now: then nothing can be watched for by sight."""
+        ...
+
     def look(self) -> None:
         """Let what the robot recognises catch up with its view now (a detector runs at its
         own rate, behind the camera): returns once it has reported on this view, or after a
@@ -274,6 +280,10 @@ class BaseRobot(ABC):
 
     def bearings(self) -> tuple[Bearing, ...]:
         return ()
+
+    def in_view(self) -> tuple[Sighting, ...] | None:
+        """It cannot tell what is in view."""
+        return None
 
     def look(self) -> None:  # noqa: B027 (a default: nothing to do)
         """Nothing to wait for: no detector runs behind its camera."""

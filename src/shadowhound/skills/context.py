@@ -4,18 +4,22 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
 from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout
 from ..memory.service import AgentMemory
+from ..plan import Watch
 from ..robot.base import Robot
 from ..speech import Saying
 from ..state import CameraFrame, Pose2D, Posture, RobotState
 from ..world import Belief, KnownObject
 from .bounds import CommandLedger, fences, room_ahead
+from .watches import Watcher, raise_if_fired
+
+_TRANSLATING = 0.05  # m/s commanded: the robot goes somewhere (a path check looks along it)
 
 
 @dataclass
@@ -106,6 +110,13 @@ class SkillContext:
         self.ledger: CommandLedger | None = None  # the step's commands, from its first one
         self._needs: Posture | None = None  # the posture the step runs in (ensure_standing)
         self._start_clearance: list[float] | None = None  # per fence, where the step began
+        self._watcher: Watcher | None = None  # the step's watches (`watch`)
+
+    def watch(self, watches: Sequence[Watch]) -> None:
+        """Check `watches` at every `check` from now on: the first that holds stops the robot
+        and raises WatchFired (plan.Watch says what each means)."""
+        if watches:
+            self._watcher = Watcher(watches, self.robot, self.config.sim.body_radius)
 
     def start_clock(self, timeout: float) -> None:
         """Give the skill `timeout` seconds of robot time, more on a robot whose pose lags
@@ -129,6 +140,10 @@ class SkillContext:
         if self.robot.now() > self.deadline:
             raise SkillTimeout(self._late)
         state = self.robot.get_state()
+        if self._watcher is not None:
+            vx, vy, _ = self._last_command  # where it goes: a path check looks along it
+            heading = math.atan2(vy, vx) if math.hypot(vx, vy) > _TRANSLATING else None
+            raise_if_fired(self._watcher, state, heading)
         if self._needs is not None and state.posture is not self._needs:
             self.robot.stop()
             raise SkillError(

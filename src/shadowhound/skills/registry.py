@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any, get_args
 from pydantic import ValidationError
 
 from ..errors import SkillValidationError
-from ..plan import SkillCall
+from ..plan import SkillCall, Watch
 from ..state import Posture
 from ..units import UnitError
 from .arguments import SkillArgs, typical_value
@@ -170,6 +170,7 @@ class ValidatedCall:
     skill: Skill
     args: SkillArgs
     label: str = ""
+    watches: tuple[Watch, ...] = ()  # checked by checking.check_plan against the robot
 
     @property
     def name(self) -> str:
@@ -244,7 +245,7 @@ class SkillRegistry:
             parsed = skill.args_model.model_validate(dict(args))
         except ValidationError as exc:
             raise SkillValidationError(_explain(skill, exc, args)) from exc
-        return ValidatedCall(skill, parsed, call.label)
+        return ValidatedCall(skill, parsed, call.label, _watches(call.watches))
 
     def describe(self) -> list[dict[str, Any]]:
         return [s.describe() for s in self._skills.values()]
@@ -262,6 +263,16 @@ class SkillRegistry:
             }
             for s in self._skills.values()
         ]
+
+
+def _watches(watches: Any) -> tuple[Watch, ...]:
+    """A step's watches as given: a tuple of plan.Watch (what each means is checked against the
+    robot by checking.check_plan)."""
+    if watches is None:
+        return ()
+    if not isinstance(watches, (tuple, list)) or not all(isinstance(w, Watch) for w in watches):
+        raise SkillValidationError([f"a step's watches must be conditions, got {watches!r:.80}"])
+    return tuple(watches)
 
 
 def _explain(skill: Skill, exc: ValidationError, args: Mapping[str, Any]) -> list[str]:

@@ -340,6 +340,9 @@ class Go2EduRobot:
     def bearings(self) -> tuple[Bearing, ...]:
         return ()
 
+    def in_view(self) -> None:
+        return None  # no camera here: nothing can be watched for by sight
+
     def look(self) -> None:
         return None
 

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ...config import SimConfig
-from ...state import CameraFrame, Posture, RobotState, Scan, normalize_angle
+from ...state import CameraFrame, Posture, RobotState, Scan, Sighting, normalize_angle
 from ...world import Belief, KnownObject
 from ..base import BaseRobot, RobotError
 from ..go2 import api as go2_api
@@ -409,6 +409,28 @@ class SimRobot(BaseRobot):
             width=self.config.camera_width,
             height=self.config.camera_height,
         )
+
+    def in_view(self) -> tuple[Sighting, ...]:
+        """What its camera labels in view now (the scene's truth, as the frame would), without
+        rendering the picture."""
+        return scene.visible_objects(self.world, self.get_state().pose)  # as camera_frame
+
+    def set_battery(self, percent: float) -> None:
+        """Set the battery's charge (0 to 100 percent): a low battery to test against. It
+        drains from there as before."""
+        level = float(percent)
+        if not (math.isfinite(level) and 0.0 <= level <= 100.0):
+            raise ValueError(f"battery must be a percent from 0 to 100, got {percent!r}")
+        with self._lock:
+            self._catch_up()
+            self._state = replace(self._state, battery=level)
+
+    def set_world(self, world: scene.World) -> None:
+        """Change the scene while it runs (a person steps into the path): the body, the scan
+        and the camera meet the new one from now on; the map the robot was told stays."""
+        with self._lock:
+            self._catch_up()
+            self.world = world
 
     def get_scan(self) -> Scan | None:
         """A 360-beam range scan (0.1 to 8 m) from the robot's true pose, on the sim clock."""

@@ -18,6 +18,13 @@ function fillStep(item, step) {
     .map(([key, value]) => key + "=" + shown(value)).join(", ");
   item.dataset.status = step.status;
   item.textContent = step.skill + "(" + args + ")";
+  const watches = (step.watches || []).map((w) => w.words || w.when + " " + w.kind);
+  if (watches.length) {
+    const watching = document.createElement("span");
+    watching.className = "watch";
+    watching.textContent = " " + watches.join("; ");
+    item.append(watching);
+  }
   const note = step.error || step.output;
   if (note) {
     const span = document.createElement("span");

@@ -1,0 +1,89 @@
+"""What a step's watches cost per control tick (issue 26: < 0.1 ms for 10 watches).
+
+Run:  .venv/bin/python bench/bench_watches.py [--write]
+--write replaces the "watches" section of bench/RESULTS.md with the figures measured now.
+
+Ten watches of every kind (eight by sight, one path check, one battery) on one step:
+(i)  evaluation: `Watcher.evaluate` over one tick's reading (the view, the scan, the state),
+     none of them holding (every watch is looked at), what the target is about;
+(ii) a whole tick's reading and evaluation on the simulator (`Watcher.fired`: the simulator's
+     view is its scene's ray casts and its scan 360 of them), for scale.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from results import write_section  # noqa: E402
+from shadowhound.plan import Watch  # noqa: E402
+from shadowhound.robot.sim.robot import SimRobot  # noqa: E402
+from shadowhound.skills.watches import Watcher, _Reading  # noqa: E402
+
+WATCHES = [Watch("until", "seen", f"thing {i}", within=3.0) for i in range(8)] + [
+    Watch("unless", "in_the_way", within=1.0),
+    Watch("until", "battery_below", percent=5.0),
+]
+
+
+def per_tick(fn, ticks: int) -> float:  # type: ignore[no-untyped-def]
+    """Milliseconds per call of `fn`, the median of 7 runs of `ticks` calls."""
+    runs = []
+    for _ in range(7):
+        t = time.perf_counter()
+        for _ in range(ticks):
+            fn()
+        runs.append((time.perf_counter() - t) / ticks * 1000)
+    return statistics.median(runs)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--write", action="store_true", help="update bench/RESULTS.md")
+    args = parser.parse_args()
+    robot = SimRobot(time_scale=0)  # the default room: a red ball ahead, objects about
+    watcher = Watcher(WATCHES, robot, 0.35)
+    state = robot.get_state()
+    reading = _Reading(state, robot.in_view(), robot.get_scan())
+    quiet = Watcher(WATCHES[:8] + WATCHES[9:], robot, 0.35)  # none holds: all are looked at
+    assert quiet.evaluate(reading, 0.0) is None
+    evaluation = per_tick(lambda: watcher.evaluate(reading, 0.0), 5000)
+    evaluation_quiet = per_tick(lambda: quiet.evaluate(reading, 0.0), 5000)
+    whole = per_tick(lambda: watcher.fired(state, 0.0), 300)
+    view = len(reading.in_view)
+    lines = [
+        "<!-- watches:start -->",
+        "## Watches (issue 26)",
+        "",
+        f"Measured {time.strftime('%Y-%m-%d')} with `python bench/bench_watches.py --write` "
+        f"(CPython {platform.python_version()}, {platform.machine()}); 10 watches: 8 by sight "
+        "(within 3 m), a path check (1 m), the battery.",
+        "",
+        "| what | target | measured (median of 7 runs) |",
+        "|---|---|---|",
+        f"| evaluating 10 watches over one tick's reading ({view} things in view, a 360-beam "
+        f"scan) | < 0.1 ms | {evaluation * 1000:.1f} us |",
+        f"| same, 9 watches none of which holds (each looked at in full) | - | "
+        f"{evaluation_quiet * 1000:.1f} us |",
+        f"| a whole tick on the simulator: reading its view and scan, then evaluating | - | "
+        f"{whole:.3f} ms |",
+        "",
+        "The reading is taken once a tick for all of a step's watches (tests/test_watches.py",
+        "counts the reads); a robot's view and scan are what its sensors last reported.",
+        "<!-- watches:end -->",
+    ]
+    section = "\n".join(lines)
+    print(section)
+    if args.write:
+        write_section("watches", section)
+
+
+if __name__ == "__main__":
+    main()

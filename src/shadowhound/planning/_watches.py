@@ -1,0 +1,84 @@
+"""How the offline planner reads conditions it can watch: "walk forward until you see the red
+ball", "walk forward 5 meters unless something is in the way", "... and stop if you see a
+person", "... until the battery is below 30 percent".
+
+A condition becomes a `plan.Watch` on the steps it governs; the runtime evaluates it. A
+condition that is not one of these kinds is not understood (NotUnderstood names it): the
+planner never drops a condition a person stated.
+"""
+
+from __future__ import annotations
+
+import re
+
+from ..errors import NotUnderstood
+from ..plan import Watch
+
+IN_THE_WAY_METRES = 1.0  # how far ahead of the body "in the way" looks unless told
+
+# ACTION until|unless|stop if CONDITION (on a normalised clause)
+WATCHED = re.compile(
+    r"^(?P<action>.+?)\s+(?P<when>until|till|unless|except\s+if|(?:and\s+|but\s+)?stop\s+if"
+    r"|stopping\s+if|(?:and\s+|but\s+)?stop\s+(?:when|once|as\s+soon\s+as))\s+(?P<cond>.+)$"
+)
+# a clause of its own that stops what came before it: "(and) stop if you see a person"
+STOP_IF = re.compile(
+    r"^(?:and\s+|but\s+|then\s+)?(?:stop|halt|freeze)(?:\s+(?:moving|walking|there))?\s+"
+    r"(?:if|when|once|as\s+soon\s+as|whenever|in\s+case)\s+(?P<cond>.+)$"
+)
+_DISTANCE = r"(?P<d>\d+(?:\.\d+)?)\s*(?:m|meters?|metres?)"
+_SEEN = re.compile(
+    r"^(?:(?:you|u|we|i)\s+)?(?:can\s+|do\s+)?(?:see|spot|find|notice|detect|sight|spy|catch\s+"
+    r"sight\s+of)\s+(?:a|an|the|some|any)?\s*(?P<name>.+?)(?:\s+within\s+" + _DISTANCE + r")?"
+    r"(?:\s+(?:ahead|in\s+front(?:\s+of\s+you)?))?$"
+    r"|^(?:a|an|the)?\s*(?P<name2>.+?)\s+(?:is|comes|appears|gets)\s+(?:in\s+view|in\s+sight"
+    r"|visible|into\s+view|seen)$"
+)
+_SOMETHING = (
+    r"(?:something|anything|somebody|someone|anybody|anyone|a\s+person|people|a\s+human"
+    r"|an?\s+obstacle|obstacles|a\s+thing|things|an\s+object|objects)"
+)
+_IN_THE_WAY = re.compile(
+    r"^" + _SOMETHING + r"\s+(?:is\s+|are\s+|gets\s+|comes\s+|stands\s+|appears\s+|steps\s+)?"
+    r"(?:in\s+(?:the|your|my|its|our)\s+(?:way|path)|blocking\s+(?:the|your)\s+(?:way|path)"
+    r"|blocks\s+(?:the|your)\s+(?:way|path)|in\s+front(?:\s+of\s+you)?|ahead|close\s+ahead"
+    r"|gets\s+in\s+the\s+way)(?:\s+within\s+" + _DISTANCE + r")?$"
+    r"|^(?:the\s+|your\s+)?(?:way|path)\s+is\s+(?:blocked|not\s+clear|obstructed)$"
+    r"|^(?:you\s+)?(?:are|get)\s+(?:blocked|stuck)$"
+)
+_BATTERY = re.compile(
+    r"^(?:the\s+|your\s+)?battery(?:\s+level)?\s+(?:is\s+|gets\s+|goes\s+|drops\s+|falls\s+)?"
+    r"(?:below|under|less\s+than|lower\s+than|beneath)\s+(?P<p>\d+(?:\.\d+)?)(?:\s*percent)?$"
+)
+_PEOPLE = {"person", "people", "someone", "somebody", "anyone", "anybody", "human", "man", "woman"}
+CAN_WATCH = (
+    "I can watch until or unless something named is seen ('until you see the red ball'), "
+    "something is in the way ('unless something is in the way'), or the battery is below a "
+    "percent"
+)
+
+
+def watch_of(when: str, condition: str) -> Watch:
+    """The watch `condition` (normalised words) states; NotUnderstood when it cannot be one."""
+    kind = "until" if when in ("until", "till") else "unless"
+    words = f"{' '.join(when.split())} {condition}"
+    cond = condition.strip()
+    m = _IN_THE_WAY.match(cond)
+    if m:
+        within = float(m["d"]) if m["d"] else IN_THE_WAY_METRES
+        return Watch(kind, "in_the_way", within=within, words=words)
+    m = _SEEN.match(cond)
+    if m:
+        name = (m["name"] or m["name2"] or "").strip()
+        if name in _PEOPLE:
+            name = "person"
+        near = float(m["d"]) if m["d"] else None
+        if name and not re.search(r"\b(?:if|unless|until|while|and|or|not)\b", name):
+            return Watch(kind, "seen", name=name, within=near, words=words)
+    m = _BATTERY.match(cond)
+    if m:
+        return Watch(kind, "battery_below", percent=float(m["p"]), words=words)
+    raise NotUnderstood(
+        f"I do not plan around conditions ('{' '.join(when.split())}') such as '{condition}': "
+        f"{CAN_WATCH}"
+    )

@@ -1,0 +1,191 @@
+"""Watches: conditions a step's runtime checks at control rate (never a model).
+
+A plan step may carry watches (`plan.Watch`): "until the red ball is seen" ends the step when it
+holds and the mission goes on; "unless something is in the way" stops the step and ends the
+mission there, saying why. The plan is checked as if no watch ever fired, and a watch can only
+stop motion, so it never takes the robot anywhere the governor did not allow.
+
+`check_watches` refuses, before anything moves, a watch the robot cannot observe (no camera
+that labels what is in view, no range sensor, no battery reading) or that names something it
+cannot recognise: a condition a person stated is honoured or the mission refused, never
+dropped. `Watcher` evaluates a step's watches each tick over one reading of what they need.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from ..errors import WatchFired
+from ..plan import WATCH_KINDS, WATCH_WHEN, Watch
+from ..robot.base import Robot
+from ..state import RobotState, Scan, Sighting
+from ..world.objects import object_key
+
+MAX_NAME = 60  # characters of a watched thing's name
+IN_THE_WAY = (0.3, 5.0)  # metres from the body a path check may reach
+SEEN_WITHIN = (0.2, 20.0)  # metres a "seen within" may ask
+_CORRIDOR = 0.15  # metres either side of the body a return still counts as in the path
+
+__all__ = ["Watcher", "check_watches", "fired_text"]
+
+
+def check_watches(
+    watches: Sequence[Watch], robot: Robot, vocabulary: frozenset[str] | None
+) -> list[str]:
+    """Why these watches cannot be honoured on `robot` (empty: they can)."""
+    problems: list[str] = []
+    for w in watches:
+        if not isinstance(w, Watch):
+            problems.append(f"a watch must be a condition, got {type(w).__name__}")
+            continue
+        if w.when not in WATCH_WHEN:
+            problems.append(f"a watch is {' or '.join(WATCH_WHEN)}, not {w.when!r}")
+        if w.kind not in WATCH_KINDS:
+            problems.append(
+                f"cannot watch for {w.words or w.kind!r}: a watch is one of "
+                f"{', '.join(WATCH_KINDS)}"
+            )
+            continue
+        problems += _observable(w, robot, vocabulary)
+    return problems
+
+
+def _observable(w: Watch, robot: Robot, vocabulary: frozenset[str] | None) -> list[str]:
+    said = f"'{w.words}'" if w.words else w.describe()
+    if w.kind == "seen":
+        name = object_key(w.name)
+        if not name or len(name) > MAX_NAME:
+            return [f"{said}: name what to watch for (1 to {MAX_NAME} characters)"]
+        if w.within is not None and not SEEN_WITHIN[0] <= w.within <= SEEN_WITHIN[1]:
+            return [f"{said}: 'within' must be {SEEN_WITHIN[0]:g} to {SEEN_WITHIN[1]:g} m"]
+        if robot.in_view() is None:
+            return [f"cannot watch {said}: {robot.description} cannot tell what is in view"]
+        if vocabulary is not None and not _known(name, vocabulary):
+            known = ", ".join(sorted(vocabulary)) or "nothing"
+            return [f"cannot watch {said}: the camera recognises {known}"]
+        return []
+    if w.kind == "in_the_way":
+        low, high = IN_THE_WAY
+        if w.within is None or not low <= w.within <= high:
+            return [f"{said}: how far ahead to watch must be {low:g} to {high:g} m"]
+        if robot.get_scan() is None:
+            return [f"cannot watch {said}: {robot.description} has no range sensor (scan)"]
+        return []
+    if w.percent is None or not 0 < w.percent < 100:
+        return [f"{said}: the battery level must be a percent between 0 and 100"]
+    if robot.last_state().battery is None:
+        return [f"cannot watch {said}: {robot.description} reports no battery level"]
+    return []
+
+
+def _known(name: str, vocabulary: frozenset[str]) -> bool:
+    keys = {object_key(v) for v in vocabulary}
+    return name in keys or any(k.endswith(" " + name) for k in keys)
+
+
+def _names(name: str, seen: str) -> bool:
+    """`name` ("ball", "the red ball") names the thing `seen` ("red ball")."""
+    key = object_key(seen)
+    return key == name or key.endswith(" " + name)
+
+
+@dataclass(frozen=True)
+class _Reading:
+    """What the watches of one tick need, read once."""
+
+    state: RobotState
+    in_view: tuple[Sighting, ...]
+    scan: Scan | None
+
+
+class Watcher:
+    """A step's watches over `robot`: `fired(state)` returns the first that holds now, with
+    what was observed, or None. Reads only what its watches need (the view, the scan) once a
+    tick. `heading` (body frame, radians) is where the robot goes: the path a path check looks
+    along."""
+
+    def __init__(self, watches: Sequence[Watch], robot: Robot, body_radius: float) -> None:
+        self.watches = tuple(watches)
+        self.robot = robot
+        self.body_radius = body_radius
+        self._view = any(w.kind == "seen" for w in self.watches)
+        self._scan = any(w.kind == "in_the_way" for w in self.watches)
+        self._keys = {id(w): object_key(w.name) for w in self.watches}
+
+    def fired(self, state: RobotState, heading: float | None) -> tuple[Watch, str] | None:
+        if not self.watches:
+            return None
+        reading = _Reading(
+            state,
+            (self.robot.in_view() or ()) if self._view else (),
+            self.robot.get_scan() if self._scan else None,
+        )
+        return self.evaluate(reading, heading)
+
+    def evaluate(self, r: _Reading, heading: float | None) -> tuple[Watch, str] | None:
+        for w in self.watches:
+            seen = self._holds(w, r, heading)
+            if seen:
+                return w, seen
+        return None
+
+    def _holds(self, w: Watch, r: _Reading, heading: float | None) -> str:
+        if w.kind == "seen":
+            key = self._keys[id(w)]
+            for s in r.in_view:
+                if _names(key, s.name) and (w.within is None or s.distance <= w.within):
+                    return f"saw {s.describe()}"
+            return ""
+        if w.kind == "in_the_way":
+            return self._in_the_way(w, r, heading)
+        battery = r.state.battery
+        if battery is not None and w.percent is not None and battery < w.percent:
+            return f"the battery is at {battery:.0f}%, below {w.percent:g}%"
+        return ""
+
+    def _in_the_way(self, w: Watch, r: _Reading, heading: float | None) -> str:
+        scan = r.scan
+        if scan is None or w.within is None:
+            return ""
+        along = 0.0 if heading is None else heading  # body frame: 0 = straight ahead
+        reach = self.body_radius + w.within
+        half = self.body_radius + _CORRIDOR
+        nearest = math.inf
+        rel = scan.pose.yaw - r.state.yaw  # the scan's frame against the body's
+        for i, d in enumerate(scan.ranges):
+            if not scan.range_min <= d <= min(reach, scan.range_max):
+                continue
+            a = scan.angle_min + i * scan.angle_increment + rel - along
+            ahead, side = d * math.cos(a), d * math.sin(a)
+            if ahead > 0 and abs(side) <= half and ahead < nearest:
+                nearest = ahead
+        if nearest == math.inf:
+            return ""
+        gap = max(0.0, nearest - self.body_radius)
+        what = self._named(r, nearest, along)
+        return f"{what} in the way {gap:.2f} m ahead"
+
+    def _named(self, r: _Reading, distance: float, along: float) -> str:
+        """What the camera shows near the return, else "something"."""
+        for s in self.robot.in_view() or ():
+            if abs(s.distance - distance) < 0.6 and abs(math.radians(s.bearing_deg) - along) < 0.5:
+                return s.name
+        return "something"
+
+
+def fired_text(w: Watch, observed: str) -> str:
+    """The step's words when `w` fired: "stopped: saw red ball about 2.3 m ahead (until you
+    see the red ball)": what was observed, and the person's words for the condition."""
+    return f"stopped: {observed} ({w.words or w.describe()})"
+
+
+def raise_if_fired(watcher: Watcher | None, state: RobotState, heading: float | None) -> None:
+    """Stop the robot and raise WatchFired when one of the step's watches holds."""
+    if watcher is None:
+        return
+    hit = watcher.fired(state, heading)
+    if hit is not None:
+        watcher.robot.stop()
+        raise WatchFired(hit[0], hit[1])

@@ -1,0 +1,277 @@
+"""Watches on steps (issue 26): "until", "unless", "stop if", evaluated by the runtime at control
+rate over what the robot observes, judged by the simulator's truth (its true pose and its
+scene's camera truth, `scene.visible_objects`), never by the robot's own readings."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from shadowhound import RobotAgent, RobotAgentConfig
+from shadowhound.config import ShadowHoundConfig
+from shadowhound.plan import Plan, SkillCall, Watch
+from shadowhound.planning import FixedPlanner
+from shadowhound.planning.rules import RulePlanner
+from shadowhound.result import MissionStatus, StepStatus
+from shadowhound.robot.sim.robot import SimRobot
+from shadowhound.robot.sim.scene import World, WorldObject, visible_objects
+from shadowhound.skills.watches import Watcher, _Reading
+from shadowhound.state import Pose2D, RobotState, Scan, Sighting
+from tests.robot.test_base import Minimal
+
+BALL = WorldObject("red ball", 4.5, 1.5, 0.15, height=0.3, color=(220, 30, 30))
+PILLAR = WorldObject("pillar", 2.0, 1.0, 0.45, height=1.5)  # hides the ball at first
+PERSON = WorldObject("person", 3.2, 0.0, 0.25, height=1.7, color=(60, 90, 200))
+
+
+class ScriptedRobot(SimRobot):
+    """The simulator whose scene changes during the run: `later` enters the scene (or moves
+    there, when one of its name is in it) once the body has passed `at_x` (a person steps into
+    the path). Its truth: `path`, every true pose the control loop let pass."""
+
+    def __init__(self, world: World, later: WorldObject | None = None, at_x: float = 0.0):
+        super().__init__(time_scale=0, world=world)
+        self.later, self.at_x = later, at_x
+        self.path: list[RobotState] = []
+
+    def sleep(self, seconds: float) -> None:
+        super().sleep(seconds)
+        truth = self.get_state()
+        self.path.append(truth)
+        if self.later is not None and truth.x >= self.at_x:
+            others = tuple(o for o in self.world.objects if o.name != self.later.name)
+            self.set_world(World(objects=(*others, self.later)))
+            self.later = None
+
+
+def agent_on(robot: object, planner: object | None = None) -> RobotAgent:
+    settings = ShadowHoundConfig()
+    settings.memory.enabled = False
+    return RobotAgent(
+        RobotAgentConfig(robot=robot, settings=settings, planner=planner)  # type: ignore[arg-type]
+    )
+
+
+def first_seen_x(world: World, name: str, until: float) -> float:
+    """Where, walking along +x from the origin, `name` first enters the camera's view (truth)."""
+    for i in range(int(until * 1000) + 1):
+        x = i / 1000
+        if any(s.name == name for s in visible_objects(world, Pose2D(x, 0.0, 0.0))):
+            return x
+    raise AssertionError(f"{name} never comes into view before x={until}")
+
+
+def test_walk_forward_until_the_red_ball_is_seen_stops_where_it_comes_into_view() -> None:
+    world = World(objects=(BALL, PILLAR))
+    robot = ScriptedRobot(world)
+    result = agent_on(robot).execute_mission("walk forward until you see the red ball")
+    entry = first_seen_x(world, "red ball", 5.0)
+    end = robot.get_state()
+    assert result.success, result.response
+    assert abs(end.x - entry) <= 0.2, (end.x, entry)
+    assert entry > 0.2  # it had to walk to see it: the pillar hid it at the start
+    assert "stopped: saw red ball" in result.response, result.response
+    assert "(until you see the red ball)" in result.response
+    step = result.steps[0]
+    assert step.status is StepStatus.SUCCEEDED and "saw red ball" in step.output
+
+
+def test_walk_unless_something_is_in_the_way_stops_before_a_person_who_steps_in() -> None:
+    robot = ScriptedRobot(World(objects=()), later=PERSON, at_x=1.5)
+    result = agent_on(robot).execute_mission("walk forward 5 meters unless something is in the way")
+    end = robot.get_state()
+    gap = max(
+        math.hypot(PERSON.x - t.x, PERSON.y - t.y) - PERSON.radius - robot.config.body_radius
+        for t in robot.path[-1:]
+    )
+    closest = min(
+        math.hypot(PERSON.x - t.x, PERSON.y - t.y) - PERSON.radius - robot.config.body_radius
+        for t in robot.path
+        if t.x >= 1.5
+    )
+    assert not result.success and result.status is MissionStatus.STOPPED, result.response
+    assert closest >= 0.6, (closest, end)
+    assert gap >= 0.6
+    assert "person in the way" in result.response, result.response
+    assert "unless something is in the way" in result.response
+    assert end.x > 1.5  # it did walk until the person came
+
+
+def test_the_same_walk_with_nobody_in_the_way_goes_the_whole_way() -> None:
+    robot = ScriptedRobot(World(objects=()))
+    result = agent_on(robot).execute_mission("walk forward 3 meters unless something is in the way")
+    assert result.success, result.response
+    assert abs(robot.get_state().x - 3.0) < 0.05
+
+
+def test_stop_if_you_see_a_person_governs_the_walk_before_it() -> None:
+    behind = WorldObject("person", -4.0, 3.0, 0.25, height=1.7)  # known to the camera, unseen
+    robot = ScriptedRobot(World(objects=(behind,)), later=PERSON, at_x=1.0)
+    result = agent_on(robot).execute_mission("walk forward 2 meters and stop if you see a person")
+    assert result.status is MissionStatus.STOPPED, result.response
+    assert "saw person" in result.response
+    assert 1.0 <= robot.get_state().x < 1.2  # stopped at once: the person was in view
+
+
+def test_a_condition_that_cannot_be_observed_is_refused_naming_it() -> None:
+    robot = ScriptedRobot(World(objects=(BALL,)))
+    result = agent_on(robot).execute_mission("walk forward 2 meters unless the door is locked")
+    assert not result.success
+    assert "conditions ('unless') such as 'the door is locked'" in result.response, result.response
+    assert robot.get_state().x == 0.0
+
+
+def test_a_thing_the_camera_cannot_recognise_is_refused_before_moving() -> None:
+    robot = ScriptedRobot(World(objects=(BALL,)))
+    result = agent_on(robot).execute_mission("walk forward until you see the unicorn")
+    assert not result.success
+    assert "cannot watch 'until unicorn is seen'" not in result.response  # says the words
+    assert "cannot watch 'until you see the unicorn': the camera recognises red ball" in (
+        result.response
+    ), result.response
+    assert robot.get_state().x == 0.0
+
+
+def test_a_robot_that_cannot_tell_what_is_in_view_refuses_a_watch_by_sight() -> None:
+    robot = Minimal()
+    plan = Plan(
+        [SkillCall("sys.wait", {"seconds": 1.0}, watches=(Watch("until", "seen", "ball"),))]
+    )
+    result = agent_on(robot, FixedPlanner(plan)).execute_mission("wait until you see a ball")
+    assert not result.success
+    assert "a minimal robot cannot tell what is in view" in result.response, result.response
+
+
+def test_a_robot_without_a_scan_or_a_battery_refuses_those_watches() -> None:
+    robot = Minimal()
+    robot.state = RobotState(battery=None)
+    way = Watch("unless", "in_the_way", within=1.0, words="unless something is in the way")
+    low = Watch("until", "battery_below", percent=30, words="until the battery is below 30")
+    plan = Plan([SkillCall("sys.wait", {"seconds": 1.0}, watches=(way, low))])
+    result = agent_on(robot, FixedPlanner(plan)).execute_mission("wait")
+    assert "has no range sensor" in result.response, result.response
+    assert "reports no battery level" in result.response
+
+
+def test_until_the_battery_is_low_ends_a_wait_when_it_is() -> None:
+    robot = SimRobot(time_scale=0)
+    robot.set_battery(31.0)
+    agent = agent_on(robot)
+    plan = RulePlanner().plan("wait 5 seconds until the battery is below 90 percent")
+    assert plan.steps[0].watches[0].percent == 90.0
+    robot.set_battery(89.0)
+    result = agent.execute_mission("wait 5 seconds until the battery is below 90 percent")
+    assert result.success and "the battery is at 89%, below 90%" in result.response
+    assert result.steps[0].robot_duration < 1.0  # it held at once, not after 5 s
+
+
+def test_the_dry_run_shows_the_watches() -> None:
+    robot = ScriptedRobot(World(objects=(BALL,)))
+    result = agent_on(robot).dry_run("walk forward until you see the red ball")
+    assert result.success, result.response
+    assert result.plan is not None
+    assert result.plan.to_dict()["steps"][0]["watches"] == [
+        {"when": "until", "kind": "seen", "name": "red ball", "words": "until you see the red ball"}
+    ]
+
+
+# -- the property: a watch only ever shortens what the governor checked ------------------------
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    distance=st.floats(0.5, 4.5),
+    ball_x=st.floats(0.5, 5.5),
+    ball_y=st.floats(-3.0, 3.0),
+    person_at=st.one_of(st.none(), st.floats(0.0, 4.0)),
+    when=st.sampled_from(["until", "unless"]),
+    within=st.floats(0.3, 2.0),
+)
+def test_random_watches_never_take_the_robot_beyond_the_checked_walk(
+    distance: float,
+    ball_x: float,
+    ball_y: float,
+    person_at: float | None,
+    when: str,
+    within: float,
+) -> None:
+    """Any walk with any watches (seen, in the way) ends no farther than the walk the governor
+    checked, and a watch by sight that fires has the robot stopped within a control tick of
+    the moment it held in truth (plus braking)."""
+    ball = WorldObject("red ball", ball_x, ball_y, 0.15, height=0.3)
+    if math.hypot(ball_x, ball_y) < 0.8 or abs(ball_y) < 0.6:
+        ball = WorldObject("red ball", ball_x, math.copysign(max(abs(ball_y), 0.6), ball_y), 0.15)
+    person = WorldObject("person", (person_at or 0.0) + 1.6, 0.0, 0.25, height=1.7)
+    robot = ScriptedRobot(
+        World(objects=(ball,)), later=person if person_at is not None else None, at_x=person_at or 0
+    )
+    watches = (
+        Watch(when, "seen", "red ball"),
+        Watch(when, "in_the_way", within=within),
+    )
+    plan = Plan([SkillCall("nav.move", {"distance": round(distance, 2)}, watches=watches)])
+    agent = agent_on(robot, FixedPlanner(plan))
+    result = agent.execute_mission("walk with watches")
+    period = 1.0 / agent.settings.motion.control_rate_hz
+    speed = agent.settings.motion.default_linear_speed
+    farthest = max((t.x for t in robot.path), default=0.0)
+    assert farthest <= round(distance, 2) + 0.05, (farthest, result.response)
+    if "saw red ball" in result.response:
+        entry = first_seen_x(robot.world, "red ball", farthest + 0.01)
+        braking = speed * speed / (2 * agent.settings.safety.max_linear_accel)
+        assert robot.get_state().x <= entry + speed * period + braking + 0.02, result.response
+
+
+def test_ten_watches_read_the_robot_once_a_tick() -> None:
+    """The watcher reads the view and the scan once for all its watches (bench_watches.py
+    measures the cost)."""
+    reads = {"view": 0, "scan": 0}
+
+    class Counting(SimRobot):
+        def in_view(self) -> tuple[Sighting, ...]:
+            reads["view"] += 1
+            return super().in_view()
+
+        def get_scan(self) -> Scan | None:
+            reads["scan"] += 1
+            return super().get_scan()
+
+    robot = Counting(time_scale=0, world=World(objects=(BALL,)))
+    watches = [Watch("until", "seen", f"thing {i}") for i in range(8)] + [
+        Watch("unless", "in_the_way", within=1.0),
+        Watch("until", "battery_below", percent=5),
+    ]
+    watcher = Watcher(watches, robot, 0.35)
+    assert watcher.fired(robot.get_state(), 0.0) is None
+    assert reads == {"view": 1, "scan": 1}
+
+
+def test_a_watch_on_a_reading_names_what_it_saw() -> None:
+    robot = SimRobot(time_scale=0, world=World(objects=(BALL,)))
+    watcher = Watcher([Watch("until", "seen", "ball", within=3.0)], robot, 0.35)
+    far = _Reading(RobotState(), (Sighting("red ball", 4.0, 10.0),), None)
+    near = _Reading(RobotState(), (Sighting("red ball", 2.5, -20.0),), None)
+    assert watcher.evaluate(far, 0.0) is None  # beyond its "within"
+    hit = watcher.evaluate(near, 0.0)
+    assert hit is not None and hit[1] == "saw red ball about 2.5 m 20 degrees to the right"
+
+
+@pytest.mark.parametrize(
+    ("text", "kind"),
+    [
+        ("walk forward until you spot a chair", "seen"),
+        ("go forward till the red ball is in view", "seen"),
+        ("walk ahead 3 m unless someone is in your path", "in_the_way"),
+        ("walk forward 2 meters unless the path is blocked", "in_the_way"),
+        ("move forward 4 meters but stop if you see a dog", "seen"),
+        ("walk backward until the battery drops below 40 percent", "battery_below"),
+        ("turn right until you see the door", "seen"),
+    ],
+)
+def test_the_offline_planner_reads_kinds_of_conditions(text: str, kind: str) -> None:
+    plan = RulePlanner().plan(text)
+    watched = [w for s in plan.steps for w in s.watches]
+    assert watched and watched[0].kind == kind, plan.to_dict()
