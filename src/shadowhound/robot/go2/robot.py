@@ -25,13 +25,14 @@ Written against how the driver really behaves (docs/go2.md):
 - map: nav_msgs/OccupancyGrid on `map` (slam_toolbox, map_server; transient local), read into
   the core's grid with its origin and resolution: `belief()`. No map: `belief()` is None and
   paths are straight lines.
-- frames (TF): `/tf` and `/tf_static` (tf2_msgs/TFMessage) into a TfTree (tf_tree.py). When
-  SLAM publishes `map -> odom` (`map_frame`), the robot's world is the map: `get_state` poses,
-  taught places, sightings, the map and Nav2 goals are in it (odometry carried over with the
-  latest map -> odom); a correction larger than a leg may absorb (a jump) counts in
-  `RobotState.relocalized`, and the running leg stops (a walk plans again). Without it the world
-  is odometry's frame, and a map in another frame is used as if the two coincided, with a
-  warning.
+- frames (TF): `/tf` and `/tf_static` (tf2_msgs/TFMessage) into a TfTree (tf_tree.py), only
+  the edges it is asked about (into odometry's frame, `odom` and `base_link`): the body's links
+  that robot_state_publisher sends at 50 Hz are dropped unread. When SLAM publishes `map ->
+  odom` (`map_frame`), the robot's world is the map: `get_state` poses, taught places,
+  sightings, the map and Nav2 goals are in it (odometry carried over with the latest map ->
+  odom); a correction larger than a leg may absorb (a jump) counts in `RobotState.relocalized`,
+  and the running leg stops (a walk plans again). Without it the world is odometry's frame, and
+  a map in another frame is used as if the two coincided, with a warning.
 - scan: sensor_msgs/LaserScan on `scan`, taken at the pose odometry gave when it arrived.
 - navigation: Nav2's NavigateToPose on `navigate_to_pose` (`navigator()`, go2_nav2.py);
   `stop` and `emergency_stop` cancel its goals.
@@ -83,7 +84,7 @@ from ...world.objects import KnownObject
 from ..base import RobotError
 from ..estop_listener import EstopListener
 from ..ros_base import DRIVEN_SETTLE, KEEPALIVE_PERIOD, RELIABLE, RosRobot
-from ..tf_tree import MapCorrection, TfTree, Transform2D
+from ..tf_tree import BASE, ODOM, MapCorrection, TfTree, Transform2D
 from . import api as go2_api
 from .detections import (
     COCO_CLASSES,
@@ -341,11 +342,20 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
 
     def _take_transforms(self, msg: Any, static: bool) -> None:
         """Feed the frames' tree; when SLAM's map -> odom moves the robot's map pose by more
-        than a leg may absorb, count a relocalization (a running leg stops on it)."""
+        than a leg may absorb, count a relocalization (a running leg stops on it).
+
+        Only edges into the frames the tree is asked about go in: odometry's frame (SLAM's
+        map -> odom, `_to_world`), and `odom` and `base_link` (TfTree.map_to_odom_jump measures
+        a correction at the robot). The rest (robot_state_publisher's dozens of links, at
+        50 Hz) is dropped here, before the lock."""
+        # A reference read without the lock: a frame id changing meanwhile is read again below.
+        wanted = (self._odom_frame, ODOM, BASE)
         log = self.node.get_logger()
         for t in msg.transforms:
-            parent = str(t.header.frame_id).lstrip("/")
             child = str(t.child_frame_id).lstrip("/")
+            if child not in wanted:
+                continue
+            parent = str(t.header.frame_id).lstrip("/")
             q, p = t.transform.rotation, t.transform.translation
             yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
             stamp = t.header.stamp.sec + t.header.stamp.nanosec * 1e-9
