@@ -43,7 +43,7 @@ __all__ = ["DRIVEN_SETTLE", "KEEPALIVE_PERIOD", "RELIABLE", "RosRobot", "SportSe
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 KEEPALIVE_PERIOD = 0.1  # Moves renewed at 10 Hz (the robot drops one after about a second)
-DRIVEN_SETTLE = 2.0  # seconds the body may still move after a posture or a trick
+DRIVEN_SETTLE = 2.0  # seconds the body may still move after a posture, a trick (or Nav2)
 
 
 class SportSettings(Protocol):
