@@ -310,6 +310,63 @@ def test_every_stop_is_a_stop_move_and_no_zero_twist_is_ever_sent(
     wait_until(lambda: not driver.truth().moving, 10, "the true robot to stop")
 
 
+def _tf_message(edges: list[tuple[str, str]], sec: int) -> object:
+    from geometry_msgs.msg import TransformStamped
+    from tf2_msgs.msg import TFMessage
+
+    msg = TFMessage()
+    for parent, child in edges:
+        t = TransformStamped()
+        t.header.frame_id, t.child_frame_id = parent, child
+        t.header.stamp.sec = sec
+        t.transform.translation.x = 0.1
+        t.transform.rotation.w = 1.0
+        msg.transforms.append(t)
+    return msg
+
+
+# What robot_state_publisher sends about a Go2's body on /tf at 50 Hz: 30 links nobody reads.
+_LINKS = [
+    (parent, child)
+    for leg in ("FL", "FR", "RL", "RR")
+    for parent, child in zip(
+        ("base_link", f"{leg}_hip", f"{leg}_thigh", f"{leg}_calf", f"{leg}_calf", f"{leg}_foot"),
+        (
+            f"{leg}_hip",
+            f"{leg}_thigh",
+            f"{leg}_calf",
+            f"{leg}_calflower",
+            f"{leg}_foot",
+            f"{leg}_toe",
+        ),
+        strict=True,
+    )
+] + [
+    ("base_link", link)
+    for link in ("Head_upper", "Head_lower", "imu", "radar", "front_camera", "base_footprint")
+]
+
+
+def test_tf_feeds_the_frames_tree_only_with_the_edges_it_is_asked_about(
+    client: RosClient,
+) -> None:
+    """A /tf message full of the body's links (robot_state_publisher's, 50 Hz) leaves them out
+    of the robot's frames tree, before its state lock; SLAM's map -> odom goes in (the world
+    becomes the map), and so does odom -> base_link, where a map -> odom jump is measured."""
+    assert len(_LINKS) == 30
+    lonely = Go2RosRobot(
+        Go2RosConfig(namespace="tf_only", node_name="shadowhound_go2_tf"), context=client.context
+    )
+    try:
+        lonely._on_tf_static(_tf_message(_LINKS, 0))
+        lonely._on_tf(_tf_message([*_LINKS, ("map", "odom"), ("odom", "base_link")], 100))
+        lonely._on_tf(_tf_message(_LINKS, 101))
+        assert lonely.world_frame == "map"
+        assert lonely._tf.frames() == {"map", "odom", "base_link"}
+    finally:
+        lonely.close()
+
+
 def test_without_a_driver_commands_time_out_and_motion_is_refused(client: RosClient) -> None:
     lonely = Go2RosRobot(
         Go2RosConfig(namespace="nobody", command_timeout=0.3), context=client.context

@@ -25,13 +25,14 @@ Written against how the driver really behaves (docs/go2.md):
 - map: nav_msgs/OccupancyGrid on `map` (slam_toolbox, map_server; transient local), read into
   the core's grid with its origin and resolution: `belief()`. No map: `belief()` is None and
   paths are straight lines.
-- frames (TF): `/tf` and `/tf_static` (tf2_msgs/TFMessage) into a TfTree (tf_tree.py). When
-  SLAM publishes `map -> odom` (`map_frame`), the robot's world is the map: `get_state` poses,
-  taught places, sightings, the map and Nav2 goals are in it (odometry carried over with the
-  latest map -> odom); a correction larger than a leg may absorb (a jump) counts in
-  `RobotState.relocalized`, and the running leg stops (a walk plans again). Without it the world
-  is odometry's frame, and a map in another frame is used as if the two coincided, with a
-  warning.
+- frames (TF): `/tf` and `/tf_static` (tf2_msgs/TFMessage) into a TfTree (tf_tree.py), only
+  the edges it is asked about (into odometry's frame, `odom` and `base_link`): the body's links
+  that robot_state_publisher sends at 50 Hz are dropped unread. When SLAM publishes `map ->
+  odom` (`map_frame`), the robot's world is the map: `get_state` poses, taught places,
+  sightings, the map and Nav2 goals are in it (odometry carried over with the latest map ->
+  odom); a correction larger than a leg may absorb (a jump) counts in `RobotState.relocalized`,
+  and the running leg stops (a walk plans again). Without it the world is odometry's frame, and
+  a map in another frame is used as if the two coincided, with a warning.
 - scan: sensor_msgs/LaserScan on `scan`, taken at the pose odometry gave when it arrived.
 - navigation: Nav2's NavigateToPose on `navigate_to_pose` (`navigator()`, go2_nav2.py);
   `stop` and `emergency_stop` cancel its goals.
@@ -43,8 +44,9 @@ Written against how the driver really behaves (docs/go2.md):
 - voice: `say` publishes one std_msgs/String on `speech_topic` (go2_ros2_sdk's `tts_node`
   listens on `/tts` and plays it on the robot's speaker), without waiting for it to be heard.
 
-The robot has its own rclpy node and executor thread, so it works inside the MissionNode
-process (sharing its context) or in a plain script (it then initialises a private context).
+What every Go2 over ROS has (its own rclpy node and executor thread, so it works inside the
+MissionNode process or in a plain script; the locks, stops, the e-stop latch, the state) is
+ros_base.py's RosRobot, as the Go2 EDU's is.
 
 Long because: it is the one Robot implementation over go2_ros2_sdk, whose protocol methods and
 ROS callbacks share one node, one executor thread and one lock; what needs no ROS already
@@ -63,14 +65,11 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any, TypeAlias
 
-import rclpy
 from geometry_msgs.msg import Twist
 from go2_interfaces.msg import Go2State, WebRtcReq
 from nav_msgs.msg import OccupancyGrid as GridMsg
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import BatteryState, CameraInfo, CompressedImage, Image, LaserScan
 from std_msgs.msg import String
@@ -78,13 +77,14 @@ from std_msgs.msg import String
 from ...camera import raw_image_frame, to_camera_frame
 from ...errors import TransformUnavailable
 from ...robot_config import Go2RobotSettings
-from ...state import CameraFrame, Pose2D, Posture, RobotState, Scan, compose
+from ...state import CameraFrame, Pose2D, Posture, Scan, compose
 from ...world import Belief, GridError, merge_sightings
 from ...world.image_sighting import Bearing, SightingRules
 from ...world.objects import KnownObject
-from ..base import BaseRobot, RobotError
+from ..base import RobotError
 from ..estop_listener import EstopListener
-from ..tf_tree import MapCorrection, TfTree, Transform2D
+from ..ros_base import DRIVEN_SETTLE, KEEPALIVE_PERIOD, RELIABLE, RosRobot
+from ..tf_tree import BASE, ODOM, MapCorrection, TfTree, Transform2D
 from . import api as go2_api
 from .detections import (
     COCO_CLASSES,
@@ -94,21 +94,13 @@ from .detections import (
     SightingBoard,
     sightings_from_msg,
 )
-from .motion import MAX_LATENCY, MotionTracker
+from .motion import MAX_LATENCY
 from .nav2 import Nav2Navigator
-from .odometry import OdometryFault, OdometryIntake, OdometryLimits
-from .posture import (
-    STAND_UP_BOUND,
-    PostureWatch,
-    SportBody,
-    capped,
-    finite_velocity,
-    trick_info,
-)
+from .odometry import OdometryFault
+from .posture import STAND_UP_BOUND, capped, finite_velocity, trick_info
 from .topics import VELOCITY_TOPICS, VelocityRoute, choose_velocity_topic, node_name
 from .world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 
-_RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _SENSOR = QoSProfile(
     depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.BEST_EFFORT
 )
@@ -122,8 +114,6 @@ _TF_STATIC = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
-_KEEPALIVE_PERIOD = 0.1  # 10 Hz, as DIMOS streams Twist to the Go2
-_DRIVEN_SETTLE = 2.0  # seconds the body may still move after Nav2, a posture or a trick
 _PUBLISHERS_PERIOD = 0.5  # seconds between looks for a second odometry publisher
 _LOOK_SECONDS = 1.5  # longest wait for the detector's report on a view (2 Hz detectors, DDS)
 
@@ -132,42 +122,25 @@ _LOOK_SECONDS = 1.5  # longest wait for the detector's report on a view (2 Hz de
 Go2RosConfig: TypeAlias = Go2RobotSettings
 
 
-class Go2RosRobot(BaseRobot):
+class Go2RosRobot(RosRobot[Go2RobotSettings]):
     """The Robot protocol over go2_ros2_sdk. A real robot: on the wall clock (BaseRobot's)."""
+
+    pose_source = "odometry"
 
     def __init__(
         self, config: Go2RosConfig | None = None, *, context: Context | None = None
     ) -> None:
-        self.config = c = config or Go2RosConfig()
-        namespace = c.namespace.strip("/")
-        self.name = f"go2 ({namespace})" if namespace else "go2"
+        c = config or Go2RosConfig()
+        super().__init__(
+            c,
+            context,
+            name="go2",
+            description="Go2 over ROS",
+            pose_latency=c.odom_latency,
+            pose_timeout=c.odom_timeout,
+        )
         self.tricks = go2_api.offered(ai_mode=c.firmware_tricks)
-        self.description = "Go2 over ROS" + (f" (namespace /{namespace})" if namespace else "")
-        self._own_context = context is None and not rclpy.ok()
-        if self._own_context:
-            context = Context()
-            rclpy.init(context=context)
-        elif context is None:
-            context = rclpy.get_default_context()
-        self._context = context
-        self._lock = threading.Lock()  # state; held briefly, never while publishing
-        self._send_lock = threading.Lock()  # orders Twists and StopMoves as they go out
-        self._wake = threading.Event()  # stop() and e-stop wake sleeps and waits early
-        self._tracker = MotionTracker(
-            linear_accel=c.linear_accel, angular_accel=c.angular_accel, latency=c.odom_latency
-        )
-        self._odom_at: float | None = None  # monotonic receipt of the last odometry
-        # Odometry is checked before it is believed (go2_odometry); the odometer is its own.
-        self._intake = OdometryIntake(
-            self._tracker,
-            OdometryLimits(
-                max_speed=c.max_linear_speed + 0.25, max_yaw_rate=c.max_angular_speed + 0.5
-            ),
-        )
         self._detections_at: float | None = None  # monotonic receipt of the last detections
-        self._posture = Posture.STANDING  # until go2_states says otherwise
-        self._posture_seen = False  # go2_states has shown a posture (a change then means news)
-        self._battery: tuple[float, float] | None = None  # (receipt, percent)
         self._frame: CameraFrame | None = None
         self._sightings = SightingBoard()
         self._boxes = (
@@ -187,36 +160,9 @@ class Go2RosRobot(BaseRobot):
         self._jumps: tuple[float, float, float] = (0.0, 0.0, 0.0)  # composed (RobotState)
         self._map: Belief | None = None  # the latest map, inflated once per map
         self._scan: tuple[float, Scan] | None = None  # (receipt, scan)
-        self._command = (0.0, 0.0, 0.0)
-        self._halted = True  # no velocity commanded since the last stop()
         self._last_sent = 0.0
-        self._closed = False
-        self._started = time.monotonic()
         self._route: VelocityRoute | None = None  # where velocity goes (discovered)
-        self._postures = PostureWatch(
-            self._check_estop, "", c.command_timeout, stale=max(1.0, c.odom_timeout)
-        )
-        # Nav2, a posture or a trick may move the body until self._body.driven_until.
-        self._body = SportBody(
-            self._postures, self._request, self._halt, self._lock, _DRIVEN_SETTLE
-        )
-        # use_global_arguments=False: the mission node's own remappings and parameters
-        # (`-r __ns:=...`) must not move the robot's topics; `namespace` does that explicitly.
-        self.node = Node(
-            c.node_name,
-            namespace="/" + c.namespace.strip("/"),
-            context=context,
-            use_global_arguments=False,
-            start_parameter_services=False,
-        )
-        try:
-            self._build_interfaces()
-        except Exception as exc:  # rclpy raises several types for bad names
-            self.node.destroy_node()
-            raise RobotError(f"cannot create the Go2 topics: {exc}") from exc
-        self._postures.topic = self.topic(c.state_topic)
-        self._executor = SingleThreadedExecutor(context=context)
-        self._executor.add_node(self.node)
+        self._open_node("Go2")
         self._navigator = (
             Nav2Navigator(self.node, c.nav2_action, self._executor.create_task)
             if c.nav2_action
@@ -227,8 +173,8 @@ class Go2RosRobot(BaseRobot):
             EstopListener(
                 f"{c.node_name}_estop",
                 "/",
-                context,
-                _RELIABLE,
+                self._context,
+                RELIABLE,
                 estop_topic=c.estop_topic,
                 release_topic=c.estop_release_topic,
                 on_estop=self._estop_pressed,
@@ -241,21 +187,20 @@ class Go2RosRobot(BaseRobot):
         self._map_msg: GridMsg | None = None  # the newest map not read yet
         self._map_thread = threading.Thread(target=self._run_maps, name="go2-map", daemon=True)
         self._map_thread.start()
-        self._thread = threading.Thread(target=self._spin, name="go2-ros", daemon=True)
-        self._thread.start()
+        self._start_spinning("go2-ros")
 
     def _build_interfaces(self) -> None:
         c, n = self.config, self.node
         names = [c.cmd_vel_topic] if c.cmd_vel_topic else list(VELOCITY_TOPICS)
-        self._twist_pubs = {name: n.create_publisher(Twist, name, _RELIABLE) for name in names}
-        self._request_pub = n.create_publisher(WebRtcReq, c.webrtc_topic, _RELIABLE)
+        self._twist_pubs = {name: n.create_publisher(Twist, name, RELIABLE) for name in names}
+        self._request_pub = n.create_publisher(WebRtcReq, c.webrtc_topic, RELIABLE)
         self._speech_pub = (
-            n.create_publisher(String, c.speech_topic, _RELIABLE) if c.speech_topic else None
+            n.create_publisher(String, c.speech_topic, RELIABLE) if c.speech_topic else None
         )
-        n.create_subscription(Odometry, c.odom_topic, self._on_odom, _RELIABLE)
-        n.create_subscription(Go2State, c.state_topic, self._on_state, _RELIABLE)
+        n.create_subscription(Odometry, c.odom_topic, self._on_odom, RELIABLE)
+        n.create_subscription(Go2State, c.state_topic, self._on_state, RELIABLE)
         if c.battery_topic:
-            n.create_subscription(BatteryState, c.battery_topic, self._on_battery, _RELIABLE)
+            n.create_subscription(BatteryState, c.battery_topic, self._on_battery, RELIABLE)
         if c.camera_topic:
             compressed = c.camera_topic.rstrip("/").endswith("compressed")
             n.create_subscription(
@@ -272,9 +217,7 @@ class Go2RosRobot(BaseRobot):
                     "detections_topic needs the shadowhound_interfaces package: "
                     f"run scripts/build_ros.sh ({exc})"
                 ) from exc
-            n.create_subscription(
-                DetectionArray, c.detections_topic, self._on_detections, _RELIABLE
-            )
+            n.create_subscription(DetectionArray, c.detections_topic, self._on_detections, RELIABLE)
         if c.coco_detections_topic:
             try:
                 from vision_msgs.msg import Detection2DArray
@@ -302,20 +245,9 @@ class Go2RosRobot(BaseRobot):
             n.create_subscription(TFMessage, "/tf_static", self._on_tf_static, _TF_STATIC)
         if c.scan_topic:
             n.create_subscription(LaserScan, c.scan_topic, self._on_scan, _SENSOR)
-        n.create_timer(_KEEPALIVE_PERIOD, self._keep_alive)
+        n.create_timer(KEEPALIVE_PERIOD, self._keep_alive)
         n.create_timer(5.0, self._warn_without_odometry)
         n.create_timer(_PUBLISHERS_PERIOD, self._check_publishers)
-
-    def _spin(self) -> None:
-        try:
-            while not self._closed and self._context.ok():
-                self._executor.spin_once(timeout_sec=0.1)
-        except ExternalShutdownException:
-            pass  # the process is shutting ROS down; close() still cleans up
-
-    def topic(self, name: str) -> str:
-        """The full name of one of the robot's topics (for messages to people)."""
-        return self.node.resolve_topic_name(name)
 
     @property
     def velocity_topic(self) -> str:
@@ -340,12 +272,6 @@ class Go2RosRobot(BaseRobot):
         """go2_states shows the robot standing in a mode in which it obeys Moves (settled)."""
         return self._postures.balanced()
 
-    @property
-    def latency(self) -> float:
-        """The most odometry may lag now: measured (or configured), else MAX_LATENCY."""
-        with self._lock:
-            return self._tracker.latency_bound
-
     # -- callbacks (executor thread; short) ----------------------------------------------
 
     def _on_odom(self, msg: Odometry) -> None:
@@ -354,12 +280,12 @@ class Go2RosRobot(BaseRobot):
         now = time.monotonic()
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         if self._navigator is not None and self._navigator.driving:
-            self._body.driven_until = now + _DRIVEN_SETTLE + self.odom_latency
+            self._body.driven_until = now + DRIVEN_SETTLE + self.odom_latency
         elsewhere = now < self._body.driven_until
         with self._lock:
             before = self._tracker.latency
             fault = self._intake.receive(now, stamp, p.x, p.y, yaw, driven_elsewhere=elsewhere)
-            self._odom_at = now
+            self._pose_at = now
             after = self._tracker.latency
             self._odom_frame = msg.header.frame_id or self._odom_frame
             if msg.header.frame_id and msg.child_frame_id:
@@ -407,23 +333,7 @@ class Go2RosRobot(BaseRobot):
             self._odometry_fault(fault)
 
     def _on_state(self, msg: Go2State) -> None:
-        posture = self._postures.observe(int(msg.mode), float(msg.body_height))
-        if posture is None:
-            return
-        with self._lock:
-            was, self._posture = self._posture if self._posture_seen else posture, posture
-            self._posture_seen = True
-            moving = not self._halted
-        if was is Posture.STANDING and posture is not was and not self._postures.commanded:
-            # Nobody here asked for it: a fall, or the remote. Moves would be ignored or worse;
-            # stop now (the running step then fails on the posture, SkillContext.check).
-            if moving:
-                self.stop()
-            self.node.get_logger().warning(
-                f"{self.topic(self.config.state_topic)} shows the robot {posture.value} "
-                f"({self._postures.describe()}) without a command from ShadowHound: a fall?"
-                + (" The robot was stopped." if moving else "")
-            )
+        self._observe_posture(int(msg.mode), float(msg.body_height))
 
     def _on_tf(self, msg: Any) -> None:
         self._take_transforms(msg, static=False)
@@ -433,11 +343,20 @@ class Go2RosRobot(BaseRobot):
 
     def _take_transforms(self, msg: Any, static: bool) -> None:
         """Feed the frames' tree; when SLAM's map -> odom moves the robot's map pose by more
-        than a leg may absorb, count a relocalization (a running leg stops on it)."""
+        than a leg may absorb, count a relocalization (a running leg stops on it).
+
+        Only edges into the frames the tree is asked about go in: odometry's frame (SLAM's
+        map -> odom, `_to_world`), and `odom` and `base_link` (TfTree.map_to_odom_jump measures
+        a correction at the robot). The rest (robot_state_publisher's dozens of links, at
+        50 Hz) is dropped here, before the lock."""
+        # A reference read without the lock: a frame id changing meanwhile is read again below.
+        wanted = (self._odom_frame, ODOM, BASE)
         log = self.node.get_logger()
         for t in msg.transforms:
-            parent = str(t.header.frame_id).lstrip("/")
             child = str(t.child_frame_id).lstrip("/")
+            if child not in wanted:
+                continue
+            parent = str(t.header.frame_id).lstrip("/")
             q, p = t.transform.rotation, t.transform.translation
             yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
             stamp = t.header.stamp.sec + t.header.stamp.nanosec * 1e-9
@@ -701,7 +620,7 @@ class Go2RosRobot(BaseRobot):
                 self._publish_twist(command, topic)
 
     def _warn_without_odometry(self) -> None:
-        if self._odom_at is None:
+        if self._pose_at is None:
             self.node.get_logger().warning(
                 f"no odometry on {self.topic(self.config.odom_topic)} yet: is go2_ros2_sdk (or "
                 "`shadowhound sim-driver`) running, with the same ROS_DOMAIN_ID and RMW? "
@@ -711,61 +630,20 @@ class Go2RosRobot(BaseRobot):
 
     # -- Robot protocol ------------------------------------------------------------------
 
-    def get_state(self) -> RobotState:
-        """The latest state. Raises RobotError when odometry is stale (older than
-        `odom_timeout`) while motion is under way (velocity commanded since the last `stop`):
-        a closed loop must not steer on an old pose. After `stop` the last state comes back
-        with `connected` False, so reports and plans still work, and `send_velocity` refuses
-        to start moving blind."""
-        state = self.last_state()
-        with self._lock:
-            halted, untrusted = self._halted, self._intake.problem(time.monotonic())
-        if untrusted:
-            raise RobotError(f"odometry is not trusted: {untrusted}")
-        if not state.connected and not halted:
-            raise RobotError(self._odometry_problem())
-        return state
+    def _locate(self, now: float) -> tuple[Pose2D, int, tuple[float, float, float]]:
+        """The pose now in the world frame (the map once SLAM's map -> odom is known), and the
+        map -> odom jumps seen. With self._lock held."""
+        return self._to_world(*self._tracker.pose(now)), self._relocalized, self._jumps
 
-    def last_state(self) -> RobotState:
-        """The last known state without raising: `connected` is False when odometry is stale."""
-        now = time.monotonic()
-        with self._lock:
-            pose = self._to_world(*self._tracker.pose(now))
-            vx, vy, wz = self._tracker.velocity(now)
-            relocalized, jumps = self._relocalized, self._jumps
-            odom_at, battery = self._odom_at, self._battery
-            travel = (self._intake.distance, self._intake.turned, self._intake.moving)
-            posture, estopped = self._posture, self._body.estopped
-        fresh = odom_at is not None and now - odom_at <= self.config.odom_timeout
-        level = battery[1] if battery and now - battery[0] <= self.config.battery_timeout else None
-        return RobotState(
-            x=pose.x,
-            y=pose.y,
-            yaw=pose.yaw,
-            vx=vx,
-            vy=vy,
-            wz=wz,
-            posture=posture,
-            battery=level,
-            distance_travelled=travel[0],
-            angle_turned=travel[1],
-            time_moving=travel[2],
-            stamp=now,
-            estopped=estopped,
-            connected=fresh,
-            relocalized=relocalized,
-            jumps=jumps,
-        )
-
-    def _odometry_problem(self) -> str:
+    def _pose_problem(self) -> str:
         topic = self.topic(self.config.odom_topic)
-        if self._odom_at is None:
+        if self._pose_at is None:
             waited = time.monotonic() - self._started
             return (
                 f"no odometry received on {topic} in {waited:.1f} s: is go2_ros2_sdk "
                 "running, with the same ROS_DOMAIN_ID and RMW?"
             )
-        age = time.monotonic() - self._odom_at
+        age = time.monotonic() - self._pose_at
         return (
             f"no odometry on {topic} for {age:.1f} s: is go2_ros2_sdk running and the "
             "robot connected (WebRTC allows one client: close the phone app)?"
@@ -776,10 +654,7 @@ class Go2RosRobot(BaseRobot):
         Twists."""
         values = finite_velocity(vx, vy, wz)
         if not any(values):
-            with self._lock:
-                halted = self._halted
-            if not halted:
-                self.stop()
+            self._halt()
             return
         c = self.config
         vx, vy, wz = capped(values, c.max_linear_speed, c.max_angular_speed)
@@ -787,7 +662,7 @@ class Go2RosRobot(BaseRobot):
         # the last millimetres of an approach would otherwise round to standing still.
         command = (go2_api.movable(vx), go2_api.movable(vy), go2_api.movable(wz))
         if not self.last_state().connected:
-            raise RobotError(self._odometry_problem() + " Not moving without odometry.")
+            raise RobotError(self._pose_problem() + " Not moving without odometry.")
         with self._lock:
             starting, estopped = self._halted, self._body.estopped
         if starting:
@@ -808,39 +683,14 @@ class Go2RosRobot(BaseRobot):
                 "link: docs/go2.md). Not moving."
             )
         topic = self._discover_velocity_topic()
-        with self._send_lock:
-            with self._lock:
-                if self._body.estopped:
-                    return  # like the simulator: motion is ignored while the e-stop is latched
-                self._command = command
-                self._halted = False
-                # The robot ignores velocity unless standing: predict no motion then.
-                walks = self._posture is Posture.STANDING
-                self._intake.command(time.monotonic(), *(command if walks else (0.0, 0.0, 0.0)))
-            self._publish_twist(command, topic)
+        self._command_velocity(command, lambda sent: self._publish_twist(sent, topic))
 
     def stop(self) -> None:
-        """StopMove now (thread-safe); the keep-alive goes quiet. Under the send lock, so no
-        Twist read before the stop can go out after it (the robot would walk on for a second)."""
+        """Nav2's goals cancelled, and StopMove now (thread-safe); the keep-alive goes quiet."""
         now = time.monotonic()
         if self._navigator is not None:  # else Nav2's controller drives on
             self._navigator.cancel_all()
-        with self._send_lock:
-            with self._lock:
-                self._command = (0.0, 0.0, 0.0)
-                self._halted = True
-            self._request(go2_api.STOP_MOVE)
-        with self._lock:
-            self._intake.command(now, 0.0, 0.0, 0.0)
-        self._wake.set()
-
-    def emergency_stop(self) -> None:
-        """StopMove now; motion and postures are refused until `release_estop`."""
-        self._body.latch(True)
-        self.stop()
-
-    def release_estop(self) -> None:
-        self._body.latch(False)
+        self._stop_move(now)
 
     def watch_estop(self, listener: Callable[[bool], None]) -> None:
         """Call `listener(True)` after an e-stop on `estop_topic` stopped the robot, and
@@ -866,12 +716,6 @@ class Go2RosRobot(BaseRobot):
         go2_states shows the posture it leads to. Nothing is sent when already there."""
         self._body.set_posture(posture, self._stand_before_balancing)
 
-    def _halt(self) -> None:
-        with self._lock:
-            moving = not self._halted
-        if moving:
-            self.stop()
-
     def _stand_before_balancing(self, what: str) -> None:
         """After StandUp (or RiseSit): BalanceStand went once go2_states showed the body
         standing, whatever the mode (firmware differ: JointLock 6, Damping 7), or after a
@@ -896,11 +740,6 @@ class Go2RosRobot(BaseRobot):
             self._request(go2_api.MOTION_SWITCH, {"name": "ai"}, go2_api.MOTION_SWITCHER_TOPIC)
 
         self._body.perform(trick, ai if ai_mode else None)
-
-    def sleep(self, seconds: float) -> None:
-        if seconds > 0:
-            self._wake.clear()
-            self._wake.wait(seconds)
 
     def get_camera_frame(self) -> CameraFrame | None:
         return self._frame
@@ -928,24 +767,18 @@ class Go2RosRobot(BaseRobot):
             self._navigator.frame = self.world_frame
         return self._navigator
 
-    def close(self) -> None:
-        if self._closed:
-            return
-        if self._context.ok():
-            self.stop()
-        self._closed = True
+    def _closing(self) -> None:
+        """The map thread and the e-stop listener end (close(), before the executor's end)."""
         with self._map_ready:
             self._map_ready.notify()
         if self._estop_node is not None:
             self._estop_node.close()
-        self._thread.join(2.0)
         self._map_thread.join(2.0)
-        self._executor.shutdown(timeout_sec=1.0)
+
+    def _destroy_node(self) -> None:
         if self._navigator is not None:
             self._navigator.destroy()
-        self.node.destroy_node()
-        if self._own_context:
-            rclpy.try_shutdown(context=self._context)
+        super()._destroy_node()
 
     # -- topics out ----------------------------------------------------------------------
 
@@ -1025,8 +858,3 @@ class Go2RosRobot(BaseRobot):
             raise RobotError("this Go2 has no voice: speech_topic is '' (set it, e.g. /tts)")
         if self._context.ok():
             self._speech_pub.publish(String(data=text))
-
-    # -- postures ------------------------------------------------------------------------
-
-    def _check_estop(self, doing: str) -> None:
-        self._body.check_estop(doing)
