@@ -275,3 +275,170 @@ def test_the_offline_planner_reads_kinds_of_conditions(text: str, kind: str) -> 
     plan = RulePlanner().plan(text)
     watched = [w for s in plan.steps for w in s.watches]
     assert watched and watched[0].kind == kind, plan.to_dict()
+
+
+# -- branches and loops ------------------------------------------------------------------------
+
+BRANCH = "if the battery is below 30% go to the charging dock, otherwise patrol"
+
+
+@pytest.mark.parametrize("level", [25.0, 80.0])
+def test_if_the_battery_is_low_go_to_the_dock_otherwise_patrol(level: float) -> None:
+    """Each branch is taken for its battery level, judged by where the body went in truth."""
+    robot = ScriptedRobot(World(objects=(WorldObject("charging dock", -3.0, -1.0, 0.4),)))
+    robot.set_battery(level)
+    agent = agent_on(robot)
+    result = agent.execute_mission(BRANCH)
+    assert result.success, result.response
+    dock, patrol = result.steps
+    end = robot.get_state()
+    route = agent.settings.patrol_route
+    if level < 30:
+        assert (dock.status, patrol.status) == (StepStatus.SUCCEEDED, StepStatus.SKIPPED)
+        assert math.hypot(end.x + 3.0, end.y + 1.0) < 1.2, end
+        assert "the battery is at 25%, below 30%" in dock.output
+        assert patrol.output.startswith("skipped: the battery is at 25%, below 30% (otherwise)")
+        assert all(math.dist((t.x, t.y), route[0]) > 0.3 for t in robot.path)  # no patrol
+    else:
+        assert (dock.status, patrol.status) == (StepStatus.SKIPPED, StepStatus.SUCCEEDED)
+        assert dock.output.startswith("skipped: the battery is at 80.0%, not below 30%")
+        for point in route:  # the body passed every waypoint of the patrol
+            assert min(math.dist((t.x, t.y), point) for t in robot.path) < 0.1, point
+        assert math.hypot(end.x, end.y) < 0.1  # and came back
+        assert min(math.hypot(t.x + 3.0, t.y + 1.0) for t in robot.path) > 2.0  # never docked
+
+
+def test_the_dry_run_shows_both_branches() -> None:
+    robot = ScriptedRobot(World(objects=(WorldObject("charging dock", -3.0, -1.0, 0.4),)))
+    result = agent_on(robot).dry_run(BRANCH)
+    assert result.success, result.response
+    assert [s.watching() for s in result.steps] == ["if the battery is below 30%", "otherwise"]
+
+
+def test_patrol_until_i_say_stop_ends_as_asked_when_a_person_stops_it() -> None:
+    import threading
+
+    robot = SimRobot(time_scale=1.0)
+    agent = agent_on(robot)
+    moving = threading.Event()
+    agent.add_listener(lambda e: moving.set() if e.kind == "step_started" else None)
+    out: dict[str, object] = {}
+    runner = threading.Thread(
+        target=lambda: out.update(result=agent.execute_mission("patrol until I say stop"))
+    )
+    runner.start()
+    assert moving.wait(20)
+    while robot.get_state().distance_travelled < 0.3:  # the body walks (truth), then the stop
+        robot.sleep(0.02)
+    agent.cancel()
+    runner.join(20)
+    robot.sleep(0.5)  # braking (the simulator's deceleration) is over by then
+    assert robot.get_state().vx == 0.0 and robot.get_state().vy == 0.0
+    result = out["result"]
+    assert result.success, result.response  # type: ignore[attr-defined]
+    assert "stopped: you said stop (until I say stop)" in result.response  # type: ignore[attr-defined]
+    assert result.status is MissionStatus.SUCCEEDED  # type: ignore[attr-defined]
+
+
+def test_after_a_person_says_stop_nothing_more_moves() -> None:
+    import threading
+
+    robot = SimRobot(time_scale=1.0)
+    agent = agent_on(robot)
+    started = threading.Event()
+    agent.add_listener(lambda e: started.set() if e.kind == "step_started" else None)
+    out: dict[str, object] = {}
+    mission = "patrol until I say stop, then walk forward 1 meter"
+    runner = threading.Thread(target=lambda: out.update(result=agent.execute_mission(mission)))
+    runner.start()
+    assert started.wait(20)
+    while robot.get_state().distance_travelled < 0.2:
+        robot.sleep(0.02)
+    agent.cancel()
+    runner.join(20)
+    result = out["result"]
+    assert result.status is MissionStatus.STOPPED  # type: ignore[attr-defined]
+    assert result.steps[1].status is StepStatus.SKIPPED  # type: ignore[attr-defined]
+    robot.sleep(0.5)  # braking
+    at = robot.get_state().distance_travelled
+    robot.sleep(1.0)  # the walk after it never starts
+    assert robot.get_state().distance_travelled - at < 0.001
+
+
+@pytest.mark.parametrize(
+    ("text", "laps", "watch"),
+    [
+        ("keep patrolling", None, None),
+        ("patrol continuously", None, None),
+        ("patrol until I say stop", None, "operator_stop"),
+        ("patrol 3 laps until I say stop", 3, "operator_stop"),
+        ("while the battery is above 50% patrol", None, "battery_below"),
+        ("patrol as long as the battery stays above 40 percent", None, "battery_below"),
+    ],
+)
+def test_the_offline_planner_reads_loops(text: str, laps: int | None, watch: str | None) -> None:
+    step = RulePlanner().plan(text).steps[-1]
+    assert step.skill == "nav.patrol" and step.args["laps"] == laps
+    assert [w.kind for w in step.watches] == ([watch] if watch else [])
+
+
+def test_keep_patrolling_is_bounded_by_the_missions_limits() -> None:
+    """As many laps as the mission's distance allows, checked before it moves."""
+    settings = ShadowHoundConfig(safety={"max_mission_distance": 15.0})
+    settings.memory.enabled = False
+    robot = SimRobot(time_scale=0)
+    agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
+    dry = agent.dry_run("keep patrolling")
+    assert "at most 2 laps" in dry.response, dry.response  # 6.4 m a lap
+    result = agent.execute_mission("keep patrolling")
+    assert result.success, result.response
+    assert "patrolled 2 laps" in result.response
+    assert 12.0 < robot.get_state().distance_travelled <= 15.0  # the truth's odometer
+
+
+# -- random plans with branches and watches ------------------------------------------------------
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    legs=st.lists(
+        st.tuples(
+            st.floats(0.2, 1.5),  # metres forward
+            st.one_of(st.none(), st.sampled_from(["if", "if_not"])),  # its guard, if any
+            st.floats(5.0, 95.0),  # the guard's percent
+            st.booleans(),  # watch for the ball too
+        ),
+        min_size=1,
+        max_size=3,
+    ),
+    battery=st.floats(1.0, 100.0),
+    ball_x=st.floats(0.5, 5.0),
+)
+def test_random_branches_and_watches_never_go_beyond_the_checked_plan(
+    legs: list[tuple[float, str | None, float, bool]], battery: float, ball_x: float
+) -> None:
+    robot = ScriptedRobot(World(objects=(WorldObject("red ball", ball_x, 1.2, 0.15),)))
+    robot.set_battery(battery)
+    steps = []
+    for metres, guard, percent, watch in legs:
+        steps.append(
+            SkillCall(
+                "nav.move",
+                {"distance": round(metres, 2)},
+                guard=Watch(guard, "battery_below", percent=percent) if guard else None,
+                watches=(Watch("until", "seen", "red ball"),) if watch else (),
+            )
+        )
+    result = agent_on(robot, FixedPlanner(Plan(steps))).execute_mission("random plan")
+    checked = sum(round(m, 2) for m, *_ in legs)  # every branch, as if no watch fired
+    farthest = max((t.x for t in robot.path), default=0.0)
+    assert farthest <= checked + 0.05, (farthest, result.response)
+    ran = [s for s in result.steps if s.status is not StepStatus.SKIPPED]
+    if result.refusals:  # refused whole (a battery below the floor, say): nothing moved
+        assert farthest < 0.01 and not ran, result.response
+        return
+    for step, (_, guard, percent, _) in zip(result.steps, legs, strict=True):
+        if guard is not None:  # taken exactly when the guard says (the battery barely drains)
+            low = battery < percent
+            assert (step.status is not StepStatus.SKIPPED) == (low == (guard == "if")), step
+    assert len(ran) <= len(legs)

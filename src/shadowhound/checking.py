@@ -17,7 +17,7 @@ from .result import StepResult, StepStatus
 from .robot.base import Robot
 from .safety import Governor
 from .skills import PlanEnv, SkillRegistry, SkillValidationError, ValidatedCall
-from .skills.watches import check_watches
+from .skills.watches import GUARD_WHEN, check_watches
 from .state import Pose2D, RobotState
 
 
@@ -49,12 +49,15 @@ def check_plan(
     `robot`, or the plan is refused naming them."""
     calls, problems, invalid = _validate(plan, registry, settings)
     for i, c in enumerate(calls, first):
-        if c is None or not c.watches:
+        if c is None or not (c.watches or c.guard):
             continue
         if robot is None:
             problems.append(f"step {i}: its conditions can only be checked against the robot")
             continue
         problems += [f"step {i}: {p}" for p in check_watches(c.watches, robot, env.vocabulary)]
+        if c.guard is not None:
+            found = check_watches([c.guard], robot, env.vocabulary, GUARD_WHEN)
+            problems += [f"step {i}: {p}" for p in found]
     steps = [
         StepResult(i, c.skill, plain_args(c.args), c.label, watches=_watch_records(c))
         for i, c in enumerate(plan.steps, first)
@@ -120,9 +123,11 @@ def _validate(
 
 
 def _watch_records(call: Any) -> list[dict[str, Any]]:
-    """A proposed step's watches for the record (whatever a planner sent)."""
+    """A proposed step's guard and watches for the record (whatever a planner sent)."""
     watches = getattr(call, "watches", ())
-    return [w.to_dict() for w in watches if isinstance(w, Watch)] if watches else []
+    guard = getattr(call, "guard", None)
+    records = [guard.to_dict()] if isinstance(guard, Watch) else []
+    return records + ([w.to_dict() for w in watches if isinstance(w, Watch)] if watches else [])
 
 
 def plain_args(args: Any) -> dict[str, Any]:

@@ -28,7 +28,7 @@ from .budget import MissionBudget
 from .checking import CheckedPlan, check_plan
 from .crew import Crew
 from .errors import WatchFired
-from .plan import Plan, PlanningError, SkillCall, Usage
+from .plan import Plan, PlanningError, SkillCall, Usage, Watch
 from .planning import Planner, PlanningContext, ReplanningPlanner, StepwisePlanner
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing, compose_response
 from .robot.base import RobotError
@@ -40,7 +40,7 @@ from .skills import (
     ValidatedCall,
 )
 from .skills.objects import see_at_start
-from .skills.watches import fired_text
+from .skills.watches import fired_text, guard_holds
 from .speech import Saying
 from .state import RobotState, normalize_angle
 
@@ -258,7 +258,17 @@ class MissionRun:
         self.crew.tracker.set_status(MissionStatus.EXECUTING)
         self.crew.tracker.at_least_steps(steps[-1].index if steps else 0)
         for position, (step, call) in enumerate(zip(steps, calls, strict=True)):
-            outcome = self.run_step(step, call)
+            taken = ""
+            if call.guard is not None:
+                runs, taken = self.guarded(step, call.guard)
+                if not runs:
+                    continue  # a branch not taken: skipped, saying why
+            outcome = self.run_step(step, call, taken)
+            if outcome is MissionStatus.SUCCEEDED and self.crew.stop.cancelled.is_set():
+                if position + 1 == len(steps):
+                    break  # "until I say stop" was the last step: done as asked
+                outcome = MissionStatus.STOPPED  # after a person's stop nothing more moves
+                step.error = "a person said stop: the steps after it were not run"
             if outcome is not MissionStatus.SUCCEEDED:
                 self.robot.stop()
                 for later in steps[position + 1 :]:
@@ -368,7 +378,25 @@ class MissionRun:
             error=None if status is MissionStatus.SUCCEEDED else answer,
         )
 
-    def run_step(self, step: StepResult, call: ValidatedCall) -> MissionStatus:
+    def guarded(self, step: StepResult, guard: Watch) -> tuple[bool, str]:
+        """Whether a guarded step runs, decided now (a branch of "if ... otherwise ..."); a
+        step not run is skipped with why. A robot that cannot say decides nothing: the step is
+        skipped and says so."""
+        try:
+            runs, why = guard_holds(guard, self.robot, self.crew.settings.sim.body_radius)
+        except RobotError as exc:
+            runs, why = False, f"the condition could not be read: {exc}"
+        except Exception as exc:  # a bug must not end the mission uncaught: skip, say so
+            log.exception("guard %r crashed", guard)
+            runs, why = False, f"internal error reading the condition: {exc!r}"
+        said = f"{why} ({guard.words or guard.describe()})"
+        if not runs:
+            step.status = StepStatus.SKIPPED
+            step.output = f"skipped: {said}"
+            self.emit(ev.StepFinished.of(self.id, step))
+        return runs, said
+
+    def run_step(self, step: StepResult, call: ValidatedCall, taken: str = "") -> MissionStatus:
         """One checked step on the robot: the governor's step check, the skill, its outcome."""
         robot, c = self.robot, self.crew
         env = self._env()
@@ -391,6 +419,8 @@ class MissionRun:
             say=lambda text: self.say(step, text),
             answer=self.answer,
         )
+        if taken:  # why a guarded step runs: its branch was taken
+            ctx.notes.append(taken)
         try:
             before = robot.get_state()
             refused = c.governor.check_step(call, before, env)
@@ -417,8 +447,15 @@ class MissionRun:
                 status = MissionStatus.STOPPED
         except MissionCancelled:
             robot.stop()
-            step.status, step.error = StepStatus.CANCELLED, c.stop.reason()
-            status = MissionStatus.STOPPED
+            asked = _until_stopped(call, c.stop)
+            if asked is not None:  # "until I say stop", and a person said it: done as asked
+                said = f"{_so_far(before, robot)}, stopped: you said stop ({asked})"
+                step.output = "; ".join([*ctx.notes, said])
+                step.status = StepStatus.SUCCEEDED
+                self.emit(ev.WatchFiredEvent(self.id, step.index, said))
+            else:
+                step.status, step.error = StepStatus.CANCELLED, c.stop.reason()
+                status = MissionStatus.STOPPED
         except (SkillError, RobotError) as exc:
             robot.stop()
             step.status, step.error = StepStatus.FAILED, str(exc)
@@ -553,3 +590,14 @@ def _so_far(before: RobotState, robot: Any) -> str:
     parts = [f"moved {moved:.2f} m"] if moved >= 0.01 else []
     parts += [f"turned {turned:.0f} degrees"] if turned >= 1 else []
     return ", ".join(parts) or "did not move"
+
+
+def _until_stopped(call: ValidatedCall, stop: Any) -> str | None:
+    """The words of `call`'s "until I say stop", when a person's plain stop (not the e-stop,
+    not the watchdog) ended it; else None."""
+    if stop.estop_latched or stop.cause:
+        return None
+    for w in call.watches:
+        if w.kind == "operator_stop" and w.when == "until":
+            return w.words or w.describe()
+    return None

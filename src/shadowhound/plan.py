@@ -8,8 +8,9 @@ from typing import Any
 from .errors import PlanningError as PlanningError
 from .usage import Usage as Usage
 
-WATCH_KINDS = ("seen", "in_the_way", "battery_below")
+WATCH_KINDS = ("seen", "in_the_way", "battery_below", "operator_stop")
 WATCH_WHEN = ("until", "unless")
+GUARD_WHEN = ("if", "if_not")  # a step's guard: it runs only if the condition holds (or not)
 
 
 @dataclass(frozen=True)
@@ -21,7 +22,9 @@ class Watch:
     shorten a step: the plan is checked as if it never fired.
     `kind`: "seen" (`name` in view, within `within` metres when given), "in_the_way"
     (something in the robot's path within `within` metres of its body), "battery_below"
-    (`percent`). `words`: the request's words for it, for people.
+    (`percent`), "operator_stop" (a person's stop from any interface: the web, ROS, MCP, the
+    CLI; "until I say stop" then ends the step as asked rather than as a cancelled mission).
+    `words`: the request's words for it, for people.
     """
 
     when: str
@@ -44,16 +47,20 @@ class Watch:
         return out
 
     def describe(self) -> str:
-        """In a person's words: "until the red ball is seen", "unless something is within 1 m
-        of the path"."""
+        """In a person's words: "until red ball is seen", "unless something is in the way
+        (within 1 m)", "if the battery is below 30%", "if not ... (otherwise)"."""
         if self.kind == "seen":
             what = f"{self.name or 'anything'} is seen"
             if self.within is not None:
                 what += f" within {self.within:g} m"
         elif self.kind == "in_the_way":
             what = f"something is in the way (within {self.within or 0:g} m)"
+        elif self.kind == "operator_stop":
+            what = "a person says stop"
         else:
             what = f"the battery is below {self.percent or 0:g}%"
+        if self.when == "if_not":
+            return f"otherwise (not: {what})"
         return f"{self.when} {what}"
 
 
@@ -66,6 +73,9 @@ class SkillCall:
     args: dict[str, Any] = field(default_factory=dict)
     label: str = ""  # the words of the request this step came from, for people
     watches: tuple[Watch, ...] = ()
+    # Decided when the step is reached: it runs only if this holds ("if"), or does not
+    # ("if_not": an "otherwise" branch); else it is skipped, saying why.
+    guard: Watch | None = None
 
     def to_dict(self) -> dict[str, Any]:
         # A language model may propose anything; keep the record JSON-safe whatever it is.
@@ -73,6 +83,8 @@ class SkillCall:
         out: dict[str, Any] = {"skill": self.skill, "args": args, "label": self.label}
         if self.watches:
             out["watches"] = [w.to_dict() for w in self.watches]
+        if isinstance(self.guard, Watch):
+            out["guard"] = self.guard.to_dict()
         return out
 
 

@@ -84,8 +84,8 @@ def test_lists_tools_from_the_registry_resources_and_the_prompt(transport, http_
             assert distance["type"] == ["number", "string"] and distance["maximum"] == 1000
             speed = tools["nav_move"].input_schema["properties"]["speed"]["anyOf"]
             assert speed[0]["type"] == ["number", "string"] and speed[1] == {"type": "null"}
-            laps = tools["nav_patrol"].input_schema["properties"]["laps"]
-            assert laps["type"] == ["integer", "string"]
+            laps = tools["nav_patrol"].input_schema["properties"]["laps"]["anyOf"]
+            assert laps[0]["type"] == ["integer", "string"] and laps[1] == {"type": "null"}
             assert (
                 tools["body_sport"].input_schema
                 == default_registry().get("body.sport").parameters_schema()

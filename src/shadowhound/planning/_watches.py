@@ -10,6 +10,7 @@ planner never drops a condition a person stated.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 
 from ..errors import NotUnderstood
 from ..plan import Watch
@@ -18,7 +19,8 @@ IN_THE_WAY_METRES = 1.0  # how far ahead of the body "in the way" looks unless t
 
 # ACTION until|unless|stop if CONDITION (on a normalised clause)
 WATCHED = re.compile(
-    r"^(?P<action>.+?)\s+(?P<when>until|till|unless|except\s+if|(?:and\s+|but\s+)?stop\s+if"
+    r"^(?P<action>.+?)\s+(?P<when>until|till|unless|except\s+if|while|as\s+long\s+as"
+    r"|(?:and\s+|but\s+)?stop\s+if"
     r"|stopping\s+if|(?:and\s+|but\s+)?stop\s+(?:when|once|as\s+soon\s+as))\s+(?P<cond>.+)$"
 )
 # a clause of its own that stops what came before it: "(and) stop if you see a person"
@@ -26,6 +28,10 @@ STOP_IF = re.compile(
     r"^(?:and\s+|but\s+|then\s+)?(?:stop|halt|freeze)(?:\s+(?:moving|walking|there))?\s+"
     r"(?:if|when|once|as\s+soon\s+as|whenever|in\s+case)\s+(?P<cond>.+)$"
 )
+# "if CONDITION (then) ACTION" / "if CONDITION" (the action in the clauses after it)
+IF = re.compile(r"^(?:if|in\s+case|should)\s+(?P<rest>.+)$")
+# "otherwise ACTION" / "else ACTION" / "if not, ACTION"
+OTHERWISE = re.compile(r"^(?:otherwise|else|or\s+else|if\s+not)(?:\s+(?P<rest>.+))?$")
 _DISTANCE = r"(?P<d>\d+(?:\.\d+)?)\s*(?:m|meters?|metres?)"
 _SEEN = re.compile(
     r"^(?:(?:you|u|we|i)\s+)?(?:can\s+|do\s+)?(?:see|spot|find|notice|detect|sight|spy|catch\s+"
@@ -46,6 +52,22 @@ _IN_THE_WAY = re.compile(
     r"|^(?:the\s+|your\s+)?(?:way|path)\s+is\s+(?:blocked|not\s+clear|obstructed)$"
     r"|^(?:you\s+)?(?:are|get)\s+(?:blocked|stuck)$"
 )
+_OPERATOR = re.compile(
+    r"^(?:i|we|you\s+are|someone|somebody|anyone)\s+(?:say|says|tell\s+you|tells\s+you|told\s+you"
+    r"|ask\s+you|asks\s+you)(?:\s+to)?\s+(?:stop|halt|so|otherwise|enough)$"
+    r"|^(?:you\s+are\s+|you\s+get\s+)?(?:told|asked)\s+to\s+stop$|^(?:i|we)\s+stop\s+you$"
+)
+_BATTERY_ABOVE = re.compile(
+    r"^(?:the\s+|your\s+)?battery(?:\s+level)?\s+(?:is\s+|stays\s+|remains\s+)?"
+    r"(?:above|over|more\s+than|higher\s+than|at\s+least)\s+(?P<p>\d+(?:\.\d+)?)(?:\s*percent)?$"
+)
+# "keep patrolling", "patrol continuously": as long as the mission's limits allow
+KEEP_GOING = re.compile(
+    r"\b(?:keep|keeps|continue|continuously|constantly|forever|nonstop|non\s+stop|endlessly"
+    r"|indefinitely|all\s+(?:day|night)|on\s+and\s+on|again\s+and\s+again)\b"
+)
+# "while CONDITION (,) ACTION" / "as long as CONDITION ACTION"
+WHILE = re.compile(r"^(?:while|as\s+long\s+as|so\s+long\s+as)\s+(?P<rest>.+)$")
 _BATTERY = re.compile(
     r"^(?:the\s+|your\s+)?battery(?:\s+level)?\s+(?:is\s+|gets\s+|goes\s+|drops\s+|falls\s+)?"
     r"(?:below|under|less\s+than|lower\s+than|beneath)\s+(?P<p>\d+(?:\.\d+)?)(?:\s*percent)?$"
@@ -60,9 +82,22 @@ CAN_WATCH = (
 
 def watch_of(when: str, condition: str) -> Watch:
     """The watch `condition` (normalised words) states; NotUnderstood when it cannot be one."""
+    when = " ".join(when.split())
     kind = "until" if when in ("until", "till") else "unless"
-    words = f"{' '.join(when.split())} {condition}"
+    words = re.sub(r"\bi\b", "I", f"{when} {condition}")
     cond = condition.strip()
+    if when in ("while", "as long as", "so long as"):  # "while X" is "until not X"
+        above = _BATTERY_ABOVE.match(cond)
+        if above:
+            percent = float(above["p"])
+            said = f"{when} the battery is above {percent:g}%"
+            return Watch("until", "battery_below", percent=percent, words=said)
+        raise NotUnderstood(
+            f"I do not plan around conditions ('{when}') such as '{condition}': I can go on "
+            "while the battery is above a percent"
+        )
+    if _OPERATOR.match(cond):
+        return Watch(kind, "operator_stop", words=words)
     m = _IN_THE_WAY.match(cond)
     if m:
         within = float(m["d"]) if m["d"] else IN_THE_WAY_METRES
@@ -77,8 +112,30 @@ def watch_of(when: str, condition: str) -> Watch:
             return Watch(kind, "seen", name=name, within=near, words=words)
     m = _BATTERY.match(cond)
     if m:
-        return Watch(kind, "battery_below", percent=float(m["p"]), words=words)
+        percent = float(m["p"])
+        said = f"{' '.join(when.split())} the battery is below {percent:g}%"
+        return Watch(kind, "battery_below", percent=percent, words=said)
     raise NotUnderstood(
         f"I do not plan around conditions ('{' '.join(when.split())}') such as '{condition}': "
         f"{CAN_WATCH}"
     )
+
+
+def split_condition(rest: str) -> Iterator[tuple[Watch, str]]:
+    """Ways to read "the battery is below 30 go to the dock" as a condition and what to do:
+    (the guard, "go to the dock"), the shortest condition first; the action (after a "then")
+    may be empty (it is in the clauses that follow). The caller takes the first whose action
+    it can plan."""
+    words = rest.split()
+    for k in range(2, len(words) + 1):
+        head, tail = " ".join(words[:k]), " ".join(words[k:])
+        try:
+            watch = watch_of("if", head)
+        except NotUnderstood:
+            continue
+        tail = re.sub(r"^(?:then|do)\s+", "", tail)
+        said = watch.words.replace("if ", "if ", 1) if watch.kind == "battery_below" else ""
+        yield (
+            Watch("if", watch.kind, watch.name, watch.within, watch.percent, said or f"if {head}"),
+            tail,
+        )

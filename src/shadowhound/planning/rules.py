@@ -88,7 +88,30 @@ class RulePlanner:
         failed: list[tuple[str, str]] = []
         last_verb = ""
         previous = 0  # where the last clause's steps begin
+        guard: Watch | None = None  # "if ...": the clauses after it run only if it holds
+        branch: Watch | None = None  # the last "if", for an "otherwise"
         for label in en.split_clauses(text):
+            norm_if = en.normalize(label)[0]
+            opened = watching.IF.match(norm_if)
+            other = watching.OTHERWISE.match(norm_if)
+            if opened or other:
+                try:
+                    if opened:
+                        guard, taken = self._branch(opened["rest"], label, notes)
+                        branch = guard
+                    else:
+                        if branch is None:
+                            raise NotUnderstood("'otherwise' needs an 'if' before it")
+                        guard = replace(branch, when="if_not", words="otherwise")
+                        taken = self._then(other["rest"] or "", label, notes) if other else []
+                        branch = None
+                except NotUnderstood as exc:
+                    failed.append((label, exc.reason))
+                    continue
+                _check_size(steps, len(steps) + len(taken))
+                previous = len(steps)
+                steps.extend(_guarded(s, guard) for s in taken)
+                continue
             speech = speech_request(label)
             if speech is not None:
                 try:
@@ -97,12 +120,12 @@ class RulePlanner:
                     failed.append((label, exc.reason))
                     continue
                 _check_size(steps, len(steps) + len(said))
-                steps.extend(said)
+                steps.extend(_guarded(s, guard) for s in said)
                 last_verb = ""
                 continue
             remembered = memory_steps(label)
             if remembered is not None:
-                steps.extend(remembered)
+                steps.extend(_guarded(s, guard) for s in remembered)
                 last_verb = ""
                 continue
             try:
@@ -141,7 +164,7 @@ class RulePlanner:
                     new = new * count
             _check_size(steps, len(steps) + len(new))
             previous = len(steps)
-            steps.extend(new)
+            steps.extend(_guarded(s, guard) for s in new)
             notes.extend(clause_notes)
         if failed:
             raise failure(steps, failed)
@@ -267,6 +290,9 @@ class RulePlanner:
         watched = watching.WATCHED.match(text)
         if watched and not phrases.CONDITION.search(watched["action"]):
             return self._watched(watched, label, notes, last_verb)
+        lasting = watching.WHILE.match(text)
+        if lasting:
+            return self._while(lasting["rest"], label, notes, last_verb)
         condition = phrases.CONDITION.search(text)
         if condition:
             raise NotUnderstood(
@@ -312,6 +338,29 @@ class RulePlanner:
             return [SkillCall("sys.status", {}, label)], ""
         return None, ""
 
+    def _branch(self, rest: str, label: str, notes: list[str]) -> tuple[Watch, list[SkillCall]]:
+        """ "if CONDITION (then) ACTION": the guard and the action's steps (none: the action is
+        in the clauses that follow). The shortest condition whose action plans wins."""
+        for guard, tail in watching.split_condition(rest):
+            try:
+                return guard, self._then(tail, label, notes)
+            except NotUnderstood:
+                continue
+        raise NotUnderstood(
+            f"I do not plan around conditions ('if') such as '{rest}': {watching.CAN_WATCH}"
+        )
+
+    def _then(self, text: str, label: str, notes: list[str]) -> list[SkillCall]:
+        """The steps of a branch's action (a sentence of its own)."""
+        if not text.strip():
+            return []
+        try:
+            plan = self.plan(text)
+        except PlanningError as exc:
+            raise NotUnderstood(exc.message) from exc
+        notes.extend(plan.notes)
+        return [replace(s, label=label) for s in plan.steps]
+
     def _watched(
         self, m: re.Match[str], label: str, notes: list[str], last_verb: str
     ) -> tuple[list[SkillCall] | None, str]:
@@ -338,7 +387,36 @@ class RulePlanner:
             ]
         if not steps:
             raise NotUnderstood(f"I do not know what to do {m['when']} {m['cond']}")
+        if watch.when == "until" and not phrases.LAPS.search(m["action"]):
+            steps = [_keep_going(s) for s in steps]  # "patrol until ...": lap after lap
         return [_watched(s, watch) for s in steps], verb
+
+    def _while(
+        self, rest: str, label: str, notes: list[str], last_verb: str
+    ) -> tuple[list[SkillCall] | None, str]:
+        """ "while CONDITION (,) ACTION": the action until the condition no longer holds."""
+        words = rest.split()
+        for k in range(2, len(words) + 1):
+            head, tail = " ".join(words[:k]), " ".join(words[k:])
+            try:
+                watch = watching.watch_of("while", head)
+            except NotUnderstood:
+                continue
+            if not tail:
+                continue
+            try:
+                steps, verb = self._clause(tail, label, notes, last_verb)
+            except NotUnderstood:
+                continue
+            if not steps:
+                continue
+            if not phrases.LAPS.search(tail):
+                steps = [_keep_going(s) for s in steps]
+            return [_watched(s, watch) for s in steps], verb
+        raise NotUnderstood(
+            f"I do not plan around conditions ('while') such as '{rest}': I can go on while "
+            "the battery is above a percent"
+        )
 
     def _duration(self, rest: str, label: str, notes: list[str]) -> float | None:
         """Seconds named in `rest`; None if no time is given. Raises on words it cannot use."""
@@ -476,7 +554,7 @@ class RulePlanner:
     def _patrol(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
         if not phrases.PATROL.search(text):
             return None
-        laps = 1
+        laps: int | None = None if watching.KEEP_GOING.search(text) else 1
         m = phrases.LAPS.search(text)
         if m is not None:
             value = nums.to_float(m.group(1))
@@ -667,3 +745,16 @@ def _check_size(steps: list[SkillCall], size: int) -> None:
 def _watched(step: SkillCall, watch: Watch) -> SkillCall:
     """`step` also watching `watch`."""
     return replace(step, watches=(*step.watches, watch))
+
+
+def _guarded(step: SkillCall, guard: Watch | None) -> SkillCall:
+    """`step` run only if `guard` holds (or does not: an "otherwise"); `step` without one."""
+    return step if guard is None else replace(step, guard=guard)
+
+
+def _keep_going(step: SkillCall) -> SkillCall:
+    """A patrol that goes on lap after lap (as the mission's limits allow) until its watch
+    ends it; any other step as it is."""
+    if step.skill == "nav.patrol" and step.args.get("laps") == 1:
+        return replace(step, args={**step.args, "laps": None})
+    return step

@@ -66,6 +66,14 @@ OptionalAngularSpeed = Annotated[
 Count = Annotated[int, BeforeValidator(_count)]
 
 
+def _optional_count(value: object) -> int | None:
+    """A whole number, or None (none given)."""
+    return None if value is None else _count(value)
+
+
+OptionalCount = Annotated[int | None, BeforeValidator(_optional_count)]
+
+
 class SkillArgs(BaseModel):
     """Base of every skill's arguments: unknown keys are errors, numbers are typed quantities."""
 
@@ -112,7 +120,8 @@ def argument_kind(info: FieldInfo) -> units.Kind | None:
 def is_numeric(info: FieldInfo) -> bool:
     """Whether a skill argument is a number (a quantity or a count)."""
     return argument_kind(info) is not None or any(
-        isinstance(m, BeforeValidator) and m.func is _count for m in info.metadata
+        isinstance(m, BeforeValidator) and m.func in (_count, _optional_count)
+        for m in info.metadata
     )
 
 

@@ -19,11 +19,11 @@ from ..world import NearGoal, PlanError, apply_scan, near_goal, plan_route
 from . import motion, navigate, objects, paths
 from .arguments import (
     Angle,
-    Count,
     Length,
     NoArgs,
     OptionalAngle,
     OptionalAngularSpeed,
+    OptionalCount,
     OptionalLength,
     OptionalSpeed,
     SkillArgs,
@@ -89,7 +89,12 @@ class GotoArgs(SkillArgs):
 
 
 class PatrolArgs(SkillArgs):
-    laps: Count = Field(1, ge=1, le=20, description="times round the route")
+    laps: OptionalCount = Field(
+        1,
+        ge=1,
+        le=20,
+        description="times round the route; null: until stopped (as the mission's limits allow)",
+    )
 
 
 def _linear(ctx_or_env: SkillContext | PlanEnv, speed: float | None) -> float:
@@ -413,18 +418,41 @@ def _run_patrol(ctx: SkillContext, a: PatrolArgs) -> str:
     ctx.ensure_standing()
     st = ctx.robot.get_state()
     points = _patrol_points(st.pose, ctx.env)
+    count = _laps(st.pose, a, ctx.env)
     walked = 0.0
-    for _ in range(a.laps):
+    for _ in range(count):
         for point in points:
             walked += walk(ctx, point, _linear(ctx, None), _angular(ctx, None))
             objects.sight_in_view(ctx)
-    laps = "lap" if a.laps == 1 else "laps"
-    return f"patrolled {a.laps} {laps} of {len(points)} waypoints ({walked:.1f} m) and returned"
+    laps = "lap" if count == 1 else "laps"
+    done = f"patrolled {count} {laps} of {len(points)} waypoints ({walked:.1f} m) and returned"
+    if a.laps is None:
+        done += ": the mission's distance and time limits allow no more"
+    return done
+
+
+def _laps(pose: Pose2D, a: PatrolArgs, env: PlanEnv) -> int:
+    """The laps a patrol walks: as asked, or (laps None: until stopped) as many whole laps as
+    the mission's distance and time left allow at the default speed (at least 1, at most 20:
+    the plan check then refuses what does not fit)."""
+    if a.laps is not None:
+        return a.laps
+    points = [(pose.x, pose.y), *_patrol_points(pose, env)]
+    lap = sum(math.dist(p, q) for p, q in zip(points, points[1:], strict=False))
+    if lap <= 0:
+        return 1
+    lim, budget = env.config.safety, env.budget
+    walked = budget.commanded if budget is not None else 0.0
+    spent = budget.elapsed() if budget is not None else 0.0
+    by_distance = (lim.max_mission_distance - walked) / lap
+    seconds = lap / env.config.motion.default_linear_speed * 1.5 + 3.0 * len(points)
+    by_time = (lim.max_mission_duration - spent) / seconds
+    return max(1, min(20, int(min(by_distance, by_time))))
 
 
 def _predict_patrol(pose: Pose2D, a: PatrolArgs, env: PlanEnv) -> list[Pose2D]:
     poses: list[Pose2D] = []
-    for _ in range(a.laps):
+    for _ in range(_laps(pose, a, env)):
         for point in _patrol_points(pose, env):
             poses += _predict_walk(poses[-1] if poses else pose, point, env)
     return poses
@@ -432,7 +460,8 @@ def _predict_patrol(pose: Pose2D, a: PatrolArgs, env: PlanEnv) -> list[Pose2D]:
 
 def _patrol_timeout(a: PatrolArgs, env: PlanEnv) -> float:
     legs = len(env.config.patrol_route) + 1
-    return a.laps * legs * _goto_timeout(GotoArgs(x=0.0, y=0.0, place=None), env)
+    laps = _laps(env.mission_start or Pose2D(), a, env)
+    return laps * legs * _goto_timeout(GotoArgs(x=0.0, y=0.0, place=None), env)
 
 
 def _forecast_goto(a: GotoArgs, env: PlanEnv) -> str:
@@ -449,6 +478,24 @@ def _forecast_goto(a: GotoArgs, env: PlanEnv) -> str:
         f"{cfg.max_seconds:g} s and {cfg.max_distance:g} m (search.max_seconds, "
         "search.max_distance), then go to it: where it ends is not known before it runs"
     )
+
+
+def _forecast_patrol(a: PatrolArgs, env: PlanEnv) -> str:
+    """A patrol until stopped: how many laps the mission's limits allow at most."""
+    if a.laps is not None:
+        return ""
+    laps = _laps(env.mission_start, a, env)
+    return (
+        f"would patrol lap after lap until stopped, at most {laps} lap{'s' if laps != 1 else ''}"
+        " (the mission's distance and time limits: safety.max_mission_distance, "
+        "max_mission_duration)"
+    )
+
+
+def _say_patrol(a: PatrolArgs) -> str:
+    if a.laps is None:
+        return "keep patrolling"
+    return f"patrol {a.laps} lap{'s' if a.laps != 1 else ''}"
 
 
 def _say_goto(a: GotoArgs) -> str:
@@ -525,7 +572,8 @@ SKILLS = (
         timeout=_patrol_timeout,
         moves=True,
         predict=_predict_patrol,
-        phrase=lambda a: f"patrol {a.laps} lap{'s' if a.laps != 1 else ''}",
+        forecast=_forecast_patrol,
+        phrase=_say_patrol,
     ),
     Skill(
         "nav.stop",

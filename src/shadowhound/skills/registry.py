@@ -171,6 +171,7 @@ class ValidatedCall:
     args: SkillArgs
     label: str = ""
     watches: tuple[Watch, ...] = ()  # checked by checking.check_plan against the robot
+    guard: Watch | None = None  # run only if it holds (or not): decided when reached
 
     @property
     def name(self) -> str:
@@ -245,7 +246,9 @@ class SkillRegistry:
             parsed = skill.args_model.model_validate(dict(args))
         except ValidationError as exc:
             raise SkillValidationError(_explain(skill, exc, args)) from exc
-        return ValidatedCall(skill, parsed, call.label, _watches(call.watches))
+        return ValidatedCall(
+            skill, parsed, call.label, _watches(call.watches), _guard(getattr(call, "guard", None))
+        )
 
     def describe(self) -> list[dict[str, Any]]:
         return [s.describe() for s in self._skills.values()]
@@ -273,6 +276,12 @@ def _watches(watches: Any) -> tuple[Watch, ...]:
     if not isinstance(watches, (tuple, list)) or not all(isinstance(w, Watch) for w in watches):
         raise SkillValidationError([f"a step's watches must be conditions, got {watches!r:.80}"])
     return tuple(watches)
+
+
+def _guard(guard: Any) -> Watch | None:
+    if guard is None or isinstance(guard, Watch):
+        return guard
+    raise SkillValidationError([f"a step's guard must be a condition, got {guard!r:.80}"])
 
 
 def _explain(skill: Skill, exc: ValidationError, args: Mapping[str, Any]) -> list[str]:

@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from ..errors import WatchFired
-from ..plan import WATCH_KINDS, WATCH_WHEN, Watch
+from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, Watch
 from ..robot.base import Robot
 from ..state import RobotState, Scan, Sighting
 from ..world.objects import object_key
@@ -28,20 +28,24 @@ IN_THE_WAY = (0.3, 5.0)  # metres from the body a path check may reach
 SEEN_WITHIN = (0.2, 20.0)  # metres a "seen within" may ask
 _CORRIDOR = 0.15  # metres either side of the body a return still counts as in the path
 
-__all__ = ["Watcher", "check_watches", "fired_text"]
+__all__ = ["GUARD_WHEN", "Watcher", "check_watches", "fired_text", "guard_holds"]
 
 
 def check_watches(
-    watches: Sequence[Watch], robot: Robot, vocabulary: frozenset[str] | None
+    watches: Sequence[Watch],
+    robot: Robot,
+    vocabulary: frozenset[str] | None,
+    allowed: tuple[str, ...] = WATCH_WHEN,
 ) -> list[str]:
-    """Why these watches cannot be honoured on `robot` (empty: they can)."""
+    """Why these watches (or, with `allowed` GUARD_WHEN, guards) cannot be honoured on
+    `robot` (empty: they can)."""
     problems: list[str] = []
     for w in watches:
         if not isinstance(w, Watch):
             problems.append(f"a watch must be a condition, got {type(w).__name__}")
             continue
-        if w.when not in WATCH_WHEN:
-            problems.append(f"a watch is {' or '.join(WATCH_WHEN)}, not {w.when!r}")
+        if w.when not in allowed:
+            problems.append(f"a condition here is {' or '.join(allowed)}, not {w.when!r}")
         if w.kind not in WATCH_KINDS:
             problems.append(
                 f"cannot watch for {w.words or w.kind!r}: a watch is one of "
@@ -73,6 +77,8 @@ def _observable(w: Watch, robot: Robot, vocabulary: frozenset[str] | None) -> li
         if robot.get_scan() is None:
             return [f"cannot watch {said}: {robot.description} has no range sensor (scan)"]
         return []
+    if w.kind == "operator_stop":
+        return []  # every interface can stop a mission
     if w.percent is None or not 0 < w.percent < 100:
         return [f"{said}: the battery level must be a percent between 0 and 100"]
     if robot.last_state().battery is None:
@@ -140,6 +146,8 @@ class Watcher:
             return ""
         if w.kind == "in_the_way":
             return self._in_the_way(w, r, heading)
+        if w.kind == "operator_stop":
+            return ""  # a person's stop arrives as the mission's cancel (mission.run_step)
         battery = r.state.battery
         if battery is not None and w.percent is not None and battery < w.percent:
             return f"the battery is at {battery:.0f}%, below {w.percent:g}%"
@@ -189,3 +197,22 @@ def raise_if_fired(watcher: Watcher | None, state: RobotState, heading: float | 
     if hit is not None:
         watcher.robot.stop()
         raise WatchFired(hit[0], hit[1])
+
+
+def guard_holds(guard: Watch, robot: Robot, body_radius: float) -> tuple[bool, str]:
+    """Whether a step guarded by `guard` runs now, and why in words ("the battery is at 25%,
+    below 30%" / "the battery is not below 30%"). A path check looks straight ahead."""
+    state = robot.get_state()
+    hit = Watcher([guard], robot, body_radius).fired(state, 0.0)
+    runs = (hit is not None) == (guard.when == "if")
+    return runs, hit[1] if hit is not None else _not_so(guard, state)
+
+
+def _not_so(guard: Watch, state: RobotState) -> str:
+    """Why a guard's condition does not hold now, in words."""
+    if guard.kind == "battery_below":
+        return f"the battery is at {state.battery_text}, not below {guard.percent or 0:g}%"
+    if guard.kind == "seen":
+        near = f" within {guard.within:g} m" if guard.within is not None else ""
+        return f"no {guard.name} in view{near}"
+    return f"nothing in the way within {guard.within or 0:g} m"
