@@ -327,3 +327,19 @@ def test_every_mission_within_the_text_limit_fits_in_a_body(agent: RobotAgent) -
         over = client.post("/api/mission", json={"command": "x" * (MAX_TEXT + 1)})
         assert over.status_code == 422 and over.json()["problems"][0]["where"] == "body.command"
     wide.cleanup()
+
+
+def test_patrol_until_i_say_stop_ends_as_asked_on_the_dashboards_cancel() -> None:
+    """Issue 26: the dashboard's stop is the person's "stop": the mission succeeds, as asked."""
+    agent = make_agent(time_scale=1.0)
+    with TestClient(create_app(agent), base_url="http://127.0.0.1") as client:
+        body = client.post("/api/mission", json={"command": "patrol until I say stop"}).json()
+        wait_for(
+            lambda: agent.robot.get_state().distance_travelled > 0.2,
+            what="the patrol to walk (the simulator's odometer)",
+        )
+        assert client.post(f"/api/missions/{body['mission_id']}/cancel").json()["cancelled"]
+        record = finished(client, body["mission_id"])
+        assert record["status"] == "succeeded", record
+        assert "stopped: you said stop (until I say stop)" in record["result"]["response"]
+    agent.cleanup()
