@@ -399,3 +399,27 @@ def test_json_answers_are_strict_json_and_chat_status_says_the_pose_is_unknown_w
     answer = strict_loads(capsys.readouterr().out)
     assert isinstance(answer, dict) and answer["success"] is True
     assert (answer["robot"]["x"], answer["robot"]["y"]) == (None, None)
+
+
+def test_chat_stop_ends_patrol_until_i_say_stop_as_asked():
+    """Issue 26: a plain "stop" typed in the chat is the person's stop, at once, out of turn:
+    "patrol until I say stop" ends as asked (ok)."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "shadowhound", "--time-scale", "1", "chat"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={k: v for k, v in os.environ.items() if k != "SHADOWHOUND_CONFIG"},
+    )
+    assert proc.stdin is not None and proc.stderr is not None
+    proc.stdin.write("/run patrol until I say stop\n")
+    proc.stdin.flush()
+    for line in proc.stderr:  # the mission's progress: its step has started
+        if "nav.patrol() until I say stop ..." in line:
+            break
+    out, _ = proc.communicate("stop\n", timeout=60)
+    lines = out.strip().splitlines()
+    assert proc.returncode == 0
+    assert lines[0] == "stopping 'patrol until I say stop'", lines  # at once, out of turn
+    assert lines[1].startswith("ok: ") and "stopped: you said stop" in lines[1], lines

@@ -1,7 +1,8 @@
 """`shadowhound chat`: a REPL over the agent's chat and the mission worker.
 
 Questions are answered by `RobotAgent.chat` (never moving the robot); `/run MISSION` runs one on
-the worker and shows its steps as `run` does; `/estop` acts at once, whatever is in flight.
+the worker and shows its steps as `run` does; `/estop` and `/stop` (or a plain "stop") act at
+once, whatever is in flight.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ if TYPE_CHECKING:
 
 _CHAT_HELP = (
     "Ask a question (where are you? battery? what do you see? what did you do?), or: "
-    "/run MISSION, /status, /skills, /estop, /release, /help, /quit"
+    "/run MISSION, /stop (or just 'stop'), /status, /skills, /estop, /release, /help, /quit"
 )
 
 
@@ -61,8 +62,8 @@ def cmd_chat(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
                 break
             if not line:
                 screen.prompt_when_idle()
-            elif line.split()[0] == "/estop":
-                screen.say_now(_chat_line(agent, worker, line))
+            elif line.split()[0] in ("/estop", "/stop") or _says_stop(line):
+                screen.say_now(_chat_line(agent, worker, line))  # at once, out of turn
             else:
                 screen.waiting()
                 lines.put(line)
@@ -146,13 +147,34 @@ def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
         "/status": lambda: _status(agent.diagnostics()),
         "/skills": lambda: ", ".join(s["name"] for s in agent.get_available_skills()),
         "/estop": lambda: (worker.estop(), "e-stop latched; /release to release it")[1],
+        "/stop": lambda: _stop(worker),
         "/release": lambda: (agent.release_estop(), "e-stop released")[1],
         "/help": lambda: _CHAT_HELP,
     }
+    if _says_stop(line):
+        return _stop(worker)
     if line.startswith("/"):
         action = commands.get(line.split()[0])
         return action() if action else f"unknown command {line.split()[0]!r}. {_CHAT_HELP}"
     return str(agent.chat(line))
+
+
+def _says_stop(line: str) -> bool:
+    """A person's plain "stop" ("stop", "halt", "that's enough"): the running mission's stop,
+    answered at once (a mission "until I say stop" then ends as asked)."""
+    from ..planning._english import normalize
+    from ..planning._phrases import STOP
+
+    return not line.startswith("/") and bool(STOP.match(normalize(line)[0]))
+
+
+def _stop(worker: MissionWorker) -> str:
+    """/stop: cancel the running mission; the robot stops."""
+    job = worker.current
+    if job is None:
+        return "no mission is running"
+    worker.cancel(job.mission_id)
+    return f"stopping {job.command!r}"
 
 
 def _status(now: Diagnostics) -> str:
