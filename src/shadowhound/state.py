@@ -167,6 +167,8 @@ class Sighting:
             side = f"{abs(self.bearing_deg):.0f} degrees to the left"
         elif self.bearing_deg < -8:
             side = f"{abs(self.bearing_deg):.0f} degrees to the right"
+        if not math.isfinite(self.distance):  # a detector's box with no range
+            return f"{self.name} {side} (how far is not known)"
         return f"{self.name} about {self.distance:.1f} m {side}"
 
 

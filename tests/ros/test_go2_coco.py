@@ -181,3 +181,19 @@ def test_go_to_the_person_stops_at_least_1_m_from_the_true_person(rig: Rig) -> N
     gap, off = gap_and_facing(PERSON, end)
     assert PERSON_STANDOFF <= gap < PERSON_STANDOFF + PERSON_MARGIN + 0.1, (gap, end, final)
     assert off < 10.0, (off, end, final)
+
+
+def test_turn_until_the_chair_is_seen_stops_with_the_true_chair_in_view(rig: Rig) -> None:
+    """Issue 26: a watch by sight on the Go2 reads the detector's boxes (`in_view`: what it
+    reported in the last second). The turn stops once a "chair" box arrives: in truth the
+    chair is then in the camera's view, give or take the turn made while the box was on its
+    way (the detector's rate and DDS)."""
+    start = rig.truth.still()
+    final = rig.agent.run("turn left until you see the chair", 120.0)
+    end = rig.truth.still()
+    assert final.startswith("COMPLETED: "), (final, rig.node.output()[-3000:])
+    assert "stopped: saw chair" in final and "(until you see the chair)" in final, final
+    bearing = math.atan2(CHAIR.y - end["y"], CHAIR.x - end["x"]) - end["yaw"]
+    assert abs(math.degrees(math.remainder(bearing, math.tau))) < 45.0 + 25.0, (end, final)
+    turned = math.degrees(math.remainder(end["yaw"] - start["yaw"], math.tau)) % 360.0
+    assert 0.0 < turned < 350.0, (turned, final)  # it stopped before a full turn

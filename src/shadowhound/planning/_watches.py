@@ -139,3 +139,15 @@ def split_condition(rest: str) -> Iterator[tuple[Watch, str]]:
             Watch("if", watch.kind, watch.name, watch.within, watch.percent, said or f"if {head}"),
             tail,
         )
+
+
+# "follow the person", "follow me at 2 meters", "keep following the red ball for 30 seconds"
+FOLLOW = re.compile(
+    r"^(?:please\s+)?(?:keep\s+|continue\s+|start\s+)?(?:follow(?:ing)?|track(?:ing)?|tail(?:ing)?"
+    r"|shadow(?:ing)?|come\s+(?:along\s+)?with|walk\s+with|stay\s+with|stick\s+with)\s+"
+    r"(?:(?P<me>me|us)|(?:the|that|this|a|an|my)?\s*(?P<name>[a-z][a-z ]*?))"
+    r"(?:\s+(?:at|from)\s+(?:a\s+distance\s+of\s+)?(?P<d>\d+(?:\.\d+)?)\s*(?:m|meters?|metres?)"
+    r"(?:\s+(?:away|behind|back|distance))?)?"
+    r"(?:\s+for\s+(?P<t>\d+(?:\.\d+)?)\s*(?P<unit>s|secs?|seconds?|mins?|minutes?))?"
+    r"(?:\s+around)?$"
+)

@@ -306,6 +306,7 @@ class RulePlanner:
             self._posture,
             self._trick,
             self._face,
+            self._follow,
             self._find,
             self._goto,
             self._patrol,
@@ -550,6 +551,17 @@ class RulePlanner:
         if place is None:
             raise NotUnderstood("say which thing to find, e.g. 'find the red ball'")
         return [SkillCall("nav.goto", {"place": place}, label)]
+
+    def _follow(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
+        m = watching.FOLLOW.match(text)
+        if m is None:
+            return None
+        args: dict[str, Any] = {"target": "person" if m["me"] else m["name"].strip()}
+        if m["d"]:
+            args["distance"] = float(m["d"])
+        if m["t"]:
+            args["seconds"] = float(m["t"]) * (60.0 if m["unit"].startswith("m") else 1.0)
+        return [SkillCall("nav.follow", args, label)]
 
     def _patrol(self, text: str, label: str, notes: list[str]) -> list[SkillCall] | None:
         if not phrases.PATROL.search(text):

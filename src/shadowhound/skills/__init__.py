@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout, SkillValidationError
-from . import body, facing, memory, nav, sense, voice
+from . import body, facing, follow, memory, nav, sense, voice
 from .arguments import (
     Angle,
     AngularSpeed,
@@ -47,6 +47,7 @@ def default_registry(tricks: Mapping[str, TrickInfo] | None = None) -> SkillRegi
     return SkillRegistry(
         [
             *nav.SKILLS,
+            *follow.SKILLS,
             *facing.SKILLS,
             *body.SKILLS,
             *([sport] if sport else []),

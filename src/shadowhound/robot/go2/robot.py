@@ -77,7 +77,7 @@ from std_msgs.msg import String
 from ...camera import raw_image_frame, to_camera_frame
 from ...errors import TransformUnavailable
 from ...robot_config import Go2RobotSettings
-from ...state import CameraFrame, Pose2D, Posture, Scan, compose
+from ...state import CameraFrame, Pose2D, Posture, Scan, Sighting, compose, normalize_angle
 from ...world import Belief, GridError, merge_sightings
 from ...world.image_sighting import Bearing, SightingRules
 from ...world.objects import KnownObject
@@ -88,6 +88,7 @@ from ..tf_tree import BASE, ODOM, MapCorrection, TfTree, Transform2D
 from . import api as go2_api
 from .detections import (
     COCO_CLASSES,
+    HOLD_SECONDS,
     BoxIntake,
     CameraMount,
     Frames,
@@ -116,6 +117,8 @@ _TF_STATIC = QoSProfile(
 )
 _PUBLISHERS_PERIOD = 0.5  # seconds between looks for a second odometry publisher
 _LOOK_SECONDS = 1.5  # longest wait for the detector's report on a view (2 Hz detectors, DDS)
+IN_VIEW_SECONDS = HOLD_SECONDS + 0.5  # robot seconds a detection counts as in view now: a box
+# seen while turning waits (up to HOLD_SECONDS) for the odometry of its image's time
 
 
 # The Go2's settings: the profile's `robot: {type: go2, ...}` (robot_config.Go2RobotSettings).
@@ -585,6 +588,32 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
             if heard is not None and heard > since:
                 return
             time.sleep(0.02)
+
+    def in_view(self) -> tuple[Sighting, ...] | None:
+        """What the detector reported in the last `IN_VIEW_SECONDS` (robot clock), as seen from
+        where the robot is now, nearest first. None without a detections topic: nothing can
+        be watched for by sight."""
+        if not (self.config.detections_topic or self.config.coco_detections_topic):
+            return None
+        now, here = self.now(), self.last_state()
+        seen = []
+        for o in self._sightings.objects():
+            if now - o.stamp > IN_VIEW_SECONDS:
+                continue
+            bearing = normalize_angle(math.atan2(o.y - here.y, o.x - here.x) - here.yaw)
+            seen.append(
+                Sighting(o.name, math.hypot(o.x - here.x, o.y - here.y), math.degrees(bearing))
+            )
+        # Boxes with no range (none in the scan, or too far): a direction in odometry's frame,
+        # stamped with the image's time on the ROS clock.
+        offset = now - self.node.get_clock().now().nanoseconds * 1e-9
+        with self._lock:
+            correction = self._map_odom.yaw if self._map_odom is not None else 0.0
+        for b in self.bearings():
+            if now - (b.stamp + offset) <= IN_VIEW_SECONDS:
+                turn = normalize_angle(b.direction + correction - here.yaw)
+                seen.append(Sighting(b.name, math.inf, math.degrees(turn)))
+        return tuple(sorted(seen, key=lambda s: s.distance))
 
     def vocabulary(self) -> frozenset[str]:
         """The detector's classes (`detector_classes`) and every name it has reported: what
