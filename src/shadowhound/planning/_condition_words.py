@@ -92,12 +92,13 @@ def _read_typo(word: str) -> str:
     """`word`, or the condition word it is a misspelling of."""
     if len(word) < 4 or not word.isalpha() or word in _NEAR_WORDS or word in known_words():
         return word
-    near = [
-        target
+    near = {
+        target: distance(word, target, limit(word))
         for target in _TYPO_TARGETS
-        if target[0] == word[0] and distance(word, target, limit(word)) <= limit(word)
-    ]
-    return near[0] if len(near) == 1 else word
+        if target[0] == word[0]
+    }
+    best = [t for t, d in near.items() if d <= limit(word) and d == min(near.values())]
+    return best[0] if len(best) == 1 else word  # "followng": following, not follow
 
 
 # ---- kinds of conditions ---------------------------------------------------------------------

@@ -3,7 +3,9 @@
 plan mode (default): one request returns the whole plan, as JSON constrained by a schema
 (`plan_format` json_schema) or as parallel tool calls (`tools`). Every call is validated
 against the registry; if any is invalid the model gets one repair round trip that says exactly
-what was wrong. Safety refusals are never "repaired": a limit is not negotiable.
+what was wrong. Safety refusals are never "repaired": a limit is not negotiable. The model may
+refuse a request instead (`{"refusal": "why"}`): the mission fails with its reason, and no
+step of that reply runs.
 
 react mode: a bounded tool-calling loop. The model calls one skill, the agent validates,
 checks and runs it, the result goes back, and so on until the model answers in words, the step
@@ -56,8 +58,7 @@ class LLMPlanner:
         situation = (
             f"Original request: {text}\nDone so far: {'; '.join(done) or 'nothing'}\n"
             f"A step failed: {failure}\nPlan only the remaining steps from the robot's current "
-            "state, or return no steps and explain in 'answer' if the request cannot be "
-            "finished."
+            "state, or refuse, saying why, if the request cannot be finished."
         )
         return self._plan(text, situation, context)
 
@@ -74,6 +75,8 @@ class LLMPlanner:
         ]
         for attempt in range(self.llm.repair_attempts + 1):
             reply, raw = self._ask(messages, style, ctx, usage)
+            if reply.refusal:
+                raise _refused(reply.refusal, usage)
             calls, problems = self._checked(reply, ctx)
             if not problems and calls:
                 plan = Plan(
@@ -185,6 +188,10 @@ class LLMPlanner:
         )
 
 
+def _refused(reason: str, usage: Usage) -> PlanningError:
+    return PlanningError(f"The model refused to plan this request: {reason}", usage=usage)
+
+
 def _refuse_unhonoured(text: str, plan: Plan | None, usage: Usage) -> None:
     """Raise the refusal when `text` states a condition that `plan` does not express (None: no
     plan can, so any condition)."""
@@ -256,6 +263,8 @@ class ReactPlanner(LLMPlanner):
             except BackendError as exc:
                 raise PlanningError(str(exc), usage=usage) from exc
             reply = parse_reply(completion.message)
+            if reply.refusal:
+                raise _refused(reply.refusal, usage)
             if not reply.calls and completion.finish_reason == "length":
                 return (
                     f"Stopped: the model's answer was cut off at {self.llm.max_tokens} "

@@ -7,6 +7,13 @@ over them): its name as a constant and an `args` object with exactly that skill'
 has them). Numbers are plain JSON numbers in the units the prompt names: a grammar that lets a
 model write "3 cm" would also let it write "3 bananas".
 
+One more choice stands beside the skills: the refusal, `{"skill": "refuse", "args": {"reason":
+"..."}}`. A model that does not understand a request ("blorp the zanzibar") meets it where it
+would otherwise pick a skill and invent motion; a plan with a refusal in it is refused as a
+whole, with the model's reason (`parse.py`). It is a step in form only, so the schema keeps one
+shape in every dialect (OpenAI's strict mode wants one object at the root, every property
+required) and `refuse`, having no dot, can never be a skill's name.
+
 Dialects (`dialect_of` picks one per backend):
 - `openai`: OpenAI strict structured outputs (`strict: true`). Its subset wants every property
   required (an optional argument is `null`-able instead), `enum` rather than `const`, and no
@@ -45,6 +52,7 @@ from .prompts import function_tool
 Dialect = Literal["openai", "json_schema", "llamacpp"]
 
 ANSWER_MAX_CHARS = 300  # a short reason when nothing can be done; also stops a model rambling
+REFUSE = "refuse"  # the step that refuses the request instead of planning it
 
 _RANGES = ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum")
 _LENGTHS = ("minLength", "maxLength")
@@ -114,24 +122,41 @@ def _args_schema(
     return schema
 
 
-def _name(skill: Skill, dialect: Dialect) -> dict[str, Any]:
+def _name(name: str, dialect: Dialect) -> dict[str, Any]:
     if dialect == "openai":
-        return {"type": "string", "enum": [skill.name]}
-    return {"type": "string", "const": skill.name}
+        return {"type": "string", "enum": [name]}
+    return {"type": "string", "const": name}
+
+
+def _step(name: str, args: dict[str, Any], dialect: Dialect) -> dict[str, Any]:
+    return {
+        "type": "object",
+        "properties": {"skill": _name(name, dialect), "args": args},
+        "required": ["skill", "args"],
+        "additionalProperties": False,
+    }
+
+
+def _refusal(dialect: Dialect) -> dict[str, Any]:
+    """The refusal as a step: `refuse` with the model's reason, a short non-empty string."""
+    reason: dict[str, Any] = {"type": "string"}
+    if dialect != "openai":
+        reason["minLength"] = 1
+    if dialect == "json_schema":
+        reason["maxLength"] = ANSWER_MAX_CHARS
+    args = {
+        "type": "object",
+        "properties": {"reason": reason},
+        "required": ["reason"],
+        "additionalProperties": False,
+    }
+    return _step(REFUSE, args, dialect)
 
 
 @functools.lru_cache(maxsize=64)
 def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
-    steps = [
-        {
-            "type": "object",
-            "properties": {"skill": _name(s, dialect), "args": args},
-            "required": ["skill", "args"],
-            "additionalProperties": False,
-        }
-        for s in skills
-        for args in args_schema(s, dialect)
-    ]
+    steps = [_step(s.name, args, dialect) for s in skills for args in args_schema(s, dialect)]
+    steps.append(_refusal(dialect))
     answer: dict[str, Any] = {"type": "string"}
     if dialect == "json_schema":
         answer["maxLength"] = ANSWER_MAX_CHARS
