@@ -33,7 +33,7 @@ A skill whose arguments come in alternative sets declares them as `oneOf` of `re
 (nav.goto: x and y, or a place); each set becomes a step of its own, so a half target ("x"
 without "y") is outside the schema.
 
-The schema is sent with every request, so it is kept small: the skills without arguments
+The schema is sent with every request, so it is kept small: the skills that take no arguments
 share one step (their names an `enum`), and an argument schema met more than once (a
 distance, a speed, the arguments of two skills alike) is written once under `$defs` and
 referred to, wherever a reference is shorter than the schema it stands for.
@@ -178,7 +178,7 @@ def _steps(skills: tuple[Skill, ...], dialect: Dialect) -> tuple[list[Any], dict
     bare: list[str] = []  # the skills without arguments: one step for them all
     for skill in skills:
         for args in args_schema(skill, dialect):
-            if args["properties"]:
+            if skill.parameters_schema().get("properties"):  # even if this dialect leaves all out
                 shapes.append(([skill.name], args))
             elif not bare:
                 bare.append(skill.name)
