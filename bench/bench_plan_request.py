@@ -100,7 +100,8 @@ def main() -> None:
             *rows,
             "",
             "What changed since a9427aa: the schema gained the refusal step (about 150 "
-            "characters) and the prompt its offer (about 60 net); skills without arguments share "
+            "characters) and the prompt its offer (11 characters more than the rule it replaced); "
+            "skills without arguments share "
             "one step, and argument schemas met more than once (a distance, a speed, the "
             "arguments of two skills alike) are written once under `$defs`. The target is not "
             "met: every skill with arguments keeps a step of its own (about 125 characters of "

@@ -73,9 +73,9 @@ def test_refuse_can_never_be_a_skills_name():
 @pytest.mark.parametrize("style", ["plan", "tools", "react"])
 def test_the_prompt_offers_the_refusal_in_every_style(style):
     prefix = prompts.stable_prefix(REGISTRY, style=style)
-    assert "never guess" in prefix
+    assert "request no skill fits gets" in prefix
     if style == "plan":
-        assert '{"skill": "refuse", "args": {"reason": "<why>"}}' in prefix
+        assert '{"skill": "refuse", "args": {"reason": "why"}}' in prefix
 
 
 # -- the parser reads it, in every form a model sends ----------------------------------------

@@ -26,18 +26,18 @@ _RULES = (
 )
 _PLAN_REPLY = (
     'Reply with JSON only: {"steps": [{"skill": "nav.move", "args": {"distance": 1.0}}], '
-    '"answer": ""}. If the request is unclear or these skills cannot do it, reply with the '
-    'one step {"skill": "refuse", "args": {"reason": "<why>"}}; never guess.'
+    '"answer": ""}. A request no skill fits gets the one step {"skill": "refuse", "args": '
+    '{"reason": "why"}}.'
 )
 _TOOLS_REPLY = (
-    "Call the skills as tools, all of them at once, in order. If the request is unclear or "
-    "these skills cannot do it, call none and say why; never guess."
+    "Call the skills as tools, all of them at once, in order. A request no skill fits gets no "
+    "call and a short reason."
 )
 _REACT_REPLY = (
     "Call one skill at a time and read its result before the next. If you cannot call tools, "
     'reply with JSON only: {"skill": "nav.move", "args": {"distance": 1.0}}. When the '
-    "request is done, reply with a short answer for the user and no skill call. If it is "
-    "unclear or these skills cannot do it, call none and say why; never guess."
+    "request is done, reply with a short answer for the user and no skill call; a request no "
+    "skill fits gets no call and a short reason."
 )
 
 
