@@ -255,3 +255,33 @@ def test_openai_tools_are_strict_and_others_are_not(monkeypatch):
             tools = srv.requests[0]["tools"]
         strict = [t["function"].get("strict") for t in tools]
         assert strict == ([True] * len(REGISTRY) if backend == "openai" else [None] * len(tools))
+
+
+# -- compact: sent with every request -------------------------------------------------------
+
+
+@pytest.mark.parametrize("dialect", DIALECTS)
+def test_skills_that_take_no_arguments_share_one_step(dialect):
+    steps = schema.plan_schema(REGISTRY, dialect)["properties"]["steps"]["items"]["anyOf"]
+    names = [
+        s["properties"]["skill"].get("enum") or [s["properties"]["skill"]["const"]] for s in steps
+    ]
+    [shared] = [n for n in names if len(n) > 1]
+    assert {"nav.stop", "body.stand", "body.sit", "places.list"} <= set(shared)
+    assert ["nav.patrol"] in names  # its one argument left out (llama.cpp): still its own step
+    for name in ("nav.stop", "body.sit", "places.list"):
+        assert valid(plan((name, {})), dialect)
+
+
+@pytest.mark.parametrize("dialect", DIALECTS)
+def test_an_argument_schema_met_twice_is_defined_once(dialect):
+    root = schema.plan_schema(REGISTRY, dialect)
+    text = json.dumps(root, separators=(",", ":"))
+    for name, definition in root.get("$defs", {}).items():
+        written = json.dumps(definition, separators=(",", ":"))
+        assert text.count(written) == 1, name  # only in $defs
+        assert text.count(f'"#/$defs/{name}"') >= 2, name
+    distance = schema.args_schema(REGISTRY.get("nav.move"), dialect)[0]["properties"]["distance"]
+    written = json.dumps(distance, separators=(",", ":"))
+    if len(written) > len('{"$ref":"#/$defs/distance"}'):  # a range: worth defining once
+        assert text.count(written) == 1

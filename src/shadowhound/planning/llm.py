@@ -3,11 +3,18 @@
 plan mode (default): one request returns the whole plan, as JSON constrained by a schema
 (`plan_format` json_schema) or as parallel tool calls (`tools`). Every call is validated
 against the registry; if any is invalid the model gets one repair round trip that says exactly
-what was wrong. Safety refusals are never "repaired": a limit is not negotiable.
+what was wrong. Safety refusals are never "repaired": a limit is not negotiable. The model may
+refuse a request instead (`{"refusal": "why"}`): the mission fails with its reason, and no
+step of that reply runs.
 
 react mode: a bounded tool-calling loop. The model calls one skill, the agent validates,
 checks and runs it, the result goes back, and so on until the model answers in words, the step
 limit or the token budget is reached, or the mission is cancelled.
+
+A request that states a condition ("until you see the ball", "unless someone is in the way")
+is refused unless the plan expresses it (`conditions.unhonoured`): never planned as if the
+condition were not there. While plans cannot carry watches, such a request is refused before
+the model is asked, in plan mode, hybrid, re-planning and react mode alike.
 """
 
 from __future__ import annotations
@@ -21,7 +28,7 @@ from ..errors import BackendError
 from ..llm.backend import LLMBackend, request_hints
 from ..plan import Plan, PlanningError, SkillCall, Usage
 from ..skills import SkillValidationError
-from . import PlanningContext, StepRunner, prompts, schema
+from . import PlanningContext, StepRunner, conditions, prompts, schema
 from .parse import ParsedReply, parse_reply
 
 log = logging.getLogger(__name__)
@@ -44,18 +51,35 @@ class LLMPlanner:
     # -- plan mode -----------------------------------------------------------------------------
 
     def plan(self, text: str, context: Any = None) -> Plan:
+        return self._plan(text, text, context)
+
+    def replan(self, text: str, context: Any, done: list[str], failure: str) -> Plan:
+        """A new plan for the rest of the mission after a step failed."""
+        situation = (
+            f"Original request: {text}\nDone so far: {'; '.join(done) or 'nothing'}\n"
+            f"A step failed: {failure}\nPlan only the remaining steps from the robot's current "
+            "state, or refuse, saying why, if the request cannot be finished."
+        )
+        return self._plan(text, situation, context)
+
+    def _plan(self, text: str, prompt: str, context: Any) -> Plan:
+        """Plan the request `text`, asking the model with `prompt`."""
+        if not conditions.STEPS_CARRY_WATCHES:  # no plan can express a condition: do not ask
+            _refuse_unhonoured(text, None, Usage())
         ctx = _context(context)
         usage = Usage()
         style = "tools" if self._format() == "tools" else "plan"
         messages = [
             {"role": "system", "content": self._system(ctx, style)},
-            {"role": "user", "content": text},
+            {"role": "user", "content": prompt},
         ]
         for attempt in range(self.llm.repair_attempts + 1):
             reply, raw = self._ask(messages, style, ctx, usage)
+            if reply.refusal:
+                raise _refused(reply.refusal, usage)
             calls, problems = self._checked(reply, ctx)
             if not problems and calls:
-                return Plan(
+                plan = Plan(
                     calls,
                     text=text,
                     usage=usage,
@@ -63,6 +87,8 @@ class LLMPlanner:
                     planned_by="llm",
                     notes=[reply.answer] if reply.answer else [],
                 )
+                _refuse_unhonoured(text, plan, usage)
+                return plan
             if not problems:  # no steps: the model says why in words
                 raise PlanningError(reply.answer or "The model proposed no steps.", usage=usage)
             usage.invalid_plans += 1
@@ -73,16 +99,6 @@ class LLMPlanner:
             not_understood=problems,
             usage=usage,
         )
-
-    def replan(self, text: str, context: Any, done: list[str], failure: str) -> Plan:
-        """A new plan for the rest of the mission after a step failed."""
-        situation = (
-            f"Original request: {text}\nDone so far: {'; '.join(done) or 'nothing'}\n"
-            f"A step failed: {failure}\nPlan only the remaining steps from the robot's current "
-            "state, or return no steps and explain in 'answer' if the request cannot be "
-            "finished."
-        )
-        return self.plan(situation, context)
 
     def _format(self) -> str:
         fmt = self.llm.plan_format
@@ -172,6 +188,18 @@ class LLMPlanner:
         )
 
 
+def _refused(reason: str, usage: Usage) -> PlanningError:
+    return PlanningError(f"The model refused to plan this request: {reason}", usage=usage)
+
+
+def _refuse_unhonoured(text: str, plan: Plan | None, usage: Usage) -> None:
+    """Raise the refusal when `text` states a condition that `plan` does not express (None: no
+    plan can, so any condition)."""
+    missing = conditions.unhonoured(text, plan)
+    if missing:
+        raise conditions.refusal(missing, usage)
+
+
 def _context(context: Any) -> PlanningContext:
     if isinstance(context, PlanningContext):
         return context
@@ -213,6 +241,7 @@ class ReactPlanner(LLMPlanner):
 
     def react(self, text: str, context: Any, run_step: StepRunner) -> tuple[str, Usage, bool]:
         """Run the tool loop. Returns (answer for the user, usage, finished normally)."""
+        _refuse_unhonoured(text, None, Usage())  # calls proposed one by one carry no watch
         ctx = _context(context)
         usage = Usage()
         messages: list[dict[str, Any]] = [
@@ -234,6 +263,8 @@ class ReactPlanner(LLMPlanner):
             except BackendError as exc:
                 raise PlanningError(str(exc), usage=usage) from exc
             reply = parse_reply(completion.message)
+            if reply.refusal:
+                raise _refused(reply.refusal, usage)
             if not reply.calls and completion.finish_reason == "length":
                 return (
                     f"Stopped: the model's answer was cut off at {self.llm.max_tokens} "

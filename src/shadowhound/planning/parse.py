@@ -2,7 +2,10 @@
 
 Tool calls, a JSON plan in the content, JSON in ``` fences, <tool_call> tags, a bare list of
 steps, arguments as JSON strings: all become SkillCalls, and anything unusable becomes a problem
-sentence that goes back to the model. Arguments are passed on as the model wrote them: the
+sentence that goes back to the model. A refusal (a `refuse` step with its reason, as the plan
+schema offers it, a `{"refusal": "why"}` object, or the `refusal` of an OpenAI message) is the
+model's decision: its reason, cleaned and cut short, and no steps, whatever else the reply
+holds. Arguments are passed on as the model wrote them: the
 registry reads numbers with units ("3cm", "90 deg") the same way for every caller, and decides
 with the safety governor whether a call is valid.
 """
@@ -15,10 +18,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..plan import SkillCall
+from .schema import ANSWER_MAX_CHARS, REFUSE
 
 _THINK = re.compile(r"<think>.*?</think>", re.DOTALL | re.IGNORECASE)
 _FENCE = re.compile(r"```(?:json|JSON)?\s*(.*?)```", re.DOTALL)
 _TOOL_TAG = re.compile(r"<tool_call>\s*(.*?)\s*</tool_call>", re.DOTALL)
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u200b-\u200f\u2028-\u202e\u2066-\u2069]")
 
 
 @dataclass
@@ -31,9 +36,31 @@ class ParsedReply:
     answer: str = ""
     problems: list[str] = field(default_factory=list)
     used_tools: bool = False
+    refusal: str = ""  # the model's reason for refusing the request; then no calls
 
 
 def parse_reply(message: dict[str, Any]) -> ParsedReply:
+    reply = _parse(message)
+    native = message.get("refusal")  # OpenAI's own: the model declined
+    if isinstance(native, str) and native.strip():
+        reply.refusal = native
+    if not reply.refusal:
+        return reply
+    reason = clean_reason(reply.refusal)
+    reason = "no reason given" if reason in ("", "none") else reason
+    return ParsedReply(refusal=reason, used_tools=reply.used_tools)
+
+
+def clean_reason(text: str) -> str:
+    """A model's words as one short line for people: no control or bidi characters, no
+    quotes around it, spaces collapsed, at most `ANSWER_MAX_CHARS` characters."""
+    words = " ".join(_CONTROL.sub(" ", text).split()).strip("\"'` ")
+    if len(words) > ANSWER_MAX_CHARS:
+        words = words[: ANSWER_MAX_CHARS - 3].rstrip() + "..."
+    return words
+
+
+def _parse(message: dict[str, Any]) -> ParsedReply:
     reply = ParsedReply()
     for i, call in enumerate(message.get("tool_calls") or [], start=1):
         function = call.get("function") or {}
@@ -82,6 +109,9 @@ def _interpret(reply: ParsedReply, value: Any) -> None:
         return
     if not isinstance(value, dict):
         reply.problems.append(f"expected a JSON object with 'steps', got {type(value).__name__}")
+        return
+    if isinstance(value.get("refusal"), str) and value["refusal"].strip():
+        reply.refusal = value["refusal"]
         return
     if isinstance(value.get("answer"), str) and value["answer"].strip():
         reply.answer = value["answer"].strip()
@@ -133,6 +163,10 @@ def _add(reply: ParsedReply, name: Any, args: Any, where: str, call_id: str | No
             return
     if args is None:
         args = {}
+    if name.strip() == REFUSE:
+        reason = args.get("reason") if isinstance(args, dict) else None
+        reply.refusal = reply.refusal or (reason if isinstance(reason, str) else "") or "none"
+        return
     if not isinstance(args, dict):
         reply.problems.append(
             f"{where} ({name}): arguments must be an object, got {json.dumps(args)[:80]}"

@@ -22,18 +22,22 @@ _INTRO = (
 _RULES = (
     "Rules: use only the skills listed; one step per action, in the order asked; write a step "
     "twice for 'twice'; give numbers as numbers; to come back, use nav.goto with place 'start'; "
-    "to go to, find or look for a thing, use nav.goto with its name as place (seen or not). "
-    "If the request cannot be done with these skills, return no steps and explain in 'answer'."
+    "to go to, find or look for a thing, use nav.goto with its name as place (seen or not)."
 )
 _PLAN_REPLY = (
     'Reply with JSON only: {"steps": [{"skill": "nav.move", "args": {"distance": 1.0}}], '
-    '"answer": ""}'
+    '"answer": ""}. A request no skill fits gets the one step {"skill": "refuse", "args": '
+    '{"reason": "why"}}.'
 )
-_TOOLS_REPLY = "Call the skills as tools, all of them at once, in order."
+_TOOLS_REPLY = (
+    "Call the skills as tools, all of them at once, in order. A request no skill fits gets no "
+    "call and a short reason."
+)
 _REACT_REPLY = (
     "Call one skill at a time and read its result before the next. If you cannot call tools, "
     'reply with JSON only: {"skill": "nav.move", "args": {"distance": 1.0}}. When the '
-    "request is done, reply with a short answer for the user and no skill call."
+    "request is done, reply with a short answer for the user and no skill call; a request no "
+    "skill fits gets no call and a short reason."
 )
 
 

@@ -7,6 +7,13 @@ over them): its name as a constant and an `args` object with exactly that skill'
 has them). Numbers are plain JSON numbers in the units the prompt names: a grammar that lets a
 model write "3 cm" would also let it write "3 bananas".
 
+One more choice stands beside the skills: the refusal, `{"skill": "refuse", "args": {"reason":
+"..."}}`. A model that does not understand a request ("blorp the zanzibar") meets it where it
+would otherwise pick a skill and invent motion; a plan with a refusal in it is refused as a
+whole, with the model's reason (`parse.py`). It is a step in form only, so the schema keeps one
+shape in every dialect (OpenAI's strict mode wants one object at the root, every property
+required) and `refuse`, having no dot, can never be a skill's name.
+
 Dialects (`dialect_of` picks one per backend):
 - `openai`: OpenAI strict structured outputs (`strict: true`). Its subset wants every property
   required (an optional argument is `null`-able instead), `enum` rather than `const`, and no
@@ -26,6 +33,11 @@ A skill whose arguments come in alternative sets declares them as `oneOf` of `re
 (nav.goto: x and y, or a place); each set becomes a step of its own, so a half target ("x"
 without "y") is outside the schema.
 
+The schema is sent with every request, so it is kept small: the skills that take no arguments
+share one step (their names an `enum`), and an argument schema met more than once (a
+distance, a speed, the arguments of two skills alike) is written once under `$defs` and
+referred to, wherever a reference is shorter than the schema it stands for.
+
 The schema is a guarantee only where the server enforces it: every plan is still validated
 against the registry, and an invalid one still gets a repair turn.
 
@@ -37,6 +49,8 @@ the returned dicts as read-only.
 from __future__ import annotations
 
 import functools
+import json
+from collections import Counter
 from typing import Any, Literal
 
 from ..skills import Skill, SkillRegistry
@@ -45,6 +59,7 @@ from .prompts import function_tool
 Dialect = Literal["openai", "json_schema", "llamacpp"]
 
 ANSWER_MAX_CHARS = 300  # a short reason when nothing can be done; also stops a model rambling
+REFUSE = "refuse"  # the step that refuses the request instead of planning it
 
 _RANGES = ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum")
 _LENGTHS = ("minLength", "maxLength")
@@ -114,28 +129,102 @@ def _args_schema(
     return schema
 
 
-def _name(skill: Skill, dialect: Dialect) -> dict[str, Any]:
-    if dialect == "openai":
-        return {"type": "string", "enum": [skill.name]}
-    return {"type": "string", "const": skill.name}
+def _name(names: list[str], dialect: Dialect) -> dict[str, Any]:
+    if dialect == "openai" or len(names) > 1:
+        return {"type": "string", "enum": names}
+    return {"type": "string", "const": names[0]}
+
+
+def _step(names: list[str], args: dict[str, Any], dialect: Dialect) -> dict[str, Any]:
+    return {
+        "type": "object",
+        "properties": {"skill": _name(names, dialect), "args": args},
+        "required": ["skill", "args"],
+        "additionalProperties": False,
+    }
+
+
+def _dump(value: Any) -> str:
+    return json.dumps(value, separators=(",", ":"))
+
+
+def _share(found: list[tuple[str, dict[str, Any]]], defs: dict[str, Any]) -> dict[str, str]:
+    """Of the schemas `found` (each with a name to give it), those met more than once where a
+    reference is shorter: each added to `defs` once. Returns {schema as JSON: its name}."""
+    counts = Counter(_dump(schema) for _, schema in found)
+    names: dict[str, str] = {}
+    for hint, schema in found:
+        text = _dump(schema)
+        if text in names or counts[text] < 2:
+            continue
+        name = hint
+        while name in defs:
+            name += "_"
+        cost = len(_dump({name: schema})) + 1  # its entry in $defs
+        if counts[text] * (len(text) - len(_dump(_ref(name)))) <= cost:
+            continue
+        defs[name] = schema
+        names[text] = name
+    return names
+
+
+def _ref(name: str) -> dict[str, str]:
+    return {"$ref": f"#/$defs/{name}"}
+
+
+def _steps(skills: tuple[Skill, ...], dialect: Dialect) -> tuple[list[Any], dict[str, Any]]:
+    """The steps of a plan (skills without arguments sharing one) and their shared `$defs`."""
+    shapes: list[tuple[list[str], dict[str, Any]]] = []
+    bare: list[str] = []  # the skills without arguments: one step for them all
+    for skill in skills:
+        for args in args_schema(skill, dialect):
+            if skill.parameters_schema().get("properties"):  # even if this dialect leaves all out
+                shapes.append(([skill.name], args))
+            elif not bare:
+                bare.append(skill.name)
+                shapes.append((bare, args))
+            else:
+                bare.append(skill.name)
+    defs: dict[str, Any] = {}
+    props = _share([p for _, a in shapes for p in a["properties"].items()], defs)
+    shapes = [
+        (names, {**a, "properties": {k: _shared(v, props) for k, v in a["properties"].items()}})
+        for names, a in shapes
+    ]
+    whole = _share([(f"{next(iter(a['properties']), 'none')}_args", a) for _, a in shapes], defs)
+    steps = [_step(names, _shared(a, whole), dialect) for names, a in shapes]
+    return steps, defs
+
+
+def _shared(schema: dict[str, Any], names: dict[str, str]) -> dict[str, Any]:
+    name = names.get(_dump(schema))
+    return schema if name is None else _ref(name)
+
+
+def _refusal(dialect: Dialect) -> dict[str, Any]:
+    """The refusal as a step: `refuse` with the model's reason, a short non-empty string."""
+    reason: dict[str, Any] = {"type": "string"}
+    if dialect != "openai":
+        reason["minLength"] = 1
+    if dialect == "json_schema":
+        reason["maxLength"] = ANSWER_MAX_CHARS
+    args = {
+        "type": "object",
+        "properties": {"reason": reason},
+        "required": ["reason"],
+        "additionalProperties": False,
+    }
+    return _step([REFUSE], args, dialect)
 
 
 @functools.lru_cache(maxsize=64)
 def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
-    steps = [
-        {
-            "type": "object",
-            "properties": {"skill": _name(s, dialect), "args": args},
-            "required": ["skill", "args"],
-            "additionalProperties": False,
-        }
-        for s in skills
-        for args in args_schema(s, dialect)
-    ]
+    steps, defs = _steps(skills, dialect)
+    steps.append(_refusal(dialect))
     answer: dict[str, Any] = {"type": "string"}
     if dialect == "json_schema":
         answer["maxLength"] = ANSWER_MAX_CHARS
-    return {
+    plan: dict[str, Any] = {
         "type": "object",
         "properties": {
             "steps": {"type": "array", "items": {"anyOf": steps}},
@@ -144,6 +233,9 @@ def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
         "required": ["steps", "answer"] if dialect == "openai" else ["steps"],
         "additionalProperties": False,
     }
+    if defs:
+        plan["$defs"] = defs
+    return plan
 
 
 def plan_schema(registry: SkillRegistry, dialect: Dialect = "json_schema") -> dict[str, Any]:
