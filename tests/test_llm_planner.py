@@ -534,7 +534,8 @@ def test_plan_prompt_with_every_skill_is_compact():
     registry = default_registry()
     prompt = system_prompt(registry, style="plan")
     assert estimate_tokens(prompt) + estimate_tokens("stand up and walk forward 1 meter") < 1500
-    assert estimate_tokens(tools(registry)) < 1600  # 21 skills (voice.say took it past 1500)
+    # 22 skills: voice.say took it past 1500, nav.follow (issue 26, about 90) past 1600
+    assert estimate_tokens(tools(registry)) < 1700
 
 
 @settings(max_examples=300, deadline=None)

@@ -69,22 +69,25 @@ def stated(text: str) -> list[Condition]:
     return found
 
 
-# Whether a plan's steps can carry watches at all. Until plan.SkillCall has them, no plan
-# expresses a condition, and the model planners refuse such a request before asking the model.
+# Whether a plan's steps can carry watches at all (plan.SkillCall's `watches` and `guard`).
 STEPS_CARRY_WATCHES = "watches" in {f.name for f in fields(SkillCall)}
+# Whether the model's plan protocol (planning/schema.py, parse.py) can carry them: not yet, so
+# the model planners refuse a request with a condition before asking the model. The offline
+# planner expresses the kinds it reads (planning/_watches.py) and is checked on its plan.
+MODEL_PLANS_CARRY_WATCHES = False
 
 
 def unhonoured(text: str, plan: Plan | None) -> list[str]:
     """The words of each condition `text` states that `plan` does not express; [] when the
     plan expresses them all (or there are none). No plan (None) expresses none.
 
-    A plan expresses conditions only through watches on its steps: while steps carry none
-    (`STEPS_CARRY_WATCHES`), every condition found is unhonoured.
+    A plan expresses conditions through its steps' watches and guards, and a follow through a
+    step that follows.
     """
     conditions = stated(text)
-    if not conditions or (plan is not None and _watches(plan)):
-        return []
-    return [c.words for c in conditions]
+    if not conditions or plan is None:
+        return [c.words for c in conditions]
+    return [c.words for c in conditions if not _expresses(plan, c)]
 
 
 def refusal(words: list[str], usage: Usage | None = None) -> PlanningError:
@@ -102,7 +105,13 @@ def refusal(words: list[str], usage: Usage | None = None) -> PlanningError:
     )
 
 
-def _watches(plan: Plan) -> bool:
-    # Steps carry no watches yet (plan.SkillCall has no such field); when they do, a plan
-    # that watches expresses its conditions and is let through.
-    return any(getattr(step, "watches", None) for step in plan.steps)
+def _expresses(plan: Plan, condition: Condition) -> bool:
+    """Whether `plan` carries `condition`: a follow by a step that follows, a branch by a
+    guarded step, any other condition by a step's watch or guard."""
+    steps = plan.steps
+    if condition.kind == "follow":
+        return any(step.skill == "nav.follow" for step in steps)
+    guarded = any(getattr(step, "guard", None) is not None for step in steps)
+    if condition.kind == "otherwise":
+        return guarded  # a branch ("stop if ..." is a watch: below)
+    return guarded or any(getattr(step, "watches", None) for step in steps)

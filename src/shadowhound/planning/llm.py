@@ -64,7 +64,7 @@ class LLMPlanner:
 
     def _plan(self, text: str, prompt: str, context: Any) -> Plan:
         """Plan the request `text`, asking the model with `prompt`."""
-        if not conditions.STEPS_CARRY_WATCHES:  # no plan can express a condition: do not ask
+        if not conditions.MODEL_PLANS_CARRY_WATCHES:  # its plan cannot say one: do not ask
             _refuse_unhonoured(text, None, Usage())
         ctx = _context(context)
         usage = Usage()

@@ -28,6 +28,7 @@ from shadowhound.planning import _phrases as phrases
 from shadowhound.planning import _spelling as spelling
 from shadowhound.planning import _vocabulary as vocab
 from shadowhound.planning import _watches as watching
+from shadowhound.planning import conditions
 from shadowhound.planning._errors import CAPABILITIES, NotUnderstood, describe, failure
 from shadowhound.planning._memory_phrases import memory_steps
 from shadowhound.planning._speech_phrases import SpeechRequest, speech_request
@@ -173,13 +174,17 @@ class RulePlanner:
                 f"I found no request in {text.strip()[:80]!r}. " + CAPABILITIES,
                 not_understood=[text.strip()[:200]],
             )
-        return Plan(
+        plan = Plan(
             steps=steps,
             text=text,
             notes=list(dict.fromkeys(notes)),
             planner=self.name,
             planned_by=self.kind,
         )
+        missing = conditions.unhonoured(text, plan)
+        if missing:  # a condition read past ("every time you see a cat, sit"): never dropped
+            raise conditions.refusal(missing)
+        return plan
 
     # ---- one clause ---------------------------------------------------------------------------
 
