@@ -101,6 +101,8 @@ def main() -> None:
             "",
             "What changed since a9427aa: the schema gained the refusal step (about 150 "
             "characters) and the prompt its offer (11 characters more than the rule it replaced); "
+            "the plan's `conditions` (watches and guards: about 500 characters of schema, 330 of "
+            "prompt) and nav.follow (about 400 of schema, 100 of prompt) came after; "
             "skills without arguments share "
             "one step, and argument schemas met more than once (a distance, a speed, the "
             "arguments of two skills alike) are written once under `$defs`. The target is not "

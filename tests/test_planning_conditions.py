@@ -4,6 +4,7 @@ still plan every request that only looks like one ("tell me if you see a cat")."
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 
 import pytest
@@ -18,7 +19,7 @@ from shadowhound.planning._spelling import known_words
 from shadowhound.planning.conditions import stated, unhonoured
 from shadowhound.planning.llm import LLMPlanner, ReactPlanner
 from shadowhound.skills import default_registry
-from tests.llm_server import ScriptedLLM, json_plan, model_settings, tool_calls
+from tests.llm_server import ScriptedLLM, json_plan, model_settings, text, tool_calls
 
 MOTION = [{"skill": "body.stand", "args": {}}, {"skill": "nav.move", "args": {"distance": 1.0}}]
 
@@ -182,15 +183,47 @@ def test_a_condition_is_refused_before_the_model_is_asked_and_nothing_moves(srv,
     result = agent.execute_mission(
         "stand up and walk forward 1 meter unless somebody is in the way"
     )
-    assert len(srv.requests) == before and srv.pending() == 1 and result.usage.round_trips == 0
     if hybrid:  # the offline rules read it whole: the walk carries the watch (no model asked)
+        assert len(srv.requests) == before and result.usage.round_trips == 0
         assert result.success and result.plan.planned_by == "offline", result.response
         (walk,) = [s for s in result.plan.steps if s.skill == "nav.move"]
         assert [w.kind for w in walk.watches] == ["in_the_way"]
-    else:  # the model's plan cannot carry a watch: refused before it is asked
+    else:  # the model's plan drops the condition: refused whole, nothing moves
+        assert result.usage.round_trips == 1 and srv.pending() == 0
         assert not result.success
         assert _refused(result.response, "unless somebody is in the way"), result.response
         assert not robot.received_motion
+    srv.clear()
+
+
+def test_a_models_plan_that_carries_the_condition_runs_it(srv):
+    """The model's JSON plan says the condition ("conditions"): the walk watches for the red
+    ball and stops where it comes into view, in the simulator's truth."""
+    from shadowhound.robot.sim.scene import World, WorldObject, visible_objects
+    from shadowhound.state import Pose2D
+
+    srv.clear()
+    ball = WorldObject("red ball", 4.5, 1.5, 0.15, height=0.3)
+    pillar = WorldObject("pillar", 2.0, 1.0, 0.45, height=1.5)  # hides the ball at first
+    robot = SimRobot(time_scale=0.0, world=World(objects=(ball, pillar)))
+    settings = settings_for(srv, hybrid=False)
+    agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
+    agent.initialize()
+    plan = {
+        "steps": [{"skill": "nav.move", "args": {"distance": 4.0}}],
+        "answer": "",
+        "conditions": [{"step": 1, "when": "until", "kind": "seen", "name": "red ball"}],
+    }
+    srv.script(text(json.dumps(plan)))
+    result = agent.execute_mission("walk forward until you see the red ball")
+    assert result.success and result.plan.planned_by == "llm", result.response
+    assert "stopped: saw red ball" in result.response, result.response
+    entry = next(
+        i / 100
+        for i in range(400)
+        if any(s.name == "red ball" for s in visible_objects(robot.world, Pose2D(i / 100, 0, 0)))
+    )
+    assert abs(robot.get_state().x - entry) <= 0.2, (robot.get_state().x, entry)
     srv.clear()
 
 
@@ -205,12 +238,13 @@ def test_react_mode_refuses_a_condition_before_any_step(srv):
 
 
 def test_a_replan_of_a_request_with_a_condition_is_refused(srv):
+    """The re-plan of "follow the person" that walks instead of following is refused."""
     srv.clear()
     planner = LLMPlanner(settings_for(srv))
     srv.script(json_plan(MOTION))
     with pytest.raises(PlanningError) as refused:
         planner.replan("follow the person", None, ["stood up"], "no progress")
-    assert _refused(refused.value.message, "follow the person") and srv.pending() == 1
+    assert _refused(refused.value.message, "follow the person") and srv.pending() == 0
     srv.clear()
 
 
@@ -379,7 +413,9 @@ def test_generated_conditions_are_never_planned_into_motion(srv, text):
     with pytest.raises(PlanningError) as refused:
         planner.plan(text, PlanningContext(registry=default_registry()))
     assert "cannot watch for yet" in refused.value.message
-    assert srv.pending() == 1  # the model was not even asked
+    # The model was asked (its JSON plan could carry the condition), and its plan, which
+    # drops it, was refused whole: nothing of it runs.
+    assert srv.pending() == 0
     srv.clear()
 
 

@@ -51,17 +51,23 @@ def make_agent(srv, **llm):
 
 @pytest.mark.parametrize("dialect", DIALECTS)
 def test_every_dialect_admits_a_refusal_with_a_reason_and_nothing_else(dialect):
-    assert valid({"steps": [refusal()], "answer": ""}, dialect)
-    assert not valid({"steps": [{"skill": "refuse", "args": {}}], "answer": ""}, dialect)
-    assert not valid({"steps": [refusal(3)], "answer": ""}, dialect)
+    assert valid({"steps": [refusal()], "answer": "", "conditions": []}, dialect)
+    assert not valid(
+        {"steps": [{"skill": "refuse", "args": {}}], "answer": "", "conditions": []}, dialect
+    )
+    assert not valid({"steps": [refusal(3)], "answer": "", "conditions": []}, dialect)
     extra = {"skill": "refuse", "args": {"reason": "no", "distance": 1.0}}
-    assert not valid({"steps": [extra], "answer": ""}, dialect)
+    assert not valid({"steps": [extra], "answer": "", "conditions": []}, dialect)
 
 
 @pytest.mark.parametrize("dialect", ["json_schema", "llamacpp"])
 def test_a_reason_is_never_empty_and_short_where_the_grammar_can_hold_it(dialect):
-    assert not valid({"steps": [refusal("")], "answer": ""}, dialect)
-    too_long = {"steps": [refusal("x" * (schema.ANSWER_MAX_CHARS + 1))], "answer": ""}
+    assert not valid({"steps": [refusal("")], "answer": "", "conditions": []}, dialect)
+    too_long = {
+        "steps": [refusal("x" * (schema.ANSWER_MAX_CHARS + 1))],
+        "answer": "",
+        "conditions": [],
+    }
     assert valid(too_long, dialect) is (dialect == "llamacpp")  # llama.cpp: cut when read
 
 
@@ -84,7 +90,7 @@ def test_the_prompt_offers_the_refusal_in_every_style(style):
 @pytest.mark.parametrize(
     "message",
     [
-        {"content": json.dumps({"steps": [refusal()], "answer": ""})},
+        {"content": json.dumps({"steps": [refusal()], "answer": "", "conditions": []})},
         {"content": json.dumps({"steps": [MOVE, refusal()]})},
         {"content": "```json\n" + json.dumps({"refusal": REASON}) + "\n```"},
         {"content": json.dumps({"refusal": REASON, "steps": [MOVE]})},
@@ -110,7 +116,9 @@ def test_a_refusal_without_a_reason_says_so():
 @settings(max_examples=300, deadline=None)
 @given(reason=st.text(min_size=1, max_size=2000))
 def test_a_reason_is_one_short_clean_line(reason):
-    reply = parse_reply({"content": json.dumps({"steps": [refusal(reason)], "answer": ""})})
+    reply = parse_reply(
+        {"content": json.dumps({"steps": [refusal(reason)], "answer": "", "conditions": []})}
+    )
     assert reply.refusal and reply.calls == []
     assert len(reply.refusal) <= schema.ANSWER_MAX_CHARS
     assert not any(ord(c) < 32 or 0x7F <= ord(c) <= 0x9F for c in reply.refusal)

@@ -26,7 +26,12 @@ def valid(instance: Any, dialect: str) -> bool:
 
 
 def plan(*steps: tuple[str, dict[str, Any]], **extra: Any) -> dict[str, Any]:
-    return {"steps": [{"skill": s, "args": a} for s, a in steps], "answer": "", **extra}
+    return {
+        "steps": [{"skill": s, "args": a} for s, a in steps],
+        "answer": "",
+        "conditions": [],
+        **extra,
+    }
 
 
 @pytest.mark.parametrize("dialect", DIALECTS)
@@ -86,7 +91,7 @@ def test_a_half_target_is_outside_the_schema(dialect, args):
     step = {"skill": "nav.goto", "args": args}
     if dialect == "openai":  # strict: every argument of the alternative present, maybe null
         step["args"] = {"heading_degrees": None, "speed": None, **args}
-    assert not valid({"steps": [step], "answer": ""}, dialect)
+    assert not valid({"steps": [step], "answer": "", "conditions": []}, dialect)
     with pytest.raises(SkillValidationError):
         REGISTRY.validate(SkillCall("nav.goto", args))
 
@@ -105,7 +110,7 @@ def test_optional_numbers_are_offered_only_where_their_range_is_enforced():
 def test_ranges_are_enforced_where_the_dialect_has_them():
     too_far = plan(("nav.move", {"distance": 5000.0}))
     assert not valid(too_far, "json_schema")
-    assert not valid({**too_far, "answer": ""}, "openai")
+    assert not valid({**too_far, "answer": "", "conditions": []}, "openai")
     # llama-cpp-python's grammar ignores ranges: not sent, and the registry refuses instead.
     assert valid(too_far, "llamacpp")
     with pytest.raises(SkillValidationError, match="less than or equal to 1000"):
@@ -151,7 +156,7 @@ def test_openai_optional_arguments_are_nullable_and_accepted_as_null():
     assert move["required"] == ["distance", "speed"]
     assert {"type": "null"} in move["properties"]["speed"]["anyOf"]
     step = {"skill": "nav.move", "args": {"distance": 1.0, "speed": None}}
-    assert valid({"steps": [step], "answer": ""}, "openai")
+    assert valid({"steps": [step], "answer": "", "conditions": []}, "openai")
     assert REGISTRY.validate(SkillCall(step["skill"], step["args"])).args_dict() == {
         "distance": 1.0
     }
@@ -179,7 +184,7 @@ _ARG_NAMES = sorted({n for s in REGISTRY for n in s.args_model.model_fields} | {
 )
 def test_schema_valid_steps_are_registry_valid_in_name_and_type(name, args, dialect):
     step = {"skill": name, "args": args}
-    if not valid({"steps": [step], "answer": ""}, dialect):
+    if not valid({"steps": [step], "answer": "", "conditions": []}, dialect):
         return
     try:
         REGISTRY.validate(SkillCall(name, args))

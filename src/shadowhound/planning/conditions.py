@@ -71,10 +71,10 @@ def stated(text: str) -> list[Condition]:
 
 # Whether a plan's steps can carry watches at all (plan.SkillCall's `watches` and `guard`).
 STEPS_CARRY_WATCHES = "watches" in {f.name for f in fields(SkillCall)}
-# Whether the model's plan protocol (planning/schema.py, parse.py) can carry them: not yet, so
-# the model planners refuse a request with a condition before asking the model. The offline
-# planner expresses the kinds it reads (planning/_watches.py) and is checked on its plan.
-MODEL_PLANS_CARRY_WATCHES = False
+# Whether the model's JSON plan (planning/schema.py's `conditions`, parse.py) carries them: it
+# does, so a model's plan is checked like the offline planner's; tool calls (tools and react
+# mode) cannot, and a request with a condition is refused there before the model is asked.
+MODEL_PLANS_CARRY_WATCHES = True
 
 
 def unhonoured(text: str, plan: Plan | None) -> list[str]:

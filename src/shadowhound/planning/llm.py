@@ -64,11 +64,11 @@ class LLMPlanner:
 
     def _plan(self, text: str, prompt: str, context: Any) -> Plan:
         """Plan the request `text`, asking the model with `prompt`."""
-        if not conditions.MODEL_PLANS_CARRY_WATCHES:  # its plan cannot say one: do not ask
-            _refuse_unhonoured(text, None, Usage())
+        style = "tools" if self._format() == "tools" else "plan"
+        if style == "tools" or not conditions.MODEL_PLANS_CARRY_WATCHES:
+            _refuse_unhonoured(text, None, Usage())  # its reply cannot say one: do not ask
         ctx = _context(context)
         usage = Usage()
-        style = "tools" if self._format() == "tools" else "plan"
         messages = [
             {"role": "system", "content": self._system(ctx, style)},
             {"role": "user", "content": prompt},
@@ -167,7 +167,9 @@ class LLMPlanner:
             except SkillValidationError as exc:
                 problems += [f"step {index}: {p}" for p in exc.problems]
                 continue
-            calls.append(SkillCall(valid.name, valid.args_dict(), call.label))
+            calls.append(
+                SkillCall(valid.name, valid.args_dict(), call.label, valid.watches, valid.guard)
+            )
         return calls, problems
 
     def _tools(self, ctx: PlanningContext) -> list[dict[str, Any]]:

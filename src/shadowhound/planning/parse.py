@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import json
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..plan import SkillCall
+from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, SkillCall, Watch
 from .schema import ANSWER_MAX_CHARS, REFUSE
 
 _THINK = re.compile(r"<think>.*?</think>", re.DOTALL | re.IGNORECASE)
@@ -125,6 +125,7 @@ def _interpret(reply: ParsedReply, value: Any) -> None:
                 return
             for item in steps:
                 _step(reply, item, f"step {len(reply.calls) + 1}")
+            _conditions(reply, value.get("conditions"))
             return
     if any(k in value for k in ("skill", "name", "function", "tool")):
         _step(reply, value, f"step {len(reply.calls) + 1}")
@@ -174,3 +175,64 @@ def _add(reply: ParsedReply, name: Any, args: Any, where: str, call_id: str | No
         return
     reply.calls.append(SkillCall(name.strip(), args))
     reply.call_ids.append(call_id)
+
+
+_WHEN = (*WATCH_WHEN, *GUARD_WHEN)
+
+
+def _conditions(reply: ParsedReply, given: Any) -> None:
+    """The plan's `conditions`, each onto its step: a watch (until, unless) or the step's guard
+    (if, if_not). Whether the robot can observe one is checking's to say; a condition that
+    cannot be read is a problem sentence for the model, never dropped."""
+    if given is None or given == []:
+        return
+    if not isinstance(given, list):
+        reply.problems.append(f"'conditions' must be a list, got {type(given).__name__}")
+        return
+    for n, item in enumerate(given, start=1):
+        where = f"condition {n}"
+        if not isinstance(item, dict):
+            reply.problems.append(f"{where} must be an object, got {json.dumps(item)[:80]}")
+            continue
+        step = item.get("step")
+        if isinstance(step, bool) or not isinstance(step, int) or not 1 <= step <= len(reply.calls):
+            reply.problems.append(
+                f"{where}: 'step' must be the number of one of the {len(reply.calls)} steps "
+                f"(1 to {len(reply.calls)}), got {step!r}"
+            )
+            continue
+        when, kind = item.get("when"), item.get("kind")
+        if when not in _WHEN or kind not in WATCH_KINDS:
+            reply.problems.append(
+                f"{where}: 'when' is one of {', '.join(_WHEN)} and 'kind' one of "
+                f"{', '.join(WATCH_KINDS)}; got {when!r}, {kind!r}"
+            )
+            continue
+        numbers = {k: item.get(k) for k in ("within", "percent")}
+        bad = [
+            k
+            for k, v in numbers.items()
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)))
+        ]
+        name = item.get("name")
+        if bad or (name is not None and not isinstance(name, str)):
+            reply.problems.append(
+                f"{where}: 'within' and 'percent' are numbers and 'name' text, got "
+                f"{json.dumps(item)[:120]}"
+            )
+            continue
+        watch = Watch(
+            when,
+            kind,
+            name=(name or "").strip(),
+            within=None if numbers["within"] is None else float(numbers["within"]),
+            percent=None if numbers["percent"] is None else float(numbers["percent"]),
+        )
+        at = reply.calls[step - 1]
+        if when in GUARD_WHEN:
+            if at.guard is not None:
+                reply.problems.append(f"{where}: step {step} already has an 'if'")
+                continue
+            reply.calls[step - 1] = replace(at, guard=watch)
+        else:
+            reply.calls[step - 1] = replace(at, watches=(*at.watches, watch))

@@ -27,7 +27,10 @@ _RULES = (
 _PLAN_REPLY = (
     'Reply with JSON only: {"steps": [{"skill": "nav.move", "args": {"distance": 1.0}}], '
     '"answer": ""}. A request no skill fits gets the one step {"skill": "refuse", "args": '
-    '{"reason": "why"}}.'
+    '{"reason": "why"}}. Each condition the request states goes in "conditions": [{"step": 1, '
+    '"when": "until", "kind": "seen", "name": "red ball"}] (when: until, unless, if, if_not '
+    "for otherwise; kind: seen with name and within m, in_the_way with within m, "
+    "battery_below with percent, operator_stop); never leave one out: refuse instead."
 )
 _TOOLS_REPLY = (
     "Call the skills as tools, all of them at once, in order. A request no skill fits gets no "

@@ -1,11 +1,18 @@
 """The plan schema: generated from the skill registry, it admits only plans of real skills
 called with exactly their own arguments, in the dialect each server enforces.
 
-A plan is `{"steps": [step, ...], "answer": "..."}`; each step is one of the skills (`anyOf`
+A plan is `{"steps": [step, ...], "answer": "...", "conditions": [...]}`; each step is one of
+the skills (`anyOf`
 over them): its name as a constant and an `args` object with exactly that skill's arguments
 (required ones required, types, enums, `additionalProperties: false`, ranges where the dialect
 has them). Numbers are plain JSON numbers in the units the prompt names: a grammar that lets a
 model write "3 cm" would also let it write "3 bananas".
+
+A condition the request states ("until you see the red ball", "if the battery is below 30%")
+is a `conditions` entry about one step: `{"step": n, "when": until | unless | if | if_not,
+"kind": seen | in_the_way | battery_below | operator_stop, "name", "within", "percent"}`
+(`parse.py` makes it the step's `plan.Watch` or guard; checking says whether the robot can
+observe it).
 
 One more choice stands beside the skills: the refusal, `{"skill": "refuse", "args": {"reason":
 "..."}}`. A model that does not understand a request ("blorp the zanzibar") meets it where it
@@ -53,6 +60,7 @@ import json
 from collections import Counter
 from typing import Any, Literal
 
+from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN
 from ..skills import Skill, SkillRegistry
 from .prompts import function_tool
 
@@ -217,6 +225,42 @@ def _refusal(dialect: Dialect) -> dict[str, Any]:
     return _step([REFUSE], args, dialect)
 
 
+def _conditions(dialect: Dialect) -> dict[str, Any]:
+    """The plan's conditions: each about one step (1-based), a watch ("until", "unless") or a
+    guard ("if", "if_not" for an otherwise) of one kind (plan.Watch)."""
+    step: dict[str, Any] = {"type": "integer"}
+    if dialect != "llamacpp":
+        step["minimum"] = 1
+    props: dict[str, Any] = {
+        "step": step,
+        "when": {"type": "string", "enum": [*WATCH_WHEN, *GUARD_WHEN]},
+        "kind": {"type": "string", "enum": list(WATCH_KINDS)},
+        "name": {"type": "string"},
+        "within": {"type": "number"},
+        "percent": {"type": "number"},
+    }
+    required = ["step", "when", "kind"]
+    if dialect == "openai":  # strict: every property required, the optional ones null-able
+        for optional in ("name", "within", "percent"):
+            props[optional] = {"anyOf": [props[optional], {"type": "null"}]}
+        required = list(props)
+    item = {
+        "type": "object",
+        "properties": props,
+        "required": required,
+        "additionalProperties": False,
+    }
+    return {"type": "array", "items": item}
+
+
+def _shared_defs(conditions: dict[str, Any], defs: dict[str, Any]) -> dict[str, Any]:
+    """The conditions' properties written as references to `defs` where one is the same."""
+    named = {_dump(schema): name for name, schema in defs.items()}
+    item = conditions["items"]
+    props = {k: _shared(v, named) for k, v in item["properties"].items()}
+    return {**conditions, "items": {**item, "properties": props}}
+
+
 @functools.lru_cache(maxsize=64)
 def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
     steps, defs = _steps(skills, dialect)
@@ -229,8 +273,9 @@ def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
         "properties": {
             "steps": {"type": "array", "items": {"anyOf": steps}},
             "answer": answer,
+            "conditions": _shared_defs(_conditions(dialect), defs),
         },
-        "required": ["steps", "answer"] if dialect == "openai" else ["steps"],
+        "required": ["steps", "answer", "conditions"] if dialect == "openai" else ["steps"],
         "additionalProperties": False,
     }
     if defs:
