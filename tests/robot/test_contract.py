@@ -6,6 +6,12 @@
   per module), judged by the driver's ground truth on `sim_driver/truth`, never by the
   odometry the robot steers on. Skipped without rclpy or the interface packages unless
   SHADOWHOUND_REQUIRE_ROS=1 (then it fails).
+- "go2_edu": Go2EduRobot likewise, against `shadowhound sim-driver --interface unitree_ros2`
+  (the Go2 EDU through unitree_ros2: Requests in, SportModeState and LowState out), judged by
+  the same truth.
+
+Both DDS backends run in this test process's ROS domain (tests/ros/conftest.py claims one no
+other test process holds), each driver under a namespace of its own, one at a time.
 
 The contract, as robot/base.py's docstrings state it:
 
@@ -17,9 +23,9 @@ The contract, as robot/base.py's docstrings state it:
 - Velocity is ignored without an error while the robot is not standing (sitting, lying), and
   not kept for later: standing up does not start a walk. Who ignores it is no part of the
   contract, and differs: SimRobot drops it itself (its command log says "ignored: robot is
-  sitting"); Go2RosRobot sends it on (and keeps it alive at 10 Hz until a stop or a posture
-  command) and the Go2 ignores it (the driver counts it in `moves_ignored`). While the e-stop
-  is latched both drop it before it reaches the body.
+  sitting"); Go2RosRobot and Go2EduRobot send it on (and keep it alive at 10 Hz until a stop
+  or a posture command) and the Go2 ignores it (the driver counts it in `moves_ignored`).
+  While the e-stop is latched all drop it before it reaches the body.
 - `get_state` raises RobotError when the robot is blind while motion is under way, and
   `send_velocity` refuses to start moving blind; `stop` still stops it. (The simulator cannot
   be blind: skipped, see SimBackend.blind.)
@@ -150,12 +156,16 @@ class SimBackend(Backend):
         self.robot = self.sim = SimRobot(time_scale=0.0)
 
 
-class Go2Backend(Backend):
-    """`shadowhound sim-driver` under /contract (no map, Nav2, detector, camera or scan:
-    what is judged here needs none) and a Go2RosRobot in this process."""
+class DriverBackend(Backend):
+    """`shadowhound sim-driver` under /NS (no map, Nav2, detector, camera or scan: what is
+    judged here needs none) and a robot in this process that drives it over DDS; judged by
+    the driver's truth. Subclasses say which interface the driver plays and which robot
+    drives it."""
 
-    NS = "contract"
-    OPTIONS = (
+    NS: str
+    NEEDS: tuple[str, ...]  # modules without which the backend skips (or fails in CI)
+    REQUESTS: str  # the robot's sport request topic, relative to NS
+    OPTIONS: tuple[str, ...] = (
         "--posture-seconds",
         "0.5",
         "--camera-rate-hz",
@@ -167,32 +177,40 @@ class Go2Backend(Backend):
         "--no-map",
         "--no-navigate-to-pose",
     )
+    go2: Any  # the robot (Go2RosRobot or Go2EduRobot)
 
     def __init__(self) -> None:
         from tests.ros.needs import require
 
-        require("rclpy", "shadowhound_interfaces", "go2_interfaces")
-        from shadowhound.robot.go2.robot import Go2RosConfig, Go2RosRobot
+        require("rclpy", "shadowhound_interfaces", *self.NEEDS)
         from tests.ros.rosclient import NodeProcess, RosClient
-        from tests.ros.test_go2_truth import Truth
 
-        self.client = RosClient("shadowhound_contract_client")
+        self.client = RosClient(f"shadowhound_{self.NS}_client")
         self.driver = NodeProcess(
             "-r", f"__ns:=/{self.NS}", command="sim-driver", options=self.OPTIONS
         )
-        self.topics = Truth(self.client, f"/{self.NS}")
-        self.go2: Any = None
+        self.topics = self._topics()
+        self.go2 = None
         try:
             self.topics.wait_ready(self.driver)
-            self.robot = self.go2 = Go2RosRobot(
-                Go2RosConfig(namespace=self.NS, node_name="shadowhound_contract_go2"),
-                context=self.client.context,
-            )
+            self.robot = self.go2 = self._robot()
             self._wait_until(lambda: self.go2.last_state().connected, "odometry at the robot")
             self._prove_commands_arrive()
         except BaseException:
             self.close()
             raise
+
+    @abstractmethod
+    def _topics(self) -> Any:
+        """The driver's own topics as the test client reads and writes them: `requests`,
+        `fault` and `truth`, `wait_ready(driver)`, `now()`, `wait(match, what, timeout)`."""
+
+    @abstractmethod
+    def _robot(self) -> Robot:
+        """The robot under test, on the test client's context."""
+
+    def _velocity_ready(self) -> None:
+        """Until velocity can reach the driver (once sport requests do)."""
 
     def _wait_until(self, predicate: Callable[[], Any], what: str, timeout: float = 30.0) -> Any:
         from tests.ros.rosclient import wait_until
@@ -202,18 +220,23 @@ class Go2Backend(Backend):
     def _prove_commands_arrive(self) -> None:
         """Until the driver has matched the robot's writers: each counts the driver's reader
         (this side), then one command over it reaches the driver's records (the other side;
-        a reliable writer that counts a reader loses nothing to it, see wait_matched)."""
-        ns = f"/{self.NS}"
-        requests = next(p for p in self.go2.node.publishers if p.topic_name == f"{ns}/webrtc_req")
-        self._wait_until(lambda: requests.get_subscription_count() > 0, "the driver's webrtc_req")
+        a reliable writer that counts a reader loses nothing to it, see wait_matched); then
+        one turn in place proves that velocity moves the body."""
+        from shadowhound.robot.go2 import api as go2_api
+
+        topic = f"/{self.NS}/{self.REQUESTS}"
+        requests = next(p for p in self.go2.node.publishers if p.topic_name == topic)
+        self._wait_until(lambda: requests.get_subscription_count() > 0, f"the driver's {topic}")
         mark = self.topics.requests.mark()
         self.go2.stop()  # StopMove: moves nothing
-        self._wait_until(lambda: self.topics.stop_moves(mark), "the first StopMove's record")
-        # Velocity: wait for the relay to be seen (velocity goes to cmd_vel through it), then
-        # one turn in place proves the path.
-        self._wait_until(lambda: self.go2.velocity_topic == f"{ns}/cmd_vel", "the relay")
-        twists = next(p for p in self.go2.node.publishers if p.topic_name == f"{ns}/cmd_vel")
-        self._wait_until(lambda: twists.get_subscription_count() > 0, "the relay's cmd_vel")
+        self._wait_until(
+            lambda: any(
+                json.loads(m.data)["api_id"] == go2_api.STOP_MOVE
+                for m in self.topics.requests.since(mark)
+            ),
+            "the first StopMove's record",
+        )
+        self._velocity_ready()
         moves = self._record()["moves"]
         self.go2.send_velocity(0.0, 0.0, 0.2)
         try:
@@ -224,7 +247,7 @@ class Go2Backend(Backend):
 
     def _record(self) -> dict[str, Any]:
         """The next truth record."""
-        return self.topics.now()
+        return dict(self.topics.now())
 
     @staticmethod
     def _seen(record: dict[str, Any]) -> Seen:
@@ -285,13 +308,76 @@ class Go2Backend(Backend):
         assert code == 0, self.driver.output()[-3000:]
 
 
+class Go2Backend(DriverBackend):
+    """The driver as go2_ros2_sdk's (webrtc_req, cmd_vel through its relay, odom, go2_states)
+    under /contract, and a Go2RosRobot."""
+
+    NS = "contract"
+    NEEDS = ("go2_interfaces",)
+    REQUESTS = "webrtc_req"
+
+    def _topics(self) -> Any:
+        from tests.ros.test_go2_truth import Truth
+
+        return Truth(self.client, f"/{self.NS}")
+
+    def _robot(self) -> Robot:
+        from shadowhound.robot.go2.robot import Go2RosConfig, Go2RosRobot
+
+        return Go2RosRobot(
+            Go2RosConfig(namespace=self.NS, node_name="shadowhound_contract_go2"),
+            context=self.client.context,
+        )
+
+    def _velocity_ready(self) -> None:
+        """Velocity goes to cmd_vel through the relay: until the robot has seen the relay and
+        counts its reader."""
+        ns = f"/{self.NS}"
+        self._wait_until(lambda: self.go2.velocity_topic == f"{ns}/cmd_vel", "the relay")
+        twists = next(p for p in self.go2.node.publishers if p.topic_name == f"{ns}/cmd_vel")
+        self._wait_until(lambda: twists.get_subscription_count() > 0, "the relay's cmd_vel")
+
+
+class Go2EduBackend(DriverBackend):
+    """The driver as a Go2 EDU behind unitree_ros2 (`--interface unitree_ros2`: Requests on
+    api/sport/request in, SportModeState and LowState out) under /contract_edu, and a
+    Go2EduRobot. Moves go over the request topic too: nothing more to wait for."""
+
+    NS = "contract_edu"
+    NEEDS = ("go2_interfaces", "unitree_api", "unitree_go")  # EduTruth's module needs all
+    REQUESTS = "api/sport/request"
+    OPTIONS = (*DriverBackend.OPTIONS, "--interface", "unitree_ros2")
+
+    def _topics(self) -> Any:
+        from tests.ros.test_go2_edu_truth import EduTruth
+
+        return EduTruth(self.client, f"/{self.NS}")
+
+    def _robot(self) -> Robot:
+        from shadowhound.robot.go2_edu.robot import Go2EduRobot
+        from shadowhound.robot_config import Go2EduRobotSettings
+
+        return Go2EduRobot(
+            Go2EduRobotSettings(
+                namespace=self.NS,
+                request_topic=self.REQUESTS,  # the robot's own is at the root: here under NS
+                node_name="shadowhound_contract_go2_edu",
+            ),
+            context=self.client.context,
+        )
+
+
 def _fault(faults: dict[str, Any]) -> Any:
     from std_msgs.msg import String
 
     return String(data=json.dumps(faults))
 
 
-BACKENDS: dict[str, Callable[[], Backend]] = {"sim": SimBackend, "go2": Go2Backend}
+BACKENDS: dict[str, Callable[[], Backend]] = {
+    "sim": SimBackend,
+    "go2": Go2Backend,
+    "go2_edu": Go2EduBackend,
+}
 
 
 @pytest.fixture(scope="module", params=list(BACKENDS))

@@ -38,6 +38,7 @@ Per robot (names prefixed `robot{i}/` with `--robots 2` or more, as go2_ros2_sdk
 With `--interface unitree_ros2` the robots speak Unitree's own interface instead (a Go2 EDU;
 sim_driver/unitree.py): `api/sport/request` in, `api/sport/response`, `lf/sportmodestate` and
 `lf/lowstate` out, besides `sim_driver/*`; none of go2_ros2_sdk's topics, relay or servers.
+There the sport state carries the pose, so the `odom` fault stops it (as `states` does).
 """
 
 from __future__ import annotations

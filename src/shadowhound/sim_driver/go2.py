@@ -371,7 +371,8 @@ class SimGo2:
             return
         _taken, t, progress = shown
         if self.unitree is not None:
-            self.unitree.publish_state(t, progress)
+            if self.faults.odom:  # unitree_ros2 has no odom: the sport state carries the pose
+                self.unitree.publish_state(t, progress)
             return
         assert self._state_pub is not None
         c, s = math.cos(t.yaw), math.sin(t.yaw)
