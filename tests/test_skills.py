@@ -78,6 +78,7 @@ VALID = {
     "nav.goto": {"x": 1, "y": 1},
     "nav.face": {"x": 1, "y": 1},
     "nav.patrol": {},
+    "nav.follow": {"target": "person"},
     "sys.wait": {"seconds": 1},
 }
 

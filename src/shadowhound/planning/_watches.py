@@ -143,7 +143,8 @@ def split_condition(rest: str) -> Iterator[tuple[Watch, str]]:
 
 # "follow the person", "follow me at 2 meters", "keep following the red ball for 30 seconds"
 FOLLOW = re.compile(
-    r"^(?:please\s+)?(?:keep\s+|continue\s+|start\s+)?(?:follow(?:ing)?|track(?:ing)?|tail(?:ing)?"
+    r"^(?:please\s+)?(?:keep\s+|continue\s+|start\s+)?(?:follow(?:ing)?|track(?:ing)?(?!\s+down)"
+    r"|tail(?:ing)?"
     r"|shadow(?:ing)?|come\s+(?:along\s+)?with|walk\s+with|stay\s+with|stick\s+with)\s+"
     r"(?:(?P<me>me|us)|(?:the|that|this|a|an|my)?\s*(?P<name>[a-z][a-z ]*?))"
     r"(?:\s+(?:at|from)\s+(?:a\s+distance\s+of\s+)?(?P<d>\d+(?:\.\d+)?)\s*(?:m|meters?|metres?)"

@@ -35,7 +35,7 @@ LOST_AFTER = 3.0  # seconds out of view: the follow is over
 
 class FollowArgs(SkillArgs):
     target: str = Field("person", min_length=1, max_length=60)
-    distance: Length = Field(1.5, ge=0.5, le=5.0, description="metres")
+    distance: Length = Field(1.5, ge=0.3, le=5.0, description="metres")
     seconds: OptionalDuration = Field(None, gt=0, le=3600)
 
 
