@@ -349,9 +349,34 @@ class Go2EduBackend(DriverBackend):
     OPTIONS = (*DriverBackend.OPTIONS, "--interface", "unitree_ros2")
 
     def _topics(self) -> Any:
+        from tests.ros.rosclient import wait_matched
         from tests.ros.test_go2_edu_truth import EduTruth
 
-        return EduTruth(self.client, f"/{self.NS}")
+        class Topics(EduTruth):  # made here: EduTruth's module needs ROS to import
+            """EduTruth, and the driver's fault topic (`blind`), made before its sport
+            writer: the ping over that one proves both."""
+
+            def __init__(self, client: Any, ns: str) -> None:
+                from std_msgs.msg import String
+
+                self.fault = client.publisher(String, f"{ns}/sim_driver/fault")
+                super().__init__(client, ns)
+
+            def wait_ready(self, driver: Any) -> None:
+                wait_matched(
+                    self.client,
+                    "the simulated Go2 EDU",
+                    [self.requests, self.truth],
+                    [self.fault, self.sport],
+                    ping=self.ping,
+                    alive=driver.check_alive,
+                )
+
+            def close(self) -> None:
+                super().close()
+                self.client.destroy(self.fault)
+
+        return Topics(self.client, f"/{self.NS}")
 
     def _robot(self) -> Robot:
         from shadowhound.robot.go2_edu.robot import Go2EduRobot

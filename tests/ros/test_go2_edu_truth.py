@@ -54,7 +54,6 @@ class EduTruth:
     def __init__(self, client: RosClient, ns: str = "") -> None:
         self.client = client
         self.requests = client.subscribe(String, f"{ns}/sim_driver/requests")
-        self.fault = client.publisher(String, f"{ns}/sim_driver/fault")
         self.sport = client.publisher(Request, f"{ns}/api/sport/request")  # the last writer
         self.truth = client.subscribe(String, f"{ns}/sim_driver/truth")  # last reader: 50 Hz
 
@@ -63,7 +62,7 @@ class EduTruth:
             self.client,
             "the simulated Go2 EDU",
             [self.requests, self.truth],
-            [self.fault, self.sport],
+            [self.sport],
             ping=self.ping,
             alive=driver.check_alive,
         )
@@ -82,7 +81,7 @@ class EduTruth:
         )
 
     def close(self) -> None:
-        self.client.destroy(self.requests, self.fault, self.sport, self.truth)
+        self.client.destroy(self.requests, self.sport, self.truth)
 
     def now(self) -> dict[str, Any]:
         mark = self.truth.mark()
