@@ -31,18 +31,19 @@ _CORRECTIONS = 3  # approaches after the first when the pose at rest is off the 
 _CORRECTION_SECONDS = 0.5
 
 
-# Robot seconds a step allows each correction after its first approach: a slow approach of a
-# few tolerances and the wait for the robot to show it at rest. On a loaded machine a late
-# robot (a Go2 over DDS) may need all of them; a step's time-out counts them.
-_CORRECTION_ALLOWANCE = 1.5
+# Robot seconds a move or turn step allows its corrections after the first approach (each a
+# slow approach of a few tolerances and the wait for the robot to show it at rest): on a loaded
+# machine a late robot (a Go2 over DDS) may need all of them. Not part of the estimates above,
+# which searches plan with.
+CORRECTIONS_ALLOWANCE = _CORRECTIONS * 1.5
 
 
 def straight_timeout(distance: float, speed: float, accel: float) -> float:
-    return abs(distance) / speed + 2 * speed / accel + 5.0 + _CORRECTIONS * _CORRECTION_ALLOWANCE
+    return abs(distance) / speed + 2 * speed / accel + 5.0
 
 
 def rotate_timeout(angle: float, speed: float, accel: float) -> float:
-    return abs(angle) / speed + 2 * speed / accel + 5.0 + _CORRECTIONS * _CORRECTION_ALLOWANCE
+    return abs(angle) / speed + 2 * speed / accel + 5.0
 
 
 def _profile(error: float, v_max: float, accel: float, period: float) -> float:

@@ -129,7 +129,8 @@ def _run_strafe(ctx: SkillContext, a: StrafeArgs) -> str:
 
 def _straight_timeout(a: MoveArgs | StrafeArgs, env: PlanEnv) -> float:
     accel = env.config.motion.linear_accel
-    return motion.straight_timeout(a.distance, _linear(env, a.speed), accel)
+    speed = _linear(env, a.speed)
+    return motion.straight_timeout(a.distance, speed, accel) + motion.CORRECTIONS_ALLOWANCE
 
 
 # -- nav.rotate ------------------------------------------------------------------------------
@@ -144,8 +145,11 @@ def _run_rotate(ctx: SkillContext, a: RotateArgs) -> str:
 
 
 def _rotate_timeout(a: RotateArgs, env: PlanEnv) -> float:
-    return motion.rotate_timeout(
-        math.radians(a.degrees), _angular(env, a.speed), env.config.motion.angular_accel
+    return (
+        motion.rotate_timeout(
+            math.radians(a.degrees), _angular(env, a.speed), env.config.motion.angular_accel
+        )
+        + motion.CORRECTIONS_ALLOWANCE
     )
 
 
