@@ -64,15 +64,20 @@ class Canvas:
             for j in range(-pixels, pixels + 1)
         ]
 
-    def along(self, points: list[tuple[float, float]], colour: tuple[int, int, int]) -> float:
-        """The share of points sampled every 2 cm along the polyline drawn in `colour`."""
+    def along(
+        self, points: list[tuple[float, float]], colour: tuple[int, int, int], within: float = 0.0
+    ) -> float:
+        """The share of points sampled every 2 cm along the polyline with `colour` drawn at
+        them (or, given `within` metres, somewhere that close: a walked path is where the body
+        went, a few centimetres off the planned one, and is drawn 2 px wide)."""
         hits = total = 0
+        steps = [i * 0.02 for i in range(-int(within / 0.02), int(within / 0.02) + 1)]
         for (x0, y0), (x1, y1) in zip(points, points[1:], strict=False):
             n = max(1, int(math.dist((x0, y0), (x1, y1)) / 0.02))
             for i in range(n):
                 x, y = x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * i / n
                 total += 1
-                hits += near(self.at(x, y), colour)
+                hits += any(near(self.at(x + dx, y + dy), colour) for dx in steps for dy in steps)
         return hits / max(1, total)
 
 
@@ -141,7 +146,9 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
                 "the robot to arrive on the map",
             )
             canvas = Canvas(page)
-            assert canvas.along(planned, WALKED) > 0.6
+            # Where the body walked (in truth it tracks the plan within about 10 cm; a loaded
+            # machine's controller drifts a few centimetres more), drawn along the plan.
+            assert canvas.along(planned, WALKED, within=0.1) > 0.6
             page.screenshot(path=str(ARTIFACTS / "dashboard-map-walked.png"), full_page=True)
 
             # 4. A fresh page, a mission back (no dry run first): its planned path is drawn
