@@ -22,6 +22,7 @@ from ..world.objects import object_key
 from .arguments import Length, OptionalDuration, SkillArgs
 from .context import PlanEnv, SkillContext
 from .registry import Skill
+from .watches import names
 
 PERSON_NEAREST = 1.0  # metres (centre to centre) a followed person is never approached closer
 _TURN_GAIN = 1.5  # rad/s per radian off centre
@@ -44,10 +45,7 @@ def _is_person(name: str) -> bool:
 
 
 def _spot(seen: tuple[Sighting, ...], key: str) -> Sighting | None:
-    return next(
-        (s for s in seen if object_key(s.name) == key or object_key(s.name).endswith(" " + key)),
-        None,
-    )
+    return next((s for s in seen if names(key, s.name)), None)
 
 
 def _run_follow(ctx: SkillContext, a: FollowArgs) -> str:

@@ -91,7 +91,7 @@ def _known(name: str, vocabulary: frozenset[str]) -> bool:
     return name in keys or any(k.endswith(" " + name) for k in keys)
 
 
-def _names(name: str, seen: str) -> bool:
+def names(name: str, seen: str) -> bool:
     """`name` ("ball", "the red ball") names the thing `seen` ("red ball")."""
     key = object_key(seen)
     return key == name or key.endswith(" " + name)
@@ -116,7 +116,8 @@ class Watcher:
         self.watches = tuple(watches)
         self.robot = robot
         self.body_radius = body_radius
-        self._view = any(w.kind == "seen" for w in self.watches)
+        # The view names what is in the way too: read once a tick for either.
+        self._view = any(w.kind in ("seen", "in_the_way") for w in self.watches)
         self._scan = any(w.kind == "in_the_way" for w in self.watches)
         self._keys = {id(w): object_key(w.name) for w in self.watches}
 
@@ -141,7 +142,7 @@ class Watcher:
         if w.kind == "seen":
             key = self._keys[id(w)]
             for s in r.in_view:
-                if _names(key, s.name) and (w.within is None or s.distance <= w.within):
+                if names(key, s.name) and (w.within is None or s.distance <= w.within):
                     return f"saw {s.describe()}"
             return ""
         if w.kind == "in_the_way":
@@ -176,8 +177,8 @@ class Watcher:
         return f"{what} in the way {gap:.2f} m ahead"
 
     def _named(self, r: _Reading, distance: float, along: float) -> str:
-        """What the camera shows near the return, else "something"."""
-        for s in self.robot.in_view() or ():
+        """What the camera shows near the return (this tick's view), else "something"."""
+        for s in r.in_view:
             if abs(s.distance - distance) < 0.6 and abs(math.radians(s.bearing_deg) - along) < 0.5:
                 return s.name
         return "something"
