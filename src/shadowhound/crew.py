@@ -124,7 +124,7 @@ class Crew:
             registry=self.registry,
             state=state,
             places=self.places.positions(),
-            history=self.logbook.summaries(),
+            history=self.logbook.summaries(finished_only=planner is not None),
             cancelled=self.stop.cancelled,
             memories=self.memory.search(text) if rag and text else [],
             objects=seen,

@@ -42,7 +42,11 @@ class Logbook:
             return rows
         return [r.history_row() for r in reversed(self._results)][:limit]
 
-    def summaries(self) -> list[str]:
-        """The latest `size` missions, oldest first, one line each (for prompts and chat)."""
-        rows = self.recent(self.size)
+    def summaries(self, *, finished_only: bool = False) -> list[str]:
+        """The latest `size` missions, oldest first, one line each (for prompts and chat).
+        `finished_only` leaves out the running one: a planner is planning it, it is the
+        request rather than a recent mission."""
+        rows = self.recent(self.size + finished_only)
+        if finished_only:
+            rows = [r for r in rows if r.get("status") != "running"][: self.size]
         return [f"{r['status']}: {r['mission']!r} -> {r['response']}" for r in reversed(rows)]
