@@ -72,8 +72,9 @@ def test_json_plan_in_one_round_trip(srv):
     assert request["model"] == "test-model" and request["temperature"] == 0
     # llama.cpp's dialect: json_object constrained by the plan's schema.
     assert request["response_format"]["type"] == "json_object"
-    steps = request["response_format"]["schema"]["properties"]["steps"]["items"]["anyOf"]
-    assert {"type": "string", "const": "nav.move"} in [s["properties"]["skill"] for s in steps]
+    step = request["response_format"]["schema"]["properties"]["steps"]["items"]
+    assert "nav.move" in step["properties"]["skill"]["enum"]  # the compact schema
+    assert step["properties"]["args"]["properties"]["distance"] == {"type": "number"}
     assert request["cache_prompt"] is True  # llama.cpp reuses the evaluated prompt prefix
     system = request["messages"][0]["content"]
     assert "nav.move(distance" in system and "Robot now: standing at x=0.00" in system

@@ -56,10 +56,9 @@ def test_a_model_plans_it_the_robot_runs_it_the_result_says_it_the_history_keeps
         request = srv.requests[0]
     # The model was offered it: in the prompt's skill list and the plan's schema.
     assert "body.look_up(" in request["messages"][0]["content"]
-    offered = request["response_format"]["schema"]["properties"]["steps"]["items"]["anyOf"]
-    assert {"type": "string", "const": "body.look_up"} in [
-        s["properties"]["skill"] for s in offered
-    ]
+    offered = request["response_format"]["schema"]["properties"]["steps"]["items"]["properties"]
+    assert "body.look_up" in offered["skill"]["enum"]
+    assert offered["args"]["properties"]["hold"] == {"type": "number"}  # its own argument
     assert result.success, result.response
     [step] = result.steps
     assert (step.skill, step.args, step.status) == (

@@ -28,8 +28,9 @@ def refusal(reason: Any = REASON) -> dict[str, Any]:
     return {"skill": "refuse", "args": {"reason": reason}}
 
 
-def valid(instance: Any, dialect: str) -> bool:
-    return jsonschema.Draft202012Validator(schema.plan_schema(REGISTRY, dialect)).is_valid(instance)
+def valid(instance: Any, dialect: str, style: str = "strict") -> bool:
+    root = schema.plan_schema(REGISTRY, dialect, style)  # type: ignore[arg-type]
+    return jsonschema.Draft202012Validator(root).is_valid(instance)
 
 
 @pytest.fixture
@@ -60,6 +61,17 @@ def test_every_dialect_admits_a_refusal_with_a_reason_and_nothing_else(dialect):
     assert not valid({"steps": [extra], "answer": "", "conditions": []}, dialect)
 
 
+@pytest.mark.parametrize("dialect", DIALECTS)
+def test_the_compact_schema_admits_a_refusal_with_a_reason(dialect):
+    args = schema.plan_schema(REGISTRY, dialect, "compact")["properties"]["steps"]["items"]
+    nulls = dict.fromkeys(args["properties"]["args"]["properties"]) if dialect == "openai" else {}
+    assert "refuse" in args["properties"]["skill"]["enum"]
+    step = {"skill": "refuse", "args": {**nulls, "reason": REASON}}
+    assert valid({"steps": [step], "answer": "", "conditions": []}, dialect, "compact")
+    step = {"skill": "refuse", "args": {**nulls, "reason": 3}}
+    assert not valid({"steps": [step], "answer": "", "conditions": []}, dialect, "compact")
+
+
 @pytest.mark.parametrize("dialect", ["json_schema", "llamacpp"])
 def test_a_reason_is_never_empty_and_short_where_the_grammar_can_hold_it(dialect):
     assert not valid({"steps": [refusal("")], "answer": "", "conditions": []}, dialect)
@@ -79,9 +91,9 @@ def test_refuse_can_never_be_a_skills_name():
 @pytest.mark.parametrize("style", ["plan", "tools", "react"])
 def test_the_prompt_offers_the_refusal_in_every_style(style):
     prefix = prompts.stable_prefix(REGISTRY, style=style)
-    assert "request no skill fits gets" in prefix
+    assert "request no skill fits" in prefix
     if style == "plan":
-        assert '{"skill": "refuse", "args": {"reason": "why"}}' in prefix
+        assert '{"skill":"refuse","args":{"reason":"why"}}' in prefix
 
 
 # -- the parser reads it, in every form a model sends ----------------------------------------

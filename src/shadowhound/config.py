@@ -220,8 +220,14 @@ class LLMConfig(_Section):
     )
     plan_format: Literal["auto", "json_schema", "tools", "plain"] = Field(
         "auto",
-        description="how plan mode asks for a plan: json_schema (the strict plan schema "
+        description="how plan mode asks for a plan: json_schema (the plan schema "
         "the server enforces), tools, or plain (JSON asked for in words); auto picks json_schema",
+    )
+    plan_schema: Literal["compact", "strict"] = Field(
+        "compact",
+        description="the plan schema sent with json_schema: compact (skill names and typed "
+        "arguments, about a quarter of the size; the registry checks the rest) or strict (each "
+        "skill with exactly its own arguments: helps a small local model, costs prompt time)",
     )
     hybrid: bool = Field(
         True, description="offline rules first; the model plans only what they do not understand"

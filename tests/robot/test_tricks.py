@@ -12,12 +12,13 @@ from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import ShadowHoundConfig, load_config
 from shadowhound.plan import SkillCall
 from shadowhound.planning import make_planner
+from shadowhound.planning.prompts import stable_prefix
 from shadowhound.planning.schema import plan_schema
 from shadowhound.robot.factory import tricks_of
 from shadowhound.robot.go2 import api as go2_api
 from shadowhound.robot.sim.robot import SimRobot
 from shadowhound.robot_config import Go2EduRobotSettings, Go2RobotSettings, SimRobotSettings
-from shadowhound.skills import SkillValidationError, default_registry
+from shadowhound.skills import SkillRegistry, SkillValidationError, default_registry
 from tests.robot.test_base import Minimal
 
 AI_ONLY = {n for n, t in go2_api.TRICKS.items() if t.api_id in go2_api.AI_MODE_TRICKS}
@@ -80,12 +81,18 @@ def test_the_agent_takes_the_tricks_of_the_backend_its_profile_chooses() -> None
     assert RobotAgent(settings).registry.tricks() == frozenset(go2_api.TRICKS)
 
 
-def test_the_model_is_offered_only_the_robots_tricks() -> None:
-    with_tricks = json.dumps(plan_schema(default_registry()))
+@pytest.mark.parametrize("style", ["plan", "strict"])
+def test_the_model_is_offered_only_the_robots_tricks(style: str) -> None:
+    def offered(registry: SkillRegistry) -> str:
+        if style == "plan":  # the prompt's catalogue (the compact schema names no tricks)
+            return stable_prefix(registry, style="plan")
+        return json.dumps(plan_schema(registry, "json_schema", "strict"))
+
+    with_tricks = offered(default_registry())
     assert "body.sport" in with_tricks and "backflip" in with_tricks
-    normal = json.dumps(plan_schema(default_registry(tricks_of(Go2RobotSettings()))))
+    normal = offered(default_registry(tricks_of(Go2RobotSettings())))
     assert "body.sport" in normal and "backflip" not in normal and "hello" in normal
-    none = json.dumps(plan_schema(default_registry({})))
+    none = offered(default_registry({}))
     assert "body.sport" not in none
 
 

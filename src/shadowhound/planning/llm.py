@@ -116,7 +116,9 @@ class LLMPlanner:
             if self.settings.backend == "openai":
                 options["parallel_tool_calls"] = True
         elif fmt == "json_schema":
-            options["response_format"] = schema.response_format(self.settings.backend, ctx.registry)
+            options["response_format"] = schema.response_format(
+                self.settings.backend, ctx.registry, self.llm.plan_schema
+            )
         try:
             completion = self._complete(messages, usage, ctx, **options)
         except BackendError as exc:
@@ -129,6 +131,8 @@ class LLMPlanner:
             log.warning("server rejected response_format json_schema; asking without it")
             self._schema_ok = False
             options.pop("response_format")
+            if messages and messages[0].get("role") == "system":  # it may have named the schema
+                messages[0] = {"role": "system", "content": self._system(ctx, style)}
             try:
                 completion = self._complete(messages, usage, ctx, **options)
             except BackendError as again:
@@ -163,7 +167,7 @@ class LLMPlanner:
         calls = []
         for index, call in enumerate(reply.calls, start=1):
             try:
-                valid = ctx.registry.validate(call)
+                valid = ctx.registry.validate(schema.without_unset(ctx.registry, call))
             except SkillValidationError as exc:
                 problems += [f"step {index}: {p}" for p in exc.problems]
                 continue
@@ -178,6 +182,12 @@ class LLMPlanner:
         return prompts.tools(ctx.registry)
 
     def _system(self, ctx: PlanningContext, style: str) -> str:
+        if (
+            style == "plan"
+            and self._format() == "json_schema"
+            and schema.dialect_of(self.settings.backend) == "openai"
+        ):
+            style = "plan_schema"  # OpenAI shows the model the schema: the prompt need not
         return prompts.system_prompt(
             ctx.registry,
             style=style,

@@ -17,20 +17,28 @@ from ..state import RobotState
 
 _INTRO = (
     "You plan actions for ShadowHound, a Unitree Go2 quadruped robot. Units: metres, seconds, "
-    "degrees. x is forward, y is left; positive angles turn left (counter-clockwise)."
+    "degrees, m/s. x is forward, y is left; positive angles turn left."
 )
 _RULES = (
-    "Rules: use only the skills listed; one step per action, in the order asked; write a step "
-    "twice for 'twice'; give numbers as numbers; to come back, use nav.goto with place 'start'; "
-    "to go to, find or look for a thing, use nav.goto with its name as place (seen or not)."
+    "Rules: only the skills listed; one step per action, in the order asked ('twice': two "
+    "steps); numbers as numbers; to come back, nav.goto place 'start'; to go to, find or look "
+    "for a thing, nav.goto with its name as place (seen or not)."
 )
 _PLAN_REPLY = (
-    'Reply with JSON only: {"steps": [{"skill": "nav.move", "args": {"distance": 1.0}}], '
-    '"answer": ""}. A request no skill fits gets the one step {"skill": "refuse", "args": '
-    '{"reason": "why"}}. Each condition the request states goes in "conditions": [{"step": 1, '
-    '"when": "until", "kind": "seen", "name": "red ball"}] (when: until, unless, if, if_not '
-    "for otherwise; kind: seen with name and within m, in_the_way with within m, "
-    "battery_below with percent, operator_stop); never leave one out: refuse instead."
+    'Reply with JSON only: {"steps":[{"skill":"nav.move","args":{"distance":1}}],"answer":""}. '
+    'A request no skill fits: the one step {"skill":"refuse","args":{"reason":"why"}}. Every '
+    'condition stated goes in "conditions":[{"step":1,"when":"until","kind":"seen","name":'
+    '"red ball"}] (when: until, unless, if, if_not for '
+    "otherwise; kind: seen (name, within m), in_the_way (within m), battery_below (percent), "
+    "operator_stop); never leave one out: refuse instead."
+)
+# The same when the model is shown the plan's schema (OpenAI's strict structured outputs): the
+# shape of the JSON and the names of the conditions' fields are said there, not twice.
+_SCHEMA_REPLY = (
+    "Reply with the plan in its schema. A request no skill fits: the one step refuse, with a "
+    "reason. Every condition stated goes in conditions, about its step (when: until, unless, "
+    "if, if_not for otherwise; kind: seen (name, within m), in_the_way (within m), "
+    "battery_below (percent), operator_stop); never leave one out: refuse instead."
 )
 _TOOLS_REPLY = (
     "Call the skills as tools, all of them at once, in order. A request no skill fits gets no "
@@ -66,15 +74,15 @@ def compact_schema(skill: Skill) -> dict[str, Any]:
 
 @functools.lru_cache(maxsize=256)
 def skill_line(skill: Skill) -> str:
-    """`nav.move(distance: metres; + forward, speed?: m/s) - Walk straight ...`"""
+    """`nav.move(distance, speed?) - Walk straight ...`: the arguments by name (? optional,
+    the values of an enum) and the description, which says what they mean: each thing said
+    once, as the request is sent with every mission."""
     schema = compact_schema(skill)
     required = set(schema.get("required", []))
     params = []
     for name, prop in schema["properties"].items():
-        hint = prop.get("description", prop.get("type", ""))
-        if "enum" in prop:
-            hint = "one of " + "|".join(map(str, prop["enum"]))
-        params.append(f"{name}{'' if name in required else '?'}: {hint}")
+        enum = f": {'|'.join(map(str, prop['enum']))}" if "enum" in prop else ""
+        params.append(f"{name}{'' if name in required else '?'}{enum}")
     return f"{skill.name}({', '.join(params)}) - {skill.description}"
 
 
@@ -139,10 +147,16 @@ def _stable_prefix(skills: tuple[Skill, ...], style: str) -> str:
     parts = [_INTRO]
     # React also lists the skills: some servers drop `tools` (llama-cpp-python's default chat
     # format does), and the model must still know what it may call.
-    if style in ("plan", "react"):
+    if style in ("plan", "plan_schema", "react"):
         parts.append("Skills:\n" + "\n".join(skill_line(s) for s in skills))
     parts.append(_RULES)
-    parts.append({"plan": _PLAN_REPLY, "tools": _TOOLS_REPLY, "react": _REACT_REPLY}[style])
+    replies = {
+        "plan": _PLAN_REPLY,
+        "plan_schema": _SCHEMA_REPLY,
+        "tools": _TOOLS_REPLY,
+        "react": _REACT_REPLY,
+    }
+    parts.append(replies[style])
     return "\n".join(parts)
 
 
@@ -164,7 +178,8 @@ def system_prompt(
     memories: list[str] | None = None,
     objects: dict[str, tuple[float, float]] | None = None,
 ) -> str:
-    """The system message. `style` is plan (skills listed, JSON reply), tools or react.
+    """The system message. `style` is plan (skills listed, JSON reply), plan_schema (the same,
+    the model shown the plan's schema), tools or react.
 
     The stable prefix comes first; what changes from mission to mission (places, objects
     seen, recent missions, memories, the robot's state) comes last, so only that tail is

@@ -1,12 +1,19 @@
-"""The plan schema: generated from the skill registry, it admits only plans of real skills
-called with exactly their own arguments, in the dialect each server enforces.
+"""The plan schema, generated from the skill registry in the dialect each server enforces.
 
-A plan is `{"steps": [step, ...], "answer": "...", "conditions": [...]}`; each step is one of
-the skills (`anyOf`
-over them): its name as a constant and an `args` object with exactly that skill's arguments
-(required ones required, types, enums, `additionalProperties: false`, ranges where the dialect
-has them). Numbers are plain JSON numbers in the units the prompt names: a grammar that lets a
-model write "3 cm" would also let it write "3 bananas".
+A plan is `{"steps": [step, ...], "answer": "...", "conditions": [...]}`. It comes in two
+styles (`llm.plan_schema`):
+
+- `compact` (the default): a step is `{"skill": one of the skills' names, "args": {...}}`,
+  `args` holding only arguments some skill takes, typed. About 1,700 characters, so prompt and
+  schema fit 5,000 (issue 26); which skill takes which argument, the required ones and ranges
+  are the registry's checks, and an invalid plan gets a repair turn saying what is allowed.
+- `strict`: each step is one of the skills (`anyOf` over them), its name as a constant and
+  an `args` object with exactly that skill's arguments (required ones required, types, enums,
+  ranges where the dialect has them): a grammar cannot produce a wrong argument at all, which
+  helps a small local model, at about four times the size.
+
+Numbers are plain JSON numbers in the units the prompt names: a grammar that lets a model
+write "3 cm" would also let it write "3 bananas".
 
 A condition the request states ("until you see the red ball", "if the battery is below 30%")
 is a `conditions` entry about one step: `{"step": n, "when": until | unless | if | if_not,
@@ -23,48 +30,47 @@ required) and `refuse`, having no dot, can never be a skill's name.
 
 Dialects (`dialect_of` picks one per backend):
 - `openai`: OpenAI strict structured outputs (`strict: true`). Its subset wants every property
-  required (an optional argument is `null`-able instead), `enum` rather than `const`, and no
-  string lengths; numeric ranges are allowed.
+  required (an optional argument is `null`-able instead: in the compact style every argument
+  is, and a null where the skill takes no null means "not given", `without_unset`), `enum`
+  rather than `const`, and no string lengths; numeric ranges are allowed.
 - `json_schema`: vLLM's structured outputs (`response_format` json_schema, enforced by its
   grammar backend) and Ollama (the OpenAI-compatible `response_format` becomes its `format`).
 - `llamacpp`: llama-server and llama-cpp-python 0.3.x: `response_format` `json_object` with a
   `schema`, compiled to a GBNF grammar. Its converter handles `anyOf`, `const`, `enum`,
   `required`, `additionalProperties` and `minLength`; llama-cpp-python ignores numeric ranges
   (a TODO in its converter), so they are not sent, nor `maxLength`, which it unrolls into a
-  grammar rule per character (a 35 kB grammar for this registry instead of a few kB). An
-  optional number with a range (speed, heading, laps) is not offered at all: the grammar could
-  not keep it in range, and the skill's default is always valid. A required one (a distance)
-  stays; the registry checks its range and the repair turn says what is allowed.
+  grammar rule per character (a 35 kB grammar for this registry instead of a few kB). In the
+  strict style an optional number with a range (speed, heading, laps) is not offered at all:
+  the grammar could not keep it in range, and the skill's default is always valid. A required
+  one (a distance) stays; the registry checks its range and the repair turn says what is
+  allowed.
 
-A skill whose arguments come in alternative sets declares them as `oneOf` of `required` sets
-(nav.goto: x and y, or a place); each set becomes a step of its own, so a half target ("x"
-without "y") is outside the schema.
-
-The schema is sent with every request, so it is kept small: the skills that take no arguments
-share one step (their names an `enum`), and an argument schema met more than once (a
-distance, a speed, the arguments of two skills alike) is written once under `$defs` and
-referred to, wherever a reference is shorter than the schema it stands for.
+In the strict style, alternative argument sets (`oneOf` of `required`: nav.goto's x and y, or
+a place) are steps of their own, so half a target is outside the schema; skills without
+arguments share one step; an argument schema met more than once is written once in `$defs`.
 
 The schema is a guarantee only where the server enforces it: every plan is still validated
 against the registry, and an invalid one still gets a repair turn.
 
-Everything here is cached per registry and dialect and built deterministically, so the bytes
-sent are identical from mission to mission (servers cache compiled grammars by schema): treat
-the returned dicts as read-only.
+Everything here is cached per registry, dialect and style and built deterministically, so the
+bytes sent are identical from mission to mission (servers cache compiled grammars by schema):
+treat the returned dicts as read-only.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 from collections import Counter
 from typing import Any, Literal
 
-from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN
+from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, SkillCall
 from ..skills import Skill, SkillRegistry
 from .prompts import function_tool
 
 Dialect = Literal["openai", "json_schema", "llamacpp"]
+Style = Literal["compact", "strict"]
 
 ANSWER_MAX_CHARS = 300  # a short reason when nothing can be done; also stops a model rambling
 REFUSE = "refuse"  # the step that refuses the request instead of planning it
@@ -242,7 +248,7 @@ def _conditions(dialect: Dialect) -> dict[str, Any]:
     required = ["step", "when", "kind"]
     if dialect == "openai":  # strict: every property required, the optional ones null-able
         for optional in ("name", "within", "percent"):
-            props[optional] = {"anyOf": [props[optional], {"type": "null"}]}
+            props[optional] = {"type": [props[optional]["type"], "null"]}
         required = list(props)
     item = {
         "type": "object",
@@ -262,16 +268,21 @@ def _shared_defs(conditions: dict[str, Any], defs: dict[str, Any]) -> dict[str, 
 
 
 @functools.lru_cache(maxsize=64)
-def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
-    steps, defs = _steps(skills, dialect)
-    steps.append(_refusal(dialect))
+def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect, style: Style) -> dict[str, Any]:
+    defs: dict[str, Any] = {}
+    if style == "compact":
+        items = _compact_step(skills, dialect)
+    else:
+        steps, defs = _steps(skills, dialect)
+        steps.append(_refusal(dialect))
+        items = {"anyOf": steps}
     answer: dict[str, Any] = {"type": "string"}
     if dialect == "json_schema":
         answer["maxLength"] = ANSWER_MAX_CHARS
     plan: dict[str, Any] = {
         "type": "object",
         "properties": {
-            "steps": {"type": "array", "items": {"anyOf": steps}},
+            "steps": {"type": "array", "items": items},
             "answer": answer,
             "conditions": _shared_defs(_conditions(dialect), defs),
         },
@@ -283,21 +294,81 @@ def _plan_schema(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
     return plan
 
 
-def plan_schema(registry: SkillRegistry, dialect: Dialect = "json_schema") -> dict[str, Any]:
-    """The JSON Schema of a whole plan over `registry`'s skills, in `dialect`."""
-    return _plan_schema(tuple(registry), dialect)
+_ANY = ["string", "number", "boolean"]  # an argument whose schema names no type
 
 
-def response_format(backend: str, registry: SkillRegistry) -> dict[str, Any]:
-    """The `response_format` that constrains a reply to a valid plan on `backend`'s server."""
+def _compact_step(skills: tuple[Skill, ...], dialect: Dialect) -> dict[str, Any]:
+    """One step for every skill: the skill's name and any argument some skill takes, typed
+    (the types an argument has in any skill; null-able and required in OpenAI's strict mode).
+    Which arguments a skill takes, their ranges and enums (a trick) are the registry's checks
+    (the prompt lists the tricks)."""
+    found: dict[str, list[dict[str, Any]]] = {}
+    for skill in skills:
+        for name, prop in skill.parameters_schema().get("properties", {}).items():
+            branches = [b for b in prop.get("anyOf", [prop]) if b.get("type") != "null"]
+            found.setdefault(name, []).extend(branches)
+    found.setdefault("reason", []).append({"type": "string"})  # the refusal's
+    props: dict[str, Any] = {}
+    for name, branches in found.items():
+        types = list(dict.fromkeys(t for b in branches for t in _types(b))) or list(_ANY)
+        if dialect == "openai":
+            types.append("null")
+        props[name] = {"type": types[0] if len(types) == 1 else types}
+    args: dict[str, Any] = {"type": "object", "properties": props}
+    if dialect == "openai":
+        args["required"] = list(props)
+    args["additionalProperties"] = False
+    names = [s.name for s in skills] + [REFUSE]
+    return _step(names, args, dialect)
+
+
+def _types(branch: dict[str, Any]) -> list[str]:
+    kind = branch.get("type")
+    if kind is None and "enum" in branch:  # an enum of strings without a type
+        kind = sorted({type(v).__name__.replace("str", "string") for v in branch["enum"]})
+    if kind is None:
+        return []
+    return [kind] if isinstance(kind, str) else [k for k in kind if k != "null"]
+
+
+def plan_schema(
+    registry: SkillRegistry, dialect: Dialect = "json_schema", style: Style = "compact"
+) -> dict[str, Any]:
+    """The JSON Schema of a whole plan over `registry`'s skills, in `dialect` and `style`."""
+    return _plan_schema(tuple(registry), dialect, style)
+
+
+def response_format(
+    backend: str, registry: SkillRegistry, style: Style = "compact"
+) -> dict[str, Any]:
+    """The `response_format` that constrains a reply to a plan on `backend`'s server."""
     dialect = dialect_of(backend)
-    schema = plan_schema(registry, dialect)
+    schema = plan_schema(registry, dialect, style)
     if dialect == "llamacpp":
         return {"type": "json_object", "schema": schema}
     spec: dict[str, Any] = {"name": "plan", "schema": schema}
     if dialect == "openai":
         spec["strict"] = True
     return {"type": "json_schema", "json_schema": spec}
+
+
+def without_unset(registry: SkillRegistry, call: SkillCall) -> SkillCall:
+    """`call` without the arguments a model set to null where the skill takes no null: in
+    OpenAI's strict mode every argument of the compact step is written, null meaning "not
+    given" (another skill's argument, or this skill's default). A null the skill takes (a
+    patrol's laps: until stopped) stays."""
+    skill = registry.find(call.skill) if isinstance(call.skill, str) else None
+    if skill is None or not isinstance(call.args, dict):
+        return call
+    own = skill.parameters_schema().get("properties", {})
+    kept = {
+        k: v
+        for k, v in call.args.items()
+        if v is not None or any(b.get("type") == "null" for b in own.get(k, {}).get("anyOf", []))
+    }
+    if len(kept) == len(call.args):
+        return call
+    return dataclasses.replace(call, args=kept)
 
 
 def _strict_parameters(skill: Skill) -> dict[str, Any]:

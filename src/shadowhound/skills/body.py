@@ -42,7 +42,7 @@ def _run_sport(ctx: SkillContext, a: SportArgs) -> str:
 SKILLS = (
     Skill(
         "body.stand",
-        "Stand up (from sitting or lying).",
+        "Stand up.",
         NoArgs,
         _posture_runner(Posture.STANDING, "stood up"),
         timeout=10.0,

@@ -522,7 +522,7 @@ def _run_stop(ctx: SkillContext, _a: NoArgs) -> str:
 SKILLS = (
     Skill(
         "nav.move",
-        "Walk straight forward (+) or backward (-) by a distance in metres, keeping the heading.",
+        "Walk straight forward (+) or backward (-), keeping the heading.",
         MoveArgs,
         _run_move,
         timeout=_straight_timeout,
@@ -534,7 +534,7 @@ SKILLS = (
     ),
     Skill(
         "nav.strafe",
-        "Step sideways left (+) or right (-) by a distance in metres without turning.",
+        "Step sideways left (+) or right (-) without turning.",
         StrafeArgs,
         _run_strafe,
         timeout=_straight_timeout,
@@ -544,7 +544,7 @@ SKILLS = (
     ),
     Skill(
         "nav.rotate",
-        "Turn in place by an angle in degrees: + counter-clockwise (left), - clockwise (right).",
+        "Turn in place: + left (counter-clockwise), - right.",
         RotateArgs,
         _run_rotate,
         timeout=_rotate_timeout,
@@ -570,7 +570,8 @@ SKILLS = (
     ),
     Skill(
         "nav.patrol",
-        "Walk the configured patrol route and return to where the patrol started.",
+        "Walk the configured patrol route laps times (null: until stopped) and return to the "
+        "start.",
         PatrolArgs,
         _run_patrol,
         timeout=_patrol_timeout,

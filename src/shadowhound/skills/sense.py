@@ -166,7 +166,7 @@ SKILLS = (
     ),
     Skill(
         "perception.look_around",
-        "Turn a full circle in place in quarter turns, describing each view.",
+        "Turn a full circle in quarter turns, describing each view.",
         DescribeArgs,
         _run_look_around,
         timeout=120.0,

@@ -55,7 +55,7 @@ def _phrase(a: SayArgs) -> str:
 SKILLS = (
     Skill(
         "voice.say",
-        "Say words aloud on the robot's speaker. Does not move.",
+        "Say text aloud on the robot's speaker (no text: the latest answer). Does not move.",
         SayArgs,
         _run_say,
         timeout=5.0,
