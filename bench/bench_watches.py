@@ -10,7 +10,11 @@ Ten watches of every kind (eight by sight, one path check, one battery) on one s
      view is its scene's ray casts and its scan 360 of them), for scale;
 (iii) "patrol until I say stop" on the simulator in real time: a person's stop (the Python
      API's `cancel()`, and the dashboard's `POST /api/missions/{id}/cancel` on a real server)
-     to the mission's end (the agent's MissionFinished event), the issue's "within 0.2 s".
+     to the mission's end (the agent's MissionFinished event), the issue's "within 0.2 s";
+(iv) the same over MCP (`shadowhound mcp --http` as its own process, the SDK's client: the
+     `cancel_mission` call to `run_mission`'s answer) and over ROS 2 (`shadowhound node` as its
+     own process on loopback DDS: the goal's cancel request to its result), each as the
+     client sees it. ROS is measured only where rclpy and the interface package are built.
 """
 
 from __future__ import annotations
@@ -90,6 +94,112 @@ def stop_to_end(trials: int) -> tuple[list[float], list[float]]:
     return api, web
 
 
+def mcp_stop_to_end(trials: int) -> list[float]:
+    """Milliseconds from `cancel_mission` to `run_mission`'s answer, as an MCP client sees it."""
+    import asyncio
+    import os
+    import re
+    import subprocess
+
+    from mcp import Client
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
+    server = subprocess.Popen(
+        [sys.executable, "-m", "shadowhound", "mcp", "--http", "--port", "0"]
+        + ["--time-scale", "1.0"],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert server.stderr is not None
+    url = None
+    for line in server.stderr:
+        if found := re.search(r"(http://\S+/mcp)", line):
+            url = found.group(1)
+            break
+    assert url, "the MCP server did not start"
+
+    async def measure() -> list[float]:
+        times = []
+        async with Client(url, read_timeout_seconds=60) as client:
+
+            async def travelled() -> float:
+                state = (await client.call_tool("get_state", {})).structured_content
+                return float(state["robot"]["distance_travelled"])
+
+            for _ in range(trials):
+                before = await travelled()
+                text = {"text": "patrol until I say stop"}
+                mission = asyncio.create_task(client.call_tool("run_mission", text))
+                while await travelled() < before + 0.1:
+                    await asyncio.sleep(0.01)
+                t = time.perf_counter()
+                await client.call_tool("cancel_mission", {})
+                result = (await mission).structured_content
+                times.append((time.perf_counter() - t) * 1000)
+                assert result["success"], result
+                await asyncio.sleep(0.5)  # at rest before the next
+        return times
+
+    try:
+        return asyncio.run(measure())
+    finally:
+        server.terminate()
+        server.wait(10)
+
+
+def ros_stop_to_end(trials: int) -> list[float] | str:
+    """Milliseconds from a goal's cancel request to its result, as a ROS 2 client sees it (or
+    why it was not measured)."""
+    import importlib.util
+    import os
+    import random
+
+    if not all(importlib.util.find_spec(m) for m in ("rclpy", "shadowhound_interfaces")):
+        return "not measured: rclpy or shadowhound_interfaces is not built here"
+    from shadowhound.ros.dds import claim_domain, loopback_env
+
+    domain, _held = claim_domain(random.randint(1, 100))
+    os.environ.update(loopback_env(domain))  # DDS stays on loopback, in a domain of its own
+    from tests.ros.rosclient import Agent, NodeProcess, RosClient, wait_until
+
+    client = RosClient()
+    node = NodeProcess("-p", "time_scale:=1.0")
+    agent = Agent(client)
+    times = []
+    try:
+        agent.wait_ready(node)
+        for _ in range(trials):
+            from shadowhound_interfaces.action import ExecuteMission
+
+            goal = ExecuteMission.Goal(command="stand up and patrol until I say stop")
+            sent = client.call(agent.action.send_goal_async, goal)
+            wait_until(sent.done, 30, "the goal to be accepted")
+            handle = sent.result()
+            wait_until(lambda: (s := agent.robot_state()) and s["moving"], 30, "a walk")
+            result = client.call(handle.get_result_async)
+            t = time.perf_counter()
+            client.call(handle.cancel_goal_async)
+            wait_until(result.done, 30, "the result")
+            times.append((time.perf_counter() - t) * 1000)
+            assert result.result().result.success, result.result().result.response
+            wait_until(lambda: not agent.robot_state()["moving"], 10, "rest")
+    finally:
+        node.stop()
+        client.close()
+    return times
+
+
+def _row(what: str, times: list[float] | str) -> str:
+    if isinstance(times, str):
+        return f"| {what} | < 0.2 s | {times} |"
+    return (
+        f"| {what} (median, max of {len(times)}) | < 0.2 s | {statistics.median(times):.1f} ms, "
+        f"{max(times):.1f} ms |"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", action="store_true", help="update bench/RESULTS.md")
@@ -105,6 +215,8 @@ def main() -> None:
     whole = per_tick(lambda: watcher.fired(state, 0.0), 300)
     view = len(reading.in_view)
     api, web = stop_to_end(5)
+    mcp = mcp_stop_to_end(5)
+    ros = ros_stop_to_end(5)
     lines = [
         "<!-- watches:start -->",
         "## Watches (issue 26)",
@@ -125,9 +237,19 @@ def main() -> None:
         f"{len(api)}) | < 0.2 s | {statistics.median(api):.1f} ms, {max(api):.1f} ms |",
         f"| same, the dashboard's cancel (HTTP on loopback, real server) | < 0.2 s | "
         f"{statistics.median(web):.1f} ms, {max(web):.1f} ms |",
+        _row(
+            "same, MCP: `cancel_mission` to `run_mission`'s answer (Streamable HTTP, the "
+            "server its own process)",
+            mcp,
+        ),
+        _row(
+            "same, ROS 2: a cancelled ExecuteMission goal to its result (the node its own "
+            "process, loopback DDS)",
+            ros,
+        ),
         "",
-        "ROS (a cancelled ExecuteMission goal) and MCP (`cancel_mission`) reach the same",
-        "`MissionWorker.cancel` as the dashboard.",
+        "Every interface reaches the same `MissionWorker.cancel`; the chat's stop is the "
+        "Python API's.",
         "",
         "The reading is taken once a tick for all of a step's watches (tests/test_watches.py",
         "counts the reads); a robot's view and scan are what its sensors last reported.",

@@ -307,6 +307,43 @@ def test_emergency_stop_mid_mission_stops_the_robot_and_latches(transport, http_
     run(scenario())
 
 
+def test_patrol_until_i_say_stop_ends_on_cancel_mission_as_a_success(http_server):
+    """Issue 26: "patrol until I say stop" is stopped by a person's cancel_mission; the stop is
+    what the mission waited for, so it succeeds, says why, and the robot stands still."""
+    progress: list[str] = []
+
+    async def on_progress(_done: float, _total: float | None, message: str | None) -> None:
+        progress.append(message or "")
+
+    async def scenario() -> None:
+        async with client_for("http", http_server, time_scale=REAL_TIME) as client:
+            mission = asyncio.create_task(
+                client.call_tool(
+                    "run_mission",
+                    {"text": "patrol until I say stop"},
+                    progress_callback=on_progress,
+                )
+            )
+            await wait_for_step(progress, "nav.patrol")
+            for _ in range(500):  # walking: its odometer counts
+                if (await robot(client))["distance_travelled"] > 0.1:
+                    break
+                await asyncio.sleep(0.02)
+            cancel = structured(await client.call_tool("cancel_mission", {}))
+            assert cancel["cancelled"] is True
+            result = structured(await mission)
+            assert result["success"] is True and result["status"] == "succeeded", result
+            assert "stopped: you said stop (until I say stop)" in result["response"]
+            for _ in range(250):  # it brakes within its deceleration limit, then stands
+                if not (await robot(client))["moving"]:
+                    break
+                await asyncio.sleep(0.02)
+            else:
+                raise AssertionError("the robot kept moving after the stop")
+
+    run(scenario())
+
+
 @pytest.mark.parametrize("transport", TRANSPORTS)
 def test_a_second_mission_is_refused_busy_never_queued(transport, http_server):
     progress: list[str] = []

@@ -415,3 +415,18 @@ def test_web_ui_shares_the_nodes_mission_worker(agent: Agent) -> None:
     assert agent.run("sit down").startswith("COMPLETED")  # a topic mission, listed too
     listed = [m["command"] for m in web("/api/missions")["missions"]]
     assert "sit down" in listed and "turn left 10 degrees" in listed
+
+
+def test_patrol_until_i_say_stop_ends_on_a_cancelled_goal(agent: Agent) -> None:
+    """Issue 26: a cancelled goal is the person's stop "patrol until I say stop" waited for:
+    the goal succeeds, saying why, and the robot stands still."""
+    handle = send_goal(agent, "stand up and patrol until I say stop")
+    assert handle.accepted
+    wait_moving(agent)
+    cancel = agent.client.call(handle.cancel_goal_async)
+    wait_until(cancel.done, TIMEOUT, "the cancel response")
+    response = get_result(agent, handle)
+    assert response.status == GoalStatus.STATUS_SUCCEEDED, response.result.response
+    assert response.result.success
+    assert "stopped: you said stop (until I say stop)" in response.result.response
+    wait_until(lambda: (s := agent.robot_state()) and not s["moving"] and s, 5, "the robot to stop")
