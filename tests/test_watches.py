@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import ShadowHoundConfig
-from shadowhound.plan import Plan, SkillCall, Watch
+from shadowhound.plan import Plan, PlanningError, SkillCall, Watch
 from shadowhound.planning import FixedPlanner
 from shadowhound.planning.rules import RulePlanner
 from shadowhound.result import MissionStatus, StepStatus
@@ -269,6 +269,10 @@ def test_a_watch_on_a_reading_names_what_it_saw() -> None:
         ("move forward 4 meters but stop if you see a dog", "seen"),
         ("walk backward until the battery drops below 40 percent", "battery_below"),
         ("turn right until you see the door", "seen"),
+        ("walk 3 meters unless there's something in front of you", "in_the_way"),
+        ("walk 2 meters unless there is an obstacle right ahead", "in_the_way"),
+        ("walk forward untill you see the chair", "seen"),  # typos of condition words
+        ("walk back 2 meters unles somebody is in the way", "in_the_way"),
     ],
 )
 def test_the_offline_planner_reads_kinds_of_conditions(text: str, kind: str) -> None:
@@ -278,6 +282,17 @@ def test_the_offline_planner_reads_kinds_of_conditions(text: str, kind: str) -> 
 
 
 # -- branches and loops ------------------------------------------------------------------------
+
+
+def test_when_opens_a_branch_only_before_a_condition_it_can_watch() -> None:
+    plan = RulePlanner().plan(
+        "when the battery drops under 20 percent head to the charging dock, else patrol twice"
+    )
+    guards = [(s.skill, s.guard.when if s.guard else None) for s in plan.steps]
+    assert guards == [("nav.goto", "if"), ("nav.patrol", "if_not")]
+    # "when you get there" says what comes next, not a condition: not a branch.
+    with pytest.raises(PlanningError):
+        RulePlanner().plan("when you get to the pantry, say hello")
 
 BRANCH = "if the battery is below 30% go to the charging dock, otherwise patrol"
 

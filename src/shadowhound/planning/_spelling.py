@@ -21,7 +21,14 @@ from types import ModuleType
 from typing import Any
 
 from shadowhound import units
-from shadowhound.planning import _english, _memory_phrases, _numbers, _phrases, _vocabulary
+from shadowhound.planning import (
+    _english,
+    _memory_phrases,
+    _numbers,
+    _phrases,
+    _vocabulary,
+    _watches,
+)
 
 from ..typos import distance
 from ..typos import limit as _limit
@@ -45,7 +52,7 @@ def _table_words(*tables: Any) -> set[str]:
 @functools.cache
 def known_words() -> frozenset[str]:
     """Every word the offline planner reads: its tables, its patterns, numbers and units."""
-    modules: list[ModuleType] = [_english, _memory_phrases, _numbers, _phrases]
+    modules: list[ModuleType] = [_english, _memory_phrases, _numbers, _phrases, _watches]
     # Contractions are gone once a clause is normalised ("don't" is "do not" by then).
     patterns = {
         w

@@ -30,6 +30,10 @@ STOP_IF = re.compile(
 )
 # "if CONDITION (then) ACTION" / "if CONDITION" (the action in the clauses after it)
 IF = re.compile(r"^(?:if|in\s+case|should)\s+(?P<rest>.+)$")
+# "when CONDITION (,) ACTION": a branch like "if" when what follows is a condition it can
+# watch ("when the battery is below 20% go to the dock"); else "when" is left to the clause
+# ("when you get there say hello": the rules say why they do not plan it)
+WHEN = re.compile(r"^when\s+(?P<rest>.+)$")
 # "otherwise ACTION" / "else ACTION" / "if not, ACTION"
 OTHERWISE = re.compile(r"^(?:otherwise|else|or\s+else|if\s+not)(?:\s+(?P<rest>.+))?$")
 _DISTANCE = r"(?P<d>\d+(?:\.\d+)?)\s*(?:m|meters?|metres?)"
@@ -45,9 +49,12 @@ _SOMETHING = (
     r"|an?\s+obstacle|obstacles|a\s+thing|things|an\s+object|objects)"
 )
 _IN_THE_WAY = re.compile(
-    r"^" + _SOMETHING + r"\s+(?:is\s+|are\s+|gets\s+|comes\s+|stands\s+|appears\s+|steps\s+)?"
-    r"(?:in\s+(?:the|your|my|its|our)\s+(?:way|path)|blocking\s+(?:the|your)\s+(?:way|path)"
-    r"|blocks\s+(?:the|your)\s+(?:way|path)|in\s+front(?:\s+of\s+you)?|ahead|close\s+ahead"
+    r"^(?:there\s+(?:is|are)\s+)?" + _SOMETHING + r"\s+(?:is\s+|are\s+|gets\s+|comes\s+"
+    r"|stands\s+|appears\s+|steps\s+|shows\s+up\s+|turns\s+up\s+)?"
+    r"(?:in\s+(?:the|your|my|its|our)\s+(?:way|path)|blocking\s+(?:the|your|my)\s+(?:way|path)"
+    r"|blocks\s+(?:the|your|my)\s+(?:way|path)"
+    r"|(?:right\s+|directly\s+|just\s+)?in\s+front(?:\s+of\s+(?:you|me|the\s+robot|it))?"
+    r"|(?:right\s+|directly\s+|close\s+)?ahead(?:\s+of\s+(?:you|the\s+robot|it))?"
     r"|gets\s+in\s+the\s+way)(?:\s+within\s+" + _DISTANCE + r")?$"
     r"|^(?:the\s+|your\s+)?(?:way|path)\s+is\s+(?:blocked|not\s+clear|obstructed)$"
     r"|^(?:you\s+)?(?:are|get)\s+(?:blocked|stuck)$"

@@ -93,7 +93,7 @@ class RulePlanner:
         branch: Watch | None = None  # the last "if", for an "otherwise"
         for label in en.split_clauses(text):
             norm_if = en.normalize(label)[0]
-            opened = watching.IF.match(norm_if)
+            opened = watching.IF.match(norm_if) or _when_branch(norm_if)
             other = watching.OTHERWISE.match(norm_if)
             if opened or other:
                 try:
@@ -762,6 +762,13 @@ def _check_size(steps: list[SkillCall], size: int) -> None:
 def _watched(step: SkillCall, watch: Watch) -> SkillCall:
     """`step` also watching `watch`."""
     return replace(step, watches=(*step.watches, watch))
+
+
+def _when_branch(norm: str) -> re.Match[str] | None:
+    """ "when the battery is below 20% go to the dock": a branch, as "if" is, when what
+    follows "when" begins with a condition the robot can watch."""
+    m = watching.WHEN.match(norm)
+    return m if m and next(watching.split_condition(m["rest"]), None) else None
 
 
 def _guarded(step: SkillCall, guard: Watch | None) -> SkillCall:
