@@ -100,6 +100,28 @@ def test_walk_unless_something_is_in_the_way_stops_before_a_person_who_steps_in(
     assert end.x > 1.5  # it did walk until the person came
 
 
+def test_a_walk_until_something_is_seen_goes_no_farther_than_is_clear() -> None:
+    """The chair is behind the robot and never comes into view; a box stands 2.5 m ahead. The
+    walk "until" is cut short of the box (said in a note) rather than refused, and the body
+    never touches the box in truth."""
+    box = WorldObject("box", 2.5, 0.0, 0.3, height=0.5)
+    robot = ScriptedRobot(World(objects=(box, WorldObject("chair", -4.0, 0.0, 0.3))))
+    result = agent_on(robot).execute_mission("walk forward until you see the chair")
+    assert result.success, result.response
+    assert "short of the box in the way" in result.response, result.response
+    clearance = min(
+        math.hypot(box.x - t.x, box.y - t.y) - box.radius - robot.config.body_radius
+        for t in robot.path
+    )
+    assert clearance > 0.0, clearance
+    assert robot.get_state().x > 1.0  # it did walk as far as was clear
+    # The same with a distance the robot may not walk: still cut, never refused or walked.
+    again = ScriptedRobot(World(objects=(box,)))
+    result = agent_on(again).execute_mission("walk forward 5 meters unless something is in the way")
+    assert result.status is MissionStatus.STOPPED and "box in the way" in result.response
+    assert again.get_state().x < box.x - box.radius - again.config.body_radius
+
+
 def test_the_same_walk_with_nobody_in_the_way_goes_the_whole_way() -> None:
     robot = ScriptedRobot(World(objects=()))
     result = agent_on(robot).execute_mission("walk forward 3 meters unless something is in the way")
@@ -293,6 +315,7 @@ def test_when_opens_a_branch_only_before_a_condition_it_can_watch() -> None:
     # "when you get there" says what comes next, not a condition: not a branch.
     with pytest.raises(PlanningError):
         RulePlanner().plan("when you get to the pantry, say hello")
+
 
 BRANCH = "if the battery is below 30% go to the charging dock, otherwise patrol"
 

@@ -7,11 +7,14 @@ the mission's `PlanEnv`, whose budget makes the governor count what the mission 
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import uuid
 from dataclasses import dataclass
 from typing import Any
 
 from .config import ShadowHoundConfig
+from .errors import PlanProblem
 from .plan import Plan, Watch
 from .result import StepResult, StepStatus
 from .robot.base import Robot
@@ -19,6 +22,9 @@ from .safety import Governor
 from .skills import PlanEnv, SkillRegistry, SkillValidationError, ValidatedCall
 from .skills.watches import GUARD_WHEN, check_watches
 from .state import Pose2D, RobotState
+from .world import check_leg
+
+REACH_MARGIN = 0.05  # metres kept short of where the body would touch what is in the way
 
 
 @dataclass
@@ -62,6 +68,7 @@ def check_plan(
         StepResult(i, c.skill, plain_args(c.args), c.label, watches=_watch_records(c))
         for i, c in enumerate(plan.steps, first)
     ]
+    calls = _within_reach(calls, start, env, first, plan.notes)
     verdict = governor.check_plan(calls, start, env)
     forecasts = [
         f"step {i} ({c.name}): {text}"
@@ -95,6 +102,46 @@ def check_plan(
         invalid=invalid,
         forecasts=forecasts,
     )
+
+
+def _within_reach(
+    calls: list[ValidatedCall | None],
+    start: RobotState,
+    env: PlanEnv,
+    first: int,
+    notes: list[str],
+) -> list[ValidatedCall | None]:
+    """A straight walk that goes until something happens ("walk forward until you see the
+    box"), or unless something is in the way, goes at most as far as the map says is clear:
+    its distance is cut to short of what is in the way, said in a note. A watch may only
+    shorten a step, so this is the walk the governor then checks in full (as if the watch
+    never fired); every other step is as given."""
+    if env.belief is None:
+        return calls
+    pose, fitted = start.pose, []
+    for i, call in enumerate(calls, first):
+        poses: list[Pose2D] = []
+        if call is not None and call.skill.predict is not None:
+            try:
+                poses = call.skill.predict(pose, call.args, env)
+            except PlanProblem:
+                poses = []  # the governor says why
+            distance = getattr(call.args, "distance", None)
+            until = [w for w in call.watches if w.when == "until" or w.kind == "in_the_way"]
+            if until and len(poses) == 1 and isinstance(distance, float) and distance:
+                leg = check_leg(env.belief, (pose.x, pose.y), (poses[0].x, poses[0].y))
+                reach = math.floor(max(0.0, leg.distance - REACH_MARGIN) * 100) / 100
+                if not leg.clear and leg.obstacle != "unmapped space" and reach > 0:
+                    args = call.args.model_copy(update={"distance": math.copysign(reach, distance)})
+                    call = dataclasses.replace(call, args=args)
+                    poses = call.skill.predict(pose, call.args, env)
+                    notes.append(
+                        f"step {i} ({call.name}) goes at most {reach:g} m, short of "
+                        f"{leg.obstacle} in the way ({until[0].describe()})"
+                    )
+        fitted.append(call)
+        pose = poses[-1] if poses else pose
+    return fitted
 
 
 def _validate(
