@@ -121,9 +121,10 @@ def _within_reach(
     pose, fitted = start.pose, []
     for i, call in enumerate(calls, first):
         poses: list[Pose2D] = []
-        if call is not None and call.skill.predict is not None:
+        predict = call.skill.predict if call is not None else None
+        if call is not None and predict is not None:
             try:
-                poses = call.skill.predict(pose, call.args, env)
+                poses = predict(pose, call.args, env)
             except PlanProblem:
                 poses = []  # the governor says why
             distance = getattr(call.args, "distance", None)
@@ -134,7 +135,7 @@ def _within_reach(
                 if not leg.clear and leg.obstacle != "unmapped space" and reach > 0:
                     args = call.args.model_copy(update={"distance": math.copysign(reach, distance)})
                     call = dataclasses.replace(call, args=args)
-                    poses = call.skill.predict(pose, call.args, env)
+                    poses = predict(pose, call.args, env)
                     notes.append(
                         f"step {i} ({call.name}) goes at most {reach:g} m, short of "
                         f"{leg.obstacle} in the way ({until[0].describe()})"
