@@ -247,6 +247,44 @@ def test_random_watches_never_take_the_robot_beyond_the_checked_walk(
         assert robot.get_state().x <= entry + speed * period + braking + 0.02, result.response
 
 
+_COORD = st.one_of(st.floats(-4.0, 4.0), st.sampled_from([math.nan, math.inf, -math.inf]))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    x=_COORD,
+    y=st.floats(-3.0, 3.0),
+    yaw=_COORD,
+    distance=st.floats(-6.0, 6.0).filter(lambda d: abs(d) > 0.01),
+    when=st.sampled_from(["until", "unless", None]),
+    kind=st.sampled_from(["seen", "in_the_way"]),
+)
+def test_a_fitted_reach_only_ever_shortens_and_never_into_what_is_in_the_way(
+    x: float, y: float, yaw: float, distance: float, when: str | None, kind: str
+) -> None:
+    """From any start (an unknown one too), any straight walk with any watch: checking never
+    fails with anything but a refusal; a fitted walk is shorter than asked, in the same
+    direction, and the governor finds nothing in its way."""
+    from shadowhound.checking import check_plan
+    from shadowhound.safety import Governor
+    from shadowhound.skills import PlanEnv, default_registry
+
+    robot = SimRobot(time_scale=0)  # the default room: the red ball 3 m ahead, a wall about
+    settings = ShadowHoundConfig()
+    watches = (Watch(when, kind, "chair", within=1.0),) if when else ()
+    plan = Plan([SkillCall("nav.move", {"distance": distance}, watches=watches)])
+    start = RobotState(x=x, y=y, yaw=yaw)
+    env = PlanEnv(settings, belief=robot.belief(), vocabulary=robot.vocabulary())
+    governor = Governor(settings.safety)
+    checked = check_plan(plan, default_registry(), governor, settings, env, start, robot=robot)
+    for call in checked.calls:
+        fitted = call.args.distance  # type: ignore[attr-defined]
+        assert abs(fitted) <= abs(distance) + 1e-9 and fitted * distance > 0
+        if abs(fitted) < abs(distance) - 1e-9:  # cut: only a walk with such a watch is
+            assert when == "until" or kind == "in_the_way"
+            assert not any("in the way" in p for p in checked.problems), checked.problems
+
+
 def test_ten_watches_read_the_robot_once_a_tick() -> None:
     """The watcher reads the view and the scan once for all its watches (bench_watches.py
     measures the cost)."""

@@ -21,7 +21,7 @@ from .robot.base import Robot
 from .safety import Governor
 from .skills import PlanEnv, SkillRegistry, SkillValidationError, ValidatedCall
 from .skills.watches import GUARD_WHEN, check_watches
-from .state import Pose2D, RobotState
+from .state import Pose2D, RobotState, position_unknown
 from .world import check_leg
 
 REACH_MARGIN = 0.05  # metres kept short of where the body would touch what is in the way
@@ -122,6 +122,8 @@ def _within_reach(
     for i, call in enumerate(calls, first):
         poses: list[Pose2D] = []
         predict = call.skill.predict if call is not None else None
+        if position_unknown(pose):
+            predict = None  # nothing is known from here: the governor refuses, saying why
         if call is not None and predict is not None:
             try:
                 poses = predict(pose, call.args, env)
