@@ -356,12 +356,18 @@ class NodeProcess:
     `--ros-args` (the driver's own options, e.g. ("--odom-delay", "0.5"))."""
 
     def __init__(
-        self, *ros_args: str, command: str = "node", options: tuple[str, ...] = ()
+        self,
+        *ros_args: str,
+        command: str = "node",
+        options: tuple[str, ...] = (),
+        env: dict[str, str] | None = None,
     ) -> None:
         self.command = command
         fd, name = tempfile.mkstemp(prefix=f"{command.replace('-', '_')}_", suffix=".log")
         self.log = Path(name)
-        env = dict(os.environ, PYTHONUNBUFFERED="1", RCUTILS_LOGGING_BUFFERED_STREAM="0")
+        env = dict(
+            os.environ, PYTHONUNBUFFERED="1", RCUTILS_LOGGING_BUFFERED_STREAM="0", **(env or {})
+        )
         with os.fdopen(fd, "w") as log:
             self.proc = subprocess.Popen(
                 [sys.executable, "-m", "shadowhound", command, *options, "--ros-args", *ros_args],
