@@ -12,11 +12,15 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 "$VENV/bin/python" -m pip install --quiet --upgrade pip
 "$VENV/bin/python" -m pip install --quiet -e ".[dev]"
-# The browser test (tests/web/test_browser.py) drives Debian's Chromium with Playwright
-# ("playwright install" cannot download browsers here). As root, install it when missing.
-if ! command -v chromium >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
-  echo "== chromium for the browser test"
-  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+# The browser tests (tests/web/test_browser*.py) drive Debian's Chromium with Playwright
+# ("playwright install" cannot download browsers here); push-to-talk's test feeds Chromium's
+# fake microphone speech made with espeak-ng. As root, install them when missing.
+MISSING=()
+command -v chromium >/dev/null 2>&1 || MISSING+=(chromium)
+command -v espeak-ng >/dev/null 2>&1 || MISSING+=(espeak-ng)
+if [ ${#MISSING[@]} -gt 0 ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+  echo "== ${MISSING[*]} for the browser tests"
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${MISSING[@]}" >/dev/null
 fi
 # The real-model test (tests/test_llm_llamacpp.py) needs llama.cpp's OpenAI-compatible server and
 # SmolLM2-135M. The first install compiles llama.cpp (about 6 min on 2 cores; pip caches the

@@ -27,7 +27,8 @@ PACKAGE = SRC / "shadowhound"
 # modules not named in BASE are core (the agent, its mission pipeline and what it shares).
 LEVELS: tuple[tuple[str, ...], ...] = (
     ("base",),  # plain data and rules every room shares: state, plan, units, config, events ...
-    ("llm", "world"),  # the model client (HTTP, no skills); the belief (grid, planner, objects)
+    # the model client (HTTP, no skills); the belief (grid, planner, objects); transcription
+    ("llm", "world", "hearing"),
     ("memory", "robot"),  # history, places, recall; the Robot protocol, simulator, Go2 driver
     ("skills",),  # typed skills over the Robot protocol, reading the belief
     ("planning",),  # text -> Plan: offline rules, the model planner's prompts, parsing, schema

@@ -242,6 +242,27 @@ class LLMConfig(_Section):
     vision_max_side: int = Field(512, ge=64, le=2048, description="pixels; frames are downscaled")
 
 
+class SpeechConfig(_Section):
+    """Push-to-talk on the dashboard: recordings transcribed by an OpenAI-compatible server."""
+
+    base_url: str = Field(
+        "",
+        description="OpenAI-compatible server with POST /audio/transcriptions, e.g. "
+        "https://api.openai.com/v1 or a local speaches at http://127.0.0.1:8000/v1 ('' = off)",
+    )
+    model: str = Field("whisper-1", description="transcription model as the server knows it")
+    language: str = Field("", description="ISO-639-1 language of the speech ('' = detected)")
+    api_key_env: str = Field(
+        "OPENAI_API_KEY", description="environment variable holding the API key ('' = none)"
+    )
+    timeout: float = Field(30.0, gt=0, le=300, description="seconds per transcription")
+    confirm: bool = Field(False, description="show the transcript and ask before running it")
+    max_seconds: float = Field(30.0, gt=0, le=300, description="longest recording taken")
+    max_bytes: int = Field(
+        2_000_000, ge=10_000, le=50_000_000, description="largest recording taken, bytes"
+    )
+
+
 class MemoryConfig(_Section):
     """Mission history, taught places and retrieval memory."""
 
@@ -291,6 +312,7 @@ class ShadowHoundConfig(_Section):
     llm: LLMConfig = Field(default_factory=LLMConfig)
     agent: AgentConfig = Field(default_factory=AgentConfig)
     memory: MemoryConfig = Field(default_factory=MemoryConfig)
+    speech: SpeechConfig = Field(default_factory=SpeechConfig)
     places: dict[str, tuple[float, float]] = Field(
         default_factory=lambda: {"kitchen": (4.0, 2.5), "charging dock": (-2.1, -1.0)},
         description="named places, metres, in the robot's world frame: SLAM's map on a Go2 with "

@@ -24,7 +24,7 @@ from .. import __version__
 from ..agent import RobotAgent
 from ..serving import LOOPBACK_HOSTS
 from ..worker import MissionWorker
-from . import api, live
+from . import api, live, speech
 from .desk import MissionDesk
 from .estop import EstopLane
 from .feed import EventFeed
@@ -95,12 +95,24 @@ def create_app(
     app.state.web = web
     app.include_router(api.router)
     app.include_router(live.router)
+    app.include_router(speech.router)
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
     _add_page(app)
     _add_error_handlers(app)
     app.add_middleware(EstopLane, estop=desk.estop)  # inside the gate: checked, then first
+    recordings = agent.settings.speech.max_bytes
     app.add_middleware(
-        Gate, token=token, allowed_hosts=allowed_hosts, max_body=max_body, secrets=hidden
+        Gate,
+        token=token,
+        allowed_hosts=allowed_hosts,
+        max_body=max_body,
+        secrets=hidden,
+        limits={
+            speech.PATH: (
+                recordings,
+                f"the recording is larger than the limit of {recordings} bytes (speech.max_bytes)",
+            )
+        },
     )
     _document(
         app, token=token is not None, checks_hosts=allowed_hosts is not None, max_body=max_body

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import hmac
 import os
-from collections.abc import Awaitable, Callable, Iterable, MutableMapping
+from collections.abc import Awaitable, Callable, Iterable, Mapping, MutableMapping
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
@@ -76,8 +76,12 @@ class Gate:
         allowed_hosts: Iterable[str] | None,
         max_body: int,
         secrets: Iterable[str] = (),
+        limits: Mapping[str, tuple[int, str]] | None = None,
     ) -> None:
+        """`limits`: paths whose bodies have a limit of their own (a recording), with what to
+        say when one is over it."""
         self.app = app
+        self.limits = dict(limits or {})
         self.secrets = [s.encode() for s in secrets if s]
         self.token = token
         self.allowed_hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts}
@@ -95,11 +99,13 @@ class Gate:
             await self._refuse(scope, receive, send, *problem)
             return
         if scope["type"] == "http" and scope["method"] not in SAFE_METHODS:
-            body = await self._read_body(receive, headers)
+            limit, said = self.limits.get(
+                scope.get("path", ""),
+                (self.max_body, f"the request body is larger than {self.max_body} bytes"),
+            )
+            body = await self._read_body(receive, headers, limit)
             if body is None:
-                await _send_json(
-                    send, 413, f"the request body is larger than {self.max_body} bytes"
-                )
+                await _send_json(send, 413, said)
                 return
             receive = _replay(body, receive)
         if scope["type"] == "http":
@@ -180,10 +186,12 @@ class Gate:
         expected = self.token.encode()
         return any(hmac.compare_digest(o.encode(), expected) for o in offered)
 
-    async def _read_body(self, receive: Receive, headers: dict[str, str]) -> list[Message] | None:
-        """Every body message, or None once the body passes the limit."""
+    async def _read_body(
+        self, receive: Receive, headers: dict[str, str], limit: int
+    ) -> list[Message] | None:
+        """Every body message, or None once the body passes `limit`."""
         declared = headers.get("content-length", "")
-        if declared.isdigit() and int(declared) > self.max_body:
+        if declared.isdigit() and int(declared) > limit:
             return None
         messages, size = [], 0
         while True:
@@ -192,7 +200,7 @@ class Gate:
             if message["type"] != "http.request":
                 return messages  # the client went away; let the app see it
             size += len(message.get("body", b""))
-            if size > self.max_body:
+            if size > limit:
                 return None
             if not message.get("more_body", False):
                 return messages

@@ -2,6 +2,7 @@
 // /ws/status; every robot action goes through the HTTP API (the WebSocket only reports).
 import { drawMap as draw } from "./map.js";
 import { renderHistory, renderKv, renderSteps, updateStep } from "./render.js";
+import { setupTalk } from "./talk.js";
 
 const $ = (selector) => document.querySelector(selector);
 const TOKEN_KEY = "shadowhound.token";
@@ -33,14 +34,16 @@ if (location.hash.startsWith("#token=")) {
 
 // -- HTTP ---------------------------------------------------------------------------------
 
-async function api(method, path, body) {
+// `body`: an object sent as JSON, or a Blob sent as it is (a recording) with `type`.
+async function api(method, path, body, type) {
   const headers = { Accept: "application/json" };
-  if (body !== undefined) headers["Content-Type"] = "application/json";
+  const raw = body instanceof Blob;
+  if (body !== undefined) headers["Content-Type"] = raw ? (type || body.type) : "application/json";
   if (view.token) headers.Authorization = "Bearer " + view.token;
   let response;
   try {
     response = await fetch(path, {
-      method, headers, body: body === undefined ? undefined : JSON.stringify(body),
+      method, headers, body: body === undefined ? undefined : raw ? body : JSON.stringify(body),
     });
   } catch (error) {
     return { ok: false, status: 0, data: { detail: "the dashboard server is not reachable" } };
@@ -132,11 +135,32 @@ function showResult(record) {
   $("#result").dataset.kind = record.success || result.success ? "ok" : "error";
   $("#cancel").hidden = true;
   unsay("#mission-msg", "mission"); // the outcome replaces "accepted; it starts now"
+  if (record.mission_id !== view.spokenResult) {
+    view.spokenResult = record.mission_id;
+    speakAnswer(text);
+  }
   if (result.success) $("#progress").value = 1;
   if (result.dry_run) {
     view.predicted = (result.predicted_path || []).map((p) => ({ x: p.x, y: p.y }));
     drawMap();
   }
+}
+
+// Results and chat answers read out by the browser, when the person turned that on.
+function speakAnswer(text) {
+  if (!$("#speak-answers").checked || !("speechSynthesis" in window) || !text) return;
+  window.speechSynthesis.speak(new SpeechSynthesisUtterance(text));
+}
+
+// A mission started by voice: followed like one typed and run.
+function spokenMission(command, missionId) {
+  remember(command);
+  $("#command").value = command;
+  view.current = missionId;
+  say("#mission-msg", "Heard and started: \u201c" + command + "\u201d", "info", "mission");
+  if (view.shown !== view.current) showCurrent(command, []);
+  const record = view.finished.get(view.current);
+  if (record) showResult(record);
 }
 
 function remember(command) {
@@ -475,6 +499,7 @@ async function chat(event) {
   addChat("you", text);
   const reply = await api("POST", "/api/chat", { text });
   addChat("robot", reply.ok ? reply.data.answer : "(" + detail(reply.data) + ")");
+  if (reply.ok) speakAnswer(reply.data.answer);
 }
 
 function addChat(who, text) {
@@ -513,6 +538,26 @@ function start() {
   document.addEventListener("keydown", (event) => {
     // Esc stops the robot, except while typing (Esc also closes the input's suggestions).
     if (event.key === "Escape" && event.target.tagName !== "INPUT") pressEstop();
+  });
+  setupTalk({
+    fetch: api,
+    detail,
+    message: (text, kind) => say("#talk-msg", text, kind),
+    heard: (text) => { $("#heard").textContent = text ? "Heard: \u201c" + text + "\u201d" : ""; },
+    mission: (command, missionId) => {
+      say("#talk-msg", "", "info");
+      spokenMission(command, missionId);
+    },
+    estop: (data) => {
+      setEstop(true);
+      say("#talk-msg", "", "info");
+      say("#mission-msg", data.message, "error", "estop");
+    },
+    confirm: (text) => {
+      $("#command").value = text;
+      say("#talk-msg", "Check the words, then press Run to start (speech.confirm)", "info");
+      $("#command").focus();
+    },
   });
   renderRecent();
   drawMap();

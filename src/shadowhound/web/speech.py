@@ -1,0 +1,118 @@
+"""Push-to-talk: `POST /api/speech` takes a recording, has it transcribed and runs what was
+said as a mission (or, when the words are only "stop", "halt" or "e-stop", latches the e-stop
+at once, before any planning). `GET /api/speech` tells the page whether it is set up.
+
+The recording's size is limited by the gate (`speech.max_bytes`) and its length here, read
+from the container (`speech.max_seconds`); it is sent to the configured server and never
+kept. The transcript is the mission's command, stored only where missions are (the history,
+when it is on). With `speech.confirm` the transcript comes back to be confirmed by a person
+and nothing runs.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Any
+
+from fastapi import APIRouter, Request
+
+from ..admission import ESTOP_LATCHED, mission_text_problem
+from ..hearing import ALLOWED, AudioProblem, Transcriber, TranscriptionError, inspect, is_stop
+from ..hearing import not_configured as speech_off
+from .api import ctx
+from .responses import StrictJSON
+
+PATH = "/api/speech"
+router = APIRouter(prefix="/api")
+
+
+@router.get("/speech", tags=["speech"])
+async def speech_settings(request: Request) -> dict[str, Any]:
+    """Whether push-to-talk works here, and its limits (the page reads them first)."""
+    config = ctx(request).agent.settings.speech
+    why = speech_off(config)
+    return {
+        "configured": not why,
+        "why": why,
+        "confirm": config.confirm,
+        "max_seconds": config.max_seconds,
+        "max_bytes": config.max_bytes,
+        "types": ALLOWED,
+    }
+
+
+def _answer(status: int, detail: str, **extra: Any) -> StrictJSON:
+    return StrictJSON({"detail": detail, **extra}, status_code=status)
+
+
+@router.post(
+    "/speech",
+    status_code=202,
+    tags=["speech"],
+    openapi_extra={
+        "requestBody": {
+            "required": True,
+            "content": {
+                t: {"schema": {"type": "string", "format": "binary"}}
+                for t in ("audio/webm", "audio/ogg", "audio/wav")
+            },
+        }
+    },
+)
+async def speech(request: Request) -> StrictJSON:
+    """A recording (the body; Content-Type audio/webm, audio/ogg or audio/wav) to a mission.
+
+    202 with the transcript and the mission's id; 200 with `estop: true` for a spoken stop,
+    or `confirm: true` when the person must confirm first; 413 when the recording is too long,
+    415 for another type, 422 when nothing was heard, 503 without a transcription server.
+    """
+    web = ctx(request)
+    config = web.agent.settings.speech
+    why = speech_off(config)
+    if why:
+        return _answer(503, why)
+    data = await request.body()
+    try:
+        audio = inspect(data, request.headers.get("content-type", ""))
+    except AudioProblem as exc:
+        return _answer(415 if "Content-Type" in str(exc) else 422, str(exc))
+    if audio.seconds > config.max_seconds:
+        return _answer(
+            413,
+            f"the recording is {audio.seconds:.0f} s long; at most {config.max_seconds:g} s "
+            "are taken (speech.max_seconds): hold the button for one short request",
+        )
+    try:
+        text = await asyncio.to_thread(Transcriber(config).transcribe, data, audio)
+    except TranscriptionError as exc:
+        return _answer(exc.status, str(exc))
+    if not text:
+        return _answer(422, "nothing was heard in the recording: hold the button and speak")
+    if is_stop(text):
+        dropped = web.desk.estop()  # the robot stops first, before anything is planned
+        return StrictJSON(
+            {
+                "transcript": text,
+                "estop": True,
+                "dropped": dropped,
+                "message": "e-stop latched: the robot is stopped; release it to run missions",
+            }
+        )
+    problem = mission_text_problem(text, web.agent.settings.agent.max_mission_chars, "the text")
+    if problem:
+        return _answer(422, problem, transcript=text)
+    if config.confirm:
+        return StrictJSON({"transcript": text, "confirm": True, "mission_id": None})
+    record, refused = web.desk.submit(text)
+    if record is None:
+        status = 409 if refused == ESTOP_LATCHED else 429
+        return _answer(status, f"Refused: {refused}.", transcript=text)
+    return StrictJSON(
+        {
+            "transcript": text,
+            "mission_id": record.id,
+            "url": f"/api/missions/{record.id}",
+            "message": "mission accepted",
+        },
+        status_code=202,
+    )
