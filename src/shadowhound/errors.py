@@ -41,6 +41,8 @@ what was wrong and what is allowed or what to do.
     |                                    node, no e-stop subscriber) within the wait
     +-- FrameUnavailable             web: no camera frame to show yet
     +-- ToolInputError               mcp: arguments a tool cannot take (ValueError)
+    +-- AudioProblem                 hearing: a recording that cannot be used (ValueError)
+    +-- TranscriptionError           hearing: the transcription server failed (its `status`)
 
 Classes that were ValueErrors stay ValueErrors (pydantic validators and callers rely on it).
 Callers catch by class, never by comparing class names. Each class is also importable from the
@@ -53,6 +55,7 @@ from __future__ import annotations
 from .usage import Usage
 
 __all__ = [
+    "AudioProblem",
     "BackendCancelled",
     "BackendError",
     "BackendUnavailable",
@@ -80,6 +83,7 @@ __all__ = [
     "SkillTimeout",
     "SkillValidationError",
     "ToolInputError",
+    "TranscriptionError",
     "TransformUnavailable",
     "UnitError",
     "UsageError",
@@ -277,3 +281,15 @@ class FrameUnavailable(ShadowHoundError):
 
 class ToolInputError(ShadowHoundError, ValueError):
     """Arguments a tool cannot take. The message says what was wrong and what is allowed."""
+
+
+class AudioProblem(ShadowHoundError, ValueError):
+    """A recording that cannot be used; the message says why and what is allowed."""
+
+
+class TranscriptionError(ShadowHoundError):
+    """Transcription failed; `status` is the HTTP status to answer the client with."""
+
+    def __init__(self, message: str, status: int = 502) -> None:
+        super().__init__(message)
+        self.status = status

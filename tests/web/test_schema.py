@@ -38,6 +38,9 @@ CHECKS = (
 )
 # Endless streams (MJPEG, server-sent events): a request never ends, so no answer to check.
 STREAMS = ("/api/camera/stream", "/api/events")
+# A body schemathesis cannot make: a recording (no serializer for audio types). Its answers
+# are documented all the same and met one by one in test_speech_api.py.
+BINARY = ("post_speech",)
 
 
 def schemathesis_run(url: str, tmp_path: Path, max_examples: int) -> dict[str, Any]:
@@ -68,6 +71,8 @@ def schemathesis_run(url: str, tmp_path: Path, max_examples: int) -> dict[str, A
     ]
     for path in STREAMS:
         command += ["--exclude-path", path]
+    for operation in BINARY:
+        command += ["--exclude-operation-id", operation]
     env = {**os.environ, "SCHEMATHESIS_HOOKS": "", "HOME": str(tmp_path)}
     done = subprocess.run(
         command, capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path
@@ -94,7 +99,13 @@ def assert_conforms(found: dict[str, Any], operations: int) -> None:
 
 def documented_operations(server: WebServer) -> int:
     paths = server.app.openapi()["paths"]
-    return sum(len(ops) for path, ops in paths.items() if path not in STREAMS)
+    return sum(
+        1
+        for path, ops in paths.items()
+        if path not in STREAMS
+        for op in ops.values()
+        if op.get("operationId") not in BINARY
+    )
 
 
 def test_every_answer_is_documented_and_bad_requests_are_refused(

@@ -4,9 +4,10 @@ server (`speech:` in the profile), and the few spoken words that are not a missi
 No skills, no robot: the web room turns a transcript into a mission or an e-stop.
 """
 
-from .audio import ALLOWED, Audio, AudioProblem, inspect
+from ..errors import AudioProblem, TranscriptionError
+from .audio import ALLOWED, Audio, inspect
 from .commands import is_stop
-from .transcribe import Transcriber, TranscriptionError, not_configured
+from .transcribe import Transcriber, not_configured
 
 __all__ = [
     "ALLOWED",

@@ -14,6 +14,8 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
+from ..errors import AudioProblem
+
 KINDS = {
     "audio/webm": "webm",
     "video/webm": "webm",  # some browsers label an audio-only recording so
@@ -25,10 +27,6 @@ KINDS = {
     "audio/vnd.wave": "wav",
 }
 ALLOWED = "audio/webm, audio/ogg or audio/wav"
-
-
-class AudioProblem(ValueError):
-    """The recording cannot be used; the message says why and what is allowed."""
 
 
 @dataclass(frozen=True)

@@ -18,17 +18,10 @@ import uuid
 from typing import Any
 
 from ..config import SpeechConfig
+from ..errors import TranscriptionError
 from .audio import Audio
 
 PATH = "/audio/transcriptions"
-
-
-class TranscriptionError(RuntimeError):
-    """Transcription failed; `status` is the HTTP status to answer the client with."""
-
-    def __init__(self, message: str, status: int = 502) -> None:
-        super().__init__(message)
-        self.status = status
 
 
 def not_configured(config: SpeechConfig) -> str:

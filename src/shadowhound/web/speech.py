@@ -19,7 +19,9 @@ from fastapi import APIRouter, Request
 from ..admission import ESTOP_LATCHED, mission_text_problem
 from ..hearing import ALLOWED, AudioProblem, Transcriber, TranscriptionError, inspect, is_stop
 from ..hearing import not_configured as speech_off
+from ..worker import TELEOP_BUSY
 from .api import ctx
+from .models import Problem
 from .responses import StrictJSON
 
 PATH = "/api/speech"
@@ -42,12 +44,35 @@ async def speech_settings(request: Request) -> dict[str, Any]:
 
 
 def _answer(status: int, detail: str, **extra: Any) -> StrictJSON:
+    if status == 422:  # the app's 422 shape: what was wrong, and where
+        extra = {"problems": [{"where": "body", "problem": detail}], **extra}
     return StrictJSON({"detail": detail, **extra}, status_code=status)
+
+
+def _doc(description: str) -> dict[str, Any]:
+    return {"model": Problem, "description": description}
+
+
+_SPEECH_ANSWERS: dict[int | str, dict[str, Any]] = {
+    200: {
+        "description": "a spoken stop (`estop: true`), or with speech.confirm the transcript "
+        "to confirm (`confirm: true`)"
+    },
+    409: _doc("the e-stop is latched, or a person is driving"),
+    413: _doc("the recording is over speech.max_bytes or speech.max_seconds"),
+    415: _doc("not audio/webm, audio/ogg or audio/wav"),
+    422: _doc("the recording cannot be read, or nothing was heard"),
+    429: _doc("the queue is full"),
+    502: _doc("the transcription server answered an error (named, with its status)"),
+    503: _doc("no transcription server is configured, or it does not answer"),
+}
 
 
 @router.post(
     "/speech",
     status_code=202,
+    operation_id="post_speech",
+    responses=_SPEECH_ANSWERS,
     tags=["speech"],
     openapi_extra={
         "requestBody": {
@@ -105,7 +130,7 @@ async def speech(request: Request) -> StrictJSON:
         return StrictJSON({"transcript": text, "confirm": True, "mission_id": None})
     record, refused = web.desk.submit(text)
     if record is None:
-        status = 409 if refused == ESTOP_LATCHED else 429
+        status = 409 if refused in (ESTOP_LATCHED, TELEOP_BUSY) else 429
         return _answer(status, f"Refused: {refused}.", transcript=text)
     return StrictJSON(
         {
