@@ -26,6 +26,7 @@ from .agent import RobotAgent
 from .events import MissionEvent, MissionStarted
 from .plan import SkillCall
 from .result import MissionResult
+from .teleop import Teleop
 
 log = logging.getLogger(__name__)
 
@@ -57,6 +58,9 @@ class MissionJob:
     calls: list[SkillCall] | None = None  # explicit skill calls to run instead of planning
 
 
+TELEOP_BUSY = "a person is driving the robot (teleop): switch driving off first"
+
+
 class MissionWorker:
     """Runs `MissionJob`s on one thread. Listeners (see `on`) run on that thread too, except
     for jobs that `estop`, `cancel` or `drop_queued` end before they start: those are reported
@@ -73,6 +77,7 @@ class MissionWorker:
         self._stopping = False
         self._listeners: dict[str, list[JobListener]] = {name: [] for name in JOB_EVENTS}
         self._unsubscribe = agent.add_listener(self._forward)
+        self.teleop = Teleop(agent)  # a person driving: on only while no mission runs or waits
         self._thread = threading.Thread(target=self._run, name="shadowhound-mission", daemon=True)
         self._thread.start()
 
@@ -126,6 +131,8 @@ class MissionWorker:
         with self._lock:
             if self._stopping:
                 return "the mission worker has stopped"
+            if self.teleop.on:
+                return TELEOP_BUSY
             if idle_only and self._pending:
                 return "another mission is running; wait for it to finish or cancel it"
             if self._pending > self._max_queue:
@@ -146,9 +153,24 @@ class MissionWorker:
 
     def estop(self, reason: str = ESTOP_DROP_REASON) -> list[MissionJob]:
         """Emergency stop from any thread: the robot's hard stop first (latched, and the running
-        mission is cancelled), then every waiting job is dropped with `reason`. Returns those."""
+        mission is cancelled), then teleoperation ends and every waiting job is dropped with
+        `reason`. Returns those."""
         self._agent.estop()  # first: the robot stops before any bookkeeping
+        self.teleop.stop()
         return self.drop_queued(reason)
+
+    def start_teleop(self) -> str | None:
+        """Switch teleoperation on: None, or why not (a mission runs or waits, the e-stop is
+        latched, the robot is not standing). No mission is taken while it is on."""
+        with self._lock:
+            if self._stopping:
+                return "the mission worker has stopped"
+            if self._pending:
+                return (
+                    "a mission is running or waiting: wait for it to finish or cancel it "
+                    "before driving"
+                )
+            return self.teleop.start()
 
     def cancel(self, mission_id: str) -> CancelOutcome:
         """Cancel a job from any thread: a waiting one is removed (it finishes as not run), the
@@ -184,6 +206,7 @@ class MissionWorker:
             self._stopping = True  # from here on nothing is accepted
             self._wake.notify()
         self._agent.cancel()
+        self.teleop.stop()
         self.drop_queued(SHUTDOWN_DROP_REASON)
         self._thread.join(timeout)
         self._unsubscribe()

@@ -19,6 +19,7 @@ from ..admission import ESTOP_LATCHED, mission_text_problem
 from ..agent import RobotAgent
 from ..memory.places import known_places
 from ..skills.context import robot_belief, robot_objects
+from ..worker import TELEOP_BUSY
 from .desk import MissionDesk, WebMission
 from .estop import stopped_already
 from .feed import EventFeed
@@ -99,7 +100,7 @@ async def submit_mission(request: Request, body: MissionRequest) -> MissionAccep
     ahead = web.desk.queued() + (1 if web.desk.worker.busy else 0)
     record, refused = web.desk.submit(body.command, body.dry_run)
     if record is None:
-        status = 409 if refused == ESTOP_LATCHED else 429
+        status = 409 if refused in (ESTOP_LATCHED, TELEOP_BUSY) else 429
         return StrictJSON(
             {
                 "detail": refused,
@@ -231,6 +232,7 @@ def current_status(web: WebContext) -> dict[str, Any]:
         **d.progress.to_dict(),
         "estop": d.estop,
         "busy": web.desk.worker.busy,
+        "teleop": web.desk.worker.teleop.on,
         "running": running.id if running else None,
         "queued": web.desk.queued(),
         "pending_approval": d.pending_approval.to_dict() if d.pending_approval else None,

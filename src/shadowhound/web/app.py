@@ -24,7 +24,7 @@ from .. import __version__
 from ..agent import RobotAgent
 from ..serving import LOOPBACK_HOSTS
 from ..worker import MissionWorker
-from . import api, live, speech
+from . import api, live, speech, teleop
 from .desk import MissionDesk
 from .estop import EstopLane
 from .feed import EventFeed
@@ -96,6 +96,7 @@ def create_app(
     app.include_router(api.router)
     app.include_router(live.router)
     app.include_router(speech.router)
+    app.include_router(teleop.router)
     app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
     _add_page(app)
     _add_error_handlers(app)

@@ -115,3 +115,25 @@ class MissionRefused(BaseModel):
     success: bool
     message: str
     command: str
+
+
+class TeleopSwitch(BaseModel):
+    """`{"on": true}` switches driving on (refused during a mission or a latched e-stop)."""
+
+    model_config = _STRICT
+
+    on: bool = Field(..., description="true: the pad drives the robot; false: it stops")
+
+
+class TeleopDrive(BaseModel):
+    """The pad's deflection, each from -1 (full back, right, clockwise) to 1. Sent about ten
+    times a second while held: a deflection older than 0.35 s counts as zero (dead-man)."""
+
+    model_config = ConfigDict(
+        **_STRICT,
+        json_schema_extra={"examples": [{"forward": 0.5, "left": 0.0, "turn": -0.2}]},
+    )
+
+    forward: float = Field(0.0, ge=-1, le=1, allow_inf_nan=False)
+    left: float = Field(0.0, ge=-1, le=1, allow_inf_nan=False)
+    turn: float = Field(0.0, ge=-1, le=1, allow_inf_nan=False)

@@ -2,6 +2,7 @@
 // /ws/status; every robot action goes through the HTTP API (the WebSocket only reports).
 import { drawMap as draw } from "./map.js";
 import { renderHistory, renderKv, renderSteps, updateStep } from "./render.js";
+import { setupDrive } from "./drive.js";
 import { setupTalk } from "./talk.js";
 
 const $ = (selector) => document.querySelector(selector);
@@ -22,6 +23,7 @@ const view = {
   objects: [], // known objects: name, x, y, radius, confidence
   world: { places: {}, patrol_route: [], geofence_radius: 10, geofence_polygon: [] },
   approval: null,
+  drive: null, // the teleop pad (drive.js), told when driving was switched off elsewhere
   socketFailures: 0,
 };
 
@@ -252,6 +254,7 @@ function applyStatus(status) {
     showApproval(null);
   }
   if (status.robot) renderRobot(status.robot);
+  if (typeof status.teleop === "boolean" && view.drive) view.drive.sync(status.teleop);
 }
 
 function renderRobot(robot) {
@@ -538,6 +541,11 @@ function start() {
   document.addEventListener("keydown", (event) => {
     // Esc stops the robot, except while typing (Esc also closes the input's suggestions).
     if (event.key === "Escape" && event.target.tagName !== "INPUT") pressEstop();
+  });
+  view.drive = setupDrive({
+    fetch: api,
+    detail,
+    message: (text, kind) => say("#drive-msg", text, kind),
   });
   setupTalk({
     fetch: api,

@@ -1,0 +1,152 @@
+// The teleop pad: switch "Drive" on, then drag the pad (up = forward, sideways = turn) or hold
+// the keys (W/S or arrows up/down: forward/back, A/D or arrows left/right: turn, Q/E: step
+// sideways, space: stop). While held, the deflection goes to /api/teleop/drive ten times a
+// second; letting go sends zero at once. The server keeps the limits (speed caps, the geofence,
+// obstacles on the map) and stops the robot when the page goes quiet for 0.35 s.
+
+const KEYS = {
+  w: [1, 0, 0], arrowup: [1, 0, 0], s: [-1, 0, 0], arrowdown: [-1, 0, 0],
+  a: [0, 0, 1], arrowleft: [0, 0, 1], d: [0, 0, -1], arrowright: [0, 0, -1],
+  q: [0, 1, 0], e: [0, -1, 0],
+};
+const KEY_DEFLECTION = 0.7;
+const PERIOD_MS = 100;
+
+export function setupDrive(hooks) {
+  const toggle = document.querySelector("#drive-on");
+  const pad = document.querySelector("#pad");
+  const knob = pad.querySelector(".knob");
+  const held = new Set();
+  let padStick = [0, 0, 0];
+  let sent = "0,0,0";
+  let timer = null;
+
+  function stick() {
+    if (padStick.some((v) => v !== 0)) return padStick;
+    const sum = [0, 0, 0];
+    for (const key of held) KEYS[key].forEach((v, i) => { sum[i] += v * KEY_DEFLECTION; });
+    return sum.map((v) => Math.max(-1, Math.min(1, v)));
+  }
+
+  async function send() {
+    const [forward, left, turn] = stick();
+    const key = [forward, left, turn].join(",");
+    const zero = key === "0,0,0";
+    if (zero && sent === "0,0,0") return stopLoop();
+    sent = key;
+    const reply = await hooks.fetch("POST", "/api/teleop/drive", { forward, left, turn });
+    if (!reply.ok) {
+      hooks.message(hooks.detail(reply.data), "error");
+      if (reply.status === 409) setOn(false);
+      return;
+    }
+    hooks.message(reply.data.limited ? "Limited: " + reply.data.limited : "", "info");
+    if (zero) stopLoop();
+  }
+
+  function startLoop() {
+    if (!timer) timer = setInterval(send, PERIOD_MS);
+    send();
+  }
+
+  function stopLoop() {
+    clearInterval(timer);
+    timer = null;
+  }
+
+  function changed() {
+    if (!toggle.checked) return;
+    startLoop(); // sends the new deflection now, then every 100 ms while it is not zero
+  }
+
+  function setOn(on) {
+    toggle.checked = on;
+    pad.dataset.on = String(on);
+    if (!on) {
+      held.clear();
+      padStick = [0, 0, 0];
+      placeKnob(0, 0);
+      stopLoop();
+      sent = "0,0,0";
+    }
+  }
+
+  toggle.addEventListener("change", async () => {
+    const reply = await hooks.fetch("POST", "/api/teleop", { on: toggle.checked });
+    if (!reply.ok) {
+      setOn(false);
+      hooks.message(hooks.detail(reply.data), "error");
+      return;
+    }
+    setOn(reply.data.on);
+    hooks.message(reply.data.on ? "Driving: drag the pad or hold W A S D" : "", "info");
+  });
+
+  function placeKnob(x, y) {
+    knob.style.transform = `translate(${x}px, ${y}px)`;
+  }
+
+  function fromPointer(event) {
+    const box = pad.getBoundingClientRect();
+    const radius = box.width / 2;
+    let dx = event.clientX - (box.left + radius);
+    let dy = event.clientY - (box.top + radius);
+    const length = Math.hypot(dx, dy);
+    if (length > radius) { dx *= radius / length; dy *= radius / length; }
+    placeKnob(dx, dy);
+    const round = (v) => Math.round(v * 100) / 100;
+    padStick = [round(-dy / radius), 0, round(-dx / radius)];
+    changed();
+  }
+
+  pad.addEventListener("pointerdown", (event) => {
+    if (!toggle.checked) { hooks.message("Switch Drive on first", "error"); return; }
+    event.preventDefault();
+    pad.setPointerCapture(event.pointerId);
+    fromPointer(event);
+  });
+  pad.addEventListener("pointermove", (event) => {
+    if (pad.hasPointerCapture(event.pointerId)) fromPointer(event);
+  });
+  for (const kind of ["pointerup", "pointercancel", "lostpointercapture"]) {
+    pad.addEventListener(kind, () => {
+      padStick = [0, 0, 0];
+      placeKnob(0, 0);
+      changed();
+    });
+  }
+
+  document.addEventListener("keydown", (event) => {
+    if (!toggle.checked || typing(event)) return;
+    const key = event.key.toLowerCase();
+    if (key === " ") {
+      event.preventDefault();
+      held.clear();
+      padStick = [0, 0, 0];
+      changed();
+      return;
+    }
+    if (!(key in KEYS)) return;
+    event.preventDefault(); // arrows would scroll the page
+    if (!held.has(key)) { held.add(key); changed(); }
+  });
+  document.addEventListener("keyup", (event) => {
+    const key = event.key.toLowerCase();
+    if (held.delete(key)) changed();
+  });
+  // Leaving the page (or hiding it) lets go; the server's dead-man covers a lost connection.
+  window.addEventListener("blur", () => { held.clear(); changed(); });
+  document.addEventListener("visibilitychange", () => {
+    if (document.hidden) { held.clear(); padStick = [0, 0, 0]; changed(); }
+  });
+
+  return {
+    // The e-stop (or another client) switched driving off.
+    sync(on) { if (toggle.checked !== on) setOn(on); },
+  };
+}
+
+function typing(event) {
+  return ["INPUT", "TEXTAREA", "SELECT"].includes(event.target.tagName) &&
+    event.target.type !== "checkbox";
+}

@@ -1,0 +1,128 @@
+"""The teleop pad in a real browser (issue 27): headless Chromium driven by CDP key and pointer
+events (Playwright's keyboard and mouse), the dashboard on a real server, the simulated robot
+in real time; judged by the robot's true state."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from shadowhound.web import WebServer
+from tests.web.conftest import make_agent, wait_for
+from tests.web.test_browser import ARGS, ARTIFACTS, CHROMIUM, PHONE, _playwright
+
+DESKTOP = {"width": 1400, "height": 1000}
+
+
+def launch(p: Any, tmp_path: Path, viewport: dict[str, int] = DESKTOP) -> Any:
+    return p.chromium.launch_persistent_context(
+        str(tmp_path / "profile"),
+        executable_path=CHROMIUM,
+        headless=True,
+        args=ARGS,
+        viewport=viewport,
+    )
+
+
+def driving_page(context: Any, server: WebServer, errors: list[str]) -> Any:
+    page = context.new_page()
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.set_default_timeout(20_000)
+    page.goto(server.url + "/", wait_until="domcontentloaded")
+    page.wait_for_selector('#conn[data-state="live"]')
+    page.check("#drive-on")
+    page.wait_for_selector('#pad[data-on="true"]')
+    page.locator("#pad").scroll_into_view_if_needed()
+    return page
+
+
+def test_keys_and_the_pad_drive_and_letting_go_stops(
+    serve: Callable[..., WebServer], tmp_path: Path
+) -> None:
+    sync_playwright = _playwright()
+    agent = make_agent(time_scale=1.0)
+    server = serve(agent)
+    robot = agent.robot
+    errors: list[str] = []
+    with sync_playwright() as p:
+        context = launch(p, tmp_path)
+        try:
+            page = driving_page(context, server, errors)
+            page.keyboard.down("s")  # back
+            wait_for(lambda: robot.get_state().x < -0.3, 10, "the robot to back up")
+            assert robot.get_state().vx < -0.1
+            page.keyboard.up("s")
+            wait_for(lambda: robot.get_state().vx == 0.0, 2, "the robot to stop on release")
+            # The pad: drag the knob to the left of the centre, turning left in place.
+            box = page.locator("#pad").bounding_box()
+            cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+            page.mouse.move(cx, cy)
+            page.mouse.down()
+            page.mouse.move(cx - box["width"] * 0.4, cy, steps=4)
+            wait_for(lambda: robot.get_state().yaw > 0.4, 10, "the robot to turn left")
+            page.mouse.up()
+            wait_for(lambda: robot.get_state().wz == 0.0, 2, "the turn to stop on release")
+            page.screenshot(path=str(ARTIFACTS / "dashboard-drive.png"), full_page=True)
+        finally:
+            context.close()
+    assert not errors, errors
+
+
+def test_closing_the_page_mid_drive_stops_the_robot(
+    serve: Callable[..., WebServer], tmp_path: Path
+) -> None:
+    sync_playwright = _playwright()
+    agent = make_agent(time_scale=1.0)
+    server = serve(agent)
+    robot = agent.robot
+    with sync_playwright() as p:
+        context = launch(p, tmp_path)
+        try:
+            page = driving_page(context, server, [])
+            page.keyboard.down("ArrowDown")
+            wait_for(lambda: robot.get_state().vx < -0.1, 10, "the robot to back up")
+            page.close(run_before_unload=False)
+            wait_for(lambda: robot.get_state().vx == 0.0, 3, "the robot to stop")
+            x = robot.get_state().x
+            time.sleep(0.6)  # longer than the dead-man's 0.5 s: nothing drives it any more
+            assert abs(robot.get_state().x - x) < 0.005
+        finally:
+            context.close()
+
+
+def test_the_pad_cannot_touch_the_red_ball_and_works_on_a_phone(
+    serve: Callable[..., WebServer], tmp_path: Path
+) -> None:
+    sync_playwright = _playwright()
+    agent = make_agent(time_scale=1.0)
+    server = serve(agent)
+    robot = agent.robot
+    ball = next(o for o in robot.world.objects if o.name == "red ball")  # type: ignore[attr-defined]
+    body = robot.config.body_radius  # type: ignore[attr-defined]
+    with sync_playwright() as p:
+        context = launch(p, tmp_path, PHONE)
+        try:
+            page = driving_page(context, server, [])
+            box = page.locator("#pad").bounding_box()
+            assert box["x"] >= 0 and box["x"] + box["width"] <= PHONE["width"]
+            page.keyboard.down("w")  # full ahead, straight at the ball 3 m away
+            closest = math.inf
+            deadline = time.monotonic() + 20
+            while time.monotonic() < deadline:
+                s = robot.get_state()
+                closest = min(closest, math.hypot(ball.x - s.x, ball.y - s.y) - ball.radius - body)
+                if s.x > 1.0 and s.vx == 0.0:
+                    break
+                time.sleep(0.01)
+            page.wait_for_selector('#drive-msg:has-text("red ball")')  # it says why it stopped
+            page.keyboard.up("w")
+            page.screenshot(path=str(ARTIFACTS / "dashboard-drive-phone.png"))
+            estop = page.locator("#estop").bounding_box()
+            assert estop and 0 <= estop["y"] < PHONE["height"]  # the e-stop stays on screen
+        finally:
+            context.close()
+    assert closest > 0.0, closest  # the body never touched the ball (truth)
+    assert robot.get_state().x > 1.5  # and it did drive up to it
