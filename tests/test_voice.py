@@ -229,3 +229,31 @@ def test_control_characters_go_and_do_not_count_toward_the_cut() -> None:
     result = agent.run_plan([SkillCall("voice.say", {"text": "ab\x00\x07\x1b\x7f\u200bcd\n"})])
     assert result.success and robot.spoken == ["ab cd"]
     assert result.steps[0].output == 'said "ab cd" aloud'
+
+
+def test_with_speak_results_the_robot_says_each_outcome_once() -> None:
+    """speech.speak_results: a mission's result, a refusal and a chat answer are said on the
+    robot's speaker (the simulator's record of what it said); a mission that spoke itself is
+    not said over; a dry run says nothing."""
+    settings = ShadowHoundConfig(speech={"speak_results": True})
+    settings.memory.enabled = False
+    robot = SimRobot(time_scale=0)
+    agent = RobotAgent(RobotAgentConfig(robot=robot, settings=settings))
+    done = agent.execute_mission("walk forward 0.5 meters")
+    assert robot.spoken == [done.response] == ["Done: moved 0.50 m forward."]
+    refused = agent.execute_mission("fly to the moon")
+    said = robot.spoken[-1]  # cut at a word to safety.max_speech_chars
+    assert not refused.success and refused.response.startswith(said.removesuffix("..."))
+    assert len(said) <= settings.safety.max_speech_chars
+    agent.execute_mission("say hello")
+    assert robot.spoken[-1] == "Hello!"  # its own words, not "said ... aloud" after them
+    before = len(robot.spoken)
+    agent.dry_run("walk forward 1 meter")
+    assert len(robot.spoken) == before
+    answer = agent.chat("where are you?")
+    assert robot.spoken[-1] == answer
+    off = SimRobot(time_scale=0)
+    RobotAgent(RobotAgentConfig(robot=off, settings=ShadowHoundConfig())).execute_mission(
+        "walk forward 0.5 meters"
+    )
+    assert off.spoken == []  # off by default

@@ -289,7 +289,13 @@ class RobotAgent:
         """Answer a question about the robot and its missions. Never moves the robot."""
         if not isinstance(text, str) or not text.strip():
             return "Ask me something, for example: where are you? how is your battery?"
-        return self._chat(text[: self.settings.agent.max_mission_chars], self._chat_context())
+        answer = self._chat(text[: self.settings.agent.max_mission_chars], self._chat_context())
+        if self.settings.speech.speak_results and answer.strip() and self._crew is not None:
+            try:
+                self._crew.voice.speak(self._crew.robot, answer)
+            except (ValueError, RobotError) as exc:
+                log.warning("the answer was not said aloud: %s", exc)
+        return answer
 
     def _chat_context(self) -> ChatContext:
         self.initialize()

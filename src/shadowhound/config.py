@@ -257,6 +257,11 @@ class SpeechConfig(_Section):
     )
     timeout: float = Field(30.0, gt=0, le=300, description="seconds per transcription")
     confirm: bool = Field(False, description="show the transcript and ask before running it")
+    speak_results: bool = Field(
+        False,
+        description="say each mission's result and chat answer on the robot's speaker (a Go2: "
+        "its speech_topic, go2_ros2_sdk's /tts)",
+    )
     max_seconds: float = Field(30.0, gt=0, le=300, description="longest recording taken")
     max_bytes: int = Field(
         2_000_000, ge=10_000, le=50_000_000, description="largest recording taken, bytes"

@@ -528,8 +528,25 @@ class MissionRun:
         )
         c.logbook.add(result)
         c.tracker.finished(status)
+        self._say_result(response)
         self.emit(ev.MissionFinished(self.id, result))
         return result
+
+    def _say_result(self, response: str) -> None:
+        """With `speech.speak_results`, the outcome said on the robot's speaker (through the
+        voice: cleaned, cut, rate-limited), unless the mission said something itself."""
+        c = self.crew
+        if not c.settings.speech.speak_results or not response.strip():
+            return
+        if any(s.skill == "voice.say" for s in self.steps):
+            return
+        try:
+            saying = c.voice.speak(self.robot, response)
+        except (ValueError, RobotError) as exc:
+            log.warning("the result was not said aloud: %s", exc)
+            return
+        if saying.why_silent:
+            log.info("the result was not said aloud: %s", saying.why_silent)
 
     def refuse(self, reason: str, record: bool = True) -> MissionResult:
         """Refused before anything started (no mission events)."""
@@ -546,6 +563,7 @@ class MissionRun:
         result.timing.total_duration = self._elapsed()
         if record:
             self.crew.note_error(reason)
+            self._say_result(result.response)
             self.crew.logbook.add(result)
             self.crew.tracker.set_status(MissionStatus.FAILED)
         return result

@@ -1,13 +1,19 @@
 """The Go2's voice over real DDS: `shadowhound node -p robot:=go2` with `shadowhound sim-driver`
 (as test_go2_sim.py does), and this process listening where go2_ros2_sdk's tts_node listens.
-"say hello" publishes exactly one std_msgs/String there; the robot still waves. Skipped
+"say hello" publishes exactly one std_msgs/String there; the robot still waves. With
+`speech.speak_results` each mission's outcome is said there too. The node also serves the
+dashboard: its teleop pad drives the Go2 over cmd_vel, judged by the driver's truth. Skipped
 without rclpy or the interface packages unless SHADOWHOUND_REQUIRE_ROS=1 (then it fails).
 """
 
 from __future__ import annotations
 
 import json
+import math
 import signal
+import socket
+import threading
+import time
 from collections.abc import Callable, Iterator
 
 import pytest
@@ -31,6 +37,15 @@ from tests.ros.rosclient import (  # noqa: E402
 NS = "/robot0"
 SPEECH = "/voice_test/tts"  # a speech topic of this test's own (the default is /tts)
 TIMEOUT = 30.0
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+PORT = free_port()
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
 
 
@@ -73,6 +88,11 @@ def rig() -> Iterator[tuple[Agent, Driver]]:
         f"robot_namespace:={NS[1:]}",
         "-p",
         f"speech_topic:={SPEECH}",
+        "-p",
+        "enable_web_ui:=true",
+        "-p",
+        f"web_interface_port:={PORT}",
+        env={"SHADOWHOUND_SPEECH__SPEAK_RESULTS": "true"},
     )
     agent, driver = Agent(client, speech_topic=SPEECH), Driver(client)
     try:
@@ -129,3 +149,57 @@ def test_an_answer_said_aloud_is_cut_and_clean_on_the_wire(rig) -> None:
     [words] = said(speech, mark)
     assert 0 < len(words) <= 200 and words.isprintable(), words
     assert words.startswith("Standing at x=") and "battery" in words, words
+
+
+def test_with_speak_results_a_missions_outcome_is_said_on_the_speech_topic(rig) -> None:
+    agent, _ = rig
+    speech = agent.speech
+    assert speech is not None
+    mark = speech.mark()
+    final = agent.run("turn left 10 degrees", 60.0)
+    assert final.startswith("COMPLETED: "), final
+    message = speech.wait_for(lambda m: True, 5.0, "the outcome on the speech topic", mark)
+    assert message.data.startswith("Done: turned"), message.data
+    assert len(said(speech, mark)) == 1
+
+
+def test_the_dashboards_pad_drives_the_go2_over_cmd_vel(rig) -> None:
+    """The pad on the node's own dashboard: the Go2 moves (the driver's truth) and stops when
+    the pad is let go; the only way a velocity reaches the driver is its cmd_vel."""
+    import httpx
+
+    agent, driver = rig
+    web = httpx.Client(base_url=f"http://127.0.0.1:{PORT}", timeout=10)
+    assert agent.run("stand up", 60.0).startswith("COMPLETED: ")
+    switched = web.post("/api/teleop", json={"on": True})
+    assert switched.status_code == 200 and switched.json()["on"], switched.text
+
+    def truth() -> dict:
+        mark = driver.truth.mark()
+        return json.loads(driver.truth.wait_for(lambda _m: True, 5.0, "truth", mark).data)
+
+    start = truth()
+    held = threading.Event()
+
+    def hold() -> None:  # the page, sending the stick back every 0.1 s
+        while not held.wait(0.1):
+            web.post("/api/teleop/drive", json={"forward": -0.6})
+
+    thread = threading.Thread(target=hold, daemon=True)
+    thread.start()
+    try:
+        wait_until(
+            lambda: math.dist((truth()["x"], truth()["y"]), (start["x"], start["y"])) > 0.15,
+            TIMEOUT,
+            "the Go2 to back up (truth)",
+        )
+    finally:
+        held.set()
+        thread.join()
+    web.post("/api/teleop/drive", json={"forward": 0.0})
+    wait_until(lambda: not truth()["moving"], 5.0, "the Go2 to stop (truth)")
+    stopped = truth()
+    time.sleep(0.5)
+    assert math.dist((truth()["x"], truth()["y"]), (stopped["x"], stopped["y"])) < 0.01
+    assert web.post("/api/teleop", json={"on": False}).json()["on"] is False
+    web.close()
