@@ -33,6 +33,17 @@ ARGS = [
 PHONE = {"width": 390, "height": 844}
 
 
+def launch(p: Any, tmp_path: Path, viewport: dict[str, int], *extra: str) -> Any:
+    """Chromium for one test: its own profile under `tmp_path`, the flags above and `extra`."""
+    return p.chromium.launch_persistent_context(
+        str(tmp_path / "profile"),
+        executable_path=CHROMIUM,
+        headless=True,
+        args=[*ARGS, *extra],
+        viewport=viewport,
+    )
+
+
 def _playwright() -> Any:
     problems = []
     try:

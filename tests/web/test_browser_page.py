@@ -14,7 +14,7 @@ from typing import Any
 
 from shadowhound.web import WebServer
 from tests.web.conftest import make_agent, wait_for
-from tests.web.test_browser import ARGS, ARTIFACTS, CHROMIUM, PHONE, _playwright
+from tests.web.test_browser import ARTIFACTS, PHONE, _playwright, launch
 
 DESKTOP = {"width": 1100, "height": 900}
 # Places crowded onto the scene's objects: the charging dock place on the dock, the kitchen
@@ -29,13 +29,7 @@ SCENE = {"red ball", "blue box", "green plant", "yellow chair", "person", "charg
 
 
 def _browser(p: Any, tmp_path: Path, viewport: dict[str, int]) -> Any:
-    return p.chromium.launch_persistent_context(
-        str(tmp_path / "profile"),
-        executable_path=CHROMIUM,
-        headless=True,
-        args=ARGS,
-        viewport=viewport,
-    )
+    return launch(p, tmp_path, viewport)
 
 
 def _overlap(a: dict[str, float], b: dict[str, float]) -> bool:

@@ -17,7 +17,7 @@ from shadowhound.hearing import inspect
 from shadowhound.web import WebServer
 from tests.speech_server import ScriptedTranscriber
 from tests.web.conftest import make_agent, wait_for
-from tests.web.test_browser import ARGS, ARTIFACTS, CHROMIUM, PHONE, _playwright
+from tests.web.test_browser import ARTIFACTS, PHONE, _playwright, launch
 
 DESKTOP = {"width": 1400, "height": 1000}
 
@@ -42,17 +42,14 @@ def heard() -> Iterator[ScriptedTranscriber]:
 
 
 def browser(p: Any, tmp_path: Path, wav: Path, viewport: dict[str, int] = DESKTOP) -> Any:
-    return p.chromium.launch_persistent_context(
-        str(tmp_path / "profile"),
-        executable_path=CHROMIUM,
-        headless=True,
-        args=[
-            *ARGS,
-            "--use-fake-ui-for-media-stream",
-            "--use-fake-device-for-media-stream",
-            f"--use-file-for-fake-audio-capture={wav}",
-        ],
-        viewport=viewport,
+    """Chromium whose microphone plays `wav` (and which asks nobody for it)."""
+    return launch(
+        p,
+        tmp_path,
+        viewport,
+        "--use-fake-ui-for-media-stream",
+        "--use-fake-device-for-media-stream",
+        f"--use-file-for-fake-audio-capture={wav}",
     )
 
 

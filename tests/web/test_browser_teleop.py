@@ -12,19 +12,9 @@ from typing import Any
 
 from shadowhound.web import WebServer
 from tests.web.conftest import make_agent, wait_for
-from tests.web.test_browser import ARGS, ARTIFACTS, CHROMIUM, PHONE, _playwright
+from tests.web.test_browser import ARTIFACTS, PHONE, _playwright, launch
 
 DESKTOP = {"width": 1400, "height": 1000}
-
-
-def launch(p: Any, tmp_path: Path, viewport: dict[str, int] = DESKTOP) -> Any:
-    return p.chromium.launch_persistent_context(
-        str(tmp_path / "profile"),
-        executable_path=CHROMIUM,
-        headless=True,
-        args=ARGS,
-        viewport=viewport,
-    )
 
 
 def driving_page(context: Any, server: WebServer, errors: list[str]) -> Any:
@@ -48,7 +38,7 @@ def test_keys_and_the_pad_drive_and_letting_go_stops(
     robot = agent.robot
     errors: list[str] = []
     with sync_playwright() as p:
-        context = launch(p, tmp_path)
+        context = launch(p, tmp_path, DESKTOP)
         try:
             page = driving_page(context, server, errors)
             page.keyboard.down("s")  # back
@@ -79,7 +69,7 @@ def test_closing_the_page_mid_drive_stops_the_robot(
     server = serve(agent)
     robot = agent.robot
     with sync_playwright() as p:
-        context = launch(p, tmp_path)
+        context = launch(p, tmp_path, DESKTOP)
         try:
             page = driving_page(context, server, [])
             page.keyboard.down("ArrowDown")
