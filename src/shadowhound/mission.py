@@ -59,6 +59,7 @@ class MissionRun:
         self.started = time.perf_counter()
         self.timing = Timing()
         self.steps: list[StepResult] = []
+        self.spoke = False  # a step said something (`say`): the result is not said over it
         self.start: RobotState | None = None
         self.env: PlanEnv | None = None
 
@@ -482,6 +483,7 @@ class MissionRun:
             saying = self.crew.voice.speak(self.robot, text)
         except ValueError as exc:
             raise SkillError(str(exc)) from exc
+        self.spoke = True
         self.emit(ev.Spoken(self.id, saying.text, step.index, saying.why_silent))
         return saying
 
@@ -538,7 +540,7 @@ class MissionRun:
         c = self.crew
         if not c.settings.speech.speak_results or not response.strip():
             return
-        if any(s.skill == "voice.say" for s in self.steps):
+        if self.spoke:
             return
         try:
             saying = c.voice.speak(self.robot, response)
