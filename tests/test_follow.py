@@ -7,14 +7,13 @@ import math
 
 import pytest
 
-from shadowhound import RobotAgent, RobotAgentConfig
-from shadowhound.config import ShadowHoundConfig
 from shadowhound.plan import Plan, SkillCall
 from shadowhound.planning import FixedPlanner
 from shadowhound.planning.rules import RulePlanner
 from shadowhound.robot.sim.robot import SimRobot
 from shadowhound.robot.sim.scene import World, WorldObject
 from tests.robot.test_base import Minimal
+from tests.test_watches import agent_on
 
 ROUTE = [(1.6, 0.0), (4.0, 0.0), (4.0, 3.0), (1.0, 3.0), (1.0, 4.5)]  # 11 m, turns twice
 
@@ -55,14 +54,6 @@ class Walker(SimRobot):
         s = self.get_state()
         if t < self.gone_at:
             self.log.append((t, math.dist((s.x, s.y), self.person)))
-
-
-def agent_on(robot: object, planner: object | None = None) -> RobotAgent:
-    settings = ShadowHoundConfig()
-    settings.memory.enabled = False
-    return RobotAgent(
-        RobotAgentConfig(robot=robot, settings=settings, planner=planner)  # type: ignore[arg-type]
-    )
 
 
 def test_follow_the_person_keeps_1_to_2_metres_for_30_seconds() -> None:

@@ -290,11 +290,8 @@ class RobotAgent:
         if not isinstance(text, str) or not text.strip():
             return "Ask me something, for example: where are you? how is your battery?"
         answer = self._chat(text[: self.settings.agent.max_mission_chars], self._chat_context())
-        if self.settings.speech.speak_results and answer.strip() and self._crew is not None:
-            try:
-                self._crew.voice.speak(self._crew.robot, answer)
-            except (ValueError, RobotError) as exc:
-                log.warning("the answer was not said aloud: %s", exc)
+        if self._crew is not None:  # built by the chat's context
+            self._crew.say_result(answer)
         return answer
 
     def _chat_context(self) -> ChatContext:

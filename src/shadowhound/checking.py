@@ -130,8 +130,8 @@ def _within_reach(
             except PlanProblem:
                 poses = []  # the governor says why
             distance = getattr(call.args, "distance", None)
-            until = [w for w in call.watches if w.when == "until" or w.kind == "in_the_way"]
-            if until and len(poses) == 1 and isinstance(distance, float) and distance:
+            cut_by = [w for w in call.watches if w.when == "until" or w.kind == "in_the_way"]
+            if cut_by and len(poses) == 1 and isinstance(distance, float) and distance:
                 leg = check_leg(env.belief, (pose.x, pose.y), (poses[0].x, poses[0].y))
                 reach = math.floor(max(0.0, leg.distance - REACH_MARGIN) * 100) / 100
                 if not leg.clear and leg.obstacle != "unmapped space" and reach > 0:
@@ -140,7 +140,7 @@ def _within_reach(
                     poses = predict(pose, call.args, env)
                     notes.append(
                         f"step {i} ({call.name}) goes at most {reach:g} m, short of "
-                        f"{leg.obstacle} in the way ({until[0].describe()})"
+                        f"{leg.obstacle} in the way ({cut_by[0].describe()})"
                     )
         fitted.append(call)
         pose = poses[-1] if poses else pose

@@ -9,6 +9,7 @@ watchdog, the voice.
 
 from __future__ import annotations
 
+import logging
 import threading
 from dataclasses import dataclass
 
@@ -16,7 +17,7 @@ from . import events as ev
 from .approval import ApprovalDesk
 from .config import ShadowHoundConfig
 from .diagnostics import MissionTracker
-from .errors import MissionCancelled
+from .errors import MissionCancelled, RobotError
 from .llm.backend import LLMBackend
 from .logbook import Logbook
 from .memory.places import Places
@@ -27,6 +28,8 @@ from .safety import Governor, Watchdog
 from .skills import SkillRegistry
 from .speech import Voice
 from .state import CameraFrame, RobotState
+
+log = logging.getLogger(__name__)
 
 
 class StopSignal:
@@ -132,6 +135,19 @@ class Crew:
 
     def note_error(self, text: str) -> None:
         self.tracker.note_error(text)
+
+    def say_result(self, text: str) -> None:
+        """With `speech.speak_results`, an outcome or an answer said on the robot's speaker
+        through the voice (cleaned, cut, rate-limited); why it was not is logged, never raised."""
+        if not self.settings.speech.speak_results or not text.strip():
+            return
+        try:
+            saying = self.voice.speak(self.robot, text)
+        except (ValueError, RobotError) as exc:
+            log.warning("not said aloud: %s", exc)
+            return
+        if saying.why_silent:
+            log.info("not said aloud: %s", saying.why_silent)
 
     def arm_watchdog(self) -> Watchdog | None:
         """Arm the watchdog for a step on a robot whose clock runs in real time (a simulator

@@ -535,20 +535,9 @@ class MissionRun:
         return result
 
     def _say_result(self, response: str) -> None:
-        """With `speech.speak_results`, the outcome said on the robot's speaker (through the
-        voice: cleaned, cut, rate-limited), unless the mission said something itself."""
-        c = self.crew
-        if not c.settings.speech.speak_results or not response.strip():
-            return
-        if self.spoke:
-            return
-        try:
-            saying = c.voice.speak(self.robot, response)
-        except (ValueError, RobotError) as exc:
-            log.warning("the result was not said aloud: %s", exc)
-            return
-        if saying.why_silent:
-            log.info("the result was not said aloud: %s", saying.why_silent)
+        """The outcome on the robot's speaker (`Crew.say_result`), unless a step spoke."""
+        if not self.spoke:
+            self.crew.say_result(response)
 
     def refuse(self, reason: str, record: bool = True) -> MissionResult:
         """Refused before anything started (no mission events)."""

@@ -36,6 +36,7 @@ from .world import check_leg
 
 if TYPE_CHECKING:
     from .agent import RobotAgent
+    from .robot.base import Robot
 
 log = logging.getLogger(__name__)
 
@@ -81,7 +82,10 @@ class Teleop:
         agent = self._agent
         if agent.estop_latched:
             return "the e-stop is latched: a person must release it first"
-        state = agent.robot.get_state()
+        try:
+            state = agent.robot.get_state()
+        except RobotError as exc:  # a robot that cannot say where it is is not driven blind
+            return f"the robot cannot report its state: {exc}"
         if state.posture is not Posture.STANDING:
             return f"the robot is {state.posture.value}: stand it up first ('stand up')"
         with self._lock:
@@ -100,10 +104,10 @@ class Teleop:
         if not self._on:
             raise RuntimeError("teleoperation is off: switch it on first")
         stick = tuple(max(-1.0, min(1.0, float(v))) for v in (forward, left, turn))
-        with self._lock:
+        with self._lock:  # between two ticks: none sends an older stick after this
             self._stick, self._stamp = stick, time.monotonic()  # type: ignore[assignment]
-        if stick == (0.0, 0.0, 0.0):
-            self._halt()  # let go: stop now, not at the next tick
+            if stick == (0.0, 0.0, 0.0):
+                self._halt()  # let go: stop now, not at the next tick
         return self._sent
 
     def stop(self) -> None:
@@ -111,8 +115,8 @@ class Teleop:
         with self._lock:
             was_on, self._on = self._on, False
             thread = self._thread
-        if was_on:
-            self._halt()
+            if was_on:
+                self._halt()
         if thread is not None and thread is not threading.current_thread():
             self._stopped.wait(2.0)
 
@@ -134,27 +138,33 @@ class Teleop:
                 if agent.estop_latched:
                     self._on = False
                     break
+                # One tick under the lock: a stick let go (or switched off) meanwhile is seen
+                # before anything is sent, never overtaken by the tick's older command.
                 with self._lock:
-                    stick, stamp = self._stick, self._stamp
-                if time.monotonic() - stamp > HEARTBEAT:
-                    stick = (0.0, 0.0, 0.0)  # the page went quiet: dead-man
-                command = self._limit(stick, period)
-                moving = (command.vx, command.vy, command.wz) != (0.0, 0.0, 0.0)
-                try:
-                    if moving:
-                        robot.send_velocity(command.vx, command.vy, command.wz)
-                    elif self._sent != Command():
-                        robot.stop()
-                except RobotError as exc:
-                    log.warning("teleop: %s", exc)
-                    command = Command(limited=str(exc))
-                self._sent = command
+                    if not self._on:
+                        break
+                    stick = self._stick
+                    if time.monotonic() - self._stamp > HEARTBEAT:
+                        stick = (0.0, 0.0, 0.0)  # the page went quiet: dead-man
+                    self._tick(robot, stick, period)
                 robot.sleep(period)
                 if not robot.realtime:  # a simulator on its own clock: paced by the wall's
                     time.sleep(period)
         finally:
             self._halt()
             self._stopped.set()
+
+    def _tick(self, robot: Robot, stick: tuple[float, float, float], period: float) -> None:
+        command = self._limit(stick, period)
+        try:
+            if (command.vx, command.vy, command.wz) != (0.0, 0.0, 0.0):
+                robot.send_velocity(command.vx, command.vy, command.wz)
+            elif self._sent != Command():
+                robot.stop()
+        except RobotError as exc:
+            log.warning("teleop: %s", exc)
+            command = Command(limited=str(exc))
+        self._sent = command
 
     def _limit(self, stick: tuple[float, float, float], period: float) -> Command:
         lim = self._agent.settings.safety

@@ -165,7 +165,7 @@ class MissionWorker:
         with self._lock:
             if self._stopping:
                 return "the mission worker has stopped"
-            if self._pending:
+            if self._pending and not self._agent.estop_latched:  # a latched e-stop says so first
                 return (
                     "a mission is running or waiting: wait for it to finish or cancel it "
                     "before driving"

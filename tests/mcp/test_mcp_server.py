@@ -329,6 +329,8 @@ def test_patrol_until_i_say_stop_ends_on_cancel_mission_as_a_success(http_server
                 if (await robot(client))["distance_travelled"] > 0.1:
                     break
                 await asyncio.sleep(0.02)
+            else:
+                raise AssertionError("the patrol never walked")
             cancel = structured(await client.call_tool("cancel_mission", {}))
             assert cancel["cancelled"] is True
             result = structured(await mission)

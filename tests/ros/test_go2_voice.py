@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import math
 import signal
-import socket
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -33,16 +32,11 @@ from tests.ros.rosclient import (  # noqa: E402
     wait_matched,
     wait_until,
 )
+from tests.ros.test_go2_truth import free_port  # noqa: E402
 
 NS = "/robot0"
 SPEECH = "/voice_test/tts"  # a speech topic of this test's own (the default is /tts)
 TIMEOUT = 30.0
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 PORT = free_port()

@@ -4,6 +4,7 @@ and the app on a real uvicorn server on a free 127.0.0.1 port."""
 from __future__ import annotations
 
 import importlib.util
+import math
 import os
 import time
 from collections.abc import Callable, Iterator
@@ -104,3 +105,29 @@ def finished(client: Any, mission_id: str, timeout: float = 15.0) -> dict[str, A
         return record if record["state"] in ("finished", "dropped") else None
 
     return wait_for(done, timeout, f"mission {mission_id} to finish")
+
+
+@pytest.fixture
+def heard() -> Iterator[Any]:
+    """A scripted OpenAI-compatible transcription server (tests/speech_server.py)."""
+    from tests.speech_server import ScriptedTranscriber
+
+    with ScriptedTranscriber() as srv:
+        yield srv
+
+
+def approach(robot: Any, name: str, timeout: float = 20.0) -> float:
+    """While something drives the simulated robot at the object `name`: wait until it has come
+    past 1 m and stopped, and return how close its body came to the object (truth), metres."""
+    thing = next(o for o in robot.world.objects if o.name == name)
+    body = robot.config.body_radius
+    closest = math.inf
+
+    def stopped_near() -> bool:
+        nonlocal closest
+        s = robot.get_state()
+        closest = min(closest, math.hypot(thing.x - s.x, thing.y - s.y) - thing.radius - body)
+        return bool(s.x > 1.0 and s.vx == 0.0)
+
+    wait_for(stopped_near, timeout, f"the robot to drive up to the {name} and stop")
+    return closest

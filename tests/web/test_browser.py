@@ -31,17 +31,40 @@ ARGS = [
     "--no-first-run",
 ]
 PHONE = {"width": 390, "height": 844}
+DESKTOP = {"width": 1400, "height": 1000}
 
 
-def launch(p: Any, tmp_path: Path, viewport: dict[str, int], *extra: str) -> Any:
-    """Chromium for one test: its own profile under `tmp_path`, the flags above and `extra`."""
+def launch(p: Any, tmp_path: Path, viewport: dict[str, int] | None, *extra: str) -> Any:
+    """Chromium for one test: its own profile under `tmp_path`, the flags above and `extra`
+    (`viewport` None: Chromium's own window size)."""
+    sized = {"viewport": viewport} if viewport is not None else {}
     return p.chromium.launch_persistent_context(
         str(tmp_path / "profile"),
         executable_path=CHROMIUM,
         headless=True,
         args=[*ARGS, *extra],
-        viewport=viewport,
+        **sized,
     )
+
+
+def open_dashboard(
+    context: Any,
+    url: str,
+    errors: list[str],
+    *,
+    timeout_ms: int = 20_000,
+    init_script: str = "",
+) -> Any:
+    """A new page on the dashboard at `url`, its script errors kept in `errors`, once its live
+    connection is up (`init_script` runs in the page before its own scripts)."""
+    page = context.new_page()
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.set_default_timeout(timeout_ms)
+    if init_script:
+        page.add_init_script(init_script)
+    page.goto(url + "/", wait_until="domcontentloaded")
+    page.wait_for_selector('#conn[data-state="live"]')
+    return page
 
 
 def _playwright() -> Any:
@@ -72,19 +95,9 @@ def test_dashboard_runs_a_mission_and_the_estop_stops_the_robot(
     ARTIFACTS.mkdir(exist_ok=True)
     errors: list[str] = []
     with sync_playwright() as p:
-        browser = p.chromium.launch_persistent_context(
-            str(tmp_path / "profile"),
-            executable_path=CHROMIUM,
-            headless=True,
-            args=ARGS,
-            viewport=PHONE,
-        )
+        browser = launch(p, tmp_path, PHONE)
         try:
-            page = browser.new_page()
-            page.on("pageerror", lambda exc: errors.append(str(exc)))
-            page.set_default_timeout(20_000)
-            page.goto(server.url + "/", wait_until="domcontentloaded")
-            page.wait_for_selector('#conn[data-state="live"]')
+            page = open_dashboard(browser, server.url, errors)
 
             # 1. A short mission: every step completes and the robot moves on the map.
             page.fill("#command", "walk forward 1 meter")
@@ -174,15 +187,9 @@ def test_dashboard_keeps_working_when_odometry_lies(tmp_path: Path) -> None:
     errors: list[str] = []
     try:
         with sync_playwright() as p:
-            browser = p.chromium.launch_persistent_context(
-                str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS
-            )
+            browser = launch(p, tmp_path, None)
             try:
-                page = browser.new_page()
-                page.on("pageerror", lambda exc: errors.append(str(exc)))
-                page.set_default_timeout(20_000)
-                page.goto(server.url + "/", wait_until="domcontentloaded")
-                page.wait_for_selector('#conn[data-state="live"]')
+                page = open_dashboard(browser, server.url, errors)
                 page.wait_for_selector('#map[data-unknown="true"]', state="attached")
                 assert "position unknown" in page.text_content("#pose")
                 page.fill("#command", "sit down")

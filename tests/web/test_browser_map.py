@@ -15,7 +15,7 @@ from typing import Any
 
 from shadowhound.web import WebServer
 from tests.web.conftest import make_agent, wait_for
-from tests.web.test_browser import ARGS, ARTIFACTS, CHROMIUM, _playwright
+from tests.web.test_browser import ARTIFACTS, _playwright, launch
 
 DESKTOP = {"width": 1100, "height": 900}
 OBJECT = (195, 107, 29)  # the object fill (230, 126, 34, 85 %) over an occupied (black) cell
@@ -72,15 +72,14 @@ class Canvas:
         """The share of points sampled every 2 cm along the polyline with `colour` drawn at
         them (or, given `within` metres, somewhere that close: a walked path is where the body
         went, a few centimetres off the planned one, and is drawn 2 px wide)."""
-        hits = total = 0
         steps = [i * 0.02 for i in range(-int(within / 0.02), int(within / 0.02) + 1)]
-        for (x0, y0), (x1, y1) in zip(points, points[1:], strict=False):
-            n = max(1, int(math.dist((x0, y0), (x1, y1)) / 0.02))
-            for i in range(n):
-                x, y = x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * i / n
-                total += 1
-                hits += any(near(self.at(x + dx, y + dy), colour) for dx in steps for dy in steps)
-        return hits / max(1, total)
+        # Every 2 cm along the legs (not the last point: the robot's marker is drawn there).
+        points = sampled(points)[1:]
+        hits = sum(
+            any(near(self.at(x + dx, y + dy), colour) for dx in steps for dy in steps)
+            for x, y in points
+        )
+        return hits / max(1, len(points))
 
 
 def keep(frames: list[dict[str, Any]], payload: str | bytes) -> None:
@@ -137,13 +136,7 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
     belief.sight("charging dock", -3.0, -1.0, stamp=agent.robot.now())
     errors: list[str] = []
     with sync_playwright() as p:
-        browser = p.chromium.launch_persistent_context(
-            str(tmp_path / "profile"),
-            executable_path=CHROMIUM,
-            headless=True,
-            args=ARGS,
-            viewport=DESKTOP,
-        )
+        browser = launch(p, tmp_path, DESKTOP)
         try:
             page = browser.new_page()
             page.on("pageerror", lambda exc: errors.append(str(exc)))
@@ -223,13 +216,7 @@ def test_the_grid_is_drawn_behind_a_token_too(
     agent = make_agent()
     server = serve(agent, token=TOKEN)
     with sync_playwright() as p:
-        browser = p.chromium.launch_persistent_context(
-            str(tmp_path / "profile"),
-            executable_path=CHROMIUM,
-            headless=True,
-            args=ARGS,
-            viewport=DESKTOP,
-        )
+        browser = launch(p, tmp_path, DESKTOP)
         try:
             page = browser.new_page()
             page.set_default_timeout(20_000)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -17,9 +17,7 @@ from shadowhound.hearing import inspect
 from shadowhound.web import WebServer
 from tests.speech_server import ScriptedTranscriber
 from tests.web.conftest import make_agent, wait_for
-from tests.web.test_browser import ARTIFACTS, PHONE, _playwright, launch
-
-DESKTOP = {"width": 1400, "height": 1000}
+from tests.web.test_browser import ARTIFACTS, DESKTOP, PHONE, _playwright, launch, open_dashboard
 
 
 @pytest.fixture(scope="module")
@@ -33,12 +31,6 @@ def spoken(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("speech") / "walk.wav"
     subprocess.run(["espeak-ng", "-w", str(path), "walk forward one meter"], check=True)
     return path
-
-
-@pytest.fixture
-def heard() -> Iterator[ScriptedTranscriber]:
-    with ScriptedTranscriber() as srv:
-        yield srv
 
 
 def browser(p: Any, tmp_path: Path, wav: Path, viewport: dict[str, int] = DESKTOP) -> Any:
@@ -63,13 +55,7 @@ if ("speechSynthesis" in window) {
 
 
 def open_page(context: Any, server: WebServer, errors: list[str]) -> Any:
-    page = context.new_page()
-    page.add_init_script(SPOKEN)
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    page.set_default_timeout(20_000)
-    page.goto(server.url + "/", wait_until="domcontentloaded")
-    page.wait_for_selector('#conn[data-state="live"]')
-    return page
+    return open_dashboard(context, server.url, errors, init_script=SPOKEN)
 
 
 def press(page: Any) -> None:

@@ -4,25 +4,18 @@ in real time; judged by the robot's true state."""
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from shadowhound.web import WebServer
-from tests.web.conftest import make_agent, wait_for
-from tests.web.test_browser import ARTIFACTS, PHONE, _playwright, launch
-
-DESKTOP = {"width": 1400, "height": 1000}
+from tests.web.conftest import approach, make_agent, wait_for
+from tests.web.test_browser import ARTIFACTS, DESKTOP, PHONE, _playwright, launch, open_dashboard
 
 
 def driving_page(context: Any, server: WebServer, errors: list[str]) -> Any:
-    page = context.new_page()
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    page.set_default_timeout(20_000)
-    page.goto(server.url + "/", wait_until="domcontentloaded")
-    page.wait_for_selector('#conn[data-state="live"]')
+    page = open_dashboard(context, server.url, errors)
     page.check("#drive-on")
     page.wait_for_selector('#pad[data-on="true"]')
     page.locator("#pad").scroll_into_view_if_needed()
@@ -45,7 +38,7 @@ def test_keys_and_the_pad_drive_and_letting_go_stops(
             wait_for(lambda: robot.get_state().x < -0.3, 10, "the robot to back up")
             assert robot.get_state().vx < -0.1
             page.keyboard.up("s")
-            wait_for(lambda: robot.get_state().vx == 0.0, 2, "the robot to stop on release")
+            wait_for(lambda: robot.get_state().vx == 0.0, 5, "the robot to stop on release")
             # The pad: drag the knob to the left of the centre, turning left in place.
             box = page.locator("#pad").bounding_box()
             cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
@@ -54,7 +47,7 @@ def test_keys_and_the_pad_drive_and_letting_go_stops(
             page.mouse.move(cx - box["width"] * 0.4, cy, steps=4)
             wait_for(lambda: robot.get_state().yaw > 0.4, 10, "the robot to turn left")
             page.mouse.up()
-            wait_for(lambda: robot.get_state().wz == 0.0, 2, "the turn to stop on release")
+            wait_for(lambda: robot.get_state().wz == 0.0, 5, "the turn to stop on release")
             page.screenshot(path=str(ARTIFACTS / "dashboard-drive.png"), full_page=True)
         finally:
             context.close()
@@ -90,8 +83,6 @@ def test_the_pad_cannot_touch_the_red_ball_and_works_on_a_phone(
     agent = make_agent(time_scale=1.0)
     server = serve(agent)
     robot = agent.robot
-    ball = next(o for o in robot.world.objects if o.name == "red ball")  # type: ignore[attr-defined]
-    body = robot.config.body_radius  # type: ignore[attr-defined]
     with sync_playwright() as p:
         context = launch(p, tmp_path, PHONE)
         try:
@@ -99,14 +90,7 @@ def test_the_pad_cannot_touch_the_red_ball_and_works_on_a_phone(
             box = page.locator("#pad").bounding_box()
             assert box["x"] >= 0 and box["x"] + box["width"] <= PHONE["width"]
             page.keyboard.down("w")  # full ahead, straight at the ball 3 m away
-            closest = math.inf
-            deadline = time.monotonic() + 20
-            while time.monotonic() < deadline:
-                s = robot.get_state()
-                closest = min(closest, math.hypot(ball.x - s.x, ball.y - s.y) - ball.radius - body)
-                if s.x > 1.0 and s.vx == 0.0:
-                    break
-                time.sleep(0.01)
+            closest = approach(robot, "red ball")
             page.wait_for_selector('#drive-msg:has-text("red ball")')  # it says why it stopped
             page.keyboard.up("w")
             page.screenshot(path=str(ARTIFACTS / "dashboard-drive-phone.png"))

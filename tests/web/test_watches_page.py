@@ -9,7 +9,7 @@ from pathlib import Path
 
 from shadowhound.web import WebServer
 from tests.web.conftest import make_agent
-from tests.web.test_browser import ARGS, CHROMIUM, _playwright
+from tests.web.test_browser import DESKTOP, _playwright, launch, open_dashboard
 
 Serve = Callable[..., WebServer]
 
@@ -20,19 +20,9 @@ def test_the_page_shows_the_watch_and_why_it_stopped(serve: Serve, tmp_path: Pat
     server = serve(agent)
     errors: list[str] = []
     with sync_playwright() as p:
-        browser = p.chromium.launch_persistent_context(
-            str(tmp_path / "profile"),
-            executable_path=CHROMIUM,
-            headless=True,
-            args=ARGS,
-            viewport={"width": 1400, "height": 1000},
-        )
+        browser = launch(p, tmp_path, DESKTOP)
         try:
-            page = browser.new_page()
-            page.on("pageerror", lambda exc: errors.append(str(exc)))
-            page.set_default_timeout(30_000)
-            page.goto(server.url + "/", wait_until="domcontentloaded")
-            page.wait_for_selector('#conn[data-state="live"]')
+            page = open_dashboard(browser, server.url, errors, timeout_ms=30_000)
             page.fill("#command", "walk forward 2 meters unless something is in the way")
             page.click("#run")
             # While it walks: the step shows what it watches.

@@ -5,7 +5,7 @@ No skills, no robot: the web room turns a transcript into a mission or an e-stop
 """
 
 from ..errors import AudioProblem, TranscriptionError
-from .audio import ALLOWED, Audio, inspect
+from .audio import ALLOWED, Audio, inspect, taken
 from .commands import is_stop
 from .transcribe import Transcriber, not_configured
 
@@ -18,4 +18,5 @@ __all__ = [
     "inspect",
     "is_stop",
     "not_configured",
+    "taken",
 ]

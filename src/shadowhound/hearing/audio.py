@@ -40,9 +40,19 @@ class Audio:
         return f"speech.{self.kind}"
 
 
+def base_type(content_type: str) -> str:
+    """`audio/webm;codecs=opus` -> `audio/webm`."""
+    return (content_type or "").split(";", 1)[0].strip().lower()
+
+
+def taken(content_type: str) -> bool:
+    """Whether a Content-Type is a recording we take (its length still to be read)."""
+    return base_type(content_type) in KINDS
+
+
 def inspect(data: bytes, content_type: str) -> Audio:
     """The recording's container and length; AudioProblem when it is not one we take."""
-    base = (content_type or "").split(";", 1)[0].strip().lower()
+    base = base_type(content_type)
     kind = KINDS.get(base)
     if kind is None:
         shown = base or "none"

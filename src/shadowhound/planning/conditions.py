@@ -34,9 +34,9 @@ same edit distance the offline planner forgives, never from a real word ("whole"
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
-from ..plan import Plan, PlanningError, SkillCall, Usage
+from ..plan import Plan, PlanningError, Usage
 from ._condition_words import clause_end, scan, tokens
 
 MAX_QUOTE = 60  # characters of a condition quoted back to the person
@@ -67,14 +67,6 @@ def stated(text: str) -> list[Condition]:
             words = words[: MAX_QUOTE - 3].rstrip() + "..."
         found.append(Condition(kind, words))
     return found
-
-
-# Whether a plan's steps can carry watches at all (plan.SkillCall's `watches` and `guard`).
-STEPS_CARRY_WATCHES = "watches" in {f.name for f in fields(SkillCall)}
-# Whether the model's JSON plan (planning/schema.py's `conditions`, parse.py) carries them: it
-# does, so a model's plan is checked like the offline planner's; tool calls (tools and react
-# mode) cannot, and a request with a condition is refused there before the model is asked.
-MODEL_PLANS_CARRY_WATCHES = True
 
 
 def unhonoured(text: str, plan: Plan | None) -> list[str]:

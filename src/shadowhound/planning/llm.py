@@ -13,8 +13,9 @@ limit or the token budget is reached, or the mission is cancelled.
 
 A request that states a condition ("until you see the ball", "unless someone is in the way")
 is refused unless the plan expresses it (`conditions.unhonoured`): never planned as if the
-condition were not there. While plans cannot carry watches, such a request is refused before
-the model is asked, in plan mode, hybrid, re-planning and react mode alike.
+condition were not there. A JSON plan carries them (`conditions`, schema.py and parse.py);
+tool calls (tools and react mode) cannot, so there such a request is refused before the model
+is asked.
 """
 
 from __future__ import annotations
@@ -65,8 +66,8 @@ class LLMPlanner:
     def _plan(self, text: str, prompt: str, context: Any) -> Plan:
         """Plan the request `text`, asking the model with `prompt`."""
         style = "tools" if self._format() == "tools" else "plan"
-        if style == "tools" or not conditions.MODEL_PLANS_CARRY_WATCHES:
-            _refuse_unhonoured(text, None, Usage())  # its reply cannot say one: do not ask
+        if style == "tools":
+            _refuse_unhonoured(text, None, Usage())  # tool calls cannot say one: do not ask
         ctx = _context(context)
         usage = Usage()
         messages = [

@@ -24,21 +24,22 @@ _RULES = (
     "steps); numbers as numbers; to come back, nav.goto place 'start'; to go to, find or look "
     "for a thing, nav.goto with its name as place (seen or not)."
 )
+# What a condition's `when` and `kind` may be, said once for both plan replies.
+_CONDITION_KINDS = (
+    "(when: until, unless, if, if_not for otherwise; kind: seen (name, within m), in_the_way "
+    "(within m), battery_below (percent), operator_stop); never leave one out: refuse instead."
+)
 _PLAN_REPLY = (
     'Reply with JSON only: {"steps":[{"skill":"nav.move","args":{"distance":1}}],"answer":""}. '
     'A request no skill fits: the one step {"skill":"refuse","args":{"reason":"why"}}. Every '
     'condition stated goes in "conditions":[{"step":1,"when":"until","kind":"seen","name":'
-    '"red ball"}] (when: until, unless, if, if_not for '
-    "otherwise; kind: seen (name, within m), in_the_way (within m), battery_below (percent), "
-    "operator_stop); never leave one out: refuse instead."
+    '"red ball"}] ' + _CONDITION_KINDS
 )
 # The same when the model is shown the plan's schema (OpenAI's strict structured outputs): the
-# shape of the JSON and the names of the conditions' fields are said there, not twice.
+# shape of the JSON is said there, not twice.
 _SCHEMA_REPLY = (
     "Reply with the plan in its schema. A request no skill fits: the one step refuse, with a "
-    "reason. Every condition stated goes in conditions, about its step (when: until, unless, "
-    "if, if_not for otherwise; kind: seen (name, within m), in_the_way (within m), "
-    "battery_below (percent), operator_stop); never leave one out: refuse instead."
+    "reason. Every condition stated goes in conditions, about its step " + _CONDITION_KINDS
 )
 _TOOLS_REPLY = (
     "Call the skills as tools, all of them at once, in order. A request no skill fits gets no "

@@ -17,7 +17,15 @@ from typing import Any
 from fastapi import APIRouter, Request
 
 from ..admission import ESTOP_LATCHED, mission_text_problem
-from ..hearing import ALLOWED, AudioProblem, Transcriber, TranscriptionError, inspect, is_stop
+from ..hearing import (
+    ALLOWED,
+    AudioProblem,
+    Transcriber,
+    TranscriptionError,
+    inspect,
+    is_stop,
+    taken,
+)
 from ..hearing import not_configured as speech_off
 from ..worker import TELEOP_BUSY
 from .api import ctx
@@ -97,10 +105,11 @@ async def speech(request: Request) -> StrictJSON:
     if why:
         return _answer(503, why)
     data = await request.body()
+    kind = request.headers.get("content-type", "")
     try:
-        audio = inspect(data, request.headers.get("content-type", ""))
+        audio = inspect(data, kind)
     except AudioProblem as exc:
-        return _answer(415 if "Content-Type" in str(exc) else 422, str(exc))
+        return _answer(422 if taken(kind) else 415, str(exc))
     if audio.seconds > config.max_seconds:
         return _answer(
             413,
