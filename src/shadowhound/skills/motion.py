@@ -10,7 +10,14 @@ for `stall_timeout`.
 Whatever odometry says, a loop also brakes within the bounds of bounds.py: the travel (turn)
 its leg may command in all, the room before the body would reach a geofence (from the measured
 and the commanded pose) and the mission's distance left. A loop that has used them up while
-odometry still shows the goal ahead stops and fails, naming the bound.
+odometry still shows the goal ahead stops and fails, naming the bound; only when the bound was
+its own commands' and odometry shows it within the step's outcome tolerance does it end there,
+saying so (a robot slow to start, a command late on the way: the commands ran ahead of it).
+A leg or turn done is checked against its commands once more at rest: odometry further along
+than the commands could take the robot is a lie, and fails.
+
+Long because: the straight leg and the turn are one closed loop each, with the same approaches,
+corrections, bounds and checks at rest; split, each half would need the other's helpers.
 """
 
 from __future__ import annotations
@@ -104,6 +111,7 @@ def drive_local(
     margin = leg_margin(ctx.config.safety, goal)
     leg = (tx * c - ty * s, tx * s + ty * c)  # the planned leg, from its start
     stopped_for_room = False  # the loop stopped for want of room and settled
+    short = False  # ended short, within the outcome tolerance: the commands' room is used up
     for attempt in range(1 + _CORRECTIONS):
         best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
         cap = speed if attempt == 0 else min(speed, m.position_tolerance / _CORRECTION_SECONDS)
@@ -142,13 +150,24 @@ def drive_local(
             room, why = ctx.room(heading, error + 0.5, st)
             ox, oy, _ = ctx.commanded()
             left = leg_room((ox, oy), heading, leg, margin)
-            if left < room:
+            by_commands = left < room
+            if by_commands:
                 room, why = left, _disagree(math.hypot(ox, oy), goal, margin, goal - error)
             if room < m.position_tolerance and error >= m.position_tolerance:
                 if not stopped_for_room:  # judge at rest: late odometry may only now catch up
                     stopped_for_room = True
                     settle(ctx)
+                    best_time = robot.now()  # the wait at rest is no stall
                     continue
+                if by_commands and error <= ctx.config.safety.outcome_tolerance:
+                    ctx.notes.append(
+                        f"ended {error:.2f} m short of the {goal:.2f} m leg: its commands had "
+                        f"taken the robot {math.hypot(ox, oy):.2f} m, the most the leg allows, "
+                        "and odometry shows less (the robot slow to start, or commands late "
+                        "or lost on the way)"
+                    )
+                    short = True
+                    break
                 robot.stop()
                 raise SkillError(f"stopped {error:.2f} m short of the goal: {why}")
             stopped_for_room = False
@@ -170,28 +189,47 @@ def drive_local(
                 _relocalized(ctx)
             origin, prev = carried(origin, prev, at_rest), at_rest
             c, s = math.cos(origin.yaw), math.sin(origin.yaw)
-        if _off(at_rest.pose, origin, tx, ty) < m.position_tolerance:
+        if short or _off(at_rest.pose, origin, tx, ty) < m.position_tolerance:
             break  # judged on the pose at rest, not on the one the loop stopped on
     end = robot.get_state()
     if end.relocalized != prev.relocalized:
         origin = carried(origin, prev, end)
-    _agrees(ctx, end, origin, start.yaw, margin)
+    _agrees(ctx, end, origin, start.yaw, margin, (tx, ty))
     return math.hypot(end.x - origin.x, end.y - origin.y)
 
 
-def _agrees(ctx: SkillContext, end: RobotState, origin: Pose2D, yaw0: float, margin: float) -> None:
+def _agrees(
+    ctx: SkillContext,
+    end: RobotState,
+    origin: Pose2D,
+    yaw0: float,
+    margin: float,
+    leg: tuple[float, float],
+) -> None:
     """A leg odometry says is done must agree with what its commands did: where odometry
     puts the robot (from the leg's start, in its frame) and where the commands alone put it
     (the ledger, from the same start) may differ by at most the leg's margin. A jump of the
     odometry too small to be seen as one (within what the robot could move between two
-    samples) otherwise ends the leg early or late by as much, reported as done."""
+    samples) otherwise ends the leg early by as much, reported as done.
+
+    Only odometry *ahead* of the commands along the leg (`leg`: its goal, in the same frame)
+    counts: commands further along than odometry are what a link does (each command acts
+    once it arrives, so a stop that arrives sooner than the velocity before it cuts that
+    short), and leg_room has kept them within the margin, so the truth is within it too."""
     c, s = math.cos(origin.yaw), math.sin(origin.yaw)
     dx, dy = end.x - origin.x, end.y - origin.y
     measured = (dx * c + dy * s, -dx * s + dy * c)
     ox, oy, _ = ctx.commanded()  # in the frame the leg began in (odometry's, before any jump)
     c, s = math.cos(yaw0), math.sin(yaw0)
     commanded = (ox * c + oy * s, -ox * s + oy * c)
-    apart = math.hypot(measured[0] - commanded[0], measured[1] - commanded[1])
+    ax, ay = measured[0] - commanded[0], measured[1] - commanded[1]
+    length = math.hypot(*leg)
+    if length > 0:
+        ux, uy = leg[0] / length, leg[1] / length
+        along = ax * ux + ay * uy
+        apart = math.hypot(max(0.0, along), ax * uy - ay * ux)  # ahead, and to either side
+    else:
+        apart = math.hypot(ax, ay)
     if apart > margin:
         ctx.robot.stop()
         raise SkillError(
@@ -214,6 +252,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
     ctx.begin_leg(first)
     margin = turn_margin(ctx.config.safety, angle)
     stopped_for_room = False  # the loop stopped for want of room and settled
+    short = False  # ended short, within the outcome tolerance: the commands' room is used up
     for attempt in range(1 + _CORRECTIONS):
         best, best_time = math.inf, robot.now()  # each approach from rest gets its own time
         cap = speed if attempt == 0 else min(speed, m.yaw_tolerance / _CORRECTION_SECONDS)
@@ -242,7 +281,12 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
                 if not stopped_for_room:  # judge at rest: late odometry may only now catch up
                     stopped_for_room = True
                     settle(ctx)
+                    best_time = robot.now()  # the wait at rest is no stall
                     continue
+                if abs(error) <= math.radians(ctx.config.safety.outcome_tolerance_deg):
+                    ctx.notes.append(_short_turn(error, commanded, angle))
+                    short = True
+                    break
                 robot.stop()
                 raise SkillError(
                     f"stopped {math.degrees(abs(error)):.0f} degrees short of the turn: it was "
@@ -260,13 +304,19 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
         settle(ctx)
         st = robot.get_state()
         last_yaw, prev = _turn_jumped(ctx, last_yaw, prev, st, relative), st
-        if abs(angle - turned - normalize_angle(st.yaw - last_yaw)) < m.yaw_tolerance:
+        if short or abs(angle - turned - normalize_angle(st.yaw - last_yaw)) < m.yaw_tolerance:
             break  # judged on the heading at rest, not on the one the loop stopped on
     st = robot.get_state()
     last_yaw = _turn_jumped(ctx, last_yaw, prev, st, relative)
     turned += normalize_angle(st.yaw - last_yaw)
     commanded = ctx.commanded()[2]
-    if abs(turned - commanded) > margin:  # a heading jump too small to be seen as one
+    # Odometry turned further than the commands could have (a heading jump too small to be
+    # seen as one): a success would not be true. Commands further than odometry are not: a
+    # command acts only once it reaches the robot, so a stop that arrives sooner than the last
+    # velocity before it cuts that short (a link's latency varies from message to message);
+    # turn_room has kept the commands within the margin, so the truth is too either way.
+    ahead = (turned - commanded) * (1.0 if angle >= 0 else -1.0)
+    if (ahead if angle else abs(turned - commanded)) > margin:
         robot.stop()
         raise SkillError(
             f"odometry shows the turn done ({math.degrees(turned):.0f} degrees), yet its "
@@ -275,6 +325,16 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
             "odometry disagrees with the motion (a small jump of the heading?)"
         )
     return turned
+
+
+def _short_turn(error: float, commanded: float, angle: float) -> str:
+    """The note of a turn that ended short within the outcome tolerance."""
+    return (
+        f"ended {math.degrees(abs(error)):.1f} degrees short of the "
+        f"{math.degrees(abs(angle)):.0f} degree turn: its commands had turned the robot "
+        f"{math.degrees(abs(commanded)):.0f} degrees, the most the turn allows, and odometry "
+        "shows less (the robot slow to start, or commands late or lost on the way)"
+    )
 
 
 def _turn_jumped(
