@@ -153,7 +153,8 @@ def test_with_speak_results_a_missions_outcome_is_said_on_the_speech_topic(rig) 
     final = agent.run("turn left 10 degrees", 60.0)
     assert final.startswith("COMPLETED: "), final
     message = speech.wait_for(lambda m: True, 5.0, "the outcome on the speech topic", mark)
-    assert message.data.startswith("Done: turned"), message.data
+    # The mission's own result (a turn on a busy machine may say it ended a little short).
+    assert message.data.startswith("Done: ") and message.data[:60] in final, (message.data, final)
     assert len(said(speech, mark)) == 1
 
 
