@@ -50,12 +50,8 @@ def client() -> Iterator[RosClient]:
 @pytest.fixture(scope="module")
 def rig(client: RosClient, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Rig]:
     profile = Path(tmp_path_factory.mktemp("slam")) / "places.yaml"
-    # The watchdog at 1 s, not 0.25: the longest walks of the ROS tests, on a machine loaded by
-    # parallel test workers, met control-loop gaps of 0.34 s (CI's cores are not ours alone);
-    # the watchdog has tests of its own, this module is about SLAM.
     profile.write_text(
         "backend: offline\nrobot: go2\nnavigation: direct\nmemory:\n  enabled: false\n"
-        "safety:\n  watchdog_timeout: 1.0\n"
         f"places:\n  kitchen: [{KITCHEN[0]}, {KITCHEN[1]}]\n  hall: [{HALL[0]}, {HALL[1]}]\n"
     )
     rig, stop = start_rig(

@@ -70,13 +70,9 @@ def client() -> Iterator[RosClient]:
 
 @pytest.fixture(scope="module")
 def node(client: RosClient) -> Iterator[Agent]:
-    # The e-stop and the cancels are what is tested here: a loaded machine (CI runs three test
-    # workers on two cores beside this node) can stall the node's control loop past the
-    # watchdog's 0.25 s, which then stops the walk first (seen once in CI). 1 s keeps the
-    # watchdog on, and out of the way of the stops under test.
-    process = NodeProcess(
-        "-p", "time_scale:=1.0", env={"SHADOWHOUND_SAFETY__WATCHDOG_TIMEOUT": "1.0"}
-    )
+    # (NodeProcess keeps the watchdog out of the way of the stops under test on a loaded
+    # machine: rosclient.LOADED_MACHINE_ENV.)
+    process = NodeProcess("-p", "time_scale:=1.0")
     agent = Agent(client)
     try:
         agent.wait_ready(process)

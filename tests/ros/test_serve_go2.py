@@ -11,6 +11,7 @@ Skipped without rclpy or the interface packages unless SHADOWHOUND_REQUIRE_ROS=1
 from __future__ import annotations
 
 import math
+import os
 import signal
 import subprocess
 import sys
@@ -24,7 +25,12 @@ from tests.ros.needs import require
 
 require("rclpy", "shadowhound_interfaces", "go2_interfaces", "fastapi")
 
-from tests.ros.rosclient import NodeProcess, RosClient, wait_until  # noqa: E402
+from tests.ros.rosclient import (  # noqa: E402
+    LOADED_MACHINE_ENV,
+    NodeProcess,
+    RosClient,
+    wait_until,
+)
 from tests.ros.test_go2_truth import Truth, free_port  # noqa: E402
 
 TIMEOUT = 40.0
@@ -75,6 +81,7 @@ def test_serve_robot_go2_walks_the_driver_from_the_http_api(
             ],
             stdout=out,
             stderr=subprocess.STDOUT,
+            env={**os.environ, **LOADED_MACHINE_ENV},
         )
     try:
         truth.wait_ready(driver)
@@ -90,8 +97,8 @@ def test_serve_robot_go2_walks_the_driver_from_the_http_api(
         mission_id = mission.json()["mission_id"]
         wait_until(
             lambda: (
-                httpx.get(f"{url}/api/missions/{mission_id}").json()["status"]
-                in ("succeeded", "failed")
+                httpx.get(f"{url}/api/missions/{mission_id}").json()["state"]
+                in ("finished", "dropped")  # whatever its status: stopped too
             ),
             TIMEOUT,
             "the mission to end",
