@@ -4,99 +4,87 @@ in real time; judged by the robot's true state."""
 
 from __future__ import annotations
 
+import contextlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+from shadowhound.robot.sim.robot import SimRobot
 from shadowhound.web import WebServer
 from tests.web.conftest import approach, make_agent, wait_for
 from tests.web.test_browser import ARTIFACTS, DESKTOP, PHONE, _playwright, launch, open_dashboard
 
 
-def driving_page(context: Any, server: WebServer, errors: list[str]) -> Any:
-    page = open_dashboard(context, server.url, errors)
-    page.check("#drive-on")
-    page.wait_for_selector('#pad[data-on="true"]')
-    page.locator("#pad").scroll_into_view_if_needed()
-    return page
+@contextlib.contextmanager
+def driving(
+    serve: Callable[..., WebServer], tmp_path: Path, viewport: dict[str, int], errors: list[str]
+) -> Iterator[tuple[Any, SimRobot]]:
+    """Chromium at `viewport` on a dashboard whose pad is switched on, and the simulated robot
+    it drives in real time."""
+    sync_playwright = _playwright()
+    agent = make_agent(time_scale=1.0)
+    server = serve(agent)
+    with sync_playwright() as p:
+        context = launch(p, tmp_path, viewport)
+        try:
+            page = open_dashboard(context, server.url, errors)
+            page.check("#drive-on")
+            page.wait_for_selector('#pad[data-on="true"]')
+            page.locator("#pad").scroll_into_view_if_needed()
+            yield page, agent.robot
+        finally:
+            context.close()
 
 
 def test_keys_and_the_pad_drive_and_letting_go_stops(
     serve: Callable[..., WebServer], tmp_path: Path
 ) -> None:
-    sync_playwright = _playwright()
-    agent = make_agent(time_scale=1.0)
-    server = serve(agent)
-    robot = agent.robot
     errors: list[str] = []
-    with sync_playwright() as p:
-        context = launch(p, tmp_path, DESKTOP)
-        try:
-            page = driving_page(context, server, errors)
-            page.keyboard.down("s")  # back
-            wait_for(lambda: robot.get_state().x < -0.3, 10, "the robot to back up")
-            assert robot.get_state().vx < -0.1
-            page.keyboard.up("s")
-            wait_for(lambda: robot.get_state().vx == 0.0, 5, "the robot to stop on release")
-            # The pad: drag the knob to the left of the centre, turning left in place.
-            box = page.locator("#pad").bounding_box()
-            cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
-            page.mouse.move(cx, cy)
-            page.mouse.down()
-            page.mouse.move(cx - box["width"] * 0.4, cy, steps=4)
-            wait_for(lambda: robot.get_state().yaw > 0.4, 10, "the robot to turn left")
-            page.mouse.up()
-            wait_for(lambda: robot.get_state().wz == 0.0, 5, "the turn to stop on release")
-            page.screenshot(path=str(ARTIFACTS / "dashboard-drive.png"), full_page=True)
-        finally:
-            context.close()
+    with driving(serve, tmp_path, DESKTOP, errors) as (page, robot):
+        page.keyboard.down("s")  # back
+        wait_for(lambda: robot.get_state().x < -0.3, 10, "the robot to back up")
+        assert robot.get_state().vx < -0.1
+        page.keyboard.up("s")
+        wait_for(lambda: robot.get_state().vx == 0.0, 5, "the robot to stop on release")
+        # The pad: drag the knob to the left of the centre, turning left in place.
+        box = page.locator("#pad").bounding_box()
+        cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+        page.mouse.move(cx, cy)
+        page.mouse.down()
+        page.mouse.move(cx - box["width"] * 0.4, cy, steps=4)
+        wait_for(lambda: robot.get_state().yaw > 0.4, 10, "the robot to turn left")
+        page.mouse.up()
+        wait_for(lambda: robot.get_state().wz == 0.0, 5, "the turn to stop on release")
+        page.screenshot(path=str(ARTIFACTS / "dashboard-drive.png"), full_page=True)
     assert not errors, errors
 
 
 def test_closing_the_page_mid_drive_stops_the_robot(
     serve: Callable[..., WebServer], tmp_path: Path
 ) -> None:
-    sync_playwright = _playwright()
-    agent = make_agent(time_scale=1.0)
-    server = serve(agent)
-    robot = agent.robot
-    with sync_playwright() as p:
-        context = launch(p, tmp_path, DESKTOP)
-        try:
-            page = driving_page(context, server, [])
-            page.keyboard.down("ArrowDown")
-            wait_for(lambda: robot.get_state().vx < -0.1, 10, "the robot to back up")
-            page.close(run_before_unload=False)
-            wait_for(lambda: robot.get_state().vx == 0.0, 3, "the robot to stop")
-            x = robot.get_state().x
-            time.sleep(0.6)  # longer than the dead-man's 0.5 s: nothing drives it any more
-            assert abs(robot.get_state().x - x) < 0.005
-        finally:
-            context.close()
+    with driving(serve, tmp_path, DESKTOP, []) as (page, robot):
+        page.keyboard.down("ArrowDown")
+        wait_for(lambda: robot.get_state().vx < -0.1, 10, "the robot to back up")
+        page.close(run_before_unload=False)
+        wait_for(lambda: robot.get_state().vx == 0.0, 3, "the robot to stop")
+        x = robot.get_state().x
+        time.sleep(0.6)  # longer than the dead-man's 0.5 s: nothing drives it any more
+        assert abs(robot.get_state().x - x) < 0.005
 
 
 def test_the_pad_cannot_touch_the_red_ball_and_works_on_a_phone(
     serve: Callable[..., WebServer], tmp_path: Path
 ) -> None:
-    sync_playwright = _playwright()
-    agent = make_agent(time_scale=1.0)
-    server = serve(agent)
-    robot = agent.robot
-    with sync_playwright() as p:
-        context = launch(p, tmp_path, PHONE)
-        try:
-            page = driving_page(context, server, [])
-            box = page.locator("#pad").bounding_box()
-            assert box["x"] >= 0 and box["x"] + box["width"] <= PHONE["width"]
-            page.keyboard.down("w")  # full ahead, straight at the ball 3 m away
-            closest = approach(robot, "red ball")
-            page.wait_for_selector('#drive-msg:has-text("red ball")')  # it says why it stopped
-            page.keyboard.up("w")
-            page.screenshot(path=str(ARTIFACTS / "dashboard-drive-phone.png"))
-            estop = page.locator("#estop").bounding_box()
-            assert estop and 0 <= estop["y"] < PHONE["height"]  # the e-stop stays on screen
-        finally:
-            context.close()
+    with driving(serve, tmp_path, PHONE, []) as (page, robot):
+        box = page.locator("#pad").bounding_box()
+        assert box["x"] >= 0 and box["x"] + box["width"] <= PHONE["width"]
+        page.keyboard.down("w")  # full ahead, straight at the ball 3 m away
+        closest = approach(robot, "red ball")
+        page.wait_for_selector('#drive-msg:has-text("red ball")')  # it says why it stopped
+        page.keyboard.up("w")
+        page.screenshot(path=str(ARTIFACTS / "dashboard-drive-phone.png"))
+        estop = page.locator("#estop").bounding_box()
+        assert estop and 0 <= estop["y"] < PHONE["height"]  # the e-stop stays on screen
     assert closest > 0.0, closest  # the body never touched the ball (truth)
     assert robot.get_state().x > 1.5  # and it did drive up to it

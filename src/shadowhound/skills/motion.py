@@ -161,10 +161,11 @@ def drive_local(
                     continue
                 if by_commands and error <= ctx.config.safety.outcome_tolerance:
                     ctx.notes.append(
-                        f"ended {error:.2f} m short of the {goal:.2f} m leg: its commands had "
-                        f"taken the robot {math.hypot(ox, oy):.2f} m, the most the leg allows, "
-                        "and odometry shows less (the robot slow to start, or commands late "
-                        "or lost on the way)"
+                        _ended_short(
+                            f"{error:.2f} m",
+                            f"{goal:.2f} m leg",
+                            f"taken the robot {math.hypot(ox, oy):.2f} m, the most the leg allows",
+                        )
                     )
                     short = True
                     break
@@ -284,7 +285,14 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
                     best_time = robot.now()  # the wait at rest is no stall
                     continue
                 if abs(error) <= math.radians(ctx.config.safety.outcome_tolerance_deg):
-                    ctx.notes.append(_short_turn(error, commanded, angle))
+                    ctx.notes.append(
+                        _ended_short(
+                            f"{math.degrees(abs(error)):.1f} degrees",
+                            f"{math.degrees(abs(angle)):.0f} degree turn",
+                            f"turned the robot {math.degrees(abs(commanded)):.0f} degrees, the "
+                            "most the turn allows",
+                        )
+                    )
                     short = True
                     break
                 robot.stop()
@@ -315,8 +323,9 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
     # command acts only once it reaches the robot, so a stop that arrives sooner than the last
     # velocity before it cuts that short (a link's latency varies from message to message);
     # turn_room has kept the commands within the margin, so the truth is too either way.
-    ahead = (turned - commanded) * (1.0 if angle >= 0 else -1.0)
-    if (ahead if angle else abs(turned - commanded)) > margin:
+    apart = turned - commanded
+    apart = math.copysign(1.0, angle) * apart if angle else abs(apart)  # ahead counts
+    if apart > margin:
         robot.stop()
         raise SkillError(
             f"odometry shows the turn done ({math.degrees(turned):.0f} degrees), yet its "
@@ -327,12 +336,11 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
     return turned
 
 
-def _short_turn(error: float, commanded: float, angle: float) -> str:
-    """The note of a turn that ended short within the outcome tolerance."""
+def _ended_short(short: str, planned: str, commanded: str) -> str:
+    """The note of a leg or turn that ended `short` of the `planned` one, within the outcome
+    tolerance, because its commands had done what it allows (`commanded`)."""
     return (
-        f"ended {math.degrees(abs(error)):.1f} degrees short of the "
-        f"{math.degrees(abs(angle)):.0f} degree turn: its commands had turned the robot "
-        f"{math.degrees(abs(commanded)):.0f} degrees, the most the turn allows, and odometry "
+        f"ended {short} short of the {planned}: its commands had {commanded}, and odometry "
         "shows less (the robot slow to start, or commands late or lost on the way)"
     )
 
