@@ -39,6 +39,7 @@ from .skills import (
     SkillError,
     ValidatedCall,
 )
+from .skills.motion import settle
 from .skills.objects import see_at_start
 from .skills.watches import fired_text, guard_holds
 from .speech import Saying
@@ -431,6 +432,10 @@ class MissionRun:
             ctx.watch(call.watches)
             ctx.check()
             output = call.skill.run(ctx, call.args)
+            if call.skill.moves or ctx.ledger is not None:
+                # A step that moved the robot ends at rest, whatever the skill did last: the
+                # next step then starts from rest, and the outcome is judged there.
+                settle(ctx)
             off_target = c.governor.check_outcome(call, before, robot.get_state(), env)
             if off_target:
                 raise SkillError(off_target)

@@ -10,7 +10,11 @@ keeps bounds from what it *commanded*, which no sensor can corrupt:
 - a leg's commanded travel, and a turn's commanded angle, may exceed the planned leg by
   `safety.step_travel_margin` plus `safety.step_travel_slack` of its length, no more;
 - `room_ahead`: how far the robot may go along a heading before its body would reach a
-  geofence, judged from the commanded pose and from the measured pose (the stricter wins).
+  geofence, judged from the commanded pose and from the measured pose (the stricter wins);
+- `room_on_map`: how far before its body would touch anything on the map, the rule a mission's
+  legs are checked by (`world.check_leg`); motion whose path is not known before it runs
+  (nav.follow, teleoperation) looks along its heading with it every tick, and `brake_speed`
+  is the fastest speed that still stops within the room.
 
 The motion loops (motion.py) brake within the smallest of these, as they brake for the goal.
 """
@@ -23,6 +27,9 @@ from dataclasses import dataclass
 from .. import geofence
 from ..config import SafetyConfig
 from ..state import Pose2D
+from ..world import Belief, check_leg
+
+STOP_SHORT = 0.05  # metres kept short of a fence or an obstacle when braking for it
 
 
 def fences(lim: SafetyConfig) -> list[tuple[geofence.Fence, str, str]]:
@@ -61,6 +68,38 @@ def room_ahead(
         if t is not None and t * reach < room:
             room, name = t * reach, fence_name
     return room, name
+
+
+def room_on_map(
+    belief: Belief | None, at: Pose2D, heading: float, reach: float
+) -> tuple[float, str]:
+    """Metres the robot's centre may go from `at` along `heading` (looking `reach` ahead)
+    before its body would touch what is on the map, and what that is ("the blue box", "the
+    wall", "unmapped space"): what is in the way of a mission's leg (`world.check_leg`, its
+    rule for a body already near something included) is in the way here. (reach, "") with no
+    map, or nothing in the way."""
+    if belief is None:
+        return reach, ""
+    end = (at.x + reach * math.cos(heading), at.y + reach * math.sin(heading))
+    leg = check_leg(belief, (at.x, at.y), end)
+    return (reach, "") if leg.clear else (leg.distance, leg.obstacle)
+
+
+def room_along(
+    lim: SafetyConfig, belief: Belief | None, at: Pose2D, heading: float, reach: float
+) -> tuple[float, str]:
+    """The smaller of `room_ahead` (the geofences) and `room_on_map` (anything on the map)
+    from `at` along `heading`, and what limits it ("" when nothing within `reach`)."""
+    room, why = room_ahead(lim, at, heading, reach)
+    ahead, what = room_on_map(belief, at, heading, reach)
+    return (ahead, what) if what and ahead < room else (room, why)
+
+
+def brake_speed(room: float, accel: float, period: float) -> float:
+    """The fastest speed that, held for one control `period` and then braked at `accel`,
+    stops within `room` metres: v * period + v^2 / (2 accel) = room."""
+    room = max(0.0, room)
+    return max(0.0, -accel * period + math.sqrt((accel * period) ** 2 + 2 * accel * room))
 
 
 @dataclass

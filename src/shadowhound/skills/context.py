@@ -16,7 +16,7 @@ from ..robot.base import Robot
 from ..speech import Saying
 from ..state import CameraFrame, Pose2D, Posture, RobotState
 from ..world import Belief, KnownObject
-from .bounds import CommandLedger, fences, room_ahead
+from .bounds import CommandLedger, fences, room_ahead, room_on_map
 from .watches import Watcher, raise_if_fired
 
 _TRANSLATING = 0.05  # m/s commanded: the robot goes somewhere (a path check looks along it)
@@ -202,6 +202,16 @@ class SkillContext:
                 room, why = max(0.0, left), "mission"
                 reasons[why] = walked_too_far(budget.travelled(state), lim.max_mission_distance)
         return room, reasons.get(why, "")
+
+    def room_on_path(self, heading: float, reach: float, state: RobotState) -> tuple[float, str]:
+        """`room`, and anything on the map in the way, from the measured pose: what is in the
+        way of a mission's leg (`bounds.room_on_map`). For motion whose path is not known
+        before it runs (nav.follow), which looks along its heading every tick."""
+        room, why = self.room(heading, reach, state)
+        ahead, what = room_on_map(self.env.belief, state.pose, heading, reach)
+        if what and ahead < room:
+            return ahead, f"{what} is in the way"
+        return room, why
 
     @property
     def last_command(self) -> tuple[float, float, float]:

@@ -7,7 +7,11 @@ nearer than 1.0 m; it backs off when one comes closer), reading the target from 
 from any interface ends it as any step. Refused before moving when the robot cannot tell what
 is in view, or does not see the target at the start (there is nothing to follow). Where it goes
 is not known before it runs: every velocity passes the speed and acceleration caps, and every
-tick the geofence and the mission's distance (`SkillContext.check`).
+tick the geofence and the mission's distance (`SkillContext.check`); it walks only as fast as
+still lets it brake, `STOP_SHORT` before, whatever is in the way along where it goes: the
+geofence, the mission's distance and anything on the map, by a mission leg's rule
+(`SkillContext.room_on_path`). A person is not on the map: it keeps its distance from them. Like
+every step that moves the robot, it ends at rest (the mission runner settles it).
 """
 
 from __future__ import annotations
@@ -17,9 +21,10 @@ import math
 from pydantic import Field
 
 from ..errors import SkillError
-from ..state import Sighting
+from ..state import RobotState, Sighting
 from ..world.objects import object_key
 from .arguments import Length, OptionalDuration, SkillArgs
+from .bounds import STOP_SHORT, brake_speed
 from .context import PlanEnv, SkillContext
 from .registry import Skill
 from .watches import names
@@ -63,12 +68,15 @@ def _run_follow(ctx: SkillContext, a: FollowArgs) -> str:
     top = min(s.max_linear_speed, 2 * ctx.config.motion.default_linear_speed)
     turn = min(s.max_angular_speed, 1.5)
     start = robot.now()
-    end = ctx.deadline - 1.0  # before the step's (the mission's) time runs out
+    # Before the step's (the mission's) time runs out, with the time to come to rest after.
+    end = ctx.deadline - 1.0 - top / s.max_linear_accel
     if a.seconds is not None:
         end = min(end, start + a.seconds)
     last_seen, bearing = start, 0.0
-    walked, before = 0.0, robot.get_state().pose
+    state = robot.get_state()
+    walked, before = 0.0, state.pose
     why = ""
+    held: list[str] = []  # what it stopped short of, in the order met
     while True:
         now = robot.now()
         if now >= end:
@@ -81,6 +89,9 @@ def _run_follow(ctx: SkillContext, a: FollowArgs) -> str:
             vx = max(-_BACK_OFF, min(top, _WALK_GAIN * off)) * max(0.0, math.cos(bearing))
             if target.distance < nearest + 0.1 or not math.isfinite(target.distance):
                 vx = min(vx, 0.0)  # never on toward it (or toward one at no known distance)
+            vx, limit = _within_room(ctx, vx, state)
+            if limit and limit not in held:
+                held.append(limit)
             ctx.drive(vx, 0.0, max(-turn, min(turn, _TURN_GAIN * bearing)))
         elif now - last_seen > LOST_AFTER:
             why = f"lost sight of {_the(key)} for {LOST_AFTER:g} s"
@@ -88,11 +99,31 @@ def _run_follow(ctx: SkillContext, a: FollowArgs) -> str:
         else:  # out of view a moment: stand, turned toward where it went
             ctx.drive(0.0, 0.0, max(-turn / 2, min(turn / 2, _TURN_GAIN * bearing)))
         ctx.tick()
-        here = robot.get_state().pose
-        walked += math.hypot(here.x - before.x, here.y - before.y)
-        before = here
+        state = robot.get_state()
+        walked += math.hypot(state.x - before.x, state.y - before.y)
+        before = state.pose
     robot.stop()
-    return f"followed {_the(key)} for {robot.now() - start:.0f} s ({walked:.1f} m) until {why}"
+    said = f"followed {_the(key)} for {robot.now() - start:.0f} s ({walked:.1f} m) until {why}"
+    if held:
+        said += f"; held back: {'; '.join(held[:3])}"
+    return said
+
+
+def _within_room(ctx: SkillContext, vx: float, state: RobotState) -> tuple[float, str]:
+    """`vx` (forward +, back -) cut so the robot can still brake at safety.max_linear_accel,
+    `STOP_SHORT` before whatever is in the way where it goes (`SkillContext.room_on_path`), and
+    why it was cut ("" when it was not)."""
+    speed = abs(vx)
+    if speed < 1e-9:
+        return vx, ""
+    accel = ctx.config.safety.max_linear_accel
+    heading = state.yaw + (0.0 if vx > 0 else math.pi)
+    reach = speed * ctx.period + speed * speed / (2 * accel) + 0.5
+    room, why = ctx.room_on_path(heading, reach, state)
+    allowed = brake_speed(room - STOP_SHORT, accel, ctx.period)
+    if allowed >= speed:
+        return vx, ""
+    return math.copysign(allowed, vx), why
 
 
 def _the(name: str) -> str:
