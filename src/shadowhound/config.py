@@ -295,6 +295,18 @@ class AgentConfig(_Section):
     replan_on_failure: bool = True
 
 
+class TeleopConfig(_Section):
+    """Driving from the dashboard's pad (`shadowhound.teleop`)."""
+
+    idle_timeout: float = Field(
+        60.0,
+        gt=0,
+        le=3600,
+        description="seconds with nobody driving (no deflection) before driving switches itself "
+        "off, and missions are taken again",
+    )
+
+
 class ShadowHoundConfig(_Section):
     """Everything ShadowHound can be configured with. Loaded by `load_config`."""
 
@@ -318,6 +330,7 @@ class ShadowHoundConfig(_Section):
     agent: AgentConfig = Field(default_factory=AgentConfig)
     memory: MemoryConfig = Field(default_factory=MemoryConfig)
     speech: SpeechConfig = Field(default_factory=SpeechConfig)
+    teleop: TeleopConfig = Field(default_factory=TeleopConfig)
     places: dict[str, tuple[float, float]] = Field(
         default_factory=lambda: {"kitchen": (4.0, 2.5), "charging dock": (-2.1, -1.0)},
         description="named places, metres, in the robot's world frame: SLAM's map on a Go2 with "

@@ -26,7 +26,7 @@ from .errors import PlanProblem
 from .skills import SkillRegistry, default_registry, paths
 from .skills.arguments import argument_kind
 from .skills.context import PlanEnv
-from .skills.registry import ValidatedCall
+from .skills.registry import Skill, ValidatedCall
 from .state import (
     Pose2D,
     Posture,
@@ -221,18 +221,8 @@ class Governor:
     ) -> tuple[list[str], list[Pose2D], str]:
         lim = self.limits
         name, args = call.name, call.args
-        reasons: list[str] = []
-        if lim.allow_skills is not None and not _matches(name, lim.allow_skills):
-            reasons.append(f"{name} is not in safety.allow_skills ({', '.join(lim.allow_skills)})")
-        if _matches(name, lim.deny_skills):
-            reasons.append(f"{name} is in safety.deny_skills")
-        level = start.battery  # None: unknown, said once in check_plan's notes
-        if level is not None and level < lim.battery_floor and not call.skill.low_battery:
-            reasons.append(
-                f"the battery is at {level:.0f}%, below the floor of "
-                f"{lim.battery_floor:g}% (safety.battery_floor): only "
-                f"{', '.join(self._low_battery_skills())} are allowed"
-            )
+        # start.battery None: unknown, said once in check_plan's notes
+        reasons = self.skill_rules(call.skill, start.battery)
         reasons += self._speed_caps(call)
         seconds = call.skill.waits(args) if call.skill.waits is not None else None
         if seconds is not None and seconds > lim.max_wait:
@@ -259,6 +249,24 @@ class Governor:
         what = name if distance is None else f"{name} {distance:g} m"
         reasons += self.path_problems(pose, poses, env, what)
         return reasons, poses, approval
+
+    def skill_rules(self, skill: Skill, battery: float | None) -> list[str]:
+        """Why `skill` may not run now, whatever its arguments and wherever the robot is: the
+        allow and deny lists and the battery floor (`battery` percent; None: not known, not
+        checked). Teleoperation's motion passes these too (teleop.py)."""
+        lim, name = self.limits, skill.name
+        reasons: list[str] = []
+        if lim.allow_skills is not None and not _matches(name, lim.allow_skills):
+            reasons.append(f"{name} is not in safety.allow_skills ({', '.join(lim.allow_skills)})")
+        if _matches(name, lim.deny_skills):
+            reasons.append(f"{name} is in safety.deny_skills")
+        if battery is not None and battery < lim.battery_floor and not skill.low_battery:
+            reasons.append(
+                f"the battery is at {battery:.0f}%, below the floor of "
+                f"{lim.battery_floor:g}% (safety.battery_floor): only "
+                f"{', '.join(self._low_battery_skills())} are allowed"
+            )
+        return reasons
 
     def _speed_caps(self, call: ValidatedCall) -> list[str]:
         """Every speed argument against its cap, by the kind of quantity it is declared as."""

@@ -58,7 +58,10 @@ class MissionJob:
     calls: list[SkillCall] | None = None  # explicit skill calls to run instead of planning
 
 
-TELEOP_BUSY = "a person is driving the robot (teleop): switch driving off first"
+TELEOP_BUSY = (
+    "a person is driving the robot (teleop): switch driving off first (with nobody driving, it "
+    "switches itself off after teleop.idle_timeout)"
+)
 
 
 class MissionWorker:
@@ -156,7 +159,7 @@ class MissionWorker:
         mission is cancelled), then teleoperation ends and every waiting job is dropped with
         `reason`. Returns those."""
         self._agent.estop()  # first: the robot stops before any bookkeeping
-        self.teleop.stop()
+        self.teleop.stop("the e-stop was pressed")
         return self.drop_queued(reason)
 
     def start_teleop(self) -> str | None:

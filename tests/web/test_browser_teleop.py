@@ -1,6 +1,7 @@
 """The teleop pad in a real browser (issue 27): headless Chromium driven by CDP key and pointer
 events (Playwright's keyboard and mouse), the dashboard on a real server, the simulated robot
-in real time; judged by the robot's true state."""
+in real time; judged by the robot's true state. Issue 32: the page says the server's stop
+figures, and that driving switched itself off when nobody drove."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+import httpx
+
 from shadowhound.robot.sim.robot import SimRobot
 from shadowhound.web import WebServer
 from tests.web.conftest import approach, make_agent, wait_for
@@ -18,12 +21,16 @@ from tests.web.test_browser import ARTIFACTS, DESKTOP, PHONE, _playwright, launc
 
 @contextlib.contextmanager
 def driving(
-    serve: Callable[..., WebServer], tmp_path: Path, viewport: dict[str, int], errors: list[str]
+    serve: Callable[..., WebServer],
+    tmp_path: Path,
+    viewport: dict[str, int],
+    errors: list[str],
+    **settings: Any,
 ) -> Iterator[tuple[Any, SimRobot]]:
     """Chromium at `viewport` on a dashboard whose pad is switched on, and the simulated robot
-    it drives in real time."""
+    it drives in real time (the agent made with `settings`)."""
     sync_playwright = _playwright()
-    agent = make_agent(time_scale=1.0)
+    agent = make_agent(time_scale=1.0, **settings)
     server = serve(agent)
     with sync_playwright() as p:
         context = launch(p, tmp_path, viewport)
@@ -88,3 +95,22 @@ def test_the_pad_cannot_touch_the_red_ball_and_works_on_a_phone(
         assert estop and 0 <= estop["y"] < PHONE["height"]  # the e-stop stays on screen
     assert closest > 0.0, closest  # the body never touched the ball (truth)
     assert robot.get_state().x > 1.5  # and it did drive up to it
+
+
+def test_the_page_says_its_stop_figures_and_that_nobody_drove(
+    serve: Callable[..., WebServer], tmp_path: Path
+) -> None:
+    errors: list[str] = []
+    with driving(serve, tmp_path, DESKTOP, errors, teleop={"idle_timeout": 1.0}) as (page, robot):
+        note = page.locator("#drive-note")
+        page.wait_for_selector('#drive-note:has-text("a stop within 0.4 s of its last word")')
+        assert "then brakes (about 0.5 s from full speed)" in note.inner_text()
+        page.keyboard.down("s")  # a short drive, then nobody drives
+        wait_for(lambda: robot.get_state().vx < -0.1, 10, "the robot to back up")
+        page.keyboard.up("s")
+        page.wait_for_selector('#drive-msg:has-text("nobody drove for 1 s")', timeout=15_000)
+        assert not page.is_checked("#drive-on")
+        url = page.url.split("#")[0].rstrip("/")
+        taken = httpx.post(url + "/api/mission", json={"command": "turn left 10 degrees"})
+        assert taken.status_code == 202, taken.text  # missions run again
+    assert not errors, errors

@@ -1,8 +1,10 @@
 """Driving over HTTP (issue 27): `POST /api/teleop` and `/api/teleop/drive` on a real server,
-the simulated robot in real time, judged by its true state."""
+the simulated robot in real time, judged by its true state. Issue 32: the governor's rules, late
+requests, nobody driving."""
 
 from __future__ import annotations
 
+import itertools
 import math
 import threading
 import time
@@ -13,18 +15,26 @@ import httpx
 import pytest
 
 from shadowhound.robot.sim.robot import SimRobot
+from shadowhound.teleop import HEARTBEAT
 from shadowhound.web import WebServer
 from tests.web.conftest import approach, make_agent, wait_for
+
+SEQ = itertools.count(1)  # the pages' request numbers: growing, as a page's clock
 
 
 def switch(server: WebServer, on: bool) -> httpx.Response:
     return httpx.post(server.url + "/api/teleop", json={"on": on})
 
 
-def drive(server: WebServer, forward: float = 0.0, left: float = 0.0, turn: float = 0.0) -> Any:
-    return httpx.post(
-        server.url + "/api/teleop/drive", json={"forward": forward, "left": left, "turn": turn}
-    )
+def drive(
+    server: WebServer,
+    forward: float = 0.0,
+    left: float = 0.0,
+    turn: float = 0.0,
+    seq: int | None = None,
+) -> Any:
+    body = {"seq": next(SEQ) if seq is None else seq, "forward": forward, "left": left}
+    return httpx.post(server.url + "/api/teleop/drive", json={**body, "turn": turn})
 
 
 class Holder:
@@ -143,7 +153,19 @@ def test_the_estop_ends_driving(serve: Callable[..., WebServer]) -> None:
 
 @pytest.mark.parametrize(
     "body",
-    [{"forward": 2}, {"forward": True}, {"turn": "left"}, {"forward": 0.1, "speed": 3}, [1]],
+    [
+        {"seq": 1, "forward": 2},
+        {"seq": 1, "forward": True},
+        {"seq": 1, "turn": "left"},
+        {"seq": 1, "forward": 0.1, "speed": 3},
+        [1],
+        {"forward": 0.5},
+        {"seq": 0, "forward": 0.5},
+        {"seq": 1.5, "forward": 0.5},
+        {"seq": "7", "forward": 0.5},
+        {"seq": True, "forward": 0.5},
+        {"seq": 2**53, "forward": 0.5},
+    ],
 )
 def test_bad_drive_input_is_refused_naming_it_and_moves_nothing(
     serve: Callable[..., WebServer], body: object
@@ -154,3 +176,82 @@ def test_bad_drive_input_is_refused_naming_it_and_moves_nothing(
     reply = httpx.post(server.url + "/api/teleop/drive", json=body)
     assert reply.status_code == 422 and "invalid request" in reply.json()["detail"]
     assert agent.robot.get_state().vx == 0.0
+
+
+def test_a_drive_without_its_number_says_so(serve: Callable[..., WebServer]) -> None:
+    """A page older than the server (no `seq`) is told what is missing, and moves nothing."""
+    agent = make_agent(time_scale=1.0)
+    server = serve(agent)
+    switch(server, True)
+    reply = httpx.post(server.url + "/api/teleop/drive", json={"forward": -0.6})
+    assert reply.status_code == 422
+    assert "seq is required" in reply.json()["detail"] and "reload" in reply.json()["detail"]
+    assert agent.robot.get_state().vx == 0.0
+
+
+@pytest.mark.parametrize(
+    ("settings", "why"),
+    [
+        ({}, "the battery is at 5%, below the floor of 15% (safety.battery_floor)"),
+        ({"deny_skills": ["nav.*"]}, "nav.move is in safety.deny_skills"),
+    ],
+)
+def test_the_pad_keeps_the_rules_missions_keep(
+    serve: Callable[..., WebServer], settings: dict[str, Any], why: str
+) -> None:
+    """At 5% battery (the floor is 15%), or with every nav.* skill denied, a mission may not
+    move the robot: nor may the pad (judged by truth)."""
+    agent = make_agent(time_scale=1.0, safety=settings)
+    robot = agent.robot
+    assert isinstance(robot, SimRobot)
+    if not settings:
+        robot.set_battery(5.0)
+    mission = agent.execute_mission("walk backward 1 meter")
+    assert not mission.success and why in mission.response  # as the governor refuses it
+    server = serve(agent)
+    refused = switch(server, True)
+    assert refused.status_code == 409, refused.text
+    assert why in refused.json()["detail"]
+    assert drive(server, forward=-1.0).status_code == 409
+    assert robot.true_odometer == 0.0
+
+
+def test_a_request_that_arrives_after_the_release_is_dropped(
+    serve: Callable[..., WebServer],
+) -> None:
+    """A page's drive (n) overtaken by its release (n + 1) arrives last: it is dropped, and the
+    robot, stopped by the release, is sent no motion again (truth: its command log)."""
+    agent = make_agent(time_scale=1.0)
+    robot = agent.robot
+    assert isinstance(robot, SimRobot)
+    server = serve(agent)
+    switch(server, True)
+    holder = Holder(server, forward=-0.6)
+    wait_for(lambda: robot.get_state().vx < -0.1, 10, "the robot to back up")
+    holder.quit()
+    late, release = next(SEQ), next(SEQ)
+    assert drive(server, seq=release).json()["dropped"] == ""
+    released = len(robot.commands)
+    answer = drive(server, forward=-0.6, seq=late).json()
+    assert f"request {late} came after request {release}" in answer["dropped"]
+    wait_for(lambda: robot.get_state().vx == 0.0, 5, "the robot to stop")
+    time.sleep(HEARTBEAT + 0.2)  # as long as the late request would have driven it
+    moved = [c for c in robot.commands[released:] if c.kind == "velocity" and any(c.value)]
+    assert not moved, moved
+    switch(server, False)
+
+
+def test_nobody_driving_switches_driving_off_and_missions_run_again(
+    serve: Callable[..., WebServer],
+) -> None:
+    agent = make_agent(time_scale=1.0, teleop={"idle_timeout": 0.5})
+    server = serve(agent)
+    on = switch(server, True).json()
+    assert on["on"] is True and on["idle_timeout"] == 0.5
+    busy = httpx.post(server.url + "/api/mission", json={"command": "turn left 10 degrees"})
+    assert busy.status_code == 409 and "teleop.idle_timeout" in busy.json()["detail"]
+    wait_for(lambda: not httpx.get(server.url + "/api/teleop").json()["on"], 10, "switch-off")
+    state = httpx.get(server.url + "/api/teleop").json()
+    assert "nobody drove for 0.5 s (teleop.idle_timeout)" in state["ended"]
+    taken = httpx.post(server.url + "/api/mission", json={"command": "turn left 10 degrees"})
+    assert taken.status_code == 202, taken.text

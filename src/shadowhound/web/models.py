@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 # Hard ceiling for text fields; the agent's own limit (agent.max_mission_chars) is checked in
 # the route so the answer can name it.
@@ -19,6 +19,7 @@ MAX_TEXT = 16_000
 MAX_BODY = 12 * MAX_TEXT + 4096
 
 _STRICT = ConfigDict(extra="forbid", strict=True)
+MAX_SEQ = 2**53 - 1  # the largest whole number a page's JavaScript counts exactly
 
 
 class MissionRequest(BaseModel):
@@ -127,13 +128,33 @@ class TeleopSwitch(BaseModel):
 
 class TeleopDrive(BaseModel):
     """The pad's deflection, each from -1 (full back, right, clockwise) to 1. Sent about ten
-    times a second while held: a deflection older than 0.35 s counts as zero (dead-man)."""
+    times a second while held: a deflection older than 0.35 s counts as zero (dead-man).
+    `seq` grows with every request a page sends (the page takes its clock in milliseconds); one
+    not above the last taken arrived late and is dropped."""
 
     model_config = ConfigDict(
         **_STRICT,
-        json_schema_extra={"examples": [{"forward": 0.5, "left": 0.0, "turn": -0.2}]},
+        json_schema_extra={
+            "examples": [{"seq": 1732612345678, "forward": 0.5, "left": 0.0, "turn": -0.2}]
+        },
     )
 
+    seq: int = Field(
+        ...,
+        ge=1,
+        le=MAX_SEQ,
+        description="required: a number above the page's previous request's (its clock, ms)",
+    )
     forward: float = Field(0.0, ge=-1, le=1, allow_inf_nan=False)
     left: float = Field(0.0, ge=-1, le=1, allow_inf_nan=False)
     turn: float = Field(0.0, ge=-1, le=1, allow_inf_nan=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _numbered(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "seq" not in data:
+            raise ValueError(
+                "seq is required: a whole number above the previous request's (a late request "
+                "is dropped by it); a page without it is older than the server: reload it"
+            )
+        return data

@@ -1,8 +1,11 @@
 // The teleop pad: switch "Drive" on, then drag the pad (up = forward, sideways = turn) or hold
 // the keys (W/S or arrows up/down: forward/back, A/D or arrows left/right: turn, Q/E: step
 // sideways, space: stop). While held, the deflection goes to /api/teleop/drive ten times a
-// second; letting go sends zero at once. The server keeps the limits (speed caps, the geofence,
-// obstacles on the map) and stops the robot when the page goes quiet for 0.35 s.
+// second, each request numbered (seq: this page's clock in ms, always growing, so the server
+// drops one that arrives after a newer one, the release included); letting go sends zero at
+// once. The server keeps the limits (the governor's rules, speed caps, the geofence, obstacles
+// on the map), sends the robot a stop when the page goes quiet (within 0.4 s of its last
+// word; the robot then brakes) and switches driving off when nobody drives for a while.
 
 const KEYS = {
   w: [1, 0, 0], arrowup: [1, 0, 0], s: [-1, 0, 0], arrowdown: [-1, 0, 0],
@@ -16,10 +19,27 @@ export function setupDrive(hooks) {
   const toggle = document.querySelector("#drive-on");
   const pad = document.querySelector("#pad");
   const knob = pad.querySelector(".knob");
+  const note = document.querySelector("#drive-note");
   const held = new Set();
   let padStick = [0, 0, 0];
   let sent = "0,0,0";
   let timer = null;
+  let seq = 0;
+  let switches = 0; // switch clicks so far: an answer from before the latest is out of date
+  let switching = 0; // switch requests on their way
+
+  // Growing with every request, also across a reload of the page (its clock, in ms).
+  function nextSeq() {
+    seq = Math.max(seq + 1, Date.now());
+    return seq;
+  }
+
+  // What the server says of its limits, in its own figures.
+  function describe(state) {
+    note.textContent = `Letting go stops at once. If this page goes quiet, the robot is sent ` +
+      `a stop within ${state.stop_after} s of its last word, then brakes (about ` +
+      `${state.braking} s from full speed). Nobody driving for ${state.idle_timeout} s switches driving off.`;
+  }
 
   function stick() {
     if (padStick.some((v) => v !== 0)) return padStick;
@@ -34,12 +54,14 @@ export function setupDrive(hooks) {
     const zero = key === "0,0,0";
     if (zero && sent === "0,0,0") return stopLoop();
     sent = key;
-    const reply = await hooks.fetch("POST", "/api/teleop/drive", { forward, left, turn });
+    const reply = await hooks.fetch("POST", "/api/teleop/drive",
+      { seq: nextSeq(), forward, left, turn });
     if (!reply.ok) {
       hooks.message(hooks.detail(reply.data), "error");
-      if (reply.status === 409) setOn(false);
+      if (reply.status === 409) { setOn(false); confirm(true); }
       return;
     }
+    if (reply.data.dropped) return; // a late answer: a newer request says what holds
     hooks.message(reply.data.limited ? "Limited: " + reply.data.limited : "", "info");
     if (zero) stopLoop();
   }
@@ -72,15 +94,39 @@ export function setupDrive(hooks) {
   }
 
   toggle.addEventListener("change", async () => {
+    const mine = ++switches;
+    switching += 1;
     const reply = await hooks.fetch("POST", "/api/teleop", { on: toggle.checked });
+    switching -= 1;
+    if (mine !== switches) return; // clicked again meanwhile: the later answer holds
     if (!reply.ok) {
       setOn(false);
       hooks.message(hooks.detail(reply.data), "error");
       return;
     }
     setOn(reply.data.on);
+    describe(reply.data);
     hooks.message(reply.data.on ? "Driving: drag the pad or hold W A S D" : "", "info");
   });
+
+  // The status says otherwise than the switch: ask the server now (not while a switch request
+  // is on its way), and believe the answer unless the switch was clicked meanwhile (a status
+  // sent before a click may arrive after it).
+  // Switched off by the server (`off`: a drive was refused so), say why (nobody drove for a
+  // while, the e-stop).
+  async function confirm(off = false) {
+    if (switching) return; // its answer will say
+    const mine = switches;
+    const reply = await hooks.fetch("GET", "/api/teleop");
+    if (!reply.ok || mine !== switches || switching) return;
+    if (toggle.checked === reply.data.on && !off) return;
+    setOn(reply.data.on);
+    if (!reply.data.on && reply.data.ended) {
+      hooks.message("Driving is off: " + reply.data.ended, "info");
+    }
+  }
+
+  hooks.fetch("GET", "/api/teleop").then((reply) => { if (reply.ok) describe(reply.data); });
 
   function placeKnob(x, y) {
     knob.style.transform = `translate(${x}px, ${y}px)`;
@@ -142,7 +188,7 @@ export function setupDrive(hooks) {
 
   return {
     // The e-stop (or another client) switched driving off.
-    sync(on) { if (toggle.checked !== on) setOn(on); },
+    sync(on) { if (toggle.checked !== on) confirm(); },
   };
 }
 
