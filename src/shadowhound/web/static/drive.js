@@ -27,6 +27,7 @@ export function setupDrive(hooks) {
   let seq = 0;
   let switches = 0; // switch clicks so far: an answer from before the latest is out of date
   let switching = 0; // switch requests on their way
+  let confirming = false; // a question to the server about the switch is on its way
 
   // Growing with every request, also across a reload of the page (its clock, in ms).
   function nextSeq() {
@@ -115,9 +116,11 @@ export function setupDrive(hooks) {
   // Switched off by the server (`off`: a drive was refused so), say why (nobody drove for a
   // while, the e-stop).
   async function confirm(off = false) {
-    if (switching) return; // its answer will say
+    if (switching || (confirming && !off)) return; // an answer on its way will say
     const mine = switches;
+    confirming = true;
     const reply = await hooks.fetch("GET", "/api/teleop");
+    confirming = false;
     if (!reply.ok || mine !== switches || switching) return;
     if (toggle.checked === reply.data.on && !off) return;
     setOn(reply.data.on);
