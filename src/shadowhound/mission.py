@@ -167,6 +167,7 @@ class MissionRun:
             budget=MissionBudget.start(self.start, self.robot.now),
             belief=belief,
             vocabulary=self.robot.vocabulary(),
+            secondhand=tuple(self.crew.memory.secondhand()),
         )
         return None
 

@@ -9,6 +9,10 @@ embedding model. Telemetry is off.
 A store that cannot be used (a corrupt Chroma directory, a file where the directory should be,
 no permission) raises `RecallStoreError` naming the path and what to do, at open and at every
 later use; `AgentMemory` then turns retrieval memory off for the run instead of failing missions.
+
+Every memory carries the robot that made it (metadata `robot_id`), and a search finds only the
+asking robot's: another robot's notes never reach this robot's planner. Entries written before
+robots were recorded have no `robot_id`: no search finds them (they stay in the store).
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from typing import Any, Protocol
 
 from .. import jsonout
 from ..errors import RecallStoreError
+from ..robot_config import RobotId
 
 KINDS = ("mission", "fact", "observation")
 
@@ -88,15 +93,18 @@ class RecallMemory:
         except Exception as exc:
             raise _store_error(self.path, exc) from exc
 
-    def add(self, text: str, kind: str, **meta: Any) -> str:
+    def add(self, text: str, kind: str, *, robot: RobotId, **meta: Any) -> str:
+        """Remember `text` as `robot`'s; `meta` (pose, mission) is kept beside it."""
         if kind not in KINDS:
             raise ValueError(f"memory kind must be one of {', '.join(KINDS)}, got {kind!r}")
         text = text.strip()
         if not text:
             raise ValueError("nothing to remember: the text is empty")
-        return self.add_many([(text, kind, meta)])[0]
+        return self.add_many([(text, kind, meta)], robot=robot)[0]
 
-    def add_many(self, items: list[tuple[str, str, dict[str, Any]]]) -> list[str]:
+    def add_many(
+        self, items: list[tuple[str, str, dict[str, Any]]], *, robot: RobotId
+    ) -> list[str]:
         ids = [uuid.uuid4().hex for _ in items]
         vectors = self.embedder.embed([text for text, _, _ in items])
         metadatas = [
@@ -109,6 +117,7 @@ class RecallMemory:
                     for k, v in jsonout.finite(meta).items()
                     if isinstance(v, (str, int, float, bool))
                 },
+                "robot_id": robot.name,  # after meta: whose it is is not the caller's to say
             }
             for _, kind, meta in items
         ]
@@ -124,9 +133,14 @@ class RecallMemory:
                 raise _store_error(self.path, exc) from exc
         return ids
 
-    def search(self, query: str, k: int = 3, kind: str | None = None) -> list[Memory]:
+    def search(
+        self, query: str, k: int = 3, kind: str | None = None, *, robot: RobotId
+    ) -> list[Memory]:
+        """`robot`'s memories closest to `query` (of `kind` when given), closest first."""
         if not query.strip() or k <= 0:
             return []
+        mine: dict[str, Any] = {"robot_id": robot.name}
+        where = {"$and": [mine, {"kind": kind}]} if kind else mine
         vector = self.embedder.embed([query])[0]
         with self._lock:
             try:
@@ -136,7 +150,7 @@ class RecallMemory:
                 found = self._collection.query(
                     query_embeddings=[vector],
                     n_results=min(k, total),
-                    where={"kind": kind} if kind else None,
+                    where=where,  # type: ignore[arg-type]
                     include=["documents", "metadatas", "distances"],
                 )
             except Exception as exc:
@@ -149,6 +163,7 @@ class RecallMemory:
             meta = dict(meta or {})
             created = meta.pop("created", 0.0)
             kind_ = str(meta.pop("kind", "?"))
+            meta.pop("robot_id", None)
             created = float(created) if isinstance(created, (int, float)) else 0.0
             memories.append(Memory(text or "", kind_, created, 1.0 - float(distance), meta))
         return memories
