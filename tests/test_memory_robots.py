@@ -75,8 +75,10 @@ def test_a_robot_is_its_name_else_its_type_and_namespace() -> None:
     assert identity({"type": "go2_edu", "namespace": "robot0"}) == "go2_edu:robot0"
     assert identity({"type": "go2", "name": "kitchen-dog"}) == "kitchen-dog"
     assert identity(None, {"SHADOWHOUND_ROBOT__NAME": "bench-sim"}) == "bench-sim"
-    with pytest.raises(ConfigError, match=r"robot\.name.*letters, digits|pattern"):
+    with pytest.raises(ConfigError, match="a robot's name is 1 to 64 letters, digits and _"):
         identity({"type": "sim", "name": "my robot"})
+    with pytest.raises(ConfigError, match=r"'go2:a b' \(made of the namespace\): set robot.name"):
+        identity({"type": "go2", "namespace": "a b"})
 
 
 def test_a_robot_of_another_type_never_takes_the_profiles_name(tmp_path: Path) -> None:
@@ -227,6 +229,25 @@ def test_what_another_robot_saw_is_never_walked_to(tmp_path: Path) -> None:
     go2.cleanup()
 
 
+def test_a_robot_that_can_see_the_thing_looks_for_it_itself(tmp_path: Path) -> None:
+    """Another robot's sighting is not even a first guess: a robot whose camera knows chairs
+    searches, finds the chair with its own eyes, and says whose sighting it did not use."""
+    sim = agent_on(tmp_path, "sim")
+    assert sim.execute_mission("go to the chair").success
+    sim.cleanup()
+    go2 = agent_on(tmp_path, "go2")
+    went = go2.execute_mission("go to the chair")
+    assert went.success, went.response
+    assert "The yellow chair was seen by robot 'sim', not by this robot: not a goal" in (
+        went.response
+    )
+    assert "found the yellow chair" in went.response  # its own search
+    assert "remembered from an earlier mission" not in went.response
+    x, y = truth(go2)
+    assert math.hypot(x - CHAIR.x, y - CHAIR.y) == pytest.approx(CHAIR.radius + 0.6, abs=0.05)
+    go2.cleanup()
+
+
 def test_a_place_taught_to_one_robot_is_not_anothers(tmp_path: Path) -> None:
     sim = agent_on(tmp_path, "sim")
     assert sim.execute_mission("walk forward 1 meter, remember this spot as the desk").success
@@ -374,6 +395,22 @@ def test_an_old_database_keeps_every_row_and_none_of_them_is_a_goal(
     assert {(p.robot_id, p.x) for p in again.every_place()} == {(None, 1.0), ("sim", 3.0)}
     assert again._db.execute("PRAGMA user_version").fetchone()[0] == 1
     again.close()
+
+
+def test_processes_opening_an_old_database_together_migrate_it_once(tmp_path: Path) -> None:
+    path = tmp_path / "history.db"
+    old_database(path)
+    opener = (
+        "import sys; sys.path.insert(0, 'src'); from shadowhound.memory import MissionHistory; "
+        f"MissionHistory({str(path)!r}).close()"
+    )
+    root = Path(__file__).parent.parent
+    openers = [subprocess.Popen([sys.executable, "-c", opener], cwd=root) for _ in range(3)]
+    assert [p.wait(60) for p in openers] == [0, 0, 0]
+    store = MissionHistory(path)
+    assert len(store.recent()) == 2 and len(store.every_place()) == 1
+    assert len(store.every_sighting()) == 1
+    store.close()
 
 
 def test_a_person_claims_what_no_known_robot_made(tmp_path: Path) -> None:

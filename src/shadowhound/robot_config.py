@@ -23,6 +23,8 @@ __all__ = [
     "ROBOT_TYPES",
     "Go2EduRobotSettings",
     "Go2RobotSettings",
+    "ROBOT_NAME",
+    "ROBOT_NAME_RULE",
     "RobotId",
     "RobotSettings",
     "SimRobotSettings",
@@ -42,6 +44,7 @@ ESTOP_RELEASE_TOPIC = "/shadowhound/estop_release"  # std_msgs/Empty: a person r
 # A robot's name: what people call it and what its memories carry ("sim", "go2:robot0",
 # "kitchen-dog"). No spaces, so it reads the same in a log, a listing and a ROS parameter.
 ROBOT_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.:/-]{0,63}$")
+ROBOT_NAME_RULE = "1 to 64 letters, digits and _ . : / - (starting with a letter or digit)"
 
 
 @dataclass(frozen=True)
@@ -55,10 +58,7 @@ class RobotId:
 
     def __post_init__(self) -> None:
         if not ROBOT_NAME.match(self.name):
-            raise ValueError(
-                f"a robot's name is 1 to 64 letters, digits and _ . : / - (starting with a "
-                f"letter or digit), got {self.name!r}"
-            )
+            raise ValueError(f"a robot's name is {ROBOT_NAME_RULE}, got {self.name!r}")
 
     def __str__(self) -> str:
         return self.name
@@ -80,7 +80,6 @@ class _Backend(BaseModel):
     motion_defaults: ClassVar[dict[str, float]] = {}
     name: str = Field(
         "",
-        pattern=r"^$|" + ROBOT_NAME.pattern,
         description="which robot this is to memory (its places, sightings and missions); "
         "'' = its type and namespace: sim, go2, go2_edu, go2:robot0",
     )
@@ -95,11 +94,15 @@ class _Backend(BaseModel):
 
     @model_validator(mode="after")
     def _named(self) -> _Backend:
-        """A namespace no robot name can be made of (a space in it) needs a `name`."""
+        """A name outside ROBOT_NAME, or a namespace no name can be made of (a space in it),
+        is refused at load, saying what a name may be."""
+        if self.name:
+            RobotId(self.name)
+            return self
         try:
-            RobotId(self.name or self._default_name())
+            RobotId(self._default_name())
         except ValueError as exc:
-            raise ValueError(f"{exc}; set robot.name to name this robot") from exc
+            raise ValueError(f"{exc} (made of the namespace): set robot.name") from exc
         return self
 
 

@@ -15,7 +15,7 @@ from typing import Any, get_args
 from ..config import ShadowHoundConfig, load_config
 from ..errors import ParameterError
 from ..robot.go2.motion import MAX_LATENCY
-from ..robot_config import ROBOT_NAME
+from ..robot_config import ROBOT_NAME, ROBOT_NAME_RULE
 
 NODE_NAME = "shadowhound_mission_agent"
 
@@ -333,8 +333,8 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
     name = out.get("robot_name", "")
     if name and not ROBOT_NAME.match(name):
         problems.append(
-            f"robot_name {name!r} is not a robot's name: 1 to 64 letters, digits and _ . : / - "
-            "(starting with a letter or digit); '' = the profile's, else the type and namespace"
+            f"robot_name {name!r} is not a robot's name: {ROBOT_NAME_RULE}; '' = the "
+            "profile's, else the type and namespace"
         )
     for name, low, high in (
         ("camera_x", -2.0, 2.0),
