@@ -70,7 +70,8 @@ def test_the_simulators_chair_is_no_goal_for_a_go2_from_the_same_home(client: Ro
         back = rig.agent.run("go to the mat", 90.0)
         end = rig.truth.still()
         assert back.startswith("COMPLETED: "), back
-        assert math.dist((mat["x"], mat["y"]), (end["x"], end["y"])) < 0.05, (mat, end)
+        # Through the driver's Nav2 (navigation auto), as the Go2 Nav2 tests judge a goal.
+        assert math.dist((mat["x"], mat["y"]), (end["x"], end["y"])) < 0.10, (mat, end)
     finally:
         stop()
     # The simulator's listing shows the Go2's place as history, labelled, never a goal.
