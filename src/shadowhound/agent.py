@@ -377,8 +377,9 @@ class RobotAgent:
         return self._memory
 
     def recent_missions(self, limit: int = 10) -> list[dict[str, Any]]:
-        """Newest first: id, mission, status, success, response, started_at. From the history
-        database when memory is enabled (so it survives restarts), else from this process."""
+        """This robot's missions (`robot_id`), newest first: id, mission, status, success,
+        response, started_at. From the history database when memory is enabled (so it survives
+        restarts), else from this process."""
         return self._logbook.recent(limit)
 
     def recent_summaries(self) -> list[str]:

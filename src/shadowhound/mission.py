@@ -167,7 +167,7 @@ class MissionRun:
             budget=MissionBudget.start(self.start, self.robot.now),
             belief=belief,
             vocabulary=self.robot.vocabulary(),
-            secondhand=tuple(self.crew.memory.secondhand()),
+            secondhand=self.crew.memory.secondhand(),
         )
         return None
 
