@@ -82,18 +82,18 @@ def bench_history(runs: int = 500) -> list[float]:
 def bench_recall(n: int, queries: int = 200) -> dict[str, float]:
     embedder = MiniLMEmbedder()
     with tempfile.TemporaryDirectory() as folder:
-        memory = RecallMemory(Path(folder) / "recall", embedder)
+        memory = RecallMemory(Path(folder) / "recall", embedder, robot=ROBOT)
         items = synthetic_memories(n)
         t0 = time.perf_counter()
         for start in range(0, n, 256):
-            memory.add_many(items[start : start + 256], robot=ROBOT)
+            memory.add_many(items[start : start + 256])
         insert_s = time.perf_counter() - t0
         rng = random.Random(3)
         latencies = []
         for _ in range(queries):
             query = f"where is the {rng.choice(THINGS)}?"
             t0 = time.perf_counter()
-            memory.search(query, k=3, robot=ROBOT)
+            memory.search(query, k=3)
             latencies.append((time.perf_counter() - t0) * 1e3)
         embed_only = []
         for _ in range(50):

@@ -293,8 +293,8 @@ def test_retrieval_is_semantic_and_persistent(tmp_path):
     from shadowhound.memory.recall import RecallMemory
 
     embedder = MiniLMEmbedder()
-    memory = RecallMemory(tmp_path / "recall", embedder)
-    memory.add("the fridge is in the kitchen", "fact", robot=SIM)
+    memory = RecallMemory(tmp_path / "recall", embedder, robot=SIM)
+    memory.add("the fridge is in the kitchen", "fact")
     noise = [
         "the charging dock is next to the sofa",
         "the red ball rolled under the table",
@@ -305,12 +305,12 @@ def test_retrieval_is_semantic_and_persistent(tmp_path):
         "a person stood in the hallway",
         "the plant needs water",
     ]
-    memory.add_many([(text, "observation", {}) for text in noise], robot=SIM)
-    top = memory.search("where is the fridge?", k=3, robot=SIM)
+    memory.add_many([(text, "observation", {}) for text in noise])
+    top = memory.search("where is the fridge?", k=3)
     assert top[0].text == "the fridge is in the kitchen" and top[0].score > top[1].score
-    again = RecallMemory(tmp_path / "recall", embedder)  # a new process would do this
+    again = RecallMemory(tmp_path / "recall", embedder, robot=SIM)  # as a new process would
     assert again.count() == 9
-    assert again.search("where is the fridge?", k=1, robot=SIM)[0].kind == "fact"
+    assert again.search("where is the fridge?", k=1)[0].kind == "fact"
 
 
 @needs_rag
@@ -339,7 +339,7 @@ def test_language_model_gets_relevant_memories(tmp_path):
         )
         agent = RobotAgent(RobotAgentConfig(robot=SimRobot(time_scale=0.0), settings=settings))
         agent.initialize()
-        agent.memory.recall.add("the charging dock is behind the sofa", "fact", robot=SIM)
+        agent.memory.recall.add("the charging dock is behind the sofa", "fact")
         srv.script(json_plan([{"skill": "sys.status", "args": {}}]))
         agent.execute_mission("where is the charging dock?")
         system = srv.requests[0]["messages"][0]["content"]

@@ -288,26 +288,37 @@ def test_missions_are_recorded_with_their_robot_and_prompts_see_only_their_own(
 
 @needs_rag
 def test_retrieval_memory_finds_only_this_robots_memories(tmp_path: Path) -> None:
-    from shadowhound.memory.embedding import MiniLMEmbedder
-    from shadowhound.memory.recall import RecallMemory
+    import chromadb
+    from chromadb.config import Settings
 
-    memory = RecallMemory(tmp_path / "recall", MiniLMEmbedder())
-    memory.add("the fridge is in the kitchen", "fact", robot=RobotId("sim"))
-    memory.add("the fridge is in the garage", "fact", robot=RobotId("go2"), robot_id="sim")
-    # An entry the version before robots wrote: no robot_id at all.
-    vector = memory.embedder.embed(["the fridge is in the cellar"])[0]
-    memory._collection.add(
+    from shadowhound.memory.embedding import MiniLMEmbedder
+    from shadowhound.memory.recall import RecallMemory, collection_name
+
+    embedder = MiniLMEmbedder()
+    store = tmp_path / "recall"
+    # A memory the version before robots wrote, in its collection: no robot's.
+    client = chromadb.PersistentClient(
+        path=str(store), settings=Settings(anonymized_telemetry=False)
+    )
+    old = client.get_or_create_collection(collection_name(embedder, None), embedding_function=None)
+    old.add(
         ids=["old"],
         documents=["the fridge is in the cellar"],
-        embeddings=[vector],
+        embeddings=list(embedder.embed(["the fridge is in the cellar"])),
         metadatas=[{"kind": "fact", "created": 0.0}],
     )
-    found = [m.text for m in memory.search("where is the fridge?", k=5, robot=RobotId("sim"))]
-    assert found == ["the fridge is in the kitchen"]
-    theirs = memory.search("where is the fridge?", k=5, kind="fact", robot=RobotId("go2"))
+    sim = RecallMemory(store, embedder, robot=RobotId("sim"))
+    go2 = RecallMemory(store, embedder, robot=RobotId("go2:robot0"))
+    similar = RecallMemory(store, embedder, robot=RobotId("go2-robot0"))  # spelt alike
+    sim.add("the fridge is in the kitchen", "fact")
+    go2.add("the fridge is in the garage", "fact", robot_id="sim")  # whose is not meta's
+    assert [m.text for m in sim.search("where is the fridge?", k=5)] == [
+        "the fridge is in the kitchen"
+    ]
+    theirs = go2.search("where is the fridge?", k=5, kind="fact")
     assert [m.text for m in theirs] == ["the fridge is in the garage"]
-    assert memory.search("fridge", k=5, robot=RobotId("go2_edu")) == []
-    assert memory.count() == 3  # kept, all of them
+    assert similar.search("where is the fridge?", k=5) == []
+    assert (sim.count(), go2.count(), similar.count(), old.count()) == (1, 1, 0, 1)
 
 
 # -- an older version's database, migrated in place ---------------------------------------------

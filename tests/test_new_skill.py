@@ -92,9 +92,7 @@ def test_retrieval_memory_keeps_what_it_saw_as_an_observation(tmp_path):
         looked = agent.execute_mission("look up")
         assert looked.success and agent.execute_mission("stand").success
     # Its output, and nothing of body.stand (which declares no memory), is an observation.
-    kept = agent.memory.recall.search(
-        "looking up at the room", k=5, kind="observation", robot=agent.memory.robot
-    )
+    kept = agent.memory.recall.search("looking up at the room", k=5, kind="observation")
     assert [(m.text, m.meta.get("mission")) for m in kept] == [
         (looked.steps[0].output, looked.mission_id)
     ]

@@ -127,13 +127,13 @@ class AgentMemory:
         memory = cls(settings, history, skills=skills, robot=robot)
         if cfg.enable_rag:
             try:
-                memory.recall = cls._open_recall(settings, data, backend)
+                memory.recall = cls._open_recall(settings, data, backend, memory.robot)
             except RecallStoreError as exc:
                 memory.turn_recall_off(exc)
         return memory
 
     @staticmethod
-    def _open_recall(settings: ShadowHoundConfig, data: Path, backend: Any) -> Any:
+    def _open_recall(settings: ShadowHoundConfig, data: Path, backend: Any, robot: RobotId) -> Any:
         cfg = settings.memory
         try:
             from .embedding import BackendEmbedder, MiniLMEmbedder
@@ -148,7 +148,7 @@ class AgentMemory:
                 embedder: Any = BackendEmbedder(backend, cfg.embedding_model)
             else:
                 embedder = MiniLMEmbedder()
-            return RecallMemory(data / "recall", embedder)
+            return RecallMemory(data / "recall", embedder, robot=robot)
         except ImportError as exc:
             raise ConfigError(f"memory.enable_rag is on but {exc}") from exc
 
@@ -215,7 +215,7 @@ class AgentMemory:
         if recall is None:
             return
         try:
-            recall.add(text[:2000], kind, robot=self.robot, **meta)
+            recall.add(text[:2000], kind, **meta)
         except RecallStoreError as exc:
             self.turn_recall_off(exc)
         except Exception:  # memory must never break a mission; the history still has it
@@ -274,7 +274,7 @@ class AgentMemory:
         if recall is None:
             return None
         try:
-            return [m.line() for m in recall.search(query, k, robot=self.robot)]
+            return [m.line() for m in recall.search(query, k)]
         except RecallStoreError as exc:
             self.turn_recall_off(exc)
             return None

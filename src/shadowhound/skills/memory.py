@@ -103,7 +103,7 @@ def _note(ctx: SkillContext, a: NoteArgs) -> str:
         )
     st = ctx.robot.get_state()
     try:
-        recall.add(a.text, "fact", robot=memory.robot, x=st.x, y=st.y)
+        recall.add(a.text, "fact", x=st.x, y=st.y)
     except RecallStoreError as exc:
         memory.turn_recall_off(exc)
         raise SkillError(f"retrieval memory is off for this run: {exc}") from exc
