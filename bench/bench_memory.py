@@ -20,9 +20,11 @@ from pathlib import Path
 
 from results import write_section
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot
-from shadowhound.memory import MissionHistory
+from shadowhound.memory import MissionHistory, RobotId
 from shadowhound.memory.embedding import MiniLMEmbedder
 from shadowhound.memory.recall import RecallMemory
+
+ROBOT = RobotId("sim")
 
 THINGS = [
     "fridge",
@@ -71,7 +73,7 @@ def bench_history(runs: int = 500) -> list[float]:
         for i in range(runs):
             record["mission_id"] = f"m{i}"
             t0 = time.perf_counter()
-            store.mission_finished(record, time.time())
+            store.mission_finished(record, time.time(), robot=ROBOT)
             times.append((time.perf_counter() - t0) * 1e3)
         store.close()
     return times
@@ -80,7 +82,7 @@ def bench_history(runs: int = 500) -> list[float]:
 def bench_recall(n: int, queries: int = 200) -> dict[str, float]:
     embedder = MiniLMEmbedder()
     with tempfile.TemporaryDirectory() as folder:
-        memory = RecallMemory(Path(folder) / "recall", embedder)
+        memory = RecallMemory(Path(folder) / "recall", embedder, robot=ROBOT)
         items = synthetic_memories(n)
         t0 = time.perf_counter()
         for start in range(0, n, 256):

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
 from shadowhound.admission import ESTOP_LATCHED, mission_text_problem
 from shadowhound.memory.places import PlaceBook, known_places
+from shadowhound.robot_config import RobotId
 
 LIMIT = 20
 
@@ -63,7 +64,7 @@ def test_a_latched_estop_refuses_with_the_one_message(agent: RobotAgent) -> None
 
 
 def test_taught_places_join_the_profiles_and_win_a_shared_name() -> None:
-    book = PlaceBook()
+    book = PlaceBook(robot=RobotId("sim"))
     book.remember("Kitchen", 4.0, 1.0, 0.5)
     book.remember("the porch", -1.0, 2.0, 0.0)
     known = known_places({"kitchen": (3.0, 2.0), "lab": (1.0, 1.0)}, book)

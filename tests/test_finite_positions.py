@@ -21,12 +21,14 @@ from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobo
 from shadowhound import events as ev
 from shadowhound.checking import check_plan
 from shadowhound.errors import ConfigError, PlaceError, ShadowHoundError
-from shadowhound.memory import MissionHistory, PlaceBook, known_places
+from shadowhound.memory import MissionHistory, PlaceBook, RobotId, known_places
 from shadowhound.plan import Plan, SkillCall
 from shadowhound.safety import Governor
 from shadowhound.skills import PlanEnv, default_registry
 from shadowhound.state import Pose2D, RobotState
 from tests.lying_odometry import LyingOdometry
+
+SIM = RobotId("sim")
 
 UNKNOWN_HERE = (
     "the robot's position is unknown (odometry reports x=nan): cannot remember a place there"
@@ -81,7 +83,7 @@ def test_odometry_that_goes_bad_during_the_mission_is_refused_by_the_skill(tmp_p
 
 
 def test_a_place_book_refuses_a_position_that_is_not_finite():
-    book = PlaceBook()
+    book = PlaceBook(robot=SIM)
     for x, y, yaw in [(math.nan, 0.0, 0.0), (0.0, math.inf, 0.0), (0.0, 0.0, -math.inf)]:
         with pytest.raises(PlaceError, match=r"not finite \((x|y|yaw)=.*\); a place needs finite"):
             book.remember("den", x, y, yaw)
@@ -94,22 +96,23 @@ def test_a_bad_place_row_in_the_database_is_skipped_with_a_warning(tmp_path, cap
     path = tmp_path / "history.db"
     MissionHistory(path).close()
     with sqlite3.connect(path) as db:  # a row written by an older version, or by hand
-        db.execute("INSERT INTO places VALUES ('den', ?, 1.0, 0.0, 0.0)", (math.inf,))
-        db.execute("INSERT INTO places VALUES ('hall', 'by the door', 1.0, 0.0, 0.0)")
-        db.execute("INSERT INTO places VALUES ('desk', 2.0, 1.0, 0.0, 0.0)")
+        db.execute("INSERT INTO places VALUES ('sim', 'den', ?, 1.0, 0.0, 0.0)", (math.inf,))
+        db.execute("INSERT INTO places VALUES ('sim', 'hall', 'by the door', 1.0, 0.0, 0.0)")
+        db.execute("INSERT INTO places VALUES ('sim', 'desk', 2.0, 1.0, 0.0, 0.0)")
         db.execute(
-            "INSERT INTO sightings VALUES ('ball', 1.0, ?, 0.1, 1.0, 0.0, 0.0)", (-math.inf,)
+            "INSERT INTO sightings VALUES ('sim', 'ball', 1.0, ?, 0.1, 1.0, 0.0, 0.0)",
+            (-math.inf,),
         )
     store = MissionHistory(path)
     with caplog.at_level(logging.WARNING):
-        book = PlaceBook(store)
+        book = PlaceBook(store, robot=SIM)
     assert book.all() == {"desk": (2.0, 1.0, 0.0)}
     assert "skipped the taught place 'den'" in caplog.text and "x=inf" in caplog.text
     assert "skipped the taught place 'hall'" in caplog.text
     from shadowhound.memory.sightings import SightingBook
 
     with caplog.at_level(logging.WARNING):
-        assert SightingBook(store).all() == []
+        assert SightingBook(store, robot=SIM).all() == []
     assert "skipped the sighting of 'ball'" in caplog.text
     store.close()
 
@@ -176,7 +179,7 @@ def test_any_coordinates_either_plan_or_are_refused_clearly(x, y, start, entry, 
     and wherever odometry puts the robot, checking the plan never raises: it passes, or says
     why not. A goal or a start that is not finite never passes."""
     settings = SETTINGS
-    book = PlaceBook()
+    book = PlaceBook(robot=SIM)
     try:
         if entry == "taught place":
             book.remember("den", x, y, 0.0)

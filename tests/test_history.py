@@ -21,7 +21,7 @@ from typing import Any
 import pytest
 
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig, SimRobot
-from shadowhound.memory import MissionHistory
+from shadowhound.memory import MissionHistory, RobotId
 from shadowhound.memory.history import INTERRUPTED, NEVER_STARTED
 from shadowhound.worker import MissionJob, MissionWorker
 
@@ -77,9 +77,9 @@ def kill(process: subprocess.Popen[str]) -> None:
 
 OWNER = """
     import time
-    from shadowhound.memory import MissionHistory
+    from shadowhound.memory import MissionHistory, RobotId
     store = MissionHistory({path!r})
-    store.mission_started("live1", "walk forward 3 meters", time.time())
+    store.mission_started("live1", "walk forward 3 meters", time.time(), robot=RobotId("sim"))
     print("ready", flush=True)
     sys.stdin.readline()  # hold the mission until the test kills this process
 """
@@ -102,7 +102,7 @@ def test_another_process_never_marks_a_live_owners_mission(tmp_path):
 
 def test_a_second_handle_in_the_owning_process_marks_nothing(tmp_path):
     owner = MissionHistory(tmp_path / "history.db")
-    owner.mission_started("mine", "turn left", time.time())
+    owner.mission_started("mine", "turn left", time.time(), robot=RobotId("sim"))
     other = MissionHistory(tmp_path / "history.db")
     assert other.interrupted == 0 and other.get("mine")["status"] == "running"
     other.close()

@@ -16,7 +16,7 @@ import pytest
 
 from shadowhound import RobotAgent, RobotAgentConfig, SimRobot, load_config
 from shadowhound.config import ConfigError
-from shadowhound.memory import MemoryStoreError, MissionHistory
+from shadowhound.memory import MemoryStoreError, MissionHistory, RobotId
 from tests.strict_json import strict_loads
 
 try:
@@ -28,6 +28,7 @@ try:
     HAVE_RAG = True
 except ImportError:
     HAVE_RAG = False
+SIM = RobotId("sim")  # the robot the offline profile drives
 needs_rag = pytest.mark.skipif(
     not HAVE_RAG and not os.environ.get("CI") or sys.version_info < (3, 11) and not HAVE_RAG,
     reason="retrieval memory needs the 'memory' extra",
@@ -78,7 +79,7 @@ def test_history_survives_process_restarts(tmp_path):
 
 def test_a_mission_running_when_the_process_died_is_marked_interrupted(tmp_path):
     store = MissionHistory(tmp_path / "history.db")
-    store.mission_started("dead1", "walk forward 3 meters", time.time())
+    store.mission_started("dead1", "walk forward 3 meters", time.time(), robot=SIM)
     store.close()  # the process "dies" here: no mission_finished
     again = MissionHistory(tmp_path / "history.db")
     assert again.interrupted == 1
@@ -94,10 +95,10 @@ def test_concurrent_writers_in_threads_and_processes(tmp_path):
             "-c",
             (
                 "import sys, time; sys.path.insert(0, 'src');"
-                "from shadowhound.memory import MissionHistory;"
+                "from shadowhound.memory import MissionHistory, RobotId;"
                 f"s = MissionHistory({str(path)!r});"
-                "[s.mission_started(f'proc{i}', 'from another process', time.time())"
-                " for i in range(50)];"
+                "[s.mission_started(f'proc{i}', 'from another process', time.time(), "
+                "robot=RobotId('sim')) for i in range(50)];"
                 "s.close()"
             ),
         ],
@@ -106,7 +107,7 @@ def test_concurrent_writers_in_threads_and_processes(tmp_path):
 
     def writer(n: int) -> None:
         for i in range(25):
-            store.mission_started(f"t{n}-{i}", f"thread {n}", time.time())
+            store.mission_started(f"t{n}-{i}", f"thread {n}", time.time(), robot=SIM)
 
     threads = [threading.Thread(target=writer, args=(n,)) for n in range(4)]
     for t in threads:
@@ -142,13 +143,13 @@ def test_a_record_the_database_refuses_for_good_is_set_aside_and_later_ones_land
     store._db.execute("PRAGMA busy_timeout = 50")
     blocker = sqlite3.connect(str(path), timeout=0)
     blocker.execute("BEGIN EXCLUSIVE")  # first the database is locked: every write waits
-    store.mission_started("m1", "walk forward 1 meter", time.time())
-    store.save_place("den", math.nan, 1.0, 0.0)
-    store.mission_queued("m2", "from a clock that lies", 2**70)
+    store.mission_started("m1", "walk forward 1 meter", time.time(), robot=SIM)
+    store.save_place(SIM, "den", math.nan, 1.0, 0.0)
+    store.mission_queued("m2", "from a clock that lies", 2**70, robot=SIM)
     assert store.unsaved == 3  # kept, in order, for a retry
     blocker.rollback()
     blocker.close()
-    store.save_place("desk", 2.0, 1.0, 0.0)  # the retry: the good ones land, the bad go aside
+    store.save_place(SIM, "desk", 2.0, 1.0, 0.0)  # the retry: the good ones land, the bad go aside
     assert store.unsaved == 0
     finished = {
         "mission_id": "m3",
@@ -159,13 +160,13 @@ def test_a_record_the_database_refuses_for_good_is_set_aside_and_later_ones_land
         "timing": {"total_duration": 1.0},
         "robot": {"x": math.nan, "yaw": math.inf, "y": 0.5},
     }
-    store.mission_finished(finished, time.time())
-    store.mission_finished({"mission_id": "m4", "mission": "no status"}, time.time())
+    store.mission_finished(finished, time.time(), robot=SIM)
+    store.mission_finished({"mission_id": "m4", "mission": "no status"}, time.time(), robot=SIM)
     store.close()
 
     again = MissionHistory(path)
     assert sorted(r["id"] for r in again.recent()) == ["m1", "m3"]
-    assert again.load_places() == {"desk": (2.0, 1.0, 0.0)}
+    assert again.load_places(SIM) == {"desk": (2.0, 1.0, 0.0)}
     record = again.get("m3")
     assert record is not None and record["robot"] == {"x": None, "yaw": None, "y": 0.5}
     assert strict_loads(again._query("SELECT record FROM missions WHERE id = 'm3'", ())[0][0])
@@ -178,7 +179,7 @@ def test_a_record_the_database_refuses_for_good_is_set_aside_and_later_ones_land
         "finished mission m4",  # a record that cannot be made into a row
     ]
     assert lines[0]["error"] == "IntegrityError: NOT NULL constraint failed: places.x"
-    assert lines[0]["params"][:2] == ["den", None]  # strict JSON: the NaN is null
+    assert lines[0]["params"][:3] == ["sim", "den", None]  # strict JSON: the NaN is null
     assert lines[1]["error"].startswith("OverflowError:") and lines[1]["params"][2] == 2**70
     assert lines[2]["error"] == "KeyError: 'status'"
     assert lines[2]["params"] == [{"mission_id": "m4", "mission": "no status"}]
@@ -197,13 +198,13 @@ def test_records_waiting_at_close_are_written_or_set_aside(tmp_path):
     store._db.execute("PRAGMA busy_timeout = 50")
     blocker = sqlite3.connect(str(path), timeout=0)
     blocker.execute("BEGIN EXCLUSIVE")
-    store.save_place("den", 1.0, math.nan, 0.0)
-    store.mission_started("m1", "turn left", time.time())
+    store.save_place(SIM, "den", 1.0, math.nan, 0.0)
+    store.mission_started("m1", "turn left", time.time(), robot=SIM)
     blocker.rollback()
     blocker.close()
     store.close()  # nothing written since the lock: close writes what waits
     again = MissionHistory(path)
-    assert [r["id"] for r in again.recent()] == ["m1"] and again.load_places() == {}
+    assert [r["id"] for r in again.recent()] == ["m1"] and again.load_places(SIM) == {}
     assert again.rejected_count() == 1
     again.close()
 
@@ -212,10 +213,10 @@ def test_a_refused_record_that_cannot_be_set_aside_is_logged_in_full(tmp_path, c
     store = MissionHistory(tmp_path / "history.db")
     store.rejected.mkdir()  # the side file cannot be written
     with caplog.at_level("ERROR"):
-        store.save_place("den", math.nan, 1.0, 0.0)
-        store.save_place("desk", 2.0, 1.0, 0.0)
-    assert store.unsaved == 0 and store.load_places() == {"desk": (2.0, 1.0, 0.0)}
-    assert "cannot be set aside" in caplog.text and '"params": ["den", null' in caplog.text
+        store.save_place(SIM, "den", math.nan, 1.0, 0.0)
+        store.save_place(SIM, "desk", 2.0, 1.0, 0.0)
+    assert store.unsaved == 0 and store.load_places(SIM) == {"desk": (2.0, 1.0, 0.0)}
+    assert "cannot be set aside" in caplog.text and '"params": ["sim", "den", null' in caplog.text
     store.close()
 
 
@@ -234,9 +235,9 @@ def test_a_corrupt_database_is_a_clear_error_and_is_kept(tmp_path):
 def test_retention_prunes_old_missions(tmp_path):
     store = MissionHistory(tmp_path / "history.db")
     for i in range(5):
-        store.mission_started(f"old{i}", "long ago", time.time() - 200 * 86400)
+        store.mission_started(f"old{i}", "long ago", time.time() - 200 * 86400, robot=SIM)
     for i in range(5):
-        store.mission_started(f"new{i}", "today", time.time())
+        store.mission_started(f"new{i}", "today", time.time(), robot=SIM)
     assert store.prune(max_age_days=90, max_missions=3) == 7
     assert [r["mission"] for r in store.recent()] == ["today"] * 3
 
@@ -252,9 +253,9 @@ def test_teach_a_place_restart_and_go_there(tmp_path):
         "walk forward 2 meters, turn left and walk 1 meter, then remember this spot as the desk",
     )
     assert taught.returncode == 0 and "remembered this spot as the desk" in taught.stdout
-    places = json.loads(cli(tmp_path, "places", "--json").stdout)
-    assert places["desk"]["source"] == "taught"
-    assert places["desk"]["x"] == pytest.approx(2.0, abs=0.01)
+    places = {p["name"]: p for p in json.loads(cli(tmp_path, "places", "--json").stdout)}
+    assert places["desk"]["source"] == "taught" and places["desk"]["robot_id"] == "sim"
+    assert places["desk"]["goal"] and places["desk"]["x"] == pytest.approx(2.0, abs=0.01)
     went = json.loads(cli(tmp_path, "run", "--json", "go to the desk").stdout)
     assert went["success"]
     assert (went["robot"]["x"], went["robot"]["y"]) == (
@@ -292,7 +293,7 @@ def test_retrieval_is_semantic_and_persistent(tmp_path):
     from shadowhound.memory.recall import RecallMemory
 
     embedder = MiniLMEmbedder()
-    memory = RecallMemory(tmp_path / "recall", embedder)
+    memory = RecallMemory(tmp_path / "recall", embedder, robot=SIM)
     memory.add("the fridge is in the kitchen", "fact")
     noise = [
         "the charging dock is next to the sofa",
@@ -307,7 +308,7 @@ def test_retrieval_is_semantic_and_persistent(tmp_path):
     memory.add_many([(text, "observation", {}) for text in noise])
     top = memory.search("where is the fridge?", k=3)
     assert top[0].text == "the fridge is in the kitchen" and top[0].score > top[1].score
-    again = RecallMemory(tmp_path / "recall", embedder)  # a new process would do this
+    again = RecallMemory(tmp_path / "recall", embedder, robot=SIM)  # as a new process would
     assert again.count() == 9
     assert again.search("where is the fridge?", k=1)[0].kind == "fact"
 

@@ -73,8 +73,10 @@ class RobotAgent:
         self._approvals = ApprovalDesk()
         self._watchdog: Watchdog | None = None
         self._stop = StopSignal()
-        # Places for this process until initialize().
-        self._memory = AgentMemory(self.settings, skills=self.registry)
+        # Places for this process until initialize(); the robot's own, as every memory is.
+        self._memory = AgentMemory(
+            self.settings, skills=self.registry, robot=self.settings.robot.identity
+        )
         self._robot = self.config.robot
         self._planner = self.config.planner
         self._backend = self.config.backend
@@ -121,7 +123,9 @@ class RobotAgent:
                 self._backend.check()
             self._chat = ModelChat(self._backend, s.agent.conversation_history_size)
         if s.memory.enabled or s.memory.enable_rag:
-            self._memory = AgentMemory.open(s, self._backend, skills=self.registry)
+            self._memory = AgentMemory.open(
+                s, self._backend, skills=self.registry, robot=s.robot.identity
+            )
             self.add_listener(self._memory.on_event)
             # Reads the history database from now on (nothing is logged before initialize).
             self._logbook = Logbook(self._memory, s.agent.conversation_history_size)
@@ -373,8 +377,9 @@ class RobotAgent:
         return self._memory
 
     def recent_missions(self, limit: int = 10) -> list[dict[str, Any]]:
-        """Newest first: id, mission, status, success, response, started_at. From the history
-        database when memory is enabled (so it survives restarts), else from this process."""
+        """This robot's missions (`robot_id`), newest first: id, mission, status, success,
+        response, started_at. From the history database when memory is enabled (so it survives
+        restarts), else from this process."""
         return self._logbook.recent(limit)
 
     def recent_summaries(self) -> list[str]:

@@ -454,6 +454,24 @@ def _merge(base: dict[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
     return merged
 
 
+def _layer(data: dict[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
+    """`extra` over `data`. A robot of another type replaces the robot settings whole: a
+    Go2's namespace or a robot's name never carries over to another backend (its memories
+    would be taken for the other robot's)."""
+    robot = extra.get("robot")
+    if isinstance(robot, Mapping):
+        if "type" in robot and robot["type"] != _robot_type(data):
+            data = {k: v for k, v in data.items() if k != "robot"}
+        elif isinstance(data.get("robot"), str):  # `robot: go2` is `robot: {type: go2}`
+            data = {**data, "robot": {"type": data["robot"]}}
+    return _merge(data, extra)
+
+
+def _robot_type(data: Mapping[str, Any]) -> Any:
+    robot = data.get("robot", "sim")
+    return robot.get("type", "sim") if isinstance(robot, Mapping) else robot
+
+
 def _explain(exc: ValidationError, source: str) -> str:
     problems = []
     for err in exc.errors():
@@ -474,8 +492,8 @@ def load_config(
     env = os.environ if environ is None else environ
     profile = profile or env.get("SHADOWHOUND_CONFIG") or "offline"
     data, source = _read_profile(profile)
-    data = _merge(data, _env_overrides(env))
-    data = _merge(data, overrides or {})
+    data = _layer(data, _env_overrides(env))
+    data = _layer(data, overrides or {})
     try:
         return ShadowHoundConfig.model_validate(data)
     except ValidationError as exc:

@@ -34,6 +34,8 @@ what was wrong and what is allowed or what to do.
     |   +-- RecallStoreError         ... the retrieval store cannot be used
     +-- PlaceError                   memory: a place without a name or a finite position
     |                                    (ValueError)
+    +-- ClaimError                   memory: a claim of a memory of no known robot that
+    |                                    cannot be made (ValueError)
     +-- CaseFileError                evaluation: a mission-case file is malformed (ValueError)
     +-- UsageError                   cli: a command line argparse cannot parse
     +-- ServeError                   web/mcp: a server cannot start as asked
@@ -60,6 +62,7 @@ __all__ = [
     "BackendError",
     "BackendUnavailable",
     "CaseFileError",
+    "ClaimError",
     "ConfigError",
     "DetectionError",
     "FrameUnavailable",
@@ -249,6 +252,11 @@ class RecallStoreError(MemoryStoreError):
 
 class PlaceError(ShadowHoundError, ValueError):
     """A place cannot be kept: it has no name, or its position is not finite numbers."""
+
+
+class ClaimError(ShadowHoundError, ValueError):
+    """A memory of no known robot cannot be claimed for this one: there is none by that name,
+    or the robot has its own. The message says what can be claimed."""
 
 
 class CaseFileError(ShadowHoundError, ValueError):

@@ -35,12 +35,14 @@ class Logbook:
         return self._results[-1] if self._results else None
 
     def recent(self, limit: int = 10) -> list[dict[str, Any]]:
-        """Newest first: id, mission, status, success, response, started_at. From the history
-        database when memory is enabled (so it survives restarts), else from this process."""
+        """This robot's missions, newest first: id, mission, status, success, response,
+        started_at, finished_at, robot_id. From the history database when memory is enabled (so
+        it survives restarts), else from this process."""
         rows = self.memory.recent_missions(limit)
         if rows or self.memory.history is not None:
             return rows
-        return [r.history_row() for r in reversed(self._results)][:limit]
+        robot = {"robot_id": self.memory.robot.name}  # the database's shape: whose mission
+        return [{**r.history_row(), **robot} for r in reversed(self._results)][:limit]
 
     def summaries(self, *, finished_only: bool = False) -> list[str]:
         """The latest `size` missions, oldest first, one line each (for prompts and chat).

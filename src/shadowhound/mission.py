@@ -168,6 +168,7 @@ class MissionRun:
             budget=MissionBudget.start(self.start, self.robot.now),
             belief=belief,
             vocabulary=self.robot.vocabulary(),
+            secondhand=self.crew.memory.secondhand(),
         )
         return None
 

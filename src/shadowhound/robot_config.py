@@ -1,14 +1,20 @@
 """The robot backends' settings: one typed model per backend, chosen by `type` in the profile
 (`robot: go2` or `robot: {type: go2, namespace: robot0, ...}`). robot/factory.py builds the
 robot from them; ROS parameters only fill them (ros/params.py).
+
+Every backend's settings also say which robot this is (`RobotId`, from `name`, else the type and
+the namespace): what the robot remembers (places, sightings, missions) belongs to it, and only
+its own memories are ever goals (docs/memory.md).
 """
 
 from __future__ import annotations
 
 import math
+import re
+from dataclasses import dataclass
 from typing import Annotated, ClassVar, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 __all__ = [
     "ESTOP_RELEASE_TOPIC",
@@ -17,6 +23,9 @@ __all__ = [
     "ROBOT_TYPES",
     "Go2EduRobotSettings",
     "Go2RobotSettings",
+    "ROBOT_NAME",
+    "ROBOT_NAME_RULE",
+    "RobotId",
     "RobotSettings",
     "SimRobotSettings",
 ]
@@ -32,6 +41,36 @@ ESTOP_TOPIC = "/shadowhound/estop"  # std_msgs/Empty: stop now and latch
 ESTOP_RELEASE_TOPIC = "/shadowhound/estop_release"  # std_msgs/Empty: a person releases it
 
 
+# A robot's name: what people call it and what its memories carry ("sim", "go2:robot0",
+# "kitchen-dog"). No spaces, so it reads the same in a log, a listing and a ROS parameter.
+ROBOT_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.:/-]{0,63}$")
+ROBOT_NAME_RULE = "1 to 64 letters, digits and _ . : / - (starting with a letter or digit)"
+
+
+@dataclass(frozen=True)
+class RobotId:
+    """Which robot made a memory: every place taught, object seen and mission run carries it,
+    and only the current robot's own are goals. From the robot's settings
+    (`settings.robot.identity`): its `name`, else its type and namespace (`sim`, `go2`,
+    `go2_edu`, `go2:robot0`). Raises ValueError for a name outside `ROBOT_NAME`."""
+
+    name: str
+
+    def __post_init__(self) -> None:
+        if not ROBOT_NAME.match(self.name):
+            raise ValueError(f"a robot's name is {ROBOT_NAME_RULE}, got {self.name!r}")
+
+    def __str__(self) -> str:
+        return self.name
+
+
+def _derived_name(kind: str, namespace: str) -> str:
+    """The default name: the backend type, with the ROS namespace when there is one (two Go2s
+    of one fleet are two robots)."""
+    where = namespace.strip("/")
+    return f"{kind}:{where}" if where else kind
+
+
 class _Backend(BaseModel):
     """A robot backend's settings: `type` names the backend (`settings.robot.type`)."""
 
@@ -39,12 +78,41 @@ class _Backend(BaseModel):
     # The motion section's defaults this robot needs where the profile and the environment
     # leave them unset (config.ShadowHoundConfig applies them); none: the motion section's own.
     motion_defaults: ClassVar[dict[str, float]] = {}
+    name: str = Field(
+        "",
+        description="which robot this is to memory (its places, sightings and missions); "
+        "'' = its type and namespace: sim, go2, go2_edu, go2:robot0",
+    )
+
+    @property
+    def identity(self) -> RobotId:
+        """Which robot these settings drive: `name`, else the type and namespace."""
+        return RobotId(self.name or self._default_name())
+
+    def _default_name(self) -> str:
+        raise NotImplementedError  # every backend says its own
+
+    @model_validator(mode="after")
+    def _named(self) -> _Backend:
+        """A name outside ROBOT_NAME, or a namespace no name can be made of (a space in it),
+        is refused at load, saying what a name may be."""
+        if self.name:
+            RobotId(self.name)
+            return self
+        try:
+            RobotId(self._default_name())
+        except ValueError as exc:
+            raise ValueError(f"{exc} (made of the namespace): set robot.name") from exc
+        return self
 
 
 class SimRobotSettings(_Backend):
     """The simulated Go2 (SimRobot); its world and physics are the `sim` section."""
 
     type: Literal["sim"] = "sim"
+
+    def _default_name(self) -> str:
+        return _derived_name(self.type, "")
 
 
 class Go2RobotSettings(_Backend):
@@ -95,6 +163,9 @@ class Go2RobotSettings(_Backend):
     speech_topic: str = Field("/tts", description="std_msgs/String for tts_node; '' = mute")
     map_frame: str = Field("map", description="SLAM's map frame on /tf; '' = read no TF")
 
+    def _default_name(self) -> str:
+        return _derived_name(self.type, self.namespace)
+
 
 class Go2EduRobotSettings(_Backend):
     """A Unitree Go2 EDU through Unitree's own ROS 2 interface (unitree_ros2, CycloneDDS on the
@@ -118,6 +189,9 @@ class Go2EduRobotSettings(_Backend):
     linear_accel: float = Field(1.0, gt=0, description="m/s^2 (the tracker's model)")
     angular_accel: float = Field(3.0, gt=0, description="rad/s^2")
     node_name: str = "shadowhound_go2_edu"
+
+    def _default_name(self) -> str:
+        return _derived_name(self.type, self.namespace)
 
 
 RobotSettings = Annotated[

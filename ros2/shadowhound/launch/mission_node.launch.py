@@ -25,6 +25,7 @@ ARGUMENTS = {
     "web_interface_port": "8080",
     "enable_web_ui": "false",
     "robot_namespace": "",
+    "robot_name": "",
     "cmd_vel_topic": "",
     "webrtc_topic": "webrtc_req",
     "odom_topic": "odom",

@@ -1,5 +1,6 @@
-"""`shadowhound`: the command line. Commands live in `missions` (run, eval), `chat`, `tools` and
-`ros_tools` (node, sim-driver, send, estop, sim-fault, loopback-env).
+"""`shadowhound`: the command line. Commands live in `missions` (run, eval), `chat`, `memory`
+(history, places, recall), `tools` and `ros_tools` (node, sim-driver, send, estop, sim-fault,
+loopback-env).
 
 Exit codes (shadowhound.exit_codes): 0 success, 1 mission (or evaluation) failure, 2 usage or
 configuration error, 130 interrupted (the robot is stopped first), 141 the output went away (a
@@ -21,6 +22,7 @@ from ..errors import BackendUnavailable, ConfigError, MemoryStoreError, UsageErr
 from ..exit_codes import EXIT_BROKEN_PIPE, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE
 from ._base import report_error
 from .chat import cmd_chat
+from .memory import cmd_history, cmd_places, cmd_recall
 from .missions import cmd_eval, cmd_run
 from .parser import BACKENDS, build_parser
 from .ros_tools import (
@@ -34,10 +36,7 @@ from .ros_tools import (
 from .tools import (
     cmd_config,
     cmd_doctor,
-    cmd_history,
     cmd_mcp,
-    cmd_places,
-    cmd_recall,
     cmd_serve,
     cmd_skills,
 )

@@ -1,4 +1,5 @@
-"""The `shadowhound` command line's arguments: every command, its options and their help.
+"""The `shadowhound` command line's arguments: every command, its options and their help (the
+memory commands' are in memory.py, beside them).
 
 Each command's handler lives in `missions` or `tools`; `main` (the package) dispatches.
 """
@@ -13,6 +14,7 @@ from ..config import available_profiles
 from ..errors import UsageError
 from ..mcp.limits import DEFAULT_IDLE_TIMEOUT, DEFAULT_MAX_SESSIONS
 from ..robot_config import ROBOT_TYPES
+from .memory import add_memory_commands
 
 
 class Parser(argparse.ArgumentParser):
@@ -189,23 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--seconds", type=float, default=3.0, help="how long to watch the topics (default 3)"
     )
 
-    history = sub.add_parser(
-        "history",
-        help="list past missions and the objects seen, or show one mission (memory.enabled)",
-    )
-    _common(history, suppress=True)
-    history.add_argument("mission_id", nargs="?", help="show this mission in full")
-    history.add_argument("--limit", type=int, default=20, help="how many to list (default 20)")
-    history.add_argument("--json", action="store_true", help="print JSON")
-
-    places = sub.add_parser("places", help="list the known places, or forget a taught one")
-    _common(places, suppress=True)
-    places.add_argument("--forget", metavar="NAME", help="forget a taught place")
-    places.add_argument("--json", action="store_true", help="print JSON")
-
-    recall = sub.add_parser("recall", help="search retrieval memory (memory.enable_rag)")
-    _common(recall, suppress=True)
-    recall.add_argument("query", help="what to look for, e.g. 'where is the fridge?'")
+    add_memory_commands(sub, lambda p: _common(p, suppress=True))
 
     serve = sub.add_parser(
         "serve", help="run the web dashboard and HTTP API (needs the 'web' extra)"

@@ -1,5 +1,5 @@
-"""Commands that inspect or serve: `skills`, `config`, `doctor`, `history`, `places`,
-`recall`, `serve`, `mcp` (the ROS 2 commands are in ros_tools)."""
+"""Commands that inspect or serve: `skills`, `config`, `doctor`, `serve`, `mcp` (the memory
+commands are in memory, the ROS 2 commands in ros_tools)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import argparse
 import errno
 import json
 import sys
-import time
 from typing import Any
 
 from .. import jsonout
@@ -159,111 +158,6 @@ def _doctor_go2(args: argparse.Namespace) -> int:
     for finding in findings:
         print(finding)
     return EXIT_FAILED if any(f.level == "fail" for f in findings) else EXIT_OK
-
-
-# -- memory --------------------------------------------------------------------------------------
-
-
-def _memory(settings: ShadowHoundConfig) -> Any:
-    from ..memory.service import AgentMemory
-
-    return AgentMemory.open(settings)
-
-
-def cmd_history(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
-    if not settings.memory.enabled:
-        print("shadowhound: mission history is off (memory.enabled: false)", file=sys.stderr)
-        return EXIT_USAGE
-    memory = _memory(settings)
-    assert memory.history is not None
-    try:
-        _note_rejected(memory.history)
-        if args.mission_id:
-            record = memory.history.get(args.mission_id)
-            if record is None:
-                print(
-                    f"shadowhound: no mission {args.mission_id!r} in {memory.history.path}",
-                    file=sys.stderr,
-                )
-                return EXIT_FAILED
-            jsonout.dump(record, sys.stdout, indent=2, default=str)
-            sys.stdout.write("\n")
-            return EXIT_OK
-        rows = memory.history.recent(max(1, args.limit))
-        if args.json:
-            jsonout.dump(rows, sys.stdout, indent=2)
-            sys.stdout.write("\n")
-            return EXIT_OK
-        for row in rows:
-            when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(row["started_at"]))
-            print(f"{row['id']}  {when}  {row['status']:<11} {row['mission'][:60]!r}")
-        seen = memory.sightings.all()
-        if seen:
-            print("objects seen (latest sighting, odom frame):")
-        for r in seen:
-            when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(r.seen_at))
-            o = r.known
-            print(
-                f"  {o.name:<20} x={o.x:7.2f} y={o.y:7.2f}  {when}  confidence {o.confidence:.2f}"
-            )
-        return EXIT_OK
-    finally:
-        memory.close()
-
-
-def _note_rejected(history: Any) -> None:
-    """One line on stderr when the history has set records aside (see docs/memory.md)."""
-    count = history.rejected_count()
-    if count:
-        print(
-            f"shadowhound: note: {count} record(s) the history database refused are set "
-            f"aside in {history.rejected} (one JSON line each, with the error)",
-            file=sys.stderr,
-        )
-
-
-def cmd_places(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
-    from ..memory.places import known_places
-
-    memory = _memory(settings)
-    try:
-        if args.forget:
-            if not memory.places.forget(args.forget):
-                print(f"shadowhound: no taught place {args.forget!r}", file=sys.stderr)
-                return EXIT_FAILED
-            print(f"forgot {args.forget!r}")
-            return EXIT_OK
-        listing = {
-            n: {"x": p.x, "y": p.y, **({} if p.yaw is None else {"yaw": p.yaw}), "source": p.source}
-            for n, p in known_places(settings.places, memory.places).items()
-        }
-        if args.json:
-            jsonout.dump(listing, sys.stdout, indent=2)
-            sys.stdout.write("\n")
-        else:
-            for name, place in listing.items():
-                print(f"{name:<20} x={place['x']:7.2f} y={place['y']:7.2f}  {place['source']}")
-        return EXIT_OK
-    finally:
-        memory.close()
-
-
-def cmd_recall(args: argparse.Namespace, settings: ShadowHoundConfig) -> int:
-    memory = _memory(settings)
-    try:
-        # Missions carry on without a broken store (it turns itself off); this command exists
-        # to search it, so it says what is wrong instead of answering from elsewhere.
-        found = [] if memory.recall_problem else memory.search(args.query)
-        if memory.recall_problem:
-            print(
-                f"shadowhound: retrieval memory is unavailable: {memory.recall_problem}",
-                file=sys.stderr,
-            )
-            return EXIT_USAGE
-        print("\n".join(found) if found else "nothing remembered about that")
-        return EXIT_OK
-    finally:
-        memory.close()
 
 
 # -- serve ---------------------------------------------------------------------------------------

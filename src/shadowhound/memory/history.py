@@ -12,6 +12,10 @@ next write, so no record is lost while the process lives. A record the database 
 good (a constraint it breaks, a value SQLite cannot hold) is set aside instead, as one line
 of strict JSON with the error in `history.rejected.jsonl` beside the database, so the records
 after it still land (backlog.py).
+
+Every mission, taught place and sighting carries the robot that made it (`RobotId`); places and
+sightings are read as goals only by their robot (owned.py). A file from before robots were
+recorded is migrated in place when opened (schema.py).
 """
 
 from __future__ import annotations
@@ -26,48 +30,30 @@ from typing import Any
 
 from .. import jsonout
 from ..errors import MemoryStoreError
+from ..robot_config import RobotId
+from . import schema
 from .backlog import Backlog, Write
 from .lease import Lease, live_owners
+from .owned import PlacesAndSightings
 
 log = logging.getLogger(__name__)
 
-_SCHEMA = """
-CREATE TABLE IF NOT EXISTS missions (
-    id TEXT PRIMARY KEY,
-    mission TEXT NOT NULL,
-    status TEXT NOT NULL,
-    success INTEGER,
-    response TEXT,
-    started_at REAL NOT NULL,
-    finished_at REAL,
-    record TEXT,
-    owner TEXT
-);
-CREATE INDEX IF NOT EXISTS missions_started ON missions (started_at);
-CREATE TABLE IF NOT EXISTS places (
-    name TEXT PRIMARY KEY,
-    x REAL NOT NULL,
-    y REAL NOT NULL,
-    yaw REAL NOT NULL,
-    created_at REAL NOT NULL
-);
-CREATE TABLE IF NOT EXISTS sightings (
-    name TEXT PRIMARY KEY,
-    x REAL NOT NULL,
-    y REAL NOT NULL,
-    radius REAL NOT NULL,
-    confidence REAL NOT NULL,
-    stamp REAL NOT NULL,
-    seen_at REAL NOT NULL
-);
-"""
-
-
+# What a mission's row says, in `recent` and `get`.
+_LISTED = (
+    "id",
+    "mission",
+    "status",
+    "success",
+    "response",
+    "started_at",
+    "finished_at",
+    "robot_id",
+)
 INTERRUPTED = "interrupted: the process running it ended before it finished"
 NEVER_STARTED = "not run: the process that accepted it ended before its turn"
 
 
-class MissionHistory:
+class MissionHistory(PlacesAndSightings):
     """Thread-safe access to the history database at `path`."""
 
     def __init__(self, path: str | Path, *, busy_timeout: float = 5.0) -> None:
@@ -87,10 +73,7 @@ class MissionHistory:
             # In WAL mode NORMAL never corrupts the file and survives a crashed process; only a
             # power cut may drop the last commits. FULL would fsync every mission (slower).
             self._db.execute("PRAGMA synchronous = NORMAL")
-            self._db.executescript(_SCHEMA)
-            columns = [row[1] for row in self._db.execute("PRAGMA table_info(missions)")]
-            if "owner" not in columns:  # a file from before owners were recorded
-                self._db.execute("ALTER TABLE missions ADD COLUMN owner TEXT")
+            schema.prepare(self._db)
             self.interrupted, self.not_run = self._mark_ownerless()
             if self.not_run:
                 log.warning(
@@ -150,37 +133,45 @@ class MissionHistory:
 
     # -- writing ----------------------------------------------------------------------------
 
-    def mission_queued(self, mission_id: str, mission: str, queued_at: float) -> None:
+    # Every write names the robot (`RobotId`) whose mission, place or sighting it is.
+
+    def mission_queued(
+        self, mission_id: str, mission: str, queued_at: float, *, robot: RobotId
+    ) -> None:
         """An interface accepted the mission; it waits for its turn."""
         self._write(
             f"queued mission {mission_id}",
-            "INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
-            "VALUES (?, ?, 'queued', ?, ?)",
-            (mission_id, mission, queued_at, self._owner()),
+            "INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner, robot_id) "
+            "VALUES (?, ?, 'queued', ?, ?, ?)",
+            (mission_id, mission, queued_at, self._owner(), robot.name),
         )
 
-    def mission_started(self, mission_id: str, mission: str, started_at: float) -> None:
+    def mission_started(
+        self, mission_id: str, mission: str, started_at: float, *, robot: RobotId
+    ) -> None:
         self._write(
             f"started mission {mission_id}",
-            "INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner) "
-            "VALUES (?, ?, 'running', ?, ?)",
-            (mission_id, mission, started_at, self._owner()),
+            "INSERT OR REPLACE INTO missions (id, mission, status, started_at, owner, robot_id) "
+            "VALUES (?, ?, 'running', ?, ?, ?)",
+            (mission_id, mission, started_at, self._owner(), robot.name),
         )
 
     def mission_not_run(
-        self, mission_id: str, mission: str, reason: str, finished_at: float
+        self, mission_id: str, mission: str, reason: str, finished_at: float, *, robot: RobotId
     ) -> None:
         """A mission that was accepted but never started (dropped, cancelled, refused)."""
         self._write(
             f"mission {mission_id} not run",
             "INSERT INTO missions (id, mission, status, success, response, started_at, "
-            "finished_at) VALUES (?, ?, 'not_run', 0, ?, ?, ?) ON CONFLICT(id) DO UPDATE SET "
-            "status = 'not_run', success = 0, response = excluded.response, "
-            "finished_at = excluded.finished_at",
-            (mission_id, mission, reason, finished_at, finished_at),
+            "finished_at, robot_id) VALUES (?, ?, 'not_run', 0, ?, ?, ?, ?) "
+            "ON CONFLICT(id) DO UPDATE SET status = 'not_run', success = 0, "
+            "response = excluded.response, finished_at = excluded.finished_at",
+            (mission_id, mission, reason, finished_at, finished_at, robot.name),
         )
 
-    def mission_finished(self, record: dict[str, Any], finished_at: float) -> None:
+    def mission_finished(
+        self, record: dict[str, Any], finished_at: float, *, robot: RobotId
+    ) -> None:
         """Store a finished mission (`MissionResult.to_dict()`), also one that never started.
         The record is kept as strict JSON (a number that is not finite is null)."""
         mission_id = record.get("mission_id")
@@ -194,6 +185,7 @@ class MissionHistory:
                 finished_at - record["timing"]["total_duration"],
                 finished_at,
                 jsonout.dumps(record, default=str),
+                robot.name,
             )
         except (KeyError, TypeError, ValueError) as exc:  # not a result's record
             with self._lock:
@@ -202,8 +194,8 @@ class MissionHistory:
         self._write(
             f"finished mission {mission_id}",
             "INSERT INTO missions (id, mission, status, success, response, started_at, "
-            "finished_at, record) VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT(id) DO UPDATE SET "
-            "status = excluded.status, success = excluded.success, "
+            "finished_at, record, robot_id) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?) "
+            "ON CONFLICT(id) DO UPDATE SET status = excluded.status, success = excluded.success, "
             "response = excluded.response, finished_at = excluded.finished_at, "
             "record = excluded.record",
             params,
@@ -265,32 +257,37 @@ class MissionHistory:
     # -- reading ----------------------------------------------------------------------------
 
     def recent(
-        self, limit: int = 20, offset: int = 0, *, queued: bool = True
+        self,
+        limit: int = 20,
+        offset: int = 0,
+        *,
+        queued: bool = True,
+        robot: RobotId | None = None,
     ) -> list[dict[str, Any]]:
-        """Newest first: id, mission, status, success, response, started_at, finished_at.
+        """Newest first: id, mission, status, success, response, started_at, finished_at,
+        robot_id (None: run before robots were recorded).
 
         `queued=False` leaves out missions still waiting for their turn (`started_at` is then
-        when they were accepted)."""
-        where = "" if queued else "WHERE status != 'queued' "
+        when they were accepted); `robot` keeps only that robot's missions."""
+        where = ["1"] if queued else ["status != 'queued'"]
+        if robot is not None:
+            where.append("robot_id = ?")
         rows = self._query(
-            "SELECT id, mission, status, success, response, started_at, "
-            f"finished_at FROM missions {where}ORDER BY started_at DESC "
-            "LIMIT ? OFFSET ?",
-            (limit, offset),
+            "SELECT id, mission, status, success, response, started_at, finished_at, robot_id "
+            f"FROM missions WHERE {' AND '.join(where)} ORDER BY started_at DESC LIMIT ? OFFSET ?",
+            (*(() if robot is None else (robot.name,)), limit, offset),
         )
-        keys = ("id", "mission", "status", "success", "response", "started_at", "finished_at")
-        return [dict(zip(keys, row, strict=True)) for row in rows]
+        return [dict(zip(_LISTED, row, strict=True)) for row in rows]
 
     def get(self, mission_id: str) -> dict[str, Any] | None:
-        """The full record of one mission (plan, steps, timing, usage, refusals, robot)."""
+        """The full record of one mission (plan, steps, timing, usage, refusals, the robot's
+        state after) and the robot that ran it (`robot_id`)."""
         rows = self._query(
-            "SELECT id, mission, status, success, response, started_at, "
-            "finished_at, record FROM missions WHERE id = ?",
-            (mission_id,),
+            f"SELECT {', '.join(_LISTED)}, record FROM missions WHERE id = ?", (mission_id,)
         )
         if not rows:
             return None
-        mission_id, mission, status, success, response, started, finished, record = rows[0]
+        mission_id, mission, status, success, response, started, finished, robot, record = rows[0]
         # A mission that never finished (queued, running, not run, interrupted) has no record:
         # what the row says is all there is.
         full = (
@@ -303,7 +300,7 @@ class MissionHistory:
                 "success": None if success is None else bool(success),
             }
         )
-        full.update(status=status, started_at=started, finished_at=finished)
+        full.update(status=status, started_at=started, finished_at=finished, robot_id=robot)
         return full
 
     def count(self) -> int:
@@ -314,46 +311,10 @@ class MissionHistory:
             try:
                 return self._db.execute(sql, params).fetchall()
             except sqlite3.DatabaseError as exc:
-                raise MemoryStoreError(_explain(self.path, exc)) from exc
+                raise self._failed(exc) from exc
 
-    # -- places (same file) -----------------------------------------------------------------
-
-    def save_place(self, name: str, x: float, y: float, yaw: float) -> None:
-        self._write(
-            f"place {name!r}",
-            "INSERT OR REPLACE INTO places (name, x, y, yaw, created_at) VALUES (?, ?, ?, ?, ?)",
-            (name, x, y, yaw, time.time()),
-        )
-
-    def delete_place(self, name: str) -> None:
-        self._write(f"forgetting the place {name!r}", "DELETE FROM places WHERE name = ?", (name,))
-
-    def load_places(self) -> dict[str, tuple[float, float, float]]:
-        rows = self._query("SELECT name, x, y, yaw FROM places ORDER BY name", ())
-        return {name: (x, y, yaw) for name, x, y, yaw in rows}
-
-    # -- sightings (same file): the latest of each object seen --------------------------------
-
-    def save_sighting(
-        self, name: str, x: float, y: float, radius: float, confidence: float, stamp: float
-    ) -> None:
-        self._write(
-            f"sighting of {name!r}",
-            "INSERT OR REPLACE INTO sightings (name, x, y, radius, confidence, stamp, "
-            "seen_at) VALUES (?, ?, ?, ?, ?, ?, ?)",
-            (name, x, y, radius, confidence, stamp, time.time()),
-        )
-
-    def load_sightings(self) -> list[tuple[str, float, float, float, float, float, float]]:
-        """(name, x, y, radius, confidence, robot stamp, wall-clock seen_at), by name."""
-        return [
-            tuple(r)
-            for r in self._query(
-                "SELECT name, x, y, radius, confidence, stamp, seen_at FROM sightings "
-                "ORDER BY name",
-                (),
-            )
-        ]
+    def _failed(self, exc: sqlite3.DatabaseError) -> MemoryStoreError:
+        return MemoryStoreError(_explain(self.path, exc))
 
 
 def _explain(path: Path, exc: sqlite3.DatabaseError) -> str:

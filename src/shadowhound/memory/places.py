@@ -9,6 +9,9 @@ for an agent's missions.
 A place's position is finite numbers, wherever it comes from (odometry can lie): `remember`
 refuses any other with a PlaceError, and a row read back from the database that is not is
 skipped, with a warning.
+
+A book is one robot's (`RobotId`): it holds, and so offers as goals, only the places that robot
+was taught; another robot's, in the same database, are never read into it.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from ..errors import PlaceError
+from ..robot_config import RobotId
 from ..state import not_finite
 from .history import MissionHistory
 
@@ -32,14 +36,15 @@ def normalize_place(name: str) -> str:
 
 
 class PlaceBook:
-    """Taught places, name -> (x, y, yaw) in the robot's world frame (SLAM's map when the
-    robot has one, else odometry's): where the robot stood when taught."""
+    """`robot`'s taught places, name -> (x, y, yaw) in its world frame (SLAM's map when the
+    robot has one, else odometry's): where it stood when taught."""
 
-    def __init__(self, store: MissionHistory | None = None) -> None:
+    def __init__(self, store: MissionHistory | None = None, *, robot: RobotId) -> None:
         self._store = store
+        self.robot = robot
         self._lock = threading.Lock()
         self._places: dict[str, tuple[float, float, float]] = {}
-        for name, (x, y, yaw) in store.load_places().items() if store is not None else ():
+        for name, (x, y, yaw) in store.load_places(robot).items() if store is not None else ():
             bad = not_finite(x=x, y=y, yaw=yaw)
             if bad:
                 log.warning(
@@ -70,7 +75,7 @@ class PlaceBook:
         with self._lock:
             self._places[key] = (x, y, yaw)
         if self._store is not None:
-            self._store.save_place(key, x, y, yaw)
+            self._store.save_place(self.robot, key, x, y, yaw)
         return key
 
     def forget(self, name: str) -> bool:
@@ -78,7 +83,7 @@ class PlaceBook:
         with self._lock:
             known = self._places.pop(key, None) is not None
         if known and self._store is not None:
-            self._store.delete_place(key)
+            self._store.delete_place(self.robot, key)
         return known
 
     def all(self) -> Mapping[str, tuple[float, float, float]]:

@@ -9,10 +9,17 @@ embedding model. Telemetry is off.
 A store that cannot be used (a corrupt Chroma directory, a file where the directory should be,
 no permission) raises `RecallStoreError` naming the path and what to do, at open and at every
 later use; `AgentMemory` then turns retrieval memory off for the run instead of failing missions.
+
+A store is opened for one robot (`RobotId`): its memories live in a collection of their own, so a
+search finds only that robot's (another robot's notes never reach its planner) at the cost of a
+plain nearest-neighbour query. A metadata filter over one shared collection would do the same
+but made Chroma scan: 0.2 s a query over 10,000 memories instead of 9 ms. Memories written before
+robots were recorded stay in the old, unnamed collection: no robot searches them.
 """
 
 from __future__ import annotations
 
+import hashlib
 import threading
 import time
 import uuid
@@ -22,6 +29,7 @@ from typing import Any, Protocol
 
 from .. import jsonout
 from ..errors import RecallStoreError
+from ..robot_config import RobotId
 
 KINDS = ("mission", "fact", "observation")
 
@@ -59,10 +67,23 @@ class Memory:
         return f"[{self.kind}, {when}] {self.text}"
 
 
-class RecallMemory:
-    """Semantic memory at `path` (a directory). Thread-safe."""
+def collection_name(embedder: Embedder, robot: RobotId | None) -> str:
+    """The collection of `robot`'s memories embedded by `embedder` (None: the one of no known
+    robot, from before robots were recorded). The name carries the embedder, so vectors of
+    different models never mix, and the robot, spelt for Chroma with a hash of its exact name
+    (so "go2:robot0" and "go2-robot0" stay apart)."""
+    name = "shadowhound-" + "".join(c if c.isalnum() else "-" for c in embedder.name)[:40]
+    name = name.strip("-")
+    if robot is None:
+        return name
+    spelt = "".join(c if c.isalnum() else "-" for c in robot.name)[:40]
+    return f"{name}-robot-{spelt}-{hashlib.sha256(robot.name.encode()).hexdigest()[:8]}"
 
-    def __init__(self, path: str | Path, embedder: Embedder) -> None:
+
+class RecallMemory:
+    """`robot`'s semantic memory in the store at `path` (a directory). Thread-safe."""
+
+    def __init__(self, path: str | Path, embedder: Embedder, *, robot: RobotId) -> None:
         try:
             import chromadb
             from chromadb.config import Settings
@@ -72,9 +93,8 @@ class RecallMemory:
             ) from exc
         self.path = Path(path).expanduser()
         self.embedder = embedder
+        self.robot = robot
         self._lock = threading.Lock()
-        # The collection name carries the embedder: vectors of different models never mix.
-        name = "shadowhound-" + "".join(c if c.isalnum() else "-" for c in embedder.name)[:40]
         # Chroma reports a damaged store with errors of many kinds (its own, sqlite's, OSError
         # from its Rust core); whatever the kind, the store is unusable and the caller must know.
         try:
@@ -83,12 +103,15 @@ class RecallMemory:
                 path=str(self.path), settings=Settings(anonymized_telemetry=False)
             )
             self._collection = client.get_or_create_collection(
-                name.strip("-"), embedding_function=None, metadata={"hnsw:space": "cosine"}
+                collection_name(embedder, robot),
+                embedding_function=None,
+                metadata={"hnsw:space": "cosine", "robot_id": robot.name},
             )
         except Exception as exc:
             raise _store_error(self.path, exc) from exc
 
     def add(self, text: str, kind: str, **meta: Any) -> str:
+        """Remember `text` as this robot's; `meta` (pose, mission) is kept beside it."""
         if kind not in KINDS:
             raise ValueError(f"memory kind must be one of {', '.join(KINDS)}, got {kind!r}")
         text = text.strip()
@@ -109,6 +132,7 @@ class RecallMemory:
                     for k, v in jsonout.finite(meta).items()
                     if isinstance(v, (str, int, float, bool))
                 },
+                "robot_id": self.robot.name,  # also on each memory, for whoever reads the store
             }
             for _, kind, meta in items
         ]
@@ -125,6 +149,7 @@ class RecallMemory:
         return ids
 
     def search(self, query: str, k: int = 3, kind: str | None = None) -> list[Memory]:
+        """This robot's memories closest to `query` (of `kind` when given), closest first."""
         if not query.strip() or k <= 0:
             return []
         vector = self.embedder.embed([query])[0]
@@ -149,6 +174,7 @@ class RecallMemory:
             meta = dict(meta or {})
             created = meta.pop("created", 0.0)
             kind_ = str(meta.pop("kind", "?"))
+            meta.pop("robot_id", None)
             created = float(created) if isinstance(created, (int, float)) else 0.0
             memories.append(Memory(text or "", kind_, created, 1.0 - float(distance), meta))
         return memories

@@ -7,6 +7,11 @@ A retrieval store that cannot be used (corrupt, a file in its place) turns retri
 for the run, with a warning and a note in `status()`: memory is an aid, never a reason for a
 mission not to run. A broken history database is still an error: it holds the records.
 What retrieval memory keeps of a step is the step's skill's to say (`Skill.remembered_as`).
+
+An agent's memory is one robot's (`robot`, a `RobotId`, from the robot's settings): everything it
+writes carries that robot, and what it reads as a goal or a hint (places, sightings, recent
+missions, retrieval) is that robot's own. Other robots' memories in the same store are history:
+`secondhand()` lists them so an answer can say why they are not goals.
 """
 
 from __future__ import annotations
@@ -21,8 +26,10 @@ from ..config import ShadowHoundConfig
 from ..errors import ConfigError, MemoryStoreError, RecallStoreError
 from ..events import MissionEvent, MissionFinished, MissionStarted, StepFinished
 from ..result import SkillBook, StepStatus
+from ..robot_config import RobotId
 from .history import MissionHistory
 from .places import PlaceBook
+from .records import Secondhand, Stored, not_a_goal
 from .sightings import SightingBook
 
 log = logging.getLogger(__name__)
@@ -77,24 +84,33 @@ class AgentMemory:
         recall_problem: str | None = None,
         *,
         skills: SkillBook | None = None,
+        robot: RobotId | None = None,
     ) -> None:
         self.settings = settings
         self.skills = skills
         self.history = history
-        self.places = PlaceBook(history)
-        self.sightings = SightingBook(history)
+        # Whose memory this is: the robot the settings drive, unless the caller names it.
+        self.robot = robot if robot is not None else settings.robot.identity
+        self.places = PlaceBook(history, robot=self.robot)
+        self.sightings = SightingBook(history, robot=self.robot)
         self.recall = recall
         # Why retrieval memory is off although enable_rag asks for it (None: it is not).
         self.recall_problem = recall_problem
 
     @classmethod
     def open(
-        cls, settings: ShadowHoundConfig, backend: Any = None, *, skills: SkillBook | None = None
+        cls,
+        settings: ShadowHoundConfig,
+        backend: Any = None,
+        *,
+        skills: SkillBook | None = None,
+        robot: RobotId | None = None,
     ) -> AgentMemory:
-        """Open what `settings.memory` asks for. Raises ConfigError with what to do."""
+        """Open what `settings.memory` asks for, as `robot`'s memory (None: the robot the
+        settings drive). Raises ConfigError with what to do."""
         cfg = settings.memory
         if not cfg.enabled and not cfg.enable_rag:
-            return cls(settings, skills=skills)
+            return cls(settings, skills=skills, robot=robot)
         data = Path(cfg.data_dir).expanduser()
         history = None
         if cfg.enabled:
@@ -108,16 +124,16 @@ class AgentMemory:
                     history.interrupted,
                 )
             history.prune(max_age_days=cfg.retention_days, max_missions=cfg.max_missions)
-        memory = cls(settings, history, skills=skills)
+        memory = cls(settings, history, skills=skills, robot=robot)
         if cfg.enable_rag:
             try:
-                memory.recall = cls._open_recall(settings, data, backend)
+                memory.recall = cls._open_recall(settings, data, backend, memory.robot)
             except RecallStoreError as exc:
                 memory.turn_recall_off(exc)
         return memory
 
     @staticmethod
-    def _open_recall(settings: ShadowHoundConfig, data: Path, backend: Any) -> Any:
+    def _open_recall(settings: ShadowHoundConfig, data: Path, backend: Any, robot: RobotId) -> Any:
         cfg = settings.memory
         try:
             from .embedding import BackendEmbedder, MiniLMEmbedder
@@ -132,7 +148,7 @@ class AgentMemory:
                 embedder: Any = BackendEmbedder(backend, cfg.embedding_model)
             else:
                 embedder = MiniLMEmbedder()
-            return RecallMemory(data / "recall", embedder)
+            return RecallMemory(data / "recall", embedder, robot=robot)
         except ImportError as exc:
             raise ConfigError(f"memory.enable_rag is on but {exc}") from exc
 
@@ -150,6 +166,7 @@ class AgentMemory:
             "on" if self.recall is not None else "unavailable" if self.recall_problem else "off"
         )
         return {
+            "robot_id": self.robot.name,
             "history": "on" if self.history is not None else "off",
             "recall": recall,
             "recall_problem": self.recall_problem if cfg.enable_rag else None,
@@ -164,18 +181,20 @@ class AgentMemory:
     def mission_queued(self, mission_id: str, mission: str) -> None:
         """An interface accepted a mission into its queue: on record before it runs."""
         if self.history is not None:
-            self.history.mission_queued(mission_id, mission, time.time())
+            self.history.mission_queued(mission_id, mission, time.time(), robot=self.robot)
 
     def mission_not_run(self, mission_id: str, mission: str, reason: str) -> None:
         """A queued mission ended without starting (dropped, cancelled, refused)."""
         if self.history is not None:
-            self.history.mission_not_run(mission_id, mission, reason, time.time())
+            self.history.mission_not_run(mission_id, mission, reason, time.time(), robot=self.robot)
 
     # -- recording (agent events) ------------------------------------------------------------
 
     def on_event(self, event: MissionEvent) -> None:
         if isinstance(event, MissionStarted) and self.history is not None:
-            self.history.mission_started(event.mission_id, event.mission, event.time)
+            self.history.mission_started(
+                event.mission_id, event.mission, event.time, robot=self.robot
+            )
         elif isinstance(event, StepFinished) and self.recall is not None:
             step = event.step
             skill = self.skills.find(step.skill) if self.skills is not None else None
@@ -184,7 +203,7 @@ class AgentMemory:
         elif isinstance(event, MissionFinished):
             result = event.result
             if self.history is not None:  # the database keeps the JSON record
-                self.history.mission_finished(event.data["result"], event.time)
+                self.history.mission_finished(event.data["result"], event.time, robot=self.robot)
             if self.recall is not None and result.plan is not None:
                 robot = result.robot
                 summary = f"Mission '{result.mission}' {result.status.value}: {result.response}"
@@ -204,13 +223,29 @@ class AgentMemory:
 
     # -- reading -----------------------------------------------------------------------------
 
+    def secondhand(self) -> tuple[Secondhand, ...]:
+        """The places and sightings in the store that are not this robot's (another robot's,
+        or of no known robot), each with why it is not a goal: history, never goals."""
+        if self.history is None:
+            return ()
+        try:
+            rows: list[Stored] = [*self.history.every_place(), *self.history.every_sighting()]
+        except MemoryStoreError as exc:
+            log.error("%s", exc)
+            return ()
+        return tuple(
+            Secondhand(r, not_a_goal(r, self.robot)) for r in rows if r.robot_id != self.robot.name
+        )
+
     def recent_missions(self, limit: int) -> list[dict[str, Any]]:
-        """Newest first, from the history database (empty when history is off). Missions still
-        waiting in the queue are left out: prompts and chat speak of what happened."""
+        """This robot's missions, newest first, from the history database (empty when history
+        is off). Missions still waiting in the queue are left out: prompts and chat speak of
+        what happened. Other robots' missions are left out too: where another robot went or saw
+        something is no hint for this one (`shadowhound history` lists every robot's)."""
         if self.history is None or limit <= 0:
             return []
         try:
-            return self.history.recent(limit, queued=False)
+            return self.history.recent(limit, queued=False, robot=self.robot)
         except MemoryStoreError as exc:
             log.error("%s", exc)
             return []

@@ -4,6 +4,9 @@ The latest sighting of each object name (position in the odom/map frame, radius,
 robot-clock stamp, wall-clock time) lives in the history database when memory is enabled (so
 it survives restarts), else for the life of the process. A mission's world model (the
 Belief) is seeded from it, and every new sighting is written back.
+
+A book is one robot's (`RobotId`): it holds only what that robot saw, so a world model is never
+seeded with another robot's sighting (a goal from what another robot saw).
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ import threading
 import time
 from dataclasses import dataclass
 
+from ..robot_config import RobotId
 from ..world import KnownObject
 from .history import MissionHistory
 
@@ -35,14 +39,15 @@ _REFRESH = 60.0  # seconds
 
 
 class SightingBook:
-    """Objects seen, name -> latest sighting."""
+    """Objects `robot` saw, name -> latest sighting."""
 
-    def __init__(self, store: MissionHistory | None = None) -> None:
+    def __init__(self, store: MissionHistory | None = None, *, robot: RobotId) -> None:
         self._store = store
+        self.robot = robot
         self._lock = threading.Lock()
         self._seen: dict[str, Remembered] = {}
         if store is not None:
-            for name, x, y, radius, confidence, stamp, seen_at in store.load_sightings():
+            for name, x, y, radius, confidence, stamp, seen_at in store.load_sightings(robot):
                 try:
                     known = KnownObject(name, x, y, radius, confidence, stamp, remembered=True)
                 except (TypeError, ValueError) as exc:  # a row no sighting could have made
@@ -62,7 +67,13 @@ class SightingBook:
             self._seen[known.name] = Remembered(known, old.seen_at if fresh and old else now)
         if self._store is not None and not fresh:
             self._store.save_sighting(
-                known.name, known.x, known.y, known.radius, known.confidence, known.stamp
+                self.robot,
+                known.name,
+                known.x,
+                known.y,
+                known.radius,
+                known.confidence,
+                known.stamp,
             )
 
     def all(self) -> list[Remembered]:

@@ -15,6 +15,7 @@ from typing import Any, get_args
 from ..config import ShadowHoundConfig, load_config
 from ..errors import ParameterError
 from ..robot.go2.motion import MAX_LATENCY
+from ..robot_config import ROBOT_NAME, ROBOT_NAME_RULE
 
 NODE_NAME = "shadowhound_mission_agent"
 
@@ -51,6 +52,11 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
         "",
         "go2: go2_ros2_sdk's robot namespace, e.g. robot0 ('' = none); "
         "the Go2 topics below are relative to it",
+    ),
+    "robot_name": (
+        "",
+        "which robot this is to memory: only its own places and sightings are goals "
+        "(robot.name; '' = the profile's, else the type and namespace: sim, go2, go2:robot0)",
     ),
     "cmd_vel_topic": (
         "",
@@ -162,6 +168,7 @@ class NodeSettings:
     web_interface_port: int = 8080
     enable_web_ui: bool = False
     robot_namespace: str = ""
+    robot_name: str = ""
     cmd_vel_topic: str = ""
     webrtc_topic: str = "webrtc_req"
     odom_topic: str = "odom"
@@ -198,15 +205,18 @@ class NodeSettings:
         overrides: dict[str, Any] = {"sim": {"time_scale": self.time_scale}}
         if self.navigation:
             overrides["navigation"] = self.navigation
-        if self.robot == "go2":  # merged into the profile's robot settings (load_config)
+        # Merged into the profile's robot settings when it names the same backend, else they
+        # replace them whole (load_config); a parameter left at its default keeps the profile's.
+        named = {"name": self.robot_name} if self.robot_name else {}
+        if self.robot == "go2":
             defaults = NodeSettings().go2_options()
             given = {k: v for k, v in self.go2_options().items() if v != defaults[k]}
-            overrides["robot"] = {**given, "type": "go2"}
+            overrides["robot"] = {**given, **named, "type": "go2"}
         elif self.robot == "go2_edu":  # the namespace is the one parameter it shares
             namespace = {"namespace": self.robot_namespace} if self.robot_namespace else {}
-            overrides["robot"] = {**namespace, "type": "go2_edu"}
+            overrides["robot"] = {**namespace, **named, "type": "go2_edu"}
         else:
-            overrides["robot"] = self.robot  # a name replaces the profile's settings whole
+            overrides["robot"] = {**named, "type": self.robot}
         return load_config(self.backend_config, overrides)
 
     def go2_options(self) -> dict[str, Any]:
@@ -320,6 +330,12 @@ def parse_parameters(values: Mapping[str, Any]) -> NodeSettings:
     namespace = out.get("robot_namespace", "")
     if namespace.strip("/") and not _TOPIC.match(namespace.strip("/")):
         problems.append(f"robot_namespace {namespace!r} is not a valid ROS namespace (e.g. robot0)")
+    name = out.get("robot_name", "")
+    if name and not ROBOT_NAME.match(name):
+        problems.append(
+            f"robot_name {name!r} is not a robot's name: {ROBOT_NAME_RULE}; '' = the "
+            "profile's, else the type and namespace"
+        )
     for name, low, high in (
         ("camera_x", -2.0, 2.0),
         ("camera_y", -2.0, 2.0),

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
 from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout
+from ..memory.records import Secondhand
 from ..memory.service import AgentMemory
 from ..plan import Watch
 from ..robot.base import Robot
@@ -44,6 +45,9 @@ class PlanEnv:
     # What the robot can recognise (`Robot.vocabulary`): a search may look only for these
     # (None: any name, its detector's names are not known in advance).
     vocabulary: frozenset[str] | None = None
+    # Places and sightings in memory that are not this robot's (`AgentMemory.secondhand`):
+    # never goals; an answer about one of their names says whose they are.
+    secondhand: tuple[Secondhand, ...] = ()
 
     def __post_init__(self) -> None:
         self.places = {**self.config.places, **self.places}

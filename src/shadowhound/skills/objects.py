@@ -103,7 +103,20 @@ def unknown(env: PlanEnv, name: str) -> str:
         text += f" I can look for: {', '.join(kinds) or 'nothing (no detector)'}."
     if alike:
         text += " Did you mean " + " or ".join(f"the {n}" for n in alike) + "?"
-    return text
+    return text + secondhand(env, name)
+
+
+def secondhand(env: PlanEnv, name: str) -> str:
+    """What other robots (or no known robot) remember by `name`, and that it is no goal here,
+    as sentences to follow another (" The yellow chair was seen by robot 'sim', not by this
+    robot: not a goal."); "" when nothing. Their memories are never goals (memory.records)."""
+    key = object_key(name)
+    notes = []
+    for other in env.secondhand:
+        theirs = object_key(other.name)
+        if key and (theirs == key or theirs.endswith(" " + key) or key.endswith(" " + theirs)):
+            notes.append(f" {other.note[0].upper()}{other.note[1:]}.")
+    return "".join(dict.fromkeys(notes))
 
 
 def find(belief: Belief | None, name: str) -> KnownObject | None:
@@ -233,6 +246,8 @@ def search(ctx: SkillContext, name: str, linear: float, angular: float) -> Known
     ctx.env.searched.add(name)
     belief = ctx.env.belief
     assert belief is not None
+    if elsewhere := secondhand(ctx.env, name):  # looked for, never walked to
+        ctx.notes.append(elsewhere.strip().rstrip("."))
     cfg, safety, m = ctx.config.search, ctx.config.safety, ctx.config.motion
     robot = ctx.robot
     start = robot.get_state()
