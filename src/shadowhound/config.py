@@ -266,6 +266,12 @@ class SpeechConfig(_Section):
     max_bytes: int = Field(
         2_000_000, ge=10_000, le=50_000_000, description="largest recording taken, bytes"
     )
+    upload_timeout: float = Field(
+        20.0,
+        gt=0,
+        le=300,
+        description="seconds a recording may take to arrive (a client trickling it gets 408)",
+    )
 
 
 class MemoryConfig(_Section):

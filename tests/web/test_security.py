@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import io
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
+import httpx
 import pytest
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
 from shadowhound import RobotAgent, ShadowHoundConfig
-from shadowhound.web import create_app, serve_main
+from shadowhound.web import WebServer, create_app, serve_main
 from shadowhound.web.server import ServeError, check_binding, serve
 from tests.web.conftest import TOKEN, make_agent
 
@@ -94,6 +95,33 @@ def test_foreign_hosts_and_cross_origin_requests_are_refused(client: TestClient)
         client.websocket_connect("/ws/status", headers={"origin": "http://attacker.example"}),
     ):
         pass
+
+
+def test_an_origin_of_another_scheme_is_another_origin(client: TestClient) -> None:
+    """Issue 32: `Origin: https://host:port` was taken as the page of an http server."""
+    other = client.post("/api/estop", headers={"origin": "https://127.0.0.1"})
+    assert other.status_code == 403 and "cross-origin" in other.json()["detail"]
+    with (
+        pytest.raises(WebSocketDisconnect),
+        client.websocket_connect(
+            "ws://127.0.0.1/ws/status", headers={"origin": "https://127.0.0.1"}
+        ),
+    ):
+        pass
+    assert client.post("/api/estop", headers={"origin": "http://127.0.0.1"}).status_code == 200
+    with client.websocket_connect(
+        "ws://127.0.0.1/ws/status", headers={"origin": "http://127.0.0.1"}
+    ) as ws:
+        assert ws.receive_json()["kind"] == "snapshot"
+
+
+def test_behind_a_tls_proxy_the_https_page_is_the_origin(serve: Callable[..., WebServer]) -> None:
+    """A TLS proxy on loopback says the page's scheme with X-Forwarded-Proto (docs/web.md)."""
+    server = serve(make_agent())
+    page = f"https://127.0.0.1:{server.port}"
+    proxied = {"origin": page, "x-forwarded-proto": "https"}
+    assert httpx.post(server.url + "/api/estop", headers=proxied).status_code == 200
+    assert httpx.post(server.url + "/api/estop", headers={"origin": page}).status_code == 403
 
 
 def test_no_cors_headers_for_other_sites(client: TestClient) -> None:

@@ -32,7 +32,7 @@ from .frames import FrameCache
 from .models import MAX_BODY
 from .openapi import document_answers
 from .responses import StrictJSON
-from .security import Gate, scrubber, secret_values
+from .security import BodyLimit, Gate, scrubber, secret_values
 
 log = logging.getLogger(__name__)
 
@@ -101,7 +101,7 @@ def create_app(
     _add_page(app)
     _add_error_handlers(app)
     app.add_middleware(EstopLane, estop=desk.estop)  # inside the gate: checked, then first
-    recordings = agent.settings.speech.max_bytes
+    hearing = agent.settings.speech
     app.add_middleware(
         Gate,
         token=token,
@@ -109,9 +109,13 @@ def create_app(
         max_body=max_body,
         secrets=hidden,
         limits={
-            speech.PATH: (
-                recordings,
-                f"the recording is larger than the limit of {recordings} bytes (speech.max_bytes)",
+            speech.PATH: BodyLimit(
+                hearing.max_bytes,
+                f"the recording is larger than the limit of {hearing.max_bytes} bytes "
+                "(speech.max_bytes)",
+                hearing.upload_timeout,
+                f"the recording did not arrive within {hearing.upload_timeout:g} s "
+                "(speech.upload_timeout): send it again on a faster link",
             )
         },
     )
