@@ -9,6 +9,7 @@ work runs on `Lanes` of its own (lanes.py), short recordings first.
 from ..errors import AudioProblem, HearingBusy, RecordingTooLong, TranscriptionError
 from .audio import ALLOWED, Audio, inspect, taken
 from .commands import is_stop
+from .lanes import Lanes
 from .transcribe import Transcriber, not_configured
 
 __all__ = [
@@ -16,6 +17,7 @@ __all__ = [
     "Audio",
     "AudioProblem",
     "HearingBusy",
+    "Lanes",
     "RecordingTooLong",
     "Transcriber",
     "TranscriptionError",

@@ -71,6 +71,7 @@ def create_app(
     feed = EventFeed(scrub=scrubber(hidden))
     desk = MissionDesk(agent, feed, worker=worker)
     web = api.WebContext(agent, desk, feed, FrameCache(agent), auth=token is not None)
+    ears = speech.Ears.open(agent.settings.speech)
 
     @contextlib.asynccontextmanager
     async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
@@ -81,6 +82,7 @@ def create_app(
             ticker.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await ticker
+            ears.close()
             desk.close()
 
     app = FastAPI(
@@ -93,6 +95,7 @@ def create_app(
         "<token>` when the server has a token.",
     )
     app.state.web = web
+    app.state.ears = ears  # recordings are read and transcribed off the event loop
     app.include_router(api.router)
     app.include_router(live.router)
     app.include_router(speech.router)
