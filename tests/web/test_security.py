@@ -92,7 +92,9 @@ def test_foreign_hosts_and_cross_origin_requests_are_refused(client: TestClient)
     assert same.status_code == 200
     with (
         pytest.raises(WebSocketDisconnect),
-        client.websocket_connect("/ws/status", headers={"origin": "http://attacker.example"}),
+        client.websocket_connect(
+            "ws://127.0.0.1/ws/status", headers={"origin": "http://attacker.example"}
+        ),
     ):
         pass
 
@@ -277,3 +279,37 @@ def test_serve_on_a_127_name_is_refused_without_resolving_it(
     # .invalid never resolves (RFC 2606): refused for the missing token, not a failed lookup.
     assert serve_main(ShadowHoundConfig(), host="127.0.0.1.invalid", port=0) == 2
     assert "needs a token" in capsys.readouterr().err
+
+
+def test_a_body_whose_client_went_away_reaches_no_route() -> None:
+    """A client that leaves mid-upload is nobody to answer: before, the route read a body that
+    never came and the server logged a failed request for every one (ClientDisconnect)."""
+    import asyncio
+
+    from shadowhound.web.security import Gate
+
+    called, sent = [], []
+
+    async def app(*_args: object) -> None:
+        called.append(True)
+
+    async def receive() -> dict[str, object]:
+        return messages.pop(0)
+
+    async def send(message: dict[str, object]) -> None:
+        sent.append(message)
+
+    messages: list[dict[str, object]] = [
+        {"type": "http.request", "body": b"RIFF", "more_body": True},
+        {"type": "http.disconnect"},
+    ]
+    scope = {
+        "type": "http",
+        "method": "POST",
+        "path": "/api/speech",
+        "scheme": "http",
+        "headers": [(b"host", b"127.0.0.1"), (b"content-type", b"audio/wav")],
+    }
+    gate = Gate(app, token=None, allowed_hosts=["127.0.0.1"], max_body=1000)
+    asyncio.run(gate(scope, receive, send))
+    assert called == [] and sent == []

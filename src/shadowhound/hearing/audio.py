@@ -53,14 +53,19 @@ def taken(content_type: str) -> bool:
     return base_type(content_type) in KINDS
 
 
+def not_taken(content_type: str) -> str:
+    """What to say of a Content-Type that is not a recording we take."""
+    shown = base_type(content_type) or "none"
+    return f"Content-Type {shown!r} is not a recording we take: send {ALLOWED}"
+
+
 def inspect(data: bytes, content_type: str, max_seconds: float = MAX_SECONDS) -> Audio:
     """The recording's container and length; AudioProblem when it is not one we take, its
     RecordingTooLong as soon as it is read to be longer than `max_seconds`."""
     base = base_type(content_type)
     kind = KINDS.get(base)
     if kind is None:
-        shown = base or "none"
-        raise AudioProblem(f"Content-Type {shown!r} is not a recording we take: send {ALLOWED}")
+        raise AudioProblem(not_taken(content_type))
     if not data:
         raise AudioProblem("the recording is empty")
     meter = Meter(max_seconds)

@@ -42,6 +42,7 @@ Send = Callable[[Message], Awaitable[None]]
 ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
 
 WS_PROTOCOL = "shadowhound"
+GONE = 499  # _read_body: the client disconnected before its body came (never sent)
 BODY_SECONDS = 10.0  # a JSON body is a few kB: on any link it arrives well within this
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 OPEN_PATHS = {"/api/health"}
@@ -125,6 +126,8 @@ class Gate:
         if scope["type"] == "http" and scope["method"] not in SAFE_METHODS:
             limit = self.limits.get(scope.get("path", ""), self.body_limit)
             body = await _read_body(receive, headers, limit)
+            if body == GONE:
+                return
             if isinstance(body, int):  # the rest of the body is never read: close after
                 said = limit.too_big if body == 413 else limit.slow()
                 await _send_json(send, body, said, [(b"connection", b"close")])
@@ -231,7 +234,8 @@ async def _read_body(
     receive: Receive, headers: dict[str, str], limit: BodyLimit
 ) -> list[Message] | int:
     """Every body message, or the status to refuse it with: 413 once it passes the limit's
-    bytes, 408 when it has not all come within the limit's seconds."""
+    bytes, 408 when it has not all come within the limit's seconds; GONE when the client went
+    away first."""
     declared = headers.get("content-length", "")
     if declared.isdigit() and int(declared) > limit.max_bytes:
         return 413
@@ -243,9 +247,9 @@ async def _read_body(
             message = await asyncio.wait_for(receive(), max(0.0, deadline - loop.time()))
         except asyncio.TimeoutError:
             return 408
-        messages.append(message)
         if message["type"] != "http.request":
-            return messages  # the client went away; let the app see it
+            return GONE  # the client went away before its body came: nobody to answer
+        messages.append(message)
         size += len(message.get("body", b""))
         if size > limit.max_bytes:
             return 413

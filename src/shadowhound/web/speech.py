@@ -30,11 +30,12 @@ from ..hearing import (
     Lanes,
     Transcriber,
     TranscriptionError,
-    inspect,
     is_stop,
     taken,
 )
 from ..hearing import not_configured as speech_off
+from ..hearing.audio import not_taken
+from ..hearing.reading import READERS, Readers
 from ..worker import TELEOP_BUSY
 from .api import ctx
 from .models import Problem
@@ -52,15 +53,18 @@ READ_SECONDS = 10.0  # a recording not read within this is stale (reading one ta
 
 @dataclass
 class Ears:
-    """The app's lanes for recordings: one reader (and one for short recordings), and
-    `TRANSCRIBERS` transcriptions at once (and one more for short recordings)."""
+    """The app's lanes for recordings: one reader (and one for short recordings), each reading
+    in a worker process (`readers`, the server process's own), and `TRANSCRIBERS`
+    transcriptions at once (and one more for short recordings)."""
 
+    readers: Readers
     reading: Lanes
     transcribing: Lanes
 
     @classmethod
     def open(cls, config: SpeechConfig) -> Ears:
         return cls(
+            READERS,
             Lanes(
                 "reader",
                 "reading",
@@ -89,6 +93,9 @@ async def speech_settings(request: Request) -> dict[str, Any]:
     """Whether push-to-talk works here, and its limits (the page reads them first)."""
     config = ctx(request).agent.settings.speech
     why = speech_off(config)
+    if not why:  # the page looks before its first recording: start the readers now
+        ears: Ears = request.app.state.ears
+        ears.readers.warm()
     return {
         "configured": not why,
         "why": why,
@@ -159,10 +166,12 @@ async def speech(request: Request) -> StrictJSON:
     data = await request.body()  # whole already: the gate read it, within its time
     kind = request.headers.get("content-type", "")
     ears: Ears = request.app.state.ears
+    if not taken(kind):  # said at once, without a reader
+        return _answer(415, not_taken(kind))
     try:
         audio = await asyncio.wrap_future(
             ears.reading.submit(
-                partial(inspect, data, kind, config.max_seconds),
+                partial(ears.readers.inspect, data, kind, config.max_seconds),
                 urgent=len(data) <= URGENT_BYTES,
             )
         )
@@ -175,7 +184,7 @@ async def speech(request: Request) -> StrictJSON:
     except RecordingTooLong as exc:
         return _answer(413, str(exc))
     except AudioProblem as exc:
-        return _answer(422 if taken(kind) else 415, str(exc))
+        return _answer(422, str(exc))
     except (TranscriptionError, HearingBusy) as exc:
         return _answer(exc.status, str(exc))
     if not text:
