@@ -239,19 +239,21 @@ async def _read_body(
     declared = headers.get("content-length", "")
     if declared.isdigit() and int(declared) > limit.max_bytes:
         return 413
-    loop = asyncio.get_running_loop()
-    deadline = loop.time() + limit.seconds
+    try:  # one timer for the whole body, not one for each of its chunks
+        return await asyncio.wait_for(_collect(receive, limit.max_bytes), limit.seconds)
+    except asyncio.TimeoutError:
+        return 408
+
+
+async def _collect(receive: Receive, max_bytes: int) -> list[Message] | int:
     messages, size = [], 0
     while True:
-        try:
-            message = await asyncio.wait_for(receive(), max(0.0, deadline - loop.time()))
-        except asyncio.TimeoutError:
-            return 408
+        message = await receive()
         if message["type"] != "http.request":
             return GONE  # the client went away before its body came: nobody to answer
         messages.append(message)
         size += len(message.get("body", b""))
-        if size > limit.max_bytes:
+        if size > max_bytes:
             return 413
         if not message.get("more_body", False):
             return messages
