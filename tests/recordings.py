@@ -92,3 +92,41 @@ def lying_wav(byte_rate: int = 4_000_000_000, seconds: float = 50.0) -> bytes:
     body = b"WAVE" + b"fmt " + struct.pack("<I", 16) + fmt + b"data"
     body += struct.pack("<I", len(data)) + data
     return b"RIFF" + struct.pack("<I", len(body)) + body
+
+
+def encoded_opus(seconds: float, path: str) -> bytes | None:
+    """A 440 Hz tone encoded by a real encoder: libsndfile's Ogg Opus (libopus) at 16 kHz,
+    written to `path`; None where the library cannot write Opus."""
+    import ctypes
+    import ctypes.util
+    import math
+
+    name = ctypes.util.find_library("sndfile")
+    if name is None:
+        return None
+
+    class Info(ctypes.Structure):
+        _fields_ = [
+            ("frames", ctypes.c_int64),
+            ("samplerate", ctypes.c_int),
+            ("channels", ctypes.c_int),
+            ("format", ctypes.c_int),
+            ("sections", ctypes.c_int),
+            ("seekable", ctypes.c_int),
+        ]
+
+    sndfile = ctypes.CDLL(name)
+    sndfile.sf_open.restype = ctypes.c_void_p
+    sndfile.sf_write_short.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int64]
+    sndfile.sf_close.argtypes = [ctypes.c_void_p]
+    rate, ogg_opus, write = 16000, 0x200000 | 0x0064, 0x20
+    info = Info(0, rate, 1, ogg_opus, 0, 0)
+    handle = sndfile.sf_open(path.encode(), write, ctypes.byref(info))
+    if not handle:
+        return None
+    count = int(seconds * rate)
+    tone = [int(8000 * math.sin(2 * math.pi * 440 * i / rate)) for i in range(count)]
+    sndfile.sf_write_short(handle, (ctypes.c_short * count)(*tone), count)
+    sndfile.sf_close(handle)
+    with open(path, "rb") as recording:
+        return recording.read()

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import struct
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -28,6 +29,7 @@ from tests.recordings import (
     OPUS_20MS,
     block,
     ebml,
+    encoded_opus,
     huge_timecode_webm,
     lying_wav,
     opus,
@@ -45,6 +47,17 @@ def test_lengths_are_read_from_each_container() -> None:
     recording = webm([0, 1000, 2000])
     assert inspect(recording, "audio/webm;codecs=opus").seconds == pytest.approx(3.0)
     assert inspect(recording, "audio/webm").content_type == "audio/webm"
+
+
+def test_a_real_encoders_ogg_opus_is_read_to_its_length(tmp_path: Path) -> None:
+    """libopus through libsndfile, as Firefox's recorder uses libopus: what a real encoder
+    writes (its page layout, pre-skip and last granule) reads as the sound it holds."""
+    recording = encoded_opus(2.5, str(tmp_path / "tone.opus"))
+    if recording is None:
+        pytest.skip("libsndfile cannot write Ogg Opus here")
+    assert inspect(recording, "audio/ogg").seconds == pytest.approx(2.5, abs=0.05)
+    with pytest.raises(RecordingTooLong):
+        inspect(recording, "audio/ogg", 2.0)
 
 
 @pytest.mark.parametrize(
