@@ -87,7 +87,7 @@ def void_webm(size: int = 2_000_000) -> bytes:
 def lying_wav(byte_rate: int = 4_000_000_000, seconds: float = 50.0) -> bytes:
     """16 kHz mono 16-bit PCM whose fmt claims another byte rate (so a 50 s recording read as
     0.0004 s)."""
-    data = b"\x00\x01" * int(16000 * seconds)
+    data = b"\x00\x01" * round(16000 * seconds)
     fmt = struct.pack("<HHIIHH", 1, 1, 16000, byte_rate, 2, 16)
     body = b"WAVE" + b"fmt " + struct.pack("<I", 16) + fmt + b"data"
     body += struct.pack("<I", len(data)) + data

@@ -28,6 +28,7 @@ from __future__ import annotations
 import asyncio
 import hmac
 import os
+import sys
 from collections.abc import Awaitable, Callable, Iterable, Mapping, MutableMapping
 from dataclasses import dataclass
 from typing import Any
@@ -239,7 +240,10 @@ async def _read_body(
     declared = headers.get("content-length", "")
     if declared.isdigit() and int(declared) > limit.max_bytes:
         return 413
-    try:  # one timer for the whole body, not one for each of its chunks
+    try:  # one timer for the whole body, in the request's own task (no task more)
+        if sys.version_info >= (3, 11):
+            async with asyncio.timeout(limit.seconds):
+                return await _collect(receive, limit.max_bytes)
         return await asyncio.wait_for(_collect(receive, limit.max_bytes), limit.seconds)
     except asyncio.TimeoutError:
         return 408
