@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shadowhound.hearing import is_stop
+from shadowhound.hearing.commands import leading_stop
 
 # The issue's phrasings, each queued as a mission behind the running walk before.
 ISSUE = [
@@ -169,15 +170,20 @@ CONDITIONS = [
 ]
 
 
+MISSION_KINDS = ("condition", "stop last", "stop first", "noun", "negated")
+
+
 @st.composite
-def missions_with_stop_words(draw: st.DrawFn) -> str:
-    kind = draw(st.sampled_from(["condition", "then", "noun", "negated"]))
+def missions_with_stop_words(draw: st.DrawFn, kinds: tuple[str, ...] = MISSION_KINDS) -> str:
+    kind = draw(st.sampled_from(kinds))
     verb = draw(st.sampled_from(["stop", "halt", "Stop", "freeze"]))
+    action = draw(st.sampled_from(ACTIONS))
     if kind == "condition":  # stopping is what the mission does somewhere, some time
         said = f"{verb} {draw(st.sampled_from(CONDITIONS))}"
-    elif kind == "then":  # stopping is one step of several
-        action = draw(st.sampled_from(ACTIONS))
-        said = draw(st.sampled_from([f"{action} and {verb}", f"{verb} and {action}"]))
+    elif kind == "stop last":  # stopping is one step of several
+        said = f"{action} and {verb}"
+    elif kind == "stop first":
+        said = f"{verb} and {action}"
     elif kind == "noun":  # "stop" names a thing
         said = draw(
             st.sampled_from(["walk to the stop sign", "go to the bus stop", "find the stop sign"])
@@ -200,3 +206,28 @@ def test_any_text_is_answered_at_once_and_long_text_is_a_mission(said: str) -> N
     result = is_stop(said)
     assert isinstance(result, bool)
     assert not is_stop("stop " * 30)  # more words than a stop is said in
+
+
+BOUNDARIES = [", ", ". ", "! ", " and ", " then ", ", then ", "... and then "]
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    said=stop_phrasings(),
+    boundary=st.sampled_from(BOUNDARIES),
+    action=st.sampled_from(ACTIONS),
+)
+def test_a_stop_said_first_is_found_with_what_follows(
+    said: str, boundary: str, action: str
+) -> None:
+    """ "Stop! Turn around.": while the robot moves this is a stop (web/speech.py), and what
+    follows is said back as not run."""
+    rest = leading_stop(said.rstrip(" .!?,-") + boundary + action)
+    assert rest is not None and rest.lower().endswith(action.lower()), (said, rest)
+
+
+@settings(max_examples=300, deadline=None)
+@given(said=missions_with_stop_words(tuple(k for k in MISSION_KINDS if k != "stop first")))
+def test_a_mission_that_mentions_stopping_does_not_start_with_a_stop(said: str) -> None:
+    """("Stop and sit down" does: said while the robot moves, it stops first.)"""
+    assert leading_stop(said) is None, said

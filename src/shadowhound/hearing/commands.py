@@ -20,6 +20,10 @@ a sentence in which stopping is part of a mission is not: "walk to the stop sign
 I say stop", "stop if you see a person", "stop at the kitchen", "stop and sit down", "don't
 stop". Words are matched phrase by phrase over at most `MAX_WORDS` words (a longer transcript
 is a mission), each position once: the cost is linear and small.
+
+`leading_stop` finds a stop said first, before more ("Stop! Turn around.", "No, stop, and sit
+down"): the longest start of the transcript, up to a sentence's end, a comma, "and" or "then",
+that is a stop, and what follows it. While the robot moves that is a stop too (web/speech.py).
 """
 
 from __future__ import annotations
@@ -59,12 +63,13 @@ _STOP_WORDS = _expand(
     "(stop|halt|freeze|estop|cease|abort|cancel|quit|pause|enough|whoa|woah|whoah|no)",
     "(stop|halt|freeze) (it|that|this)",
 )
-_THINGS = "(mission|missions|task|walk|patrol|plan|command|commands|order|motion|movement|move"
 _OBJECTS = _expand(
     "(it|that|this|everything|all|all of it|all of that|already|dead|please|now|right now)",
     "right away|at once|immediately|for now|for a (second|moment|sec)|of that|of this",
     "(right|) (there|here)|where you are|in your tracks|what(ever|) you are doing",
-    f"(the|this|that|your|my|) {_THINGS}|turn|run|robot|dog|program|tour|route|drive|thing)",
+    "(the|this|that|your|my|) (mission|missions|task|patrol|plan|command|commands|order)",
+    "(the|this|that|your|my|) (motion|movement|robot|dog|program|tour|route|thing)",
+    "(the|this|that|your|my) (turn|move|run|walk|drive|trip)",  # without one, an imperative
     "(the|this|that|your|my|) whole thing|all (motion|movement|moving)",
 )
 _MOTIONS = _expand(
@@ -85,12 +90,20 @@ _PHRASES = _expand(
 _TOWARD = _expand("(to|toward|towards|over to|back to|into) (the|a|that|this|)")
 _NOT_A_PLACE = {"if", "until", "unless", "when", "while", "and", "then", "but", "after", "before"}
 
-FILLER, STOP, OBJECT, MOTION, TOWARD = "filler", "stop", "object", "motion", "toward"
+FILLER, STOP, OBJECT, MOTION, TAIL, TOWARD = (
+    "filler",
+    "stop",
+    "object",
+    "motion",
+    "tail",
+    "toward",
+)
 _KINDS: dict[str, set[str]] = {}
 for _kind, _words in (
     (FILLER, _FILLERS),
     (STOP, _STOP_WORDS | _PHRASES),
-    (OBJECT, _OBJECTS | _TAILS),
+    (OBJECT, _OBJECTS),
+    (TAIL, _TAILS),
     (MOTION, _MOTIONS),
     (TOWARD, _TOWARD),
 ):
@@ -119,10 +132,32 @@ _AFTER = {
     FILLER: {FILLER, STOP},
     STOP: {FILLER, STOP, OBJECT, MOTION},
     OBJECT: {FILLER, STOP, OBJECT, MOTION},
-    MOTION: {FILLER, STOP, OBJECT, TOWARD},
+    MOTION: {FILLER, STOP, OBJECT, TAIL, TOWARD},
+    TAIL: {FILLER, STOP, OBJECT, TAIL},
     TOWARD: {"place"},
     "place": {FILLER, STOP, OBJECT, "place"},
 }
+
+
+_BOUNDARY = re.compile(
+    r"\s*[.!?;,][\s.!?;,]*(?:(?:and\s+then|and|then)\s+)?|\s+(?:and\s+then|and|then)\s+",
+    re.IGNORECASE,
+)
+
+
+def leading_stop(transcript: str) -> str | None:
+    """What follows a stop said first ("Stop! Turn around." -> "Turn around."), or None when
+    the transcript does not start with a stop followed by more words (or is only a stop)."""
+    if is_stop(transcript):
+        return None
+    rest = None
+    for boundary in _BOUNDARY.finditer(transcript):
+        head, tail = transcript[: boundary.start()], transcript[boundary.end() :]
+        if len(words_of(head)) > MAX_WORDS:
+            break
+        if words_of(tail) and is_stop(head):
+            rest = tail.strip()
+    return rest
 
 
 def words_of(transcript: str) -> list[str]:

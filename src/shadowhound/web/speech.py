@@ -23,7 +23,7 @@ from fastapi import APIRouter, Request
 
 from ..admission import ESTOP_LATCHED, mission_text_problem
 from ..config import SpeechConfig
-from ..errors import HearingBusy, RecordingTooLong
+from ..errors import HearingBusy, RecordingTooLong, RobotError
 from ..hearing import (
     ALLOWED,
     AudioProblem,
@@ -35,9 +35,10 @@ from ..hearing import (
 )
 from ..hearing import not_configured as speech_off
 from ..hearing.audio import not_taken
+from ..hearing.commands import leading_stop
 from ..hearing.reading import READERS, Readers
 from ..worker import TELEOP_BUSY
-from .api import ctx
+from .api import WebContext, ctx
 from .models import Problem
 from .responses import StrictJSON
 
@@ -104,6 +105,17 @@ async def speech_settings(request: Request) -> dict[str, Any]:
         "max_bytes": config.max_bytes,
         "types": ALLOWED,
     }
+
+
+def _moving(web: WebContext) -> bool:
+    """Whether the robot moves or is about to: a mission runs or waits, or its state says so
+    (teleop, another interface's mission); a robot that cannot say is taken as moving."""
+    if web.desk.running() is not None or web.desk.queued():
+        return True
+    try:
+        return web.agent.robot.get_state().is_moving
+    except RobotError:
+        return True
 
 
 def _answer(status: int, detail: str, **extra: Any) -> StrictJSON:
@@ -189,15 +201,16 @@ async def speech(request: Request) -> StrictJSON:
         return _answer(exc.status, str(exc))
     if not text:
         return _answer(422, "nothing was heard in the recording: hold the button and speak")
-    if is_stop(text):
+    stop = is_stop(text)  # while the robot moves, a stop said first is a stop too
+    rest = leading_stop(text) if not stop and _moving(web) else None
+    if stop or rest is not None:
         dropped = web.desk.estop()  # the robot stops first, before anything is planned
+        said = "e-stop latched: the robot is stopped; release it to run missions"
+        extra = {} if rest is None else {"not_run": rest}
+        if rest is not None:
+            said += f" ({rest!r} was not run: say it again once released)"
         return StrictJSON(
-            {
-                "transcript": text,
-                "estop": True,
-                "dropped": dropped,
-                "message": "e-stop latched: the robot is stopped; release it to run missions",
-            }
+            {"transcript": text, "estop": True, "dropped": dropped, **extra, "message": said}
         )
     problem = mission_text_problem(text, web.agent.settings.agent.max_mission_chars, "the text")
     if problem:
