@@ -56,8 +56,6 @@ This module imports only `usage` (what a failed plan cost), so any module may im
 
 from __future__ import annotations
 
-from typing import Any
-
 from .usage import Usage
 
 __all__ = [
@@ -308,14 +306,6 @@ class RecordingTooLong(AudioProblem):
             "hold the button for one short request"
         )
         self.seconds, self.limit, self.exact = seconds, limit, exact
-
-    def __reduce__(self) -> tuple[Any, tuple[float, float, bool]]:
-        # Raised in a reader's process and raised again here: rebuilt from its numbers.
-        return _recording_too_long, (self.seconds, self.limit, self.exact)
-
-
-def _recording_too_long(seconds: float, limit: float, exact: bool) -> RecordingTooLong:
-    return RecordingTooLong(seconds, limit, exact=exact)
 
 
 class RecordingUnreadable(AudioProblem):

@@ -75,6 +75,8 @@ def create_app(
 
     @contextlib.asynccontextmanager
     async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
+        if agent.settings.speech.base_url.strip():
+            ears.readers.warm()  # no recording waits for its reader to start
         ticker = asyncio.create_task(live.publish_state(web, state_hz))
         try:
             yield
