@@ -10,7 +10,7 @@ from collections.abc import Iterator
 import pytest
 
 from shadowhound.errors import RecordingUnreadable
-from shadowhound.hearing import AudioProblem, HearingBusy, RecordingTooLong, inspect
+from shadowhound.hearing import AudioProblem, HearingBusy, RecordingTooLong, inspect, reading
 from shadowhound.hearing.reading import Reader
 from tests.recordings import huge_timecode_webm, opus, webm
 from tests.web.test_speech_api import wav
@@ -39,11 +39,24 @@ def test_a_reader_answers_as_inspect_does(reader: Reader) -> None:
         reader.inspect(b"x", "text/plain", 30.0)
 
 
-def test_a_reader_that_dies_is_answered_503_and_replaced(reader: Reader) -> None:
+def test_a_dead_reader_is_replaced_and_a_silent_one_answered_503(
+    reader: Reader, monkeypatch: pytest.MonkeyPatch
+) -> None:
     assert reader.inspect(wav(0.5), "audio/wav", 30.0).seconds == pytest.approx(0.5)
-    assert reader.pid is not None
-    os.kill(reader.pid, signal.SIGKILL)
+    dead = reader.pid
+    assert dead is not None
+    os.kill(dead, signal.SIGKILL)
+    os.waitpid(dead, 0)  # gone for sure
+    assert reader.inspect(wav(0.5), "audio/wav", 30.0).seconds == pytest.approx(0.5)
+    assert reader.pid not in (None, dead)
+    # One that never answers (stopped) is ended at its time, the request answered 503.
+    monkeypatch.setattr(reading, "ANSWER_SECONDS", 0.5)
+    silent = reader.pid
+    assert silent is not None
+    os.kill(silent, signal.SIGSTOP)
     with pytest.raises(HearingBusy) as stopped:
         reader.inspect(wav(0.5), "audio/wav", 30.0)
     assert stopped.value.status == 503 and "say it again" in str(stopped.value)
+    monkeypatch.undo()  # a new reader has its usual time to start
     assert reader.inspect(wav(0.5), "audio/wav", 30.0).seconds == pytest.approx(0.5)
+    assert reader.pid not in (None, silent)
