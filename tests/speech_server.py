@@ -9,6 +9,11 @@
 Every `POST /v1/audio/transcriptions` is read as multipart form data as a real server reads it
 (the `file` part and the text fields) and answered `{"text": <the next scripted transcript>}`;
 the last one is repeated when the queue is empty. `status(code, body)` scripts an error.
+
+A slow server: `hold` picks requests that wait (read, but unanswered) until `release` is set;
+`held` counts them (wait on it with `answered`); `delay` gives a request seconds to take.
+`answer` picks a transcript per request instead of the script (when requests are answered out
+of order).
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ from __future__ import annotations
 import json
 import threading
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from email.parser import BytesParser
 from email.policy import HTTP
@@ -52,6 +58,11 @@ class ScriptedTranscriber:
         self._last: str | Status = ""
         self._lock = threading.Lock()
         self.answered = threading.Condition(self._lock)
+        self.hold: Callable[[Heard], bool] | None = None
+        self.answer: Callable[[Heard], str] | None = None
+        self.delay: Callable[[Heard], float] | None = None
+        self.release = threading.Event()
+        self.held = 0
         self._server = ThreadingHTTPServer(("127.0.0.1", 0), self._handler())
         self._server.daemon_threads = True
         self.url = f"http://127.0.0.1:{self._server.server_address[1]}/v1"
@@ -65,6 +76,7 @@ class ScriptedTranscriber:
         return self
 
     def __exit__(self, *_exc: Any) -> None:
+        self.release.set()
         self._server.shutdown()
         self._server.server_close()
 
@@ -100,7 +112,14 @@ class ScriptedTranscriber:
                         heard.filename = part.get_filename() or ""
                     elif isinstance(name, str):
                         heard.fields[name] = payload.decode()
-                answer = server._next()
+                if server.hold is not None and server.hold(heard):
+                    with server.answered:
+                        server.held += 1
+                        server.answered.notify_all()
+                    server.release.wait()
+                if server.delay is not None:
+                    time.sleep(server.delay(heard))
+                answer = server.answer(heard) if server.answer else server._next()
                 with server.answered:
                     heard.at = time.monotonic()
                     server.requests.append(heard)

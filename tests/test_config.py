@@ -24,6 +24,22 @@ def test_environment_overrides_profile_and_options_override_environment():
     assert cfg.safety.max_linear_speed == 0.2
 
 
+def test_an_empty_environment_variable_is_an_empty_setting_and_a_bad_one_is_named():
+    """Issue 32: an empty SHADOWHOUND_SPEECH__API_KEY_ENV failed and blamed the YAML file. Empty
+    is what `api_key_env: ""` is in a profile: no key is sent."""
+    from shadowhound.hearing import Transcriber
+
+    env = {"SHADOWHOUND_SPEECH__API_KEY_ENV": "", "OPENAI_API_KEY": "sk-not-sent-0123456789"}
+    cfg = load_config("offline", environ=env)
+    assert cfg.speech.api_key_env == "" and cfg.llm.api_key_env == "OPENAI_API_KEY"
+    assert Transcriber(cfg.speech, environ=env)._key == ""
+    with pytest.raises(ConfigError) as bad:
+        load_config("offline", environ={"SHADOWHOUND_SAFETY__MAX_LINEAR_SPEED": "fast"})
+    said = str(bad.value)
+    assert "from the environment variable SHADOWHOUND_SAFETY__MAX_LINEAR_SPEED" in said, said
+    assert "offline.yaml" not in said, said
+
+
 def test_yaml_file_profile(tmp_path):
     path = tmp_path / "mine.yaml"
     path.write_text("safety: {geofence_radius: 3}\nplaces: {Living Room: [1, 1]}\n")

@@ -266,6 +266,12 @@ class SpeechConfig(_Section):
     max_bytes: int = Field(
         2_000_000, ge=10_000, le=50_000_000, description="largest recording taken, bytes"
     )
+    upload_timeout: float = Field(
+        20.0,
+        gt=0,
+        le=300,
+        description="seconds a recording may take to arrive (a client trickling it gets 408)",
+    )
 
 
 class MemoryConfig(_Section):
@@ -421,12 +427,15 @@ def _read_profile(profile: str) -> tuple[dict[str, Any], str]:
     return data, str(path)
 
 
-def _env_overrides(environ: Mapping[str, str]) -> dict[str, Any]:
-    """SHADOWHOUND_BACKEND=ollama, SHADOWHOUND_SAFETY__MAX_LINEAR_SPEED=0.3 ... as a nested dict.
+def _env_overrides(environ: Mapping[str, str]) -> tuple[dict[str, Any], dict[str, str]]:
+    """SHADOWHOUND_BACKEND=ollama, SHADOWHOUND_SAFETY__MAX_LINEAR_SPEED=0.3 ... as a nested dict,
+    and which variable set each setting ("speech.api_key_env": "SHADOWHOUND_SPEECH__...").
 
-    Values are parsed as YAML scalars so numbers and booleans keep their types.
+    Values are parsed as YAML scalars so numbers and booleans keep their types; an empty value
+    is the empty string, as `api_key_env: ""` is in a profile (no key, no server), not null.
     """
     out: dict[str, Any] = {}
+    sources: dict[str, str] = {}
     for key, raw in environ.items():
         if not key.startswith(ENV_PREFIX) or key in ("SHADOWHOUND_CONFIG", "SHADOWHOUND_TOKEN"):
             continue
@@ -434,14 +443,15 @@ def _env_overrides(environ: Mapping[str, str]) -> dict[str, Any]:
         if path[0] not in ShadowHoundConfig.model_fields:
             continue
         try:
-            value = yaml.safe_load(raw)
+            value = yaml.safe_load(raw) if raw.strip() else ""
         except yaml.YAMLError:
             value = raw
         node = out
         for part in path[:-1]:
             node = node.setdefault(part, {})
         node[path[-1]] = value
-    return out
+        sources[".".join(path)] = key
+    return out, sources
 
 
 def _merge(base: dict[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
@@ -472,12 +482,20 @@ def _robot_type(data: Mapping[str, Any]) -> Any:
     return robot.get("type", "sim") if isinstance(robot, Mapping) else robot
 
 
-def _explain(exc: ValidationError, source: str) -> str:
-    problems = []
+def _explain(exc: ValidationError, source: str, env: Mapping[str, str]) -> str:
+    """Each problem with where it came from: the profile `source`, or the variable in `env`
+    (setting -> variable) that set it."""
+    problems, from_file = [], False
     for err in exc.errors():
         where = ".".join(str(p) for p in err["loc"]) or "(top level)"
-        problems.append(f"{where}: {err['msg']} (got {err.get('input')!r})")
-    return f"invalid configuration from {source}: " + "; ".join(problems)
+        variable = next(
+            (v for k, v in env.items() if where == k or where.startswith(k + ".")), None
+        )
+        said = f"{where}: {err['msg']} (got {err.get('input')!r})"
+        problems.append(f"{said}, from the environment variable {variable}" if variable else said)
+        from_file = from_file or variable is None
+    origin = f"from {source}" if from_file else "from the environment"
+    return f"invalid configuration {origin}: " + "; ".join(problems)
 
 
 def load_config(
@@ -492,9 +510,21 @@ def load_config(
     env = os.environ if environ is None else environ
     profile = profile or env.get("SHADOWHOUND_CONFIG") or "offline"
     data, source = _read_profile(profile)
-    data = _layer(data, _env_overrides(env))
+    from_env, variables = _env_overrides(env)
+    data = _layer(data, from_env)
     data = _layer(data, overrides or {})
+    variables = {k: v for k, v in variables.items() if not _overridden(k, overrides or {})}
     try:
         return ShadowHoundConfig.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(_explain(exc, source)) from exc
+        raise ConfigError(_explain(exc, source, variables)) from exc
+
+
+def _overridden(setting: str, overrides: Mapping[str, Any]) -> bool:
+    """Whether explicit overrides set `setting` ("speech.model"), over the environment."""
+    node: Any = overrides
+    for part in setting.split("."):
+        if not isinstance(node, Mapping) or part not in node:
+            return False
+        node = node[part]
+    return True

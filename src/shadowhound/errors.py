@@ -44,7 +44,11 @@ what was wrong and what is allowed or what to do.
     +-- FrameUnavailable             web: no camera frame to show yet
     +-- ToolInputError               mcp: arguments a tool cannot take (ValueError)
     +-- AudioProblem                 hearing: a recording that cannot be used (ValueError)
+    |   +-- RecordingTooLong         ... it is longer than speech.max_seconds
+    |   +-- RecordingUnreadable      ... its bytes are not a recording of the kind it says
     +-- TranscriptionError           hearing: the transcription server failed (its `status`)
+    +-- HearingBusy                  hearing: too many recordings at once, this one not heard
+                                         (its `status`: 429 pushed out, 503 waited too long)
 
 Classes that were ValueErrors stay ValueErrors (pydantic validators and callers rely on it).
 Callers catch by class, never by comparing class names. Each class is also importable from the
@@ -67,6 +71,7 @@ __all__ = [
     "DetectionError",
     "FrameUnavailable",
     "GridError",
+    "HearingBusy",
     "MemoryStoreError",
     "MissionCancelled",
     "NodeNotFound",
@@ -77,6 +82,8 @@ __all__ = [
     "PlanProblem",
     "PlanningError",
     "RecallStoreError",
+    "RecordingTooLong",
+    "RecordingUnreadable",
     "Relocalized",
     "RobotError",
     "SafetyError",
@@ -295,9 +302,37 @@ class AudioProblem(ShadowHoundError, ValueError):
     """A recording that cannot be used; the message says why and what is allowed."""
 
 
+class RecordingTooLong(AudioProblem):
+    """A recording longer than it may be: `seconds` (as far as it was read, unless `exact`)
+    against `limit`."""
+
+    def __init__(self, seconds: float, limit: float, *, exact: bool) -> None:
+        shown = f"{seconds:.0f}" if seconds < 1e7 else f"{seconds:.2g}"
+        said = f"{shown} s long" if exact else f"longer than {limit:g} s"
+        super().__init__(
+            f"the recording is {said}; at most {limit:g} s are taken (speech.max_seconds): "
+            "hold the button for one short request"
+        )
+        self.seconds, self.limit, self.exact = seconds, limit, exact
+
+
+class RecordingUnreadable(AudioProblem):
+    """A recording whose bytes are not what its type says (a reader's reason, then inspect's
+    sentence naming the container)."""
+
+
 class TranscriptionError(ShadowHoundError):
     """Transcription failed; `status` is the HTTP status to answer the client with."""
 
     def __init__(self, message: str, status: int = 502) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+class HearingBusy(ShadowHoundError):
+    """A recording not read or transcribed because others filled the lanes; `status` is the
+    HTTP status to answer with (429: newer ones pushed it out; 503: it waited too long)."""
+
+    def __init__(self, message: str, status: int) -> None:
         super().__init__(message)
         self.status = status

@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import io
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
+import httpx
 import pytest
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
 from shadowhound import RobotAgent, ShadowHoundConfig
-from shadowhound.web import create_app, serve_main
+from shadowhound.web import WebServer, create_app, serve_main
 from shadowhound.web.server import ServeError, check_binding, serve
 from tests.web.conftest import TOKEN, make_agent
 
@@ -91,9 +92,38 @@ def test_foreign_hosts_and_cross_origin_requests_are_refused(client: TestClient)
     assert same.status_code == 200
     with (
         pytest.raises(WebSocketDisconnect),
-        client.websocket_connect("/ws/status", headers={"origin": "http://attacker.example"}),
+        client.websocket_connect(
+            "ws://127.0.0.1/ws/status", headers={"origin": "http://attacker.example"}
+        ),
     ):
         pass
+
+
+def test_an_origin_of_another_scheme_is_another_origin(client: TestClient) -> None:
+    """Issue 32: `Origin: https://host:port` was taken as the page of an http server."""
+    other = client.post("/api/estop", headers={"origin": "https://127.0.0.1"})
+    assert other.status_code == 403 and "cross-origin" in other.json()["detail"]
+    with (
+        pytest.raises(WebSocketDisconnect),
+        client.websocket_connect(
+            "ws://127.0.0.1/ws/status", headers={"origin": "https://127.0.0.1"}
+        ),
+    ):
+        pass
+    assert client.post("/api/estop", headers={"origin": "http://127.0.0.1"}).status_code == 200
+    with client.websocket_connect(
+        "ws://127.0.0.1/ws/status", headers={"origin": "http://127.0.0.1"}
+    ) as ws:
+        assert ws.receive_json()["kind"] == "snapshot"
+
+
+def test_behind_a_tls_proxy_the_https_page_is_the_origin(serve: Callable[..., WebServer]) -> None:
+    """A TLS proxy on loopback says the page's scheme with X-Forwarded-Proto (docs/web.md)."""
+    server = serve(make_agent())
+    page = f"https://127.0.0.1:{server.port}"
+    proxied = {"origin": page, "x-forwarded-proto": "https"}
+    assert httpx.post(server.url + "/api/estop", headers=proxied).status_code == 200
+    assert httpx.post(server.url + "/api/estop", headers={"origin": page}).status_code == 403
 
 
 def test_no_cors_headers_for_other_sites(client: TestClient) -> None:
@@ -249,3 +279,37 @@ def test_serve_on_a_127_name_is_refused_without_resolving_it(
     # .invalid never resolves (RFC 2606): refused for the missing token, not a failed lookup.
     assert serve_main(ShadowHoundConfig(), host="127.0.0.1.invalid", port=0) == 2
     assert "needs a token" in capsys.readouterr().err
+
+
+def test_a_body_whose_client_went_away_reaches_no_route() -> None:
+    """A client that leaves mid-upload is nobody to answer: before, the route read a body that
+    never came and the server logged a failed request for every one (ClientDisconnect)."""
+    import asyncio
+
+    from shadowhound.web.security import Gate
+
+    called, sent = [], []
+
+    async def app(*_args: object) -> None:
+        called.append(True)
+
+    async def receive() -> dict[str, object]:
+        return messages.pop(0)
+
+    async def send(message: dict[str, object]) -> None:
+        sent.append(message)
+
+    messages: list[dict[str, object]] = [
+        {"type": "http.request", "body": b"RIFF", "more_body": True},
+        {"type": "http.disconnect"},
+    ]
+    scope = {
+        "type": "http",
+        "method": "POST",
+        "path": "/api/speech",
+        "scheme": "http",
+        "headers": [(b"host", b"127.0.0.1"), (b"content-type", b"audio/wav")],
+    }
+    gate = Gate(app, token=None, allowed_hosts=["127.0.0.1"], max_body=1000)
+    asyncio.run(gate(scope, receive, send))
+    assert called == [] and sent == []

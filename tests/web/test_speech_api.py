@@ -81,6 +81,27 @@ def test_a_spoken_stop_latches_the_estop_before_anything_is_planned(
     assert later.json()["estop"] is True
 
 
+def test_while_the_robot_walks_a_stop_said_first_stops_it_and_at_rest_it_is_a_mission(
+    serve: Callable[..., WebServer], heard: ScriptedTranscriber
+) -> None:
+    """Issue 32: "Stop! Turn around." while walking would queue behind the walk; it stops,
+    and says what was not run. At rest, "Stop, then sit down" is a mission as before."""
+    agent = make_agent(time_scale=1.0, speech={"base_url": heard.url})
+    server = serve(agent)
+    heard.script("walk backward 3 meters", "Stop! Turn around.", "Stop, then sit down")
+    assert post(server, wav(1.0)).status_code == 202
+    wait_for(lambda: agent.robot.get_state().vx < -0.1, 10, "the walk")
+    reply = post(server, wav(0.5))
+    assert reply.status_code == 200, reply.text
+    answer = reply.json()
+    assert answer["estop"] is True and answer["not_run"] == "Turn around."
+    assert agent.robot.get_state().vx == 0.0 and agent.estop_latched
+    agent.release_estop()
+    wait_for(lambda: not agent.robot.get_state().is_moving, 10, "the robot at rest")
+    at_rest = post(server, wav(0.5))
+    assert at_rest.status_code == 202 and at_rest.json()["mission_id"], at_rest.text
+
+
 @pytest.mark.parametrize(
     "said",
     ["walk forward until I say stop", "stop if you see a person and walk forward 1 meter"],

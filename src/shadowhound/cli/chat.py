@@ -160,12 +160,12 @@ def _chat_line(agent: Any, worker: MissionWorker, line: str) -> str:
 
 
 def _says_stop(line: str) -> bool:
-    """A person's plain "stop" ("stop", "halt", "that's enough"): the running mission's stop,
-    answered at once (a mission "until I say stop" then ends as asked)."""
-    from ..planning._english import normalize
-    from ..planning._phrases import STOP
+    """A person's stop ("stop", "No, stop!", "that's enough": what push-to-talk takes for a
+    stop, hearing.is_stop): the running mission's stop, answered at once (a mission "until I
+    say stop" then ends as asked)."""
+    from ..hearing import is_stop
 
-    return not line.startswith("/") and bool(STOP.match(normalize(line)[0]))
+    return not line.startswith("/") and is_stop(line)
 
 
 def _stop(worker: MissionWorker) -> str:

@@ -32,7 +32,7 @@ from .frames import FrameCache
 from .models import MAX_BODY
 from .openapi import document_answers
 from .responses import StrictJSON
-from .security import Gate, scrubber, secret_values
+from .security import BodyLimit, Gate, scrubber, secret_values
 
 log = logging.getLogger(__name__)
 
@@ -71,9 +71,12 @@ def create_app(
     feed = EventFeed(scrub=scrubber(hidden))
     desk = MissionDesk(agent, feed, worker=worker)
     web = api.WebContext(agent, desk, feed, FrameCache(agent), auth=token is not None)
+    ears = speech.Ears.open(agent.settings.speech)
 
     @contextlib.asynccontextmanager
     async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
+        if agent.settings.speech.base_url.strip():
+            ears.readers.warm()  # no recording waits for its reader to start
         ticker = asyncio.create_task(live.publish_state(web, state_hz))
         try:
             yield
@@ -81,6 +84,7 @@ def create_app(
             ticker.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await ticker
+            ears.close()
             desk.close()
 
     app = FastAPI(
@@ -93,6 +97,7 @@ def create_app(
         "<token>` when the server has a token.",
     )
     app.state.web = web
+    app.state.ears = ears  # recordings are read and transcribed off the event loop
     app.include_router(api.router)
     app.include_router(live.router)
     app.include_router(speech.router)
@@ -101,7 +106,7 @@ def create_app(
     _add_page(app)
     _add_error_handlers(app)
     app.add_middleware(EstopLane, estop=desk.estop)  # inside the gate: checked, then first
-    recordings = agent.settings.speech.max_bytes
+    hearing = agent.settings.speech
     app.add_middleware(
         Gate,
         token=token,
@@ -109,9 +114,13 @@ def create_app(
         max_body=max_body,
         secrets=hidden,
         limits={
-            speech.PATH: (
-                recordings,
-                f"the recording is larger than the limit of {recordings} bytes (speech.max_bytes)",
+            speech.PATH: BodyLimit(
+                hearing.max_bytes,
+                f"the recording is larger than the limit of {hearing.max_bytes} bytes "
+                "(speech.max_bytes)",
+                hearing.upload_timeout,
+                f"the recording did not arrive within {hearing.upload_timeout:g} s "
+                "(speech.upload_timeout): send it again on a faster link",
             )
         },
     )

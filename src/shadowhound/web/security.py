@@ -9,8 +9,13 @@
   DNS rebinding. The header is parsed strictly (`name`, `name:port`, `[v6]`, `[v6]:port`, the
   port all digits); anything else, such as `127.0.0.1:8080.evil.example`, is refused.
 - Origin: a request that changes something, and every WebSocket, must come from the page's own
-  origin (no cross-site requests; there is no CORS at all).
-- Bodies over `max_body` bytes get 413 before any route sees them.
+  origin, scheme and host and port alike (no cross-site requests; there is no CORS at all): an
+  `https://` origin is not the page of a server answering http, which a TLS proxy in front
+  says with `X-Forwarded-Proto` (uvicorn reads it from a proxy on loopback).
+- Bodies over `max_body` bytes get 413 before any route sees them, and a body that does not
+  arrive within `BODY_SECONDS` gets 408 (a client trickling bytes holds nothing for long);
+  `limits` give a path its own size and time (a recording: `speech.max_bytes`,
+  `speech.upload_timeout`).
 - Secrets (the token, the model's API key) are masked in every JSON answer, whatever put them
   there (an error message quoting a URL, say).
 
@@ -20,9 +25,12 @@ for the dashboard and the MCP server.
 
 from __future__ import annotations
 
+import asyncio
 import hmac
 import os
+import sys
 from collections.abc import Awaitable, Callable, Iterable, Mapping, MutableMapping
+from dataclasses import dataclass
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
@@ -35,6 +43,8 @@ Send = Callable[[Message], Awaitable[None]]
 ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
 
 WS_PROTOCOL = "shadowhound"
+GONE = 499  # _read_body: the client disconnected before its body came (never sent)
+BODY_SECONDS = 10.0  # a JSON body is a few kB: on any link it arrives well within this
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 OPEN_PATHS = {"/api/health"}
 _HEADERS = [
@@ -42,6 +52,20 @@ _HEADERS = [
     (b"x-frame-options", b"DENY"),
     (b"referrer-policy", b"no-referrer"),
 ]
+
+
+@dataclass(frozen=True)
+class BodyLimit:
+    """How large a request body may be and how long it may take to arrive, and what to say
+    when one is over either."""
+
+    max_bytes: int
+    too_big: str
+    seconds: float = BODY_SECONDS
+    too_slow: str = ""
+
+    def slow(self) -> str:
+        return self.too_slow or f"the request body did not arrive within {self.seconds:g} s"
 
 
 def secret_values(token: str | None, api_key_env: str | None = None) -> list[str]:
@@ -76,16 +100,18 @@ class Gate:
         allowed_hosts: Iterable[str] | None,
         max_body: int,
         secrets: Iterable[str] = (),
-        limits: Mapping[str, tuple[int, str]] | None = None,
+        limits: Mapping[str, BodyLimit] | None = None,
     ) -> None:
-        """`limits`: paths whose bodies have a limit of their own (a recording), with what to
-        say when one is over it."""
+        """`limits`: paths whose bodies have a limit of their own (a recording)."""
         self.app = app
         self.limits = dict(limits or {})
         self.secrets = [s.encode() for s in secrets if s]
         self.token = token
         self.allowed_hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts}
         self.max_body = max_body
+        self.body_limit = BodyLimit(
+            max_body, f"the request body is larger than {max_body} bytes", BODY_SECONDS
+        )
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] not in ("http", "websocket"):
@@ -99,13 +125,13 @@ class Gate:
             await self._refuse(scope, receive, send, *problem)
             return
         if scope["type"] == "http" and scope["method"] not in SAFE_METHODS:
-            limit, said = self.limits.get(
-                scope.get("path", ""),
-                (self.max_body, f"the request body is larger than {self.max_body} bytes"),
-            )
-            body = await self._read_body(receive, headers, limit)
-            if body is None:
-                await _send_json(send, 413, said)
+            limit = self.limits.get(scope.get("path", ""), self.body_limit)
+            body = await _read_body(receive, headers, limit)
+            if body == GONE:
+                return
+            if isinstance(body, int):  # the rest of the body is never read: close after
+                said = limit.too_big if body == 413 else limit.slow()
+                await _send_json(send, body, said, [(b"connection", b"close")])
                 return
             receive = _replay(body, receive)
         if scope["type"] == "http":
@@ -156,7 +182,9 @@ class Gate:
         origin = headers.get("origin")
         if origin is not None and (websocket or scope["method"] not in SAFE_METHODS):
             parts = urlsplit(origin)
-            if parts.netloc.lower() != headers.get("host", "").lower():
+            if parts.netloc.lower() != headers.get(
+                "host", ""
+            ).lower() or parts.scheme.lower() != _page_scheme(scope):
                 return 403, "cross-origin requests are not allowed; use the dashboard's own page"
         path = scope.get("path", "")
         if self.token is None or path in OPEN_PATHS or not path.startswith(("/api/", "/ws/")):
@@ -186,25 +214,6 @@ class Gate:
         expected = self.token.encode()
         return any(hmac.compare_digest(o.encode(), expected) for o in offered)
 
-    async def _read_body(
-        self, receive: Receive, headers: dict[str, str], limit: int
-    ) -> list[Message] | None:
-        """Every body message, or None once the body passes `limit`."""
-        declared = headers.get("content-length", "")
-        if declared.isdigit() and int(declared) > limit:
-            return None
-        messages, size = [], 0
-        while True:
-            message = await receive()
-            messages.append(message)
-            if message["type"] != "http.request":
-                return messages  # the client went away; let the app see it
-            size += len(message.get("body", b""))
-            if size > limit:
-                return None
-            if not message.get("more_body", False):
-                return messages
-
     async def _refuse(
         self, scope: Scope, receive: Receive, send: Send, status: int, detail: str
     ) -> None:
@@ -214,6 +223,44 @@ class Gate:
             return
         extra = [(b"www-authenticate", b"Bearer")] if status == 401 else []
         await _send_json(send, status, detail, extra)
+
+
+def _page_scheme(scope: Scope) -> str:
+    """The scheme of the page this server serves: http or https (a WebSocket's ws or wss)."""
+    scheme = str(scope.get("scheme", "http")).lower()
+    return {"ws": "http", "wss": "https"}.get(scheme, scheme)
+
+
+async def _read_body(
+    receive: Receive, headers: dict[str, str], limit: BodyLimit
+) -> list[Message] | int:
+    """Every body message, or the status to refuse it with: 413 once it passes the limit's
+    bytes, 408 when it has not all come within the limit's seconds; GONE when the client went
+    away first."""
+    declared = headers.get("content-length", "")
+    if declared.isdigit() and int(declared) > limit.max_bytes:
+        return 413
+    try:  # one timer for the whole body, in the request's own task (no task more)
+        if sys.version_info >= (3, 11):
+            async with asyncio.timeout(limit.seconds):
+                return await _collect(receive, limit.max_bytes)
+        return await asyncio.wait_for(_collect(receive, limit.max_bytes), limit.seconds)
+    except asyncio.TimeoutError:
+        return 408
+
+
+async def _collect(receive: Receive, max_bytes: int) -> list[Message] | int:
+    messages, size = [], 0
+    while True:
+        message = await receive()
+        if message["type"] != "http.request":
+            return GONE  # the client went away before its body came: nobody to answer
+        messages.append(message)
+        size += len(message.get("body", b""))
+        if size > max_bytes:
+            return 413
+        if not message.get("more_body", False):
+            return messages
 
 
 def _replay(messages: list[Message], receive: Receive) -> Receive:
