@@ -71,6 +71,13 @@ class MissionRun:
         if refusal is not None:
             return self.refuse(refusal)
         self.begin()
+        try:
+            return self._from_plan_to_report()
+        except Exception as exc:  # a bug anywhere after the start still ends the record
+            log.exception("mission %s crashed", self.id)
+            return self.report(MissionStatus.FAILED, crashed("the mission", exc), None)
+
+    def _from_plan_to_report(self) -> MissionResult:
         if isinstance(self.planner, StepwisePlanner):
             return self.react(self.planner)
         plan = self.plan()
@@ -106,6 +113,9 @@ class MissionRun:
             plan = self.planner.plan(self.text, self._context())
         except PlanningError as exc:
             return self.refuse(exc.message, record=False)
+        except Exception as exc:  # whatever a model sent: refused, said why
+            log.exception("planning %r crashed", self.text[:80])
+            return self.refuse(crashed("planning", exc), record=False)
         self.timing.agent_duration = self.timing.total_duration = self._elapsed()
         checked = self.check(plan, start, first=1)
         end, problems = checked.path[-1], checked.problems
@@ -189,6 +199,10 @@ class MissionRun:
                     MissionStatus.STOPPED, self.crew.stop.reason(), None, usage=exc.usage
                 )
             return self.report(MissionStatus.FAILED, exc.message, None, usage=exc.usage)
+        except Exception as exc:  # a planner's bug (or a reply it cannot hold) ends it failed
+            log.exception("planning %r crashed", self.text[:80])
+            self.timing.agent_duration = time.perf_counter() - t
+            return self.report(MissionStatus.FAILED, crashed("planning", exc), None)
         self.timing.agent_duration = time.perf_counter() - t
         if self.crew.stop.cancelled.is_set():
             return self.report(MissionStatus.STOPPED, self.crew.stop.reason(), plan)
@@ -294,6 +308,9 @@ class MissionRun:
         except PlanningError as exc:
             plan.usage.add(exc.usage)
             error = f"{error}; re-planning failed: {exc.message}"
+        except Exception as exc:
+            log.exception("re-planning %r crashed", self.text[:80])
+            error = f"{error}; {crashed('re-planning', exc)}"
         self.timing.agent_duration += time.perf_counter() - t
         now = self._state_or_none()
         if again is not None and now is not None and not self.crew.stop.cancelled.is_set():
@@ -354,6 +371,9 @@ class MissionRun:
             answer, finished, status = stop.reason(), False, MissionStatus.STOPPED
         except RobotError as exc:
             answer, finished = f"the robot cannot report its state: {exc}", False
+        except Exception as exc:  # the robot is stopped by the report
+            log.exception("planning %r crashed", self.text[:80])
+            answer, finished = crashed("planning", exc), False
         self.timing.agent_duration = max(
             0.0, time.perf_counter() - t - self.timing.execution_duration
         )
@@ -589,6 +609,17 @@ class MissionRun:
         except RobotError as exc:
             log.warning("robot state unavailable: %s", exc)
             return None
+
+
+def crashed(what: str, exc: BaseException) -> str:
+    """Why a stage ended on an unexpected exception, for people: "planning failed: internal
+    error (RecursionError: maximum recursion depth exceeded ...); nothing more was run"."""
+    said = " ".join(str(exc).split())
+    said = said[:197] + "..." if len(said) > 200 else said
+    return (
+        f"{what} failed: internal error ({type(exc).__name__}{': ' + said if said else ''}); "
+        "nothing more was run"
+    )
 
 
 def _so_far(before: RobotState, robot: Any) -> str:

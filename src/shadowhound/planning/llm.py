@@ -142,7 +142,7 @@ class LLMPlanner:
         raw = {"role": "assistant", "content": message.get("content") or ""}
         if message.get("tool_calls"):
             raw["tool_calls"] = message["tool_calls"]
-        return parse_reply(message), raw
+        return parse_reply(message, self.llm.max_reply_depth), raw
 
     def _complete(
         self, messages: list[dict[str, Any]], usage: Usage, ctx: PlanningContext, **options: Any
@@ -157,6 +157,14 @@ class LLMPlanner:
         except BackendError:
             usage.round_trips += 1  # a failed request is still a round trip
             raise
+        except RecursionError as exc:  # the client's JSON decoder gave up on the body
+            usage.round_trips += 1
+            raise PlanningError(
+                "the model's server sent an answer nested too deep to read "
+                f"(a reply may nest at most {self.llm.max_reply_depth} deep, "
+                "llm.max_reply_depth)",
+                usage=usage,
+            ) from exc
         usage.add(completion.usage)
         return completion
 
@@ -275,7 +283,7 @@ class ReactPlanner(LLMPlanner):
                 completion = self._complete(messages, usage, ctx, tools=tools)
             except BackendError as exc:
                 raise PlanningError(str(exc), usage=usage) from exc
-            reply = parse_reply(completion.message)
+            reply = parse_reply(completion.message, self.llm.max_reply_depth)
             if reply.refusal:
                 raise _refused(reply.refusal, usage)
             if not reply.calls and completion.finish_reason == "length":
