@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .errors import PlanningError as PlanningError
 from .usage import Usage as Usage
+
+if TYPE_CHECKING:
+    from .config import AgentConfig
 
 WATCH_KINDS = ("seen", "in_the_way", "battery_below", "operator_stop")
 WATCH_WHEN = ("until", "unless")
@@ -107,3 +111,59 @@ class Plan:
             "steps": [s.to_dict() for s in self.steps],
             "notes": list(self.notes),
         }
+
+
+def oversize(steps: Sequence[SkillCall], limits: AgentConfig) -> list[str]:
+    """Why `steps` carry more than one plan may, naming each limit (`agent.max_steps`,
+    `max_watches_per_step`, `max_watches`, `max_args_chars`); [] when they do not. The work is
+    bounded by the limits whatever the steps hold: a plan of 10,000 steps, or one step of
+    10,000 watches, is refused before any step is read further."""
+    if len(steps) > limits.max_steps:
+        return [
+            f"the plan has {len(steps)} steps; at most {limits.max_steps} are allowed "
+            "(agent.max_steps)"
+        ]
+    problems: list[str] = []
+    total = 0
+    for index, call in enumerate(steps, start=1):
+        watches = getattr(call, "watches", ())
+        here = (len(watches) if isinstance(watches, (tuple, list)) else 0) + (
+            getattr(call, "guard", None) is not None
+        )
+        total += here
+        if here > limits.max_watches_per_step:
+            problems.append(
+                f"step {index} carries {here} conditions; at most "
+                f"{limits.max_watches_per_step} are allowed (agent.max_watches_per_step)"
+            )
+        if _carries(getattr(call, "args", None), limits.max_args_chars) > limits.max_args_chars:
+            problems.append(
+                f"step {index}: its arguments carry more than {limits.max_args_chars} "
+                "characters; at most that many are allowed (agent.max_args_chars)"
+            )
+    if total > limits.max_watches:
+        problems.append(
+            f"the plan carries {total} conditions; at most {limits.max_watches} are allowed "
+            "(agent.max_watches)"
+        )
+    return problems
+
+
+def _carries(value: Any, limit: int) -> int:
+    """Characters `value` carries (strings and keys by their length, anything else as one),
+    counted without recursion and only until it passes `limit`."""
+    size, stack = 0, [value]
+    while stack and size <= limit:
+        item = stack.pop()
+        if isinstance(item, str):
+            size += len(item)
+        elif isinstance(item, Mapping):
+            size += 1
+            stack.extend(item.keys())
+            stack.extend(item.values())
+        elif isinstance(item, (list, tuple)):
+            size += 1
+            stack.extend(item)
+        else:
+            size += 1
+    return size

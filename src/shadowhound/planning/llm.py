@@ -27,7 +27,7 @@ from typing import Any
 from ..config import ShadowHoundConfig
 from ..errors import BackendError
 from ..llm.backend import LLMBackend, request_hints
-from ..plan import Plan, PlanningError, SkillCall, Usage
+from ..plan import Plan, PlanningError, SkillCall, Usage, oversize
 from ..skills import SkillValidationError
 from . import PlanningContext, StepRunner, conditions, prompts, schema
 from .parse import ParsedReply, parse_reply
@@ -171,7 +171,11 @@ class LLMPlanner:
     def _checked(
         self, reply: ParsedReply, ctx: PlanningContext
     ) -> tuple[list[SkillCall], list[str]]:
-        """Validate every proposed call; canonical names and parsed arguments on success."""
+        """Validate every proposed call; canonical names and parsed arguments on success. A
+        reply larger than one plan may be is refused whole, no call of it validated."""
+        too_big = oversize(reply.calls, self.settings.agent)
+        if too_big:  # the size first: the rest of such a reply is not worth reading
+            return [], too_big
         problems = list(reply.problems)
         calls = []
         for index, call in enumerate(reply.calls, start=1):

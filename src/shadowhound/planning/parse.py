@@ -239,6 +239,7 @@ def _conditions(reply: ParsedReply, given: Any) -> None:
     if not isinstance(given, list):
         reply.problems.append(f"'conditions' must be a list, got {type(given).__name__}")
         return
+    watched: dict[int, list[Watch]] = {}
     for n, item in enumerate(given, start=1):
         where = f"condition {n}"
         if not isinstance(item, dict):
@@ -284,5 +285,8 @@ def _conditions(reply: ParsedReply, given: Any) -> None:
                 reply.problems.append(f"{where}: step {step} already has an 'if'")
                 continue
             reply.calls[step - 1] = replace(at, guard=watch)
-        else:
-            reply.calls[step - 1] = replace(at, watches=(*at.watches, watch))
+        else:  # added once per step below: a step's tuple is not copied per condition
+            watched.setdefault(step - 1, []).append(watch)
+    for index, more in watched.items():
+        at = reply.calls[index]
+        reply.calls[index] = replace(at, watches=(*at.watches, *more))
