@@ -15,7 +15,7 @@ from typing import Any
 
 from .config import ShadowHoundConfig
 from .errors import PlanProblem
-from .plan import Plan, Watch, oversize
+from .plan import Plan, Watch, branch_problems, oversize
 from .result import StepResult, StepStatus
 from .robot.base import Robot
 from .safety import Governor
@@ -68,6 +68,8 @@ def check_plan(
         if c.guard is not None:
             found = check_watches([c.guard], robot, env.vocabulary, GUARD_WHEN)
             problems += [f"step {i}: {p}" for p in found]
+    if all(c is not None for c in calls):  # each branch is decided once: say it can be
+        problems += branch_problems([c.guard for c in calls if c is not None], first)
     steps = [
         StepResult(i, c.skill, plain_args(c.args), c.label, watches=_watch_records(c))
         for i, c in enumerate(plan.steps, first)

@@ -28,7 +28,7 @@ from .budget import MissionBudget
 from .checking import CheckedPlan, check_plan
 from .crew import Crew
 from .errors import WatchFired
-from .plan import Plan, PlanningError, SkillCall, Usage, Watch
+from .plan import Plan, PlanningError, SkillCall, Usage, Watch, branch_ways
 from .planning import Planner, PlanningContext, ReplanningPlanner, StepwisePlanner
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing, compose_response
 from .robot.base import RobotError
@@ -40,7 +40,7 @@ from .skills import (
     ValidatedCall,
 )
 from .skills.objects import see_at_start
-from .skills.watches import fired_text, guard_holds
+from .skills.watches import Branches, fired_text
 from .speech import Saying
 from .state import RobotState, normalize_angle
 
@@ -119,8 +119,17 @@ class MissionRun:
         self.timing.agent_duration = self.timing.total_duration = self._elapsed()
         checked = self.check(plan, start, first=1)
         end, problems = checked.path[-1], checked.problems
+        ways = branch_ways([c.guard for c in checked.calls])
         if problems:
             response = "Dry run: the plan would be refused: " + "; ".join(problems)
+        elif ways:  # which steps run is decided on the way; each way was checked
+            response = (
+                f"Dry run: {len(checked.steps)} step(s) planned; "
+                + "; ".join(ways)
+                + "; every way was checked; nothing moved."
+            )
+            if checked.approvals:
+                response += " It needs approval: " + "; ".join(checked.approvals) + "."
         elif checked.forecasts:  # where it ends is not known before it runs
             response = (
                 f"Dry run: {len(checked.steps)} step(s) would run; "
@@ -272,10 +281,11 @@ class MissionRun:
     ) -> tuple[MissionStatus, str | None]:
         self.crew.tracker.set_status(MissionStatus.EXECUTING)
         self.crew.tracker.at_least_steps(steps[-1].index if steps else 0)
+        ways = Branches([c.guard for c in calls], self.robot, self.crew.settings.sim.body_radius)
         for position, (step, call) in enumerate(zip(steps, calls, strict=True)):
             taken = ""
             if call.guard is not None:
-                runs, taken = self.guarded(step, call.guard)
+                runs, taken = self.guarded(step, call.guard, ways, position)
                 if not runs:
                     continue  # a branch not taken: skipped, saying why
             outcome = self.run_step(step, call, taken)
@@ -399,18 +409,12 @@ class MissionRun:
             error=None if status is MissionStatus.SUCCEEDED else answer,
         )
 
-    def guarded(self, step: StepResult, guard: Watch) -> tuple[bool, str]:
-        """Whether a guarded step runs, decided now (a branch of "if ... otherwise ..."); a
-        step not run is skipped with why. A robot that cannot say decides nothing: the step is
-        skipped and says so."""
-        try:
-            runs, why = guard_holds(guard, self.robot, self.crew.settings.sim.body_radius)
-        except RobotError as exc:
-            runs, why = False, f"the condition could not be read: {exc}"
-        except Exception as exc:  # a bug must not end the mission uncaught: skip, say so
-            log.exception("guard %r crashed", guard)
-            runs, why = False, f"internal error reading the condition: {exc!r}"
-        said = f"{why} ({guard.words or guard.describe()})"
+    def guarded(
+        self, step: StepResult, guard: Watch, ways: Branches, position: int
+    ) -> tuple[bool, str]:
+        """Whether a guarded step runs (a way of "if ... otherwise ...", decided once per
+        branch: `Branches`), and why; a step not run is skipped, saying why."""
+        runs, said = ways.runs(position, guard)
         if not runs:
             step.status = StepStatus.SKIPPED
             step.output = f"skipped: {said}"

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..config import LLMConfig
-from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, SkillCall, Watch
+from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, SkillCall, Watch, with_branches
 from .schema import ANSWER_MAX_CHARS, REFUSE
 
 MAX_DEPTH: int = LLMConfig.model_fields["max_reply_depth"].default  # one default: the setting's
@@ -173,6 +173,7 @@ def _interpret(reply: ParsedReply, value: Any) -> None:
             for item in steps:
                 _step(reply, item, f"step {len(reply.calls) + 1}")
             _conditions(reply, value.get("conditions"))
+            reply.calls = with_branches(reply.calls)  # an "if" and its "otherwise": one branch
             return
     if any(k in value for k in ("skill", "name", "function", "tool")):
         _step(reply, value, f"step {len(reply.calls) + 1}")

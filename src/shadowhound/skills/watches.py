@@ -13,13 +13,14 @@ dropped. `Watcher` evaluates a step's watches each tick over one reading of what
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 from ..errors import WatchFired
-from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, Watch
-from ..robot.base import Robot
+from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, Watch, branches
+from ..robot.base import Robot, RobotError
 from ..state import RobotState, Scan, Sighting
 from ..world.objects import object_key
 
@@ -28,7 +29,9 @@ IN_THE_WAY = (0.3, 5.0)  # metres from the body a path check may reach
 SEEN_WITHIN = (0.2, 20.0)  # metres a "seen within" may ask
 _CORRIDOR = 0.15  # metres either side of the body a return still counts as in the path
 
-__all__ = ["GUARD_WHEN", "Watcher", "check_watches", "fired_text", "guard_holds"]
+__all__ = ["GUARD_WHEN", "Branches", "Watcher", "check_watches", "fired_text", "guard_holds"]
+
+log = logging.getLogger(__name__)
 
 
 def check_watches(
@@ -226,6 +229,40 @@ def raise_if_fired(watcher: Watcher | None, state: RobotState, heading: float | 
     if hit is not None:
         watcher.robot.stop()
         raise WatchFired(hit[0], hit[1])
+
+
+class Branches:
+    """The branches of one batch of steps (`plan.branches`), each decided once, when its first
+    step is reached: every step of a branch follows that decision, so one way runs, never
+    both, whatever the first way did to what the condition reads. A condition that cannot be
+    read decides nothing: every step of its branch is skipped."""
+
+    def __init__(self, guards: Sequence[Watch | None], robot: Robot, body_radius: float) -> None:
+        self._of = branches(guards)
+        self._robot, self._body_radius = robot, body_radius
+        self._decided: dict[int, tuple[bool | None, str]] = {}  # did it hold, and why
+
+    def runs(self, position: int, guard: Watch) -> tuple[bool, str]:
+        """Whether the step at `position`, guarded by `guard`, runs, and why in words."""
+        branch = self._of[position]
+        later = branch in self._decided
+        if not later:
+            self._decided[branch] = self._decide(guard)
+        holds, why = self._decided[branch]
+        said = f"{why} ({guard.words or guard.describe()})"
+        if later:
+            said += ", decided when the branch began"
+        return holds is not None and holds == (guard.when == "if"), said
+
+    def _decide(self, guard: Watch) -> tuple[bool | None, str]:
+        try:
+            runs, why = guard_holds(guard, self._robot, self._body_radius)
+        except RobotError as exc:
+            return None, f"the condition could not be read: {exc}"
+        except Exception as exc:  # a bug must not end the mission uncaught: skip, say so
+            log.exception("guard %r crashed", guard)
+            return None, f"internal error reading the condition: {exc!r}"
+        return runs == (guard.when == "if"), why
 
 
 def guard_holds(guard: Watch, robot: Robot, body_radius: float) -> tuple[bool, str]:
