@@ -179,3 +179,31 @@ def test_deep_json_in_a_reply_is_measured_and_refused_never_decoded() -> None:
     ]
     plain = parse_reply({"content": '{"steps": [{"skill": "nav.move", "args": {"distance": 1}}]}'})
     assert [c.skill for c in plain.calls] == ["nav.move"] and not plain.problems
+
+
+def test_a_mission_that_raises_past_its_run_still_ends_failed_in_the_worker(
+    tmp_path: Path,
+) -> None:
+    """The worker's own net: an agent that started a mission (its record `running`) and then
+    raised ends the job failed with the reason, in its result and its history row."""
+    from shadowhound import events as ev
+
+    class Breaking(RobotAgent):
+        def execute_mission(self, text: str, mission_id: str | None = None) -> Any:
+            self._events.emit(ev.MissionStarted(mission_id or "m", text))
+            raise Oddity("a bug after the start")
+
+    config = ShadowHoundConfig(memory={"enabled": True, "data_dir": str(tmp_path)})
+    agent = Breaking(RobotAgentConfig(robot=SimRobot(config.sim, time_scale=0.0), settings=config))
+    agent.initialize()
+    worker = MissionWorker(agent)
+    try:
+        job = MissionJob("stand up", source="web")
+        assert worker.submit(job) is None and job.done.wait(30)
+        assert job.dropped is None and job.result is not None
+        assert job.result.status.value == "failed" and "Oddity" in (job.result.error or "")
+        row = agent.memory.history.get(job.mission_id)  # type: ignore[union-attr]
+        assert row is not None and row["status"] == "failed" and "Oddity" in row["response"]
+    finally:
+        worker.stop()
+        agent.cleanup()
