@@ -6,6 +6,9 @@ Run:  .venv/bin/python bench/bench_watches.py [--write]
 Ten watches of every kind (eight by sight, one path check, one battery) on one step:
 (i)  evaluation: `Watcher.evaluate` over one tick's reading (the view, the scan, the state),
      none of them holding (every watch is looked at), what the target is about;
+     Also the most watches one step may carry (`agent.max_watches_per_step`, 8), all path
+     checks (one pass over the scan a tick serves them all), and, for scale, 10,000 on one
+     step (what a model sent in issue 32; such a plan is refused before anything moves);
 (ii) a whole tick's reading and evaluation on the simulator (`Watcher.fired`: the simulator's
      view is its scene's ray casts and its scan 360 of them), for scale;
 (iii) "patrol until I say stop" on the simulator in real time: a person's stop (the Python
@@ -30,6 +33,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from results import write_section  # noqa: E402
+from shadowhound.config import ShadowHoundConfig  # noqa: E402
 from shadowhound.plan import Watch  # noqa: E402
 from shadowhound.robot.sim.robot import SimRobot  # noqa: E402
 from shadowhound.skills.watches import Watcher, _Reading  # noqa: E402
@@ -58,7 +62,6 @@ def stop_to_end(trials: int) -> tuple[list[float], list[float]]:
     import httpx
 
     from shadowhound import RobotAgent, RobotAgentConfig
-    from shadowhound.config import ShadowHoundConfig
     from shadowhound.web import WebServer, create_app
 
     settings = ShadowHoundConfig()
@@ -215,6 +218,14 @@ def main() -> None:
     evaluation = per_tick(lambda: watcher.evaluate(reading, 0.0), 5000)
     evaluation_quiet = per_tick(lambda: quiet.evaluate(reading, 0.0), 5000)
     whole = per_tick(lambda: watcher.fired(state, 0.0), 300)
+    most = ShadowHoundConfig().agent.max_watches_per_step
+    paths = Watcher(
+        [Watch("unless", "in_the_way", within=0.3 + 0.1 * i) for i in range(most)], robot, 0.35
+    )
+    flood = Watcher((WATCHES * 1000), robot, 0.35)  # 10,000
+    assert paths.evaluate(reading, 0.0) is None and flood.evaluate(reading, 0.0) is None
+    evaluation_paths = per_tick(lambda: paths.evaluate(reading, 0.0), 2000)
+    evaluation_flood = per_tick(lambda: flood.evaluate(reading, 0.0), 3)
     view = len(reading.in_view)
     api, web = stop_to_end(5)
     mcp = mcp_stop_to_end(5)
@@ -233,6 +244,11 @@ def main() -> None:
         f"scan; none holds), median of 7 runs | < 0.1 ms | {evaluation * 1000:.1f} us |",
         f"| same without the path check (9 watches: the scan's 360 beams not looked at) | - | "
         f"{evaluation_quiet * 1000:.1f} us |",
+        f"| the most watches one step may carry ({most}, `agent.max_watches_per_step`), all "
+        f"path checks (one pass over the scan serves them) | < 0.1 ms | "
+        f"{evaluation_paths * 1000:.1f} us |",
+        f"| 10,000 watches on one step (issue 32's model plan; refused before moving since) | "
+        f"- | {evaluation_flood:.1f} ms |",
         f"| a whole tick on the simulator: reading its view and scan, then evaluating | - | "
         f"{whole:.3f} ms |",
         f'| "patrol until I say stop": `agent.cancel()` to the mission\'s end (median, max of '

@@ -15,7 +15,7 @@ from typing import Any
 
 from .config import ShadowHoundConfig
 from .errors import PlanProblem
-from .plan import Plan, Watch
+from .plan import Plan, Watch, branch_problems, oversize
 from .result import StepResult, StepStatus
 from .robot.base import Robot
 from .safety import Governor
@@ -52,8 +52,12 @@ def check_plan(
 ) -> CheckedPlan:
     """Validate every step and run the governor over the whole plan from `start` (as if no
     watch ever fired: a watch only shortens a step). Each step's watches must be observable on
-    `robot`, or the plan is refused naming them."""
-    calls, problems, invalid = _validate(plan, registry, settings)
+    `robot`, or the plan is refused naming them. A plan larger than the `agent` limits is
+    refused whole before any step is validated (`plan.oversize`)."""
+    too_big = oversize(plan.steps, settings.agent)
+    if too_big:
+        return _too_big(plan, too_big, start, first, settings.agent.max_steps)
+    calls, problems, invalid = _validate(plan, registry)
     for i, c in enumerate(calls, first):
         if c is None or not (c.watches or c.guard):
             continue
@@ -64,6 +68,8 @@ def check_plan(
         if c.guard is not None:
             found = check_watches([c.guard], robot, env.vocabulary, GUARD_WHEN)
             problems += [f"step {i}: {p}" for p in found]
+    if all(c is not None for c in calls):  # each branch is decided once: say it can be
+        problems += branch_problems([c.guard for c in calls if c is not None], first)
     steps = [
         StepResult(i, c.skill, plain_args(c.args), c.label, watches=_watch_records(c))
         for i, c in enumerate(plan.steps, first)
@@ -101,6 +107,27 @@ def check_plan(
         path=verdict.path,
         invalid=invalid,
         forecasts=forecasts,
+    )
+
+
+def _too_big(
+    plan: Plan, problems: list[str], start: RobotState, first: int, most: int
+) -> CheckedPlan:
+    """A plan refused for its size: records for at most `most` of its steps, none validated."""
+    steps = [
+        StepResult(i, str(c.skill)[:100], plain_args(c.args), str(c.label)[:200])
+        for i, c in enumerate(plan.steps[:most], first)
+    ]
+    for s in steps:
+        s.status = StepStatus.SKIPPED
+    return CheckedPlan(
+        steps=steps,
+        calls=[],
+        problems=list(problems),
+        approvals=[],
+        path=[start.pose],
+        invalid=[list(problems) for _ in steps],
+        forecasts=[],
     )
 
 
@@ -148,7 +175,7 @@ def _within_reach(
 
 
 def _validate(
-    plan: Plan, registry: SkillRegistry, settings: ShadowHoundConfig
+    plan: Plan, registry: SkillRegistry
 ) -> tuple[list[ValidatedCall | None], list[str], list[list[str]]]:
     """Validate every step; invalid ones become None so the rest can still be checked."""
     problems: list[str] = []
@@ -156,11 +183,6 @@ def _validate(
     invalid: list[list[str]] = []
     if not plan.steps:
         problems.append("the plan has no steps")
-    if len(plan.steps) > settings.agent.max_steps:
-        problems.append(
-            f"the plan has {len(plan.steps)} steps; at most "
-            f"{settings.agent.max_steps} are allowed (agent.max_steps)"
-        )
     for index, call in enumerate(plan.steps, start=1):
         try:
             calls.append(registry.validate(call))

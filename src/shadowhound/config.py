@@ -233,6 +233,9 @@ class LLMConfig(_Section):
         True, description="offline rules first; the model plans only what they do not understand"
     )
     repair_attempts: int = Field(1, ge=0, le=3, description="round trips to fix an invalid plan")
+    max_reply_depth: int = Field(
+        16, ge=4, le=200, description="how deep a reply's JSON may nest; deeper is refused"
+    )
     react_max_steps: int = Field(8, ge=1, le=100, description="skill calls in one react mission")
     react_token_budget: int = Field(
         12000, ge=500, le=1_000_000, description="prompt + completion tokens for one mission"
@@ -297,6 +300,13 @@ class AgentConfig(_Section):
 
     max_mission_chars: int = Field(2000, ge=1, le=100_000)
     max_steps: int = Field(50, ge=1, le=1000)
+    # What one plan may carry, whatever a model sends: checked before any step is read further,
+    # so the work of checking a plan (and of each control tick) stays bounded.
+    max_watches_per_step: int = Field(8, ge=1, le=100, description="conditions on one step")
+    max_watches: int = Field(64, ge=1, le=1000, description="conditions in one plan")
+    max_args_chars: int = Field(
+        2000, ge=100, le=100_000, description="characters one step's arguments may carry"
+    )
     conversation_history_size: int = Field(10, ge=0, le=1000)
     replan_on_failure: bool = True
 

@@ -28,7 +28,7 @@ from .budget import MissionBudget
 from .checking import CheckedPlan, check_plan
 from .crew import Crew
 from .errors import WatchFired
-from .plan import Plan, PlanningError, SkillCall, Usage, Watch
+from .plan import Plan, PlanningError, SkillCall, Usage, Watch, branch_ways
 from .planning import Planner, PlanningContext, ReplanningPlanner, StepwisePlanner
 from .result import MissionResult, MissionStatus, StepResult, StepStatus, Timing, compose_response
 from .robot.base import RobotError
@@ -41,7 +41,7 @@ from .skills import (
 )
 from .skills.motion import settle
 from .skills.objects import see_at_start
-from .skills.watches import fired_text, guard_holds
+from .skills.watches import Branches, fired_text
 from .speech import Saying
 from .state import RobotState, normalize_angle
 
@@ -72,6 +72,13 @@ class MissionRun:
         if refusal is not None:
             return self.refuse(refusal)
         self.begin()
+        try:
+            return self._from_plan_to_report()
+        except Exception as exc:  # a bug anywhere after the start still ends the record
+            log.exception("mission %s crashed", self.id)
+            return self.report(MissionStatus.FAILED, crashed("the mission", exc), None)
+
+    def _from_plan_to_report(self) -> MissionResult:
         if isinstance(self.planner, StepwisePlanner):
             return self.react(self.planner)
         plan = self.plan()
@@ -107,11 +114,23 @@ class MissionRun:
             plan = self.planner.plan(self.text, self._context())
         except PlanningError as exc:
             return self.refuse(exc.message, record=False)
+        except Exception as exc:  # whatever a model sent: refused, said why
+            log.exception("planning %r crashed", self.text[:80])
+            return self.refuse(crashed("planning", exc), record=False)
         self.timing.agent_duration = self.timing.total_duration = self._elapsed()
         checked = self.check(plan, start, first=1)
         end, problems = checked.path[-1], checked.problems
+        ways = branch_ways([c.guard for c in checked.calls])
         if problems:
             response = "Dry run: the plan would be refused: " + "; ".join(problems)
+        elif ways:  # which steps run is decided on the way; each way was checked
+            response = (
+                f"Dry run: {len(checked.steps)} step(s) planned; "
+                + "; ".join(ways)
+                + "; every way was checked; nothing moved."
+            )
+            if checked.approvals:
+                response += " It needs approval: " + "; ".join(checked.approvals) + "."
         elif checked.forecasts:  # where it ends is not known before it runs
             response = (
                 f"Dry run: {len(checked.steps)} step(s) would run; "
@@ -191,6 +210,10 @@ class MissionRun:
                     MissionStatus.STOPPED, self.crew.stop.reason(), None, usage=exc.usage
                 )
             return self.report(MissionStatus.FAILED, exc.message, None, usage=exc.usage)
+        except Exception as exc:  # a planner's bug (or a reply it cannot hold) ends it failed
+            log.exception("planning %r crashed", self.text[:80])
+            self.timing.agent_duration = time.perf_counter() - t
+            return self.report(MissionStatus.FAILED, crashed("planning", exc), None)
         self.timing.agent_duration = time.perf_counter() - t
         if self.crew.stop.cancelled.is_set():
             return self.report(MissionStatus.STOPPED, self.crew.stop.reason(), plan)
@@ -260,10 +283,11 @@ class MissionRun:
     ) -> tuple[MissionStatus, str | None]:
         self.crew.tracker.set_status(MissionStatus.EXECUTING)
         self.crew.tracker.at_least_steps(steps[-1].index if steps else 0)
+        ways = Branches([c.guard for c in calls], self.robot, self.crew.settings.sim.body_radius)
         for position, (step, call) in enumerate(zip(steps, calls, strict=True)):
             taken = ""
             if call.guard is not None:
-                runs, taken = self.guarded(step, call.guard)
+                runs, taken = self.guarded(step, call.guard, ways, position)
                 if not runs:
                     continue  # a branch not taken: skipped, saying why
             outcome = self.run_step(step, call, taken)
@@ -296,6 +320,9 @@ class MissionRun:
         except PlanningError as exc:
             plan.usage.add(exc.usage)
             error = f"{error}; re-planning failed: {exc.message}"
+        except Exception as exc:
+            log.exception("re-planning %r crashed", self.text[:80])
+            error = f"{error}; {crashed('re-planning', exc)}"
         self.timing.agent_duration += time.perf_counter() - t
         now = self._state_or_none()
         if again is not None and now is not None and not self.crew.stop.cancelled.is_set():
@@ -356,6 +383,9 @@ class MissionRun:
             answer, finished, status = stop.reason(), False, MissionStatus.STOPPED
         except RobotError as exc:
             answer, finished = f"the robot cannot report its state: {exc}", False
+        except Exception as exc:  # the robot is stopped by the report
+            log.exception("planning %r crashed", self.text[:80])
+            answer, finished = crashed("planning", exc), False
         self.timing.agent_duration = max(
             0.0, time.perf_counter() - t - self.timing.execution_duration
         )
@@ -381,18 +411,12 @@ class MissionRun:
             error=None if status is MissionStatus.SUCCEEDED else answer,
         )
 
-    def guarded(self, step: StepResult, guard: Watch) -> tuple[bool, str]:
-        """Whether a guarded step runs, decided now (a branch of "if ... otherwise ..."); a
-        step not run is skipped with why. A robot that cannot say decides nothing: the step is
-        skipped and says so."""
-        try:
-            runs, why = guard_holds(guard, self.robot, self.crew.settings.sim.body_radius)
-        except RobotError as exc:
-            runs, why = False, f"the condition could not be read: {exc}"
-        except Exception as exc:  # a bug must not end the mission uncaught: skip, say so
-            log.exception("guard %r crashed", guard)
-            runs, why = False, f"internal error reading the condition: {exc!r}"
-        said = f"{why} ({guard.words or guard.describe()})"
+    def guarded(
+        self, step: StepResult, guard: Watch, ways: Branches, position: int
+    ) -> tuple[bool, str]:
+        """Whether a guarded step runs (a way of "if ... otherwise ...", decided once per
+        branch: `Branches`), and why; a step not run is skipped, saying why."""
+        runs, said = ways.runs(position, guard)
         if not runs:
             step.status = StepStatus.SKIPPED
             step.output = f"skipped: {said}"
@@ -595,6 +619,17 @@ class MissionRun:
         except RobotError as exc:
             log.warning("robot state unavailable: %s", exc)
             return None
+
+
+def crashed(what: str, exc: BaseException) -> str:
+    """Why a stage ended on an unexpected exception, for people: "planning failed: internal
+    error (RecursionError: maximum recursion depth exceeded ...); nothing more was run"."""
+    said = " ".join(str(exc).split())
+    said = said[:197] + "..." if len(said) > 200 else said
+    return (
+        f"{what} failed: internal error ({type(exc).__name__}{': ' + said if said else ''}); "
+        "nothing more was run"
+    )
 
 
 def _so_far(before: RobotState, robot: Any) -> str:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 import uuid
 from collections import deque
 from collections.abc import Callable
@@ -25,7 +26,7 @@ from typing import Literal, get_args
 from .agent import RobotAgent
 from .events import MissionEvent, MissionStarted
 from .plan import SkillCall
-from .result import MissionResult
+from .result import MissionResult, MissionStatus
 from .teleop import Teleop
 
 log = logging.getLogger(__name__)
@@ -242,10 +243,33 @@ class MissionWorker:
                     job.result = run(job.command, mission_id=job.mission_id)
             except Exception as exc:  # the worker must survive anything a mission does
                 log.exception("mission %r crashed", job.command[:80])
-                job.dropped = f"internal error: {exc!r}"
+                self._crashed(job, exc)
             finally:
                 self._current = None
                 self._finish(job)
+
+    def _crashed(self, job: MissionJob, exc: Exception) -> None:
+        """A job whose mission raised: one that had started ends failed, with the reason, in
+        its result and its record (never left `running`); one that had not is dropped."""
+        reason = f"internal error: {exc!r}"
+        if not job.started or job.dry_run:
+            job.dropped = reason
+            return
+        self._agent.cancel()  # the robot stopped (the next mission clears the flag)
+        job.result = MissionResult(
+            mission_id=job.mission_id,
+            mission=job.command,
+            success=False,
+            response=f"Failed: {reason}.",
+            status=MissionStatus.FAILED,
+            error=reason,
+        )
+        history = self._agent.memory.history
+        try:
+            if history is not None:
+                history.mission_finished(job.result.to_dict(), time.time())
+        except Exception:  # reporting must not stop the worker
+            log.exception("recording the end of mission %r failed", job.command[:80])
 
     def _finish(self, job: MissionJob) -> None:
         try:

@@ -86,8 +86,17 @@ _LEAD = re.compile(
     r"|puppy|shadowhound|go2|dear)(?:\s+|$)"
 )
 _TRAIL = re.compile(
-    r"\s+(?:please|now|robot|buddy|doggy|dog|boy|pup|puppy|shadowhound|go2|thanks|thank you"
-    r"|for me|immediately|at once|right away|as well|too|first|next)$"
+    r"\s+(?:please|now|thanks|thank you|for me|immediately|at once|right away|as well|too"
+    r"|first|next)$"
+)
+# What a person calls the robot, said last ("sit down, dog"). The same words name things too
+# ("go to the dog", "find the hot dog", "walk to the robot"): after an article or a possessive
+# (and at most one word more) they are the thing, and stay.
+_NAMES = r"robot|buddy|doggy|dog|boy|pup|puppy|shadowhound|go2"
+_CALLED = re.compile(rf",\s*(?:{_NAMES})\s*[.!?]*\s*$")
+_TRAIL_NAME = re.compile(rf"\s+(?:{_NAMES})$")
+_THING = re.compile(
+    r"\b(?:the|a|an|my|your|our|his|her|their|this|that|these|those|some|any)(?:\s+\S+)?$"
 )
 _PLEASE = re.compile(r"\bplease\b")
 
@@ -98,10 +107,13 @@ def normalize(clause: str, *, digits: bool = True) -> tuple[str, list[str]]:
     notes: list[str] = []
     text = clause.lower().translate(_CHARMAP)
     text = _CONTRACTION.sub(lambda m: _CONTRACTIONS[m.group(0)], text).replace("'", "")
-    text = " ".join(_PUNCT.sub(" ", text).split())
+    text = " ".join(_PUNCT.sub(" ", _CALLED.sub("", text)).split())
     for _ in range(8):
         before = text
         text = _TRAIL.sub("", _LEAD.sub("", _PLEASE.sub("", text).strip())).strip()
+        called = _TRAIL_NAME.search(text)
+        if called is not None and not _THING.search(text[: called.start()]):
+            text = text[: called.start()]
         if text == before:
             break
     if " few" in f" {text}":

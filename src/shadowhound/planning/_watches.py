@@ -111,7 +111,9 @@ def watch_of(when: str, condition: str) -> Watch:
         return Watch(kind, "in_the_way", within=within, words=words)
     m = _SEEN.match(cond)
     if m:
-        name = (m["name"] or m["name2"] or "").strip()
+        # "see the" is not a thing called "the": a name is more than its article
+        name = re.sub(r"^(?:a|an|the|some|any|this|that)\b\s*", "", (m["name"] or m["name2"] or ""))
+        name = name.strip()
         if name in _PEOPLE:
             name = "person"
         near = float(m["d"]) if m["d"] else None

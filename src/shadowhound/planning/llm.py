@@ -27,7 +27,7 @@ from typing import Any
 from ..config import ShadowHoundConfig
 from ..errors import BackendError
 from ..llm.backend import LLMBackend, request_hints
-from ..plan import Plan, PlanningError, SkillCall, Usage
+from ..plan import Plan, PlanningError, SkillCall, Usage, oversize
 from ..skills import SkillValidationError
 from . import PlanningContext, StepRunner, conditions, prompts, schema
 from .parse import ParsedReply, parse_reply
@@ -142,7 +142,7 @@ class LLMPlanner:
         raw = {"role": "assistant", "content": message.get("content") or ""}
         if message.get("tool_calls"):
             raw["tool_calls"] = message["tool_calls"]
-        return parse_reply(message), raw
+        return parse_reply(message, self.llm.max_reply_depth), raw
 
     def _complete(
         self, messages: list[dict[str, Any]], usage: Usage, ctx: PlanningContext, **options: Any
@@ -157,13 +157,25 @@ class LLMPlanner:
         except BackendError:
             usage.round_trips += 1  # a failed request is still a round trip
             raise
+        except RecursionError as exc:  # the client's JSON decoder gave up on the body
+            usage.round_trips += 1
+            raise PlanningError(
+                "the model's server sent an answer nested too deep to read "
+                f"(a reply may nest at most {self.llm.max_reply_depth} deep, "
+                "llm.max_reply_depth)",
+                usage=usage,
+            ) from exc
         usage.add(completion.usage)
         return completion
 
     def _checked(
         self, reply: ParsedReply, ctx: PlanningContext
     ) -> tuple[list[SkillCall], list[str]]:
-        """Validate every proposed call; canonical names and parsed arguments on success."""
+        """Validate every proposed call; canonical names and parsed arguments on success. A
+        reply larger than one plan may be is refused whole, no call of it validated."""
+        too_big = oversize(reply.calls, self.settings.agent)
+        if too_big:  # the size first: the rest of such a reply is not worth reading
+            return [], too_big
         problems = list(reply.problems)
         calls = []
         for index, call in enumerate(reply.calls, start=1):
@@ -275,7 +287,7 @@ class ReactPlanner(LLMPlanner):
                 completion = self._complete(messages, usage, ctx, tools=tools)
             except BackendError as exc:
                 raise PlanningError(str(exc), usage=usage) from exc
-            reply = parse_reply(completion.message)
+            reply = parse_reply(completion.message, self.llm.max_reply_depth)
             if reply.refusal:
                 raise _refused(reply.refusal, usage)
             if not reply.calls and completion.finish_reason == "length":

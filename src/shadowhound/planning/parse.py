@@ -17,8 +17,11 @@ import re
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, SkillCall, Watch
+from ..config import LLMConfig
+from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, SkillCall, Watch, with_branches
 from .schema import ANSWER_MAX_CHARS, REFUSE
+
+MAX_DEPTH: int = LLMConfig.model_fields["max_reply_depth"].default  # one default: the setting's
 
 _THINK = re.compile(r"<think>.*?</think>", re.DOTALL | re.IGNORECASE)
 _FENCE = re.compile(r"```(?:json|JSON)?\s*(.*?)```", re.DOTALL)
@@ -39,8 +42,10 @@ class ParsedReply:
     refusal: str = ""  # the model's reason for refusing the request; then no calls
 
 
-def parse_reply(message: dict[str, Any]) -> ParsedReply:
-    reply = _parse(message)
+def parse_reply(message: dict[str, Any], max_depth: int = MAX_DEPTH) -> ParsedReply:
+    """What `message` (an OpenAI chat message) proposes. JSON nested deeper than `max_depth`
+    (`llm.max_reply_depth`) is not read: it is a problem sentence, whatever else it holds."""
+    reply = _parse(message, max_depth)
     native = message.get("refusal")  # OpenAI's own: the model declined
     if isinstance(native, str) and native.strip():
         reply.refusal = native
@@ -60,13 +65,46 @@ def clean_reason(text: str) -> str:
     return words
 
 
-def _parse(message: dict[str, Any]) -> ParsedReply:
+def nesting(text: str) -> int:
+    """How deep the JSON in `text` nests: its deepest run of open [ and { outside strings,
+    counted in one pass (no recursion, so a reply of any depth is measured, never decoded)."""
+    depth = deepest = 0
+    in_string = escaped = False
+    for ch in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif ch == "\\":
+                escaped = True
+            elif ch == '"':
+                in_string = False
+        elif ch == '"':
+            in_string = True
+        elif ch in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif ch in "]}":
+            depth = max(0, depth - 1)
+    return deepest
+
+
+def too_deep(text: str, max_depth: int) -> str:
+    """The problem with JSON `text` nested deeper than `max_depth`; "" when it is not."""
+    depth = nesting(text)
+    if depth <= max_depth:
+        return ""
+    return f"the model's reply nests {depth} deep; at most {max_depth} (llm.max_reply_depth)"
+
+
+def _parse(message: dict[str, Any], max_depth: int) -> ParsedReply:
     reply = ParsedReply()
     for i, call in enumerate(message.get("tool_calls") or [], start=1):
         function = call.get("function") or {}
-        _add(
-            reply, function.get("name"), function.get("arguments"), f"tool call {i}", call.get("id")
-        )
+        arguments = function.get("arguments")
+        if isinstance(arguments, str) and (deep := too_deep(arguments, max_depth)):
+            reply.problems.append(f"tool call {i}: {deep}")
+        else:
+            _add(reply, function.get("name"), arguments, f"tool call {i}", call.get("id"))
         reply.used_tools = True
     content = message.get("content") or ""
     if isinstance(content, list):  # content parts
@@ -75,7 +113,9 @@ def _parse(message: dict[str, Any]) -> ParsedReply:
     if reply.used_tools or not content:
         reply.answer = content
         return reply
-    found = _json_values(content)
+    found = _json_values(content, max_depth, reply.problems)
+    if reply.problems:
+        return reply
     if not found:
         reply.answer = content
         return reply
@@ -84,17 +124,24 @@ def _parse(message: dict[str, Any]) -> ParsedReply:
     return reply
 
 
-def _json_values(content: str) -> list[Any]:
-    """JSON values in tags, fences, or the text itself (the first parseable one)."""
+def _json_values(content: str, max_depth: int, problems: list[str]) -> list[Any]:
+    """JSON values in tags, fences, or the text itself (the first parseable one). A source
+    nested deeper than `max_depth` is not decoded: `problems` says so."""
     tagged = _TOOL_TAG.findall(content)
     sources = tagged or _FENCE.findall(content) or [content]
     values = []
     decoder = json.JSONDecoder()
     for source in sources:
         text = source.strip()
+        if deep := too_deep(text, max_depth):
+            problems.append(deep)
+            continue
         for start in (i for i, ch in enumerate(text) if ch in "[{"):
             try:
                 value, _end = decoder.raw_decode(text, start)
+            except RecursionError:  # measured shallow, yet too deep for the decoder
+                problems.append(f"the model's reply nests too deep to read; at most {max_depth}")
+                break
             except ValueError:
                 continue
             values.append(value)
@@ -126,6 +173,7 @@ def _interpret(reply: ParsedReply, value: Any) -> None:
             for item in steps:
                 _step(reply, item, f"step {len(reply.calls) + 1}")
             _conditions(reply, value.get("conditions"))
+            reply.calls = with_branches(reply.calls)  # an "if" and its "otherwise": one branch
             return
     if any(k in value for k in ("skill", "name", "function", "tool")):
         _step(reply, value, f"step {len(reply.calls) + 1}")
@@ -159,6 +207,9 @@ def _add(reply: ParsedReply, name: Any, args: Any, where: str, call_id: str | No
     if isinstance(args, str):
         try:
             args = json.loads(args) if args.strip() else {}
+        except RecursionError:
+            reply.problems.append(f"{where} ({name}): its arguments nest too deep to read")
+            return
         except ValueError:
             reply.problems.append(f"{where} ({name}): arguments are not valid JSON: {args[:80]!r}")
             return
@@ -189,6 +240,7 @@ def _conditions(reply: ParsedReply, given: Any) -> None:
     if not isinstance(given, list):
         reply.problems.append(f"'conditions' must be a list, got {type(given).__name__}")
         return
+    watched: dict[int, list[Watch]] = {}
     for n, item in enumerate(given, start=1):
         where = f"condition {n}"
         if not isinstance(item, dict):
@@ -234,5 +286,8 @@ def _conditions(reply: ParsedReply, given: Any) -> None:
                 reply.problems.append(f"{where}: step {step} already has an 'if'")
                 continue
             reply.calls[step - 1] = replace(at, guard=watch)
-        else:
-            reply.calls[step - 1] = replace(at, watches=(*at.watches, watch))
+        else:  # added once per step below: a step's tuple is not copied per condition
+            watched.setdefault(step - 1, []).append(watch)
+    for index, more in watched.items():
+        at = reply.calls[index]
+        reply.calls[index] = replace(at, watches=(*at.watches, *more))

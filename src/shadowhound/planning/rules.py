@@ -97,8 +97,9 @@ class RulePlanner:
             other = watching.OTHERWISE.match(norm_if)
             if opened or other:
                 try:
-                    if opened:
+                    if opened:  # a new branch: its steps, "otherwise" ones too, share its id
                         guard, taken = self._branch(opened["rest"], label, notes)
+                        guard = replace(guard, branch=_last_branch(steps) + 1)
                         branch = guard
                     else:
                         if branch is None:
@@ -145,7 +146,7 @@ class RulePlanner:
                 if new is None:  # "repeat that": everything so far, again
                     total = count + 1 if how == "more" else (count if how == "times" else 2)
                     _check_size(steps, len(steps) * total)
-                    steps = steps * total
+                    steps = _repeated(steps, total)
                     notes.extend(clause_notes)
                     continue
             except NotUnderstood as exc:
@@ -774,6 +775,23 @@ def _when_branch(norm: str) -> re.Match[str] | None:
 def _guarded(step: SkillCall, guard: Watch | None) -> SkillCall:
     """`step` run only if `guard` holds (or does not: an "otherwise"); `step` without one."""
     return step if guard is None else replace(step, guard=guard)
+
+
+def _last_branch(steps: list[SkillCall]) -> int:
+    return max((s.guard.branch for s in steps if s.guard is not None), default=0)
+
+
+def _repeated(steps: list[SkillCall], times: int) -> list[SkillCall]:
+    """`steps` `times` over ("repeat that"): each time's branches are branches of their own,
+    decided when that time reaches them."""
+    last = _last_branch(steps)
+    return [
+        s
+        if s.guard is None or not s.guard.branch
+        else replace(s, guard=replace(s.guard, branch=s.guard.branch + k * last))
+        for k in range(times)
+        for s in steps
+    ]
 
 
 def _keep_going(step: SkillCall) -> SkillCall:

@@ -66,9 +66,11 @@ def resolve(env: PlanEnv, name: str) -> Target:
                 f"{name!r} could be " + " or ".join(o.the_name for o in several) + ": say which"
             ) from exc
         kinds = sorted(env.vocabulary or ())
-        near = _misspelt(name, [*env.places, *(o.name for o in _objects(belief)), *kinds])
-        if near is not None:
-            return resolve(env, near)
+        # A kind it recognises, named as it is, is not a misspelling of another ("car", "cat").
+        if env.vocabulary is None or not recognisable(env.vocabulary, name):
+            near = _misspelt(name, [*env.places, *(o.name for o in _objects(belief)), *kinds])
+            if near is not None:
+                return resolve(env, near)
         if belief is None or not name.strip() or not recognisable(env.vocabulary, name):
             raise PlanProblem(unknown(env, name)) from exc
         return Target(name)

@@ -13,13 +13,14 @@ dropped. `Watcher` evaluates a step's watches each tick over one reading of what
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 from ..errors import WatchFired
-from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, Watch
-from ..robot.base import Robot
+from ..plan import GUARD_WHEN, WATCH_KINDS, WATCH_WHEN, Watch, branches
+from ..robot.base import Robot, RobotError
 from ..state import RobotState, Scan, Sighting
 from ..world.objects import object_key
 
@@ -28,7 +29,9 @@ IN_THE_WAY = (0.3, 5.0)  # metres from the body a path check may reach
 SEEN_WITHIN = (0.2, 20.0)  # metres a "seen within" may ask
 _CORRIDOR = 0.15  # metres either side of the body a return still counts as in the path
 
-__all__ = ["GUARD_WHEN", "Watcher", "check_watches", "fired_text", "guard_holds"]
+__all__ = ["GUARD_WHEN", "Branches", "Watcher", "check_watches", "fired_text", "guard_holds"]
+
+log = logging.getLogger(__name__)
 
 
 def check_watches(
@@ -106,11 +109,21 @@ class _Reading:
     scan: Scan | None
 
 
+@dataclass(frozen=True)
+class _Seen:
+    """One tick's reading as the watches compare it, worked out once for all of them: each
+    sighting's name as names compare, and the scan's returns in the robot's path."""
+
+    keys: tuple[str, ...]  # object_key of each sighting in view
+    in_path: tuple[tuple[float, float], ...]  # (range, metres ahead) of returns in the path
+
+
 class Watcher:
     """A step's watches over `robot`: `fired(state)` returns the first that holds now, with
     what was observed, or None. Reads only what its watches need (the view, the scan) once a
-    tick. `heading` (body frame, radians) is where the robot goes: the path a path check looks
-    along."""
+    tick, and passes over the scan once a tick whatever the number of watches (a plan carries
+    at most `agent.max_watches_per_step` on a step). `heading` (body frame, radians) is where
+    the robot goes: the path a path check looks along."""
 
     def __init__(self, watches: Sequence[Watch], robot: Robot, body_radius: float) -> None:
         self.watches = tuple(watches)
@@ -118,7 +131,8 @@ class Watcher:
         self.body_radius = body_radius
         # The view names what is in the way too: read once a tick for either.
         self._view = any(w.kind in ("seen", "in_the_way") for w in self.watches)
-        self._scan = any(w.kind == "in_the_way" for w in self.watches)
+        reaches = [w.within for w in self.watches if w.kind == "in_the_way" and w.within]
+        self._reach = body_radius + max(reaches) if reaches else None  # None: no scan read
         self._keys = {id(w): object_key(w.name) for w in self.watches}
 
     def fired(self, state: RobotState, heading: float | None) -> tuple[Watch, str] | None:
@@ -127,26 +141,32 @@ class Watcher:
         reading = _Reading(
             state,
             (self.robot.in_view() or ()) if self._view else (),
-            self.robot.get_scan() if self._scan else None,
+            self.robot.get_scan() if self._reach is not None else None,
         )
         return self.evaluate(reading, heading)
 
     def evaluate(self, r: _Reading, heading: float | None) -> tuple[Watch, str] | None:
+        seen = _Seen(
+            tuple(object_key(s.name) for s in r.in_view),
+            self._in_path(r.scan, r.state, heading) if r.scan is not None else (),
+        )
         for w in self.watches:
-            seen = self._holds(w, r, heading)
-            if seen:
-                return w, seen
+            observed = self._holds(w, r, seen, heading)
+            if observed:
+                return w, observed
         return None
 
-    def _holds(self, w: Watch, r: _Reading, heading: float | None) -> str:
+    def _holds(self, w: Watch, r: _Reading, seen: _Seen, heading: float | None) -> str:
         if w.kind == "seen":
             key = self._keys[id(w)]
-            for s in r.in_view:
-                if names(key, s.name) and (w.within is None or s.distance <= w.within):
+            for s, name in zip(r.in_view, seen.keys, strict=True):
+                if (name == key or name.endswith(" " + key)) and (
+                    w.within is None or s.distance <= w.within
+                ):
                     return f"saw {s.describe()}"
             return ""
         if w.kind == "in_the_way":
-            return self._in_the_way(w, r, heading)
+            return self._in_the_way(w, r, seen, heading)
         if w.kind == "operator_stop":
             return ""  # a person's stop arrives as the mission's cancel (mission.run_step)
         battery = r.state.battery
@@ -154,24 +174,35 @@ class Watcher:
             return f"the battery is at {battery:.0f}%, below {w.percent:g}%"
         return ""
 
-    def _in_the_way(self, w: Watch, r: _Reading, heading: float | None) -> str:
-        scan = r.scan
-        if scan is None or w.within is None:
-            return ""
+    def _in_path(
+        self, scan: Scan, state: RobotState, heading: float | None
+    ) -> tuple[tuple[float, float], ...]:
+        """The scan's returns within the farthest reach any watch asks, in the body's path
+        along `heading`: (range, metres ahead), read in one pass."""
+        if self._reach is None:
+            return ()
         along = 0.0 if heading is None else heading  # body frame: 0 = straight ahead
-        reach = self.body_radius + w.within
         half = self.body_radius + _CORRIDOR
-        nearest = math.inf
-        rel = scan.pose.yaw - r.state.yaw  # the scan's frame against the body's
+        rel = scan.pose.yaw - state.yaw  # the scan's frame against the body's
+        top = min(self._reach, scan.range_max)
+        found = []
         for i, d in enumerate(scan.ranges):
-            if not scan.range_min <= d <= min(reach, scan.range_max):
+            if not scan.range_min <= d <= top:
                 continue
             a = scan.angle_min + i * scan.angle_increment + rel - along
             ahead, side = d * math.cos(a), d * math.sin(a)
-            if ahead > 0 and abs(side) <= half and ahead < nearest:
-                nearest = ahead
+            if ahead > 0 and abs(side) <= half:
+                found.append((d, ahead))
+        return tuple(found)
+
+    def _in_the_way(self, w: Watch, r: _Reading, seen: _Seen, heading: float | None) -> str:
+        if w.within is None:
+            return ""
+        reach = self.body_radius + w.within
+        nearest = min((ahead for d, ahead in seen.in_path if d <= reach), default=math.inf)
         if nearest == math.inf:
             return ""
+        along = 0.0 if heading is None else heading
         gap = max(0.0, nearest - self.body_radius)
         what = self._named(r, nearest, along)
         return f"{what} in the way {gap:.2f} m ahead"
@@ -198,6 +229,40 @@ def raise_if_fired(watcher: Watcher | None, state: RobotState, heading: float | 
     if hit is not None:
         watcher.robot.stop()
         raise WatchFired(hit[0], hit[1])
+
+
+class Branches:
+    """The branches of one batch of steps (`plan.branches`), each decided once, when its first
+    step is reached: every step of a branch follows that decision, so one way runs, never
+    both, whatever the first way did to what the condition reads. A condition that cannot be
+    read decides nothing: every step of its branch is skipped."""
+
+    def __init__(self, guards: Sequence[Watch | None], robot: Robot, body_radius: float) -> None:
+        self._of = branches(guards)
+        self._robot, self._body_radius = robot, body_radius
+        self._decided: dict[int, tuple[bool | None, str]] = {}  # did it hold, and why
+
+    def runs(self, position: int, guard: Watch) -> tuple[bool, str]:
+        """Whether the step at `position`, guarded by `guard`, runs, and why in words."""
+        branch = self._of[position]
+        later = branch in self._decided
+        if not later:
+            self._decided[branch] = self._decide(guard)
+        holds, why = self._decided[branch]
+        said = f"{why} ({guard.words or guard.describe()})"
+        if later:
+            said += ", decided when the branch began"
+        return holds is not None and holds == (guard.when == "if"), said
+
+    def _decide(self, guard: Watch) -> tuple[bool | None, str]:
+        try:
+            runs, why = guard_holds(guard, self._robot, self._body_radius)
+        except RobotError as exc:
+            return None, f"the condition could not be read: {exc}"
+        except Exception as exc:  # a bug must not end the mission uncaught: skip, say so
+            log.exception("guard %r crashed", guard)
+            return None, f"internal error reading the condition: {exc!r}"
+        return runs == (guard.when == "if"), why
 
 
 def guard_holds(guard: Watch, robot: Robot, body_radius: float) -> tuple[bool, str]:

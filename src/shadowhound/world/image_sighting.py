@@ -22,20 +22,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from ..state import Pose2D, Scan, compose, normalize_angle
-from .objects import KnownObject
-
-# COCO category names (coco_detector's class_id) as the planner's words name them. Names not
-# listed are used as they are ("chair", "person", "bottle").
-COCO_NAMES = {
-    "tv": "television",
-    "couch": "sofa",
-    "potted plant": "plant",
-    "dining table": "table",
-    "sports ball": "ball",
-    "cell phone": "phone",
-    "wine glass": "glass",
-    "hair drier": "hair dryer",
-}
+from .objects import COCO_NAMES, KnownObject
 
 STILL = 0.005  # metres (and radians) between the last two poses of a robot at rest
 MIN_RADIUS = 0.1  # metres: the smallest footprint a sighting is given
@@ -43,7 +30,8 @@ MAX_RADIUS = 1.5  # metres: the largest (as the map's own estimate, world/object
 
 
 def planner_name(class_id: str) -> str:
-    """A detector's class name as the planner says it: "tv" -> "television"."""
+    """A detector's class name as the planner says it: "tv" -> "television" (`COCO_NAMES`;
+    names compare the same either way, `object_key`)."""
     key = " ".join(class_id.strip().lower().replace("_", " ").split())
     return COCO_NAMES.get(key, key)
 

@@ -144,10 +144,31 @@ class Belief:
         return "an obstacle"
 
 
+# COCO category names (a COCO detector's class names, which docs/go2.md gives) that the
+# planner's words name otherwise: one thing by either name. Names not listed are the same in
+# both ("chair", "person", "teddy bear").
+COCO_NAMES = {
+    "tv": "television",
+    "couch": "sofa",
+    "potted plant": "plant",
+    "dining table": "table",
+    "sports ball": "ball",
+    "cell phone": "phone",
+    "wine glass": "glass",
+    "hair drier": "hair dryer",
+}
+
+
 def object_key(name: str) -> str:
-    """How names compare: case, spacing and a leading "the" do not matter."""
+    """How names compare: case, spacing and a leading "the" do not matter, and a COCO name is
+    the planner's word for it ("the sports ball" is "ball", "a small potted plant" names a
+    "small plant")."""
     key = " ".join(name.strip().lower().split())
-    return key[4:] if key.startswith("the ") else key
+    key = key[4:] if key.startswith("the ") else key
+    for coco, word in COCO_NAMES.items():
+        if key == coco or key.endswith(" " + coco):
+            return key[: len(key) - len(coco)] + word
+    return key
 
 
 def merge_sightings(
