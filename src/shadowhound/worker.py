@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import logging
 import threading
-import time
 import uuid
 from collections import deque
 from collections.abc import Callable
@@ -264,10 +263,8 @@ class MissionWorker:
             status=MissionStatus.FAILED,
             error=reason,
         )
-        history = self._agent.memory.history
         try:
-            if history is not None:
-                history.mission_finished(job.result.to_dict(), time.time())
+            self._agent.memory.mission_ended(job.result.to_dict())
         except Exception:  # reporting must not stop the worker
             log.exception("recording the end of mission %r failed", job.command[:80])
 

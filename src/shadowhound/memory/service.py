@@ -188,6 +188,12 @@ class AgentMemory:
         if self.history is not None:
             self.history.mission_not_run(mission_id, mission, reason, time.time(), robot=self.robot)
 
+    def mission_ended(self, record: dict[str, Any]) -> None:
+        """A started mission ended outside the agent's own events (the worker's safety net
+        after a crash): its record (`MissionResult.to_dict()`) replaces the running row."""
+        if self.history is not None:
+            self.history.mission_finished(record, time.time(), robot=self.robot)
+
     # -- recording (agent events) ------------------------------------------------------------
 
     def on_event(self, event: MissionEvent) -> None:
