@@ -19,7 +19,7 @@ from shadowhound.robot.sim.robot import SimRobot
 from shadowhound.skills import PlanEnv
 from shadowhound.skills.bounds import room_ahead
 from shadowhound.state import Posture, RobotState
-from shadowhound.teleop import MARGIN, MOTIONS, Command, Teleop
+from shadowhound.teleop import MARGIN, Command, Teleop
 from shadowhound.world import check_leg
 
 
@@ -138,7 +138,7 @@ def test_the_pad_moves_an_axis_only_when_a_mission_step_of_its_skill_would_run(
             state,
             env,
         )
-        for name in MOTIONS
+        for name in ("nav.move", "nav.strafe", "nav.rotate")  # the pad's axes, in order
     ]
     teleop = Teleop(agent)
     refused = teleop.start(thread=False)

@@ -49,6 +49,7 @@ from .state import Posture, RobotState, position_unknown
 if TYPE_CHECKING:
     from .agent import RobotAgent
     from .robot.base import Robot
+    from .skills.registry import Skill
 
 log = logging.getLogger(__name__)
 
@@ -57,8 +58,9 @@ log = logging.getLogger(__name__)
 # the 0.5 s a lost page is allowed.
 HEARTBEAT = 0.35
 MARGIN = STOP_SHORT  # metres kept short of a fence or an obstacle when braking
-# What the stick's axes move as, for the governor: forward and back, sideways, turning.
-MOTIONS = ("nav.move", "nav.strafe", "nav.rotate")
+# The stick's axes, in the order of a deflection (forward, left, turn): each moves as the skill
+# that declares it (`Skill.drives`), whose governor rules it keeps.
+AXES = ("forward", "sideways", "turn")
 _ZERO = (0.0, 0.0, 0.0)
 
 
@@ -120,7 +122,7 @@ class Teleop:
         refused = self._refusals(state)
         if all(refused):
             why = "; ".join(dict.fromkeys(r for reasons in refused for r in reasons))
-            return f"no motion may run ({', '.join(MOTIONS)}): {why}"
+            return f"no motion may run ({', '.join(self._motions())}): {why}"
         with self._lock:
             if self._on:
                 return None
@@ -223,17 +225,24 @@ class Teleop:
             command = Command(limited=str(exc))
         self._sent = command
 
+    def _skills(self) -> list[Skill | None]:
+        """Per axis (AXES), the skill whose motion it is (None: this agent has none)."""
+        found = {s.drives: s for s in self._agent.registry if s.drives}
+        return [found.get(axis) for axis in AXES]
+
+    def _motions(self) -> list[str]:
+        skills = zip(self._skills(), AXES, strict=True)
+        return [s.name if s else f"no {axis} skill" for s, axis in skills]
+
     def _refusals(self, state: RobotState) -> list[list[str]]:
-        """Per axis (MOTIONS), why the governor would refuse its skill now ([] when not)."""
-        agent = self._agent
-        out = []
-        for name in MOTIONS:
-            skill = agent.registry.find(name)
-            if skill is None:
-                out.append([f"this agent has no {name} skill"])
-            else:
-                out.append(agent.governor.skill_rules(skill, state.battery))
-        return out
+        """Per axis (AXES), why the governor would refuse its skill now ([] when not)."""
+        governor = self._agent.governor
+        return [
+            governor.skill_rules(skill, state.battery)
+            if skill is not None
+            else [f"this agent has no skill that moves {axis}"]
+            for skill, axis in zip(self._skills(), AXES, strict=True)
+        ]
 
     def _limit(self, stick: tuple[float, float, float], period: float) -> Command:
         if stick == _ZERO:

@@ -527,6 +527,7 @@ SKILLS = (
         _run_move,
         timeout=_straight_timeout,
         moves=True,
+        drives="forward",
         predict=lambda p, a, env: [_offset(p, a.distance, 0.0)],
         phrase=lambda a: (
             f"move {'forward' if a.distance >= 0 else 'backward'} {_n(abs(a.distance))} m"
@@ -539,6 +540,7 @@ SKILLS = (
         _run_strafe,
         timeout=_straight_timeout,
         moves=True,
+        drives="sideways",
         predict=lambda p, a, env: [_offset(p, 0.0, a.distance)],
         phrase=lambda a: f"step {'left' if a.distance >= 0 else 'right'} {_n(abs(a.distance))} m",
     ),
@@ -549,6 +551,7 @@ SKILLS = (
         _run_rotate,
         timeout=_rotate_timeout,
         moves=True,
+        drives="turn",
         predict=lambda p, a, env: [
             Pose2D(p.x, p.y, normalize_angle(p.yaw + math.radians(a.degrees)))
         ],

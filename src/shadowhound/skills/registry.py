@@ -83,6 +83,9 @@ class Skill:
     # What the plan check cannot predict of a call, in words ("would look for the chair for up
     # to 120 s and 20 m ..."), "" when it can: a dry run says it.
     forecast: Forecast | None = None
+    # The stick axis of teleoperation this skill's motion is ("forward", "sideways", "turn"):
+    # the governor's rules for the skill hold for that axis of the pad (teleop.py).
+    drives: str | None = None
 
     def __post_init__(self) -> None:
         if self.moves and self.low_battery:  # below the battery floor nothing may walk
