@@ -9,8 +9,11 @@ goal tolerance (0.25 m by default); the last centimetres and the heading are clo
 project's controller, so the step ends where the plan said, within the outcome tolerance.
 
 Nav2 drives at its own controller's speeds, which the governor cannot cap: the walk measures
-the robot's speed over each second of odometry and cancels the goal when it exceeds
-`safety.max_linear_speed` by more than SPEED_SLACK.
+the robot's speed over each second and cancels the goal when it exceeds
+`safety.max_linear_speed` by more than SPEED_SLACK. The speed is the robot's own (the state's
+body velocity, from odometry in its own frame), not how fast its map pose moves: SLAM's map ->
+odom corrections move the map pose without the robot moving (a flapping one looked like 0.78 m/s
+while the robot walked at 0.40: issue 32).
 """
 
 from __future__ import annotations
@@ -76,10 +79,10 @@ def navigate(
     sent = ctx.robot.now()
     first: float | None = None
     recoveries = 0
-    poses: deque[tuple[float, float, float]] = deque()
+    speeds: deque[tuple[float, float]] = deque()
     try:
         while True:
-            _check_speed(ctx, navigator.name, poses)
+            _check_speed(ctx, navigator.name, speeds)
             report = handle.report()
             fb = report.feedback
             if fb is not None:
@@ -116,18 +119,20 @@ def navigate(
     return ctx.robot.get_state().distance_travelled - before
 
 
-def _check_speed(ctx: SkillContext, name: str, poses: deque[tuple[float, float, float]]) -> None:
+def _check_speed(ctx: SkillContext, name: str, speeds: deque[tuple[float, float]]) -> None:
     """Raise SkillError when the robot moved faster than the safety limit over the last
-    SPEED_WINDOW seconds."""
+    SPEED_WINDOW seconds: its own speed at each tick, averaged over the time between ticks."""
     st = ctx.robot.get_state()
     now = ctx.robot.now()
-    poses.append((now, st.x, st.y))
-    while len(poses) > 2 and now - poses[1][0] >= SPEED_WINDOW:
-        poses.popleft()
-    t0, x0, y0 = poses[0]
+    speeds.append((now, math.hypot(st.vx, st.vy)))
+    while len(speeds) > 2 and now - speeds[1][0] >= SPEED_WINDOW:
+        speeds.popleft()
+    t0 = speeds[0][0]
     if now - t0 < SPEED_WINDOW:
         return
-    speed = math.hypot(st.x - x0, st.y - y0) / (now - t0)
+    ticks = list(speeds)
+    walked = sum(v * (t - before) for (before, _), (t, v) in zip(ticks, ticks[1:], strict=False))
+    speed = walked / (now - t0)
     limit = ctx.config.safety.max_linear_speed
     if speed > limit * SPEED_SLACK:
         raise SkillError(

@@ -48,6 +48,9 @@ class StampWindow:
         return None
 
 
+STAMPS = StampWindow()  # the window every stamped input of the robot is judged by
+
+
 class StampClock:
     """When each odometry pose was *sent*, on this process's monotonic clock.
 
