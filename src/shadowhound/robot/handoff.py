@@ -8,13 +8,16 @@ time) and the thread reads it. It keeps the newest `depth` messages, oldest firs
 inputs where only the newest counts (a map, an image, detections: one that arrives before the
 previous was read replaces it), more for a stream read in order (TF, whose messages carry
 different frames). However fast messages come, the thread reads one at a time, and what it
-could not keep up with is counted (`replaced`).
+could not keep up with is counted (`replaced`). With `share` below 1 it also rests after each
+message, so reading takes at most that share of its time (of a processor, and of the GIL the
+process's other threads need): a flood of large messages costs the process that much, no more.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 from typing import Generic, TypeVar
@@ -26,8 +29,11 @@ log = logging.getLogger(__name__)
 class Handoff(Generic[T]):
     """`offer(item)` from a callback; `take(item)` runs on the thread `name`, in order."""
 
-    def __init__(self, take: Callable[[T], None], name: str, depth: int = 1) -> None:
+    def __init__(
+        self, take: Callable[[T], None], name: str, depth: int = 1, share: float = 1.0
+    ) -> None:
         self._take = take
+        self._rest = 1.0 / share - 1.0  # seconds of rest per second of reading
         self._lock = threading.Lock()
         self._items: deque[T] = deque(maxlen=depth)
         self._ready = threading.Event()
@@ -60,7 +66,10 @@ class Handoff(Generic[T]):
                     self._ready.clear()
                     continue
                 item = self._items.popleft()
+            began = time.thread_time()
             try:
                 self._take(item)
             except Exception:  # a bug in one message's reading must not end the intake
                 log.exception("reading a message on %s failed", self._thread.name)
+            if self._rest > 0:
+                time.sleep((time.thread_time() - began) * self._rest)

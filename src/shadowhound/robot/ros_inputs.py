@@ -40,10 +40,11 @@ class RosInputs:
         *,
         thread: str = "",
         depth: int = 1,
+        share: float = 1.0,
     ) -> None:
         """`on_msg(msg)` for each message on `topic` of at most MAX_BYTES[kind] bytes; with
         `thread`, called on that thread for the newest `depth` messages in order (depth 1: the
-        newest only), else on the executor."""
+        newest only), reading at most `share` of its time, else on the executor."""
         limit = MAX_BYTES[kind]
         name = self.node.resolve_topic_name(topic)
         what = msg_type.__name__
@@ -56,7 +57,7 @@ class RosInputs:
                 return
             on_msg(msg)
 
-        handoff = Handoff(read, thread, depth) if thread else None
+        handoff = Handoff(read, thread, depth, share) if thread else None
         if handoff is not None:
             self._handoffs.append(handoff)
 

@@ -81,6 +81,7 @@ from ...world.image_sighting import Bearing, SightingRules
 from ...world.objects import KnownObject
 from ..base import RobotError
 from ..estop_listener import EstopListener
+from ..input_limits import READ_SHARE
 from ..ros_base import DRIVEN_SETTLE, KEEPALIVE_PERIOD, RELIABLE, RosRobot
 from ..ros_inputs import RosInputs
 from ..tf_tree import BASE, ODOM, MapCorrection, TfTree, Transform2D
@@ -213,6 +214,7 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                 _SENSOR,
                 "image",
                 thread="go2-camera",
+                share=READ_SHARE,
             )
         if c.detections_topic:
             try:
@@ -229,6 +231,7 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                 RELIABLE,
                 "detections",
                 thread="go2-detections",
+                share=READ_SHARE,
             )
         if c.coco_detections_topic:
             try:
@@ -246,6 +249,7 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                 _SENSOR_DEPTH,
                 "detections",
                 thread="go2-boxes",
+                share=READ_SHARE,
             )
             sub(CameraInfo, c.camera_info_topic, self._on_camera_info, _SENSOR, "small")
         if c.map_topic:  # reading and inflating a large map takes seconds
