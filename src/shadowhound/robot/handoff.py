@@ -2,15 +2,16 @@
 reads it (pure Python).
 
 An executor thread also serves odometry and the stops: a callback that reads a large message
-(a map, an image, a detector's boxes: rclpy takes 20 ms to read 100 boxes, 0.2 s for 1,000)
-puts every other callback behind it. With `Handoff` the callback stores the message (constant
-time) and the thread reads it. It keeps the newest `depth` messages, oldest first: depth 1 for
-inputs where only the newest counts (a map, an image, detections: one that arrives before the
-previous was read replaces it), more for a stream read in order (TF, whose messages carry
-different frames). However fast messages come, the thread reads one at a time, and what it
-could not keep up with is counted (`replaced`). With `share` below 1 it also rests after each
-message, so reading takes at most that share of its time (of a processor, and of the GIL the
-process's other threads need): a flood of large messages costs the process that much, no more.
+(a map, an image, a detector's boxes: rclpy takes some 30 ms to read 100 boxes, 0.2-0.3 s for
+1,000: bench/RESULTS.md) puts every other callback behind it. With `Handoff` the callback
+stores the message (constant time) and the thread reads it. It keeps the newest `depth`
+messages, oldest first: depth 1 for inputs where only the newest counts (a map, an image,
+detections: one that arrives before the previous was read replaces it), more for a stream read
+in order (TF, whose messages carry different frames). However fast messages come, the thread
+reads one at a time, and what it could not keep up with is counted (`replaced`). With `share`
+below 1 it also rests after each message, so reading takes at most that share of its time (of
+a processor, and of the GIL the process's other threads need): a flood of large messages costs
+the process that much, no more.
 """
 
 from __future__ import annotations

@@ -32,7 +32,8 @@ T = TypeVar("T")
 MAX_BOXES = 100  # detections per message kept (the most confident): a COCO model finds <= 100
 # The most of its time the thread reading images or detections spends reading (handoff.py): a
 # flood of them costs the process a quarter of a processor. A detector's few boxes take a
-# millisecond to read, 100 boxes 20 ms (read at up to 12 Hz then); a 1080p image 20 ms.
+# millisecond to read, 100 boxes some 30 ms (read at up to 8 Hz then), a 1080p image 10-15 ms
+# (bench/RESULTS.md).
 READ_SHARE = 0.25
 MAX_BEAMS = 10_000  # ranges per LaserScan: a lidar's scan is a few thousand at most
 _KB = 1024
