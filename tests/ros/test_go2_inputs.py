@@ -1,6 +1,7 @@
 """The Go2 robot's inputs within their limits, over DDS (issue 32, items 4 and 7): a message
-beyond its kind's size is refused unread, a scan of too many ranges is refused, a transform
-stamped from the future is refused, each said in the robot's input report; honest sizes (a
+beyond its kind's size is refused unread, of one within it the 100 most confident boxes are read,
+a scan of too many ranges is refused, a transform stamped from the future is refused, each said
+in the robot's input report; honest sizes (a
 lidar's scan, robot_state_publisher's links with SLAM's map -> odom) are taken as before.
 
 The test publishes what a driver, SLAM and a detector would, again on each poll until the robot
@@ -26,12 +27,12 @@ from geometry_msgs.msg import TransformStamped  # noqa: E402
 from rclpy.duration import Duration  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
 from rclpy.serialization import serialize_message  # noqa: E402
-from sensor_msgs.msg import LaserScan  # noqa: E402
+from sensor_msgs.msg import CameraInfo, LaserScan  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 from vision_msgs.msg import Detection2D, Detection2DArray, ObjectHypothesisWithPose  # noqa: E402
 
 from shadowhound.robot.go2.robot import Go2RosConfig, Go2RosRobot  # noqa: E402
-from shadowhound.robot.input_limits import MAX_BEAMS, size_words  # noqa: E402
+from shadowhound.robot.input_limits import MAX_BEAMS, MAX_BOXES, MAX_BYTES, size_words  # noqa: E402
 from tests.ros.rosclient import RosClient, wait_until  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore:module 'sre_:DeprecationWarning")
@@ -141,18 +142,34 @@ def test_messages_beyond_their_size_are_refused_unread(
     client: RosClient, robot: Go2RosRobot
 ) -> None:
     box_pub = client.publisher(Detection2DArray, f"/{NS}/detected_objects", SENSOR)
-    big = boxes(client, 3000)
-    size = size_words(len(serialize_message(big)))
+    big = boxes(client, 1000)
+    size, limit = size_words(len(serialize_message(big))), size_words(MAX_BYTES["detections"])
     report = reported(robot, lambda: box_pub.publish(big), "refused unread")
     assert (
-        f"/{NS}/detected_objects: a Detection2DArray of {size} refused unread (at most 1.0 MB "
+        f"/{NS}/detected_objects: a Detection2DArray of {size} refused unread (at most {limit} "
         "is taken)"
     ) in report, report
     tf = client.publisher(TFMessage, "/tf", TF_QOS)
-    many = transforms(client, [("base_link", f"link_{i}") for i in range(3000)])
-    size = size_words(len(serialize_message(many)))
+    many = transforms(client, [("base_link", f"link_{i}") for i in range(1000)])
+    size, limit = size_words(len(serialize_message(many))), size_words(MAX_BYTES["tf"])
     report = reported(robot, lambda: tf.publish(many), "a TFMessage of")
-    assert f"/tf: a TFMessage of {size} refused unread (at most 256 KB is taken)" in report
+    assert f"/tf: a TFMessage of {size} refused unread (at most {limit} is taken)" in report
+
+
+def test_of_many_boxes_the_most_confident_are_read(client: RosClient, robot: Go2RosRobot) -> None:
+    """120 boxes: within the size, read; the 100 most confident placed."""
+    info_pub = client.publisher(CameraInfo, f"/{NS}/camera/camera_info", SENSOR)
+    box_pub = client.publisher(Detection2DArray, f"/{NS}/detected_objects", SENSOR)
+
+    def publish() -> None:
+        info = CameraInfo()
+        info.header.stamp, info.width, info.height = stamp(client), 1280, 720
+        info.k = [370.0, 0.0, 640.0, 0.0, 370.0, 360.0, 0.0, 0.0, 1.0]
+        info_pub.publish(info)
+        box_pub.publish(boxes(client, 120))
+
+    words = f"120 detections in one message: read the {MAX_BOXES} most confident"
+    assert f"/{NS}/detected_objects: {words}" in reported(robot, publish, words)
 
 
 def test_a_transform_from_the_future_is_refused(client: RosClient, robot: Go2RosRobot) -> None:

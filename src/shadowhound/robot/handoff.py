@@ -2,16 +2,17 @@
 reads it (pure Python).
 
 An executor thread also serves odometry and the stops: a callback that reads a large message
-(a map, an image, a detector's boxes: rclpy takes some 30 ms to read 100 boxes, 0.2-0.3 s for
-1,000: bench/RESULTS.md) puts every other callback behind it. With `Handoff` the callback
-stores the message (constant time) and the thread reads it. It keeps the newest `depth`
-messages, oldest first: depth 1 for inputs where only the newest counts (a map, an image,
-detections: one that arrives before the previous was read replaces it), more for a stream read
-in order (TF, whose messages carry different frames). However fast messages come, the thread
-reads one at a time, and what it could not keep up with is counted (`replaced`). With `share`
-below 1 it also rests after each message, so reading takes at most that share of its time (of
-a processor, and of the GIL the process's other threads need): a flood of large messages costs
-the process that much, no more.
+(a map, an image, a detector's boxes: rclpy takes 12 ms to read 100 boxes, 0.14 s for 1,000,
+more on a loaded machine: bench/RESULTS.md) puts every callback after it in its queue behind
+it. With `Handoff` the callback stores the message (constant time) and the thread reads it. It
+keeps the newest `depth` messages, oldest first: depth 1 for inputs where only the newest counts
+(a map, an image, detections: one that arrives before the previous was read replaces it), more
+for a stream read in order (TF, whose messages carry different frames). However fast messages
+come, the thread reads one at a time, and what it could not keep up with is counted
+(`replaced`). rclpy holds the interpreter while it reads a message, so the process's other
+threads still wait for each read (its size bounds that: input_limits); with `share` below 1 the
+thread also rests after each message, so reading takes at most that share of its time, and a
+flood costs the process that much, no more.
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ class Handoff(Generic[T]):
         self._lock = threading.Lock()
         self._items: deque[T] = deque(maxlen=depth)
         self._ready = threading.Event()
-        self._closed = False
+        self._closed = threading.Event()
         self.replaced = 0  # items dropped for newer ones before they were taken
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
@@ -53,14 +54,15 @@ class Handoff(Generic[T]):
         return full
 
     def close(self) -> None:
-        self._closed = True
+        """End the thread (a read under way finishes; a rest ends at once)."""
+        self._closed.set()
         self._ready.set()
         self._thread.join(2.0)
 
     def _run(self) -> None:
-        while not self._closed:
+        while not self._closed.is_set():
             self._ready.wait()
-            if self._closed:
+            if self._closed.is_set():
                 return
             with self._lock:
                 if not self._items:
@@ -73,4 +75,4 @@ class Handoff(Generic[T]):
             except Exception:  # a bug in one message's reading must not end the intake
                 log.exception("reading a message on %s failed", self._thread.name)
             if self._rest > 0:
-                time.sleep((time.thread_time() - began) * self._rest)
+                self._closed.wait((time.thread_time() - began) * self._rest)

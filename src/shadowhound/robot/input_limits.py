@@ -1,20 +1,18 @@
 """How much of each ROS input a robot takes, and the record of what it refused or cut (pure
-Python; the subscriptions that apply it are ros_inputs.py).
+Python; the subscriptions that apply it are ros_inputs.py, the stamps' window go2/stamps.py).
 
 A message may carry whatever its type allows: 1,000 boxes, a million scan beams, thousands of
-transforms, a stamp from the future. Read whole on the executor thread that also reads odometry,
-a big one starves the control path (issue 32: 1,000 boxes per Detection2DArray held odometry
-back for 0.5 s, and Nav2's goals were not accepted). So every input has a limit, far above what
-an honest robot sends (a house's map, a lidar's scan, a detector's boxes):
+transforms. Read on the executor thread that also reads odometry, a big one starves the control
+path (issue 32: rclpy took 0.2 s to read each 1,000-box Detection2DArray; odometry stopped for
+0.5 s, and Nav2's goals were not accepted). So every input has a limit, far above what an
+honest robot sends (a house's map, a lidar's scan, a detector's boxes):
 
 - bytes: a message larger than its kind's limit is refused before it is read (`MAX_BYTES`), so
   no sender can make one message cost more than that;
 - items: of a detection message the `MAX_BOXES` most confident are kept; a scan of more than
   `MAX_BEAMS` ranges is refused (world_msgs.scan_from_msg); a map of more than the grid's
-  MAX_CELLS too (world/grid.py).
-
-`InputReport` keeps what was refused or cut, per topic and kind, for the log (each kind when it
-begins, then at most every `quiet` seconds) and the node's diagnostics (`input_problems`).
+  MAX_CELLS too (world/grid.py);
+- time: what is read off the executor is read at most `READ_SHARE` of its thread's time.
 """
 
 from __future__ import annotations
@@ -30,20 +28,26 @@ from ..world.grid import MAX_CELLS
 T = TypeVar("T")
 
 MAX_BOXES = 100  # detections per message kept (the most confident): a COCO model finds <= 100
-# The most of its time the thread reading images or detections spends reading (handoff.py): a
-# flood of them costs the process a quarter of a processor. A detector's few boxes take a
-# millisecond to read, 100 boxes some 30 ms (read at up to 8 Hz then), a 1080p image 10-15 ms
-# (bench/RESULTS.md).
+# The most of its time a thread reading maps, images, detections or TF spends reading
+# (handoff.py): a flood costs the process a quarter of a processor, and odometry's callbacks
+# wait for the interpreter that much less. A detector's few boxes take a millisecond to read,
+# 100 boxes 12 ms (read at up to 20 Hz then), robot_state_publisher's 30 links 1.5 ms, a 1080p
+# image 3 ms, on a quiet machine (bench/RESULTS.md).
 READ_SHARE = 0.25
 MAX_BEAMS = 10_000  # ranges per LaserScan: a lidar's scan is a few thousand at most
 _KB = 1024
 _MB = 1024 * _KB
-# Serialized bytes per message, by kind. A box is about 450 bytes (one hypothesis with its
-# covariance), a transform about 110, a scan beam 8 (range and intensity), a map cell 1.
+# Serialized bytes per message, by kind. A box is about 430 bytes (one hypothesis with its
+# covariance), a transform about 100, a scan beam 8 (range and intensity), a map cell 1. rclpy
+# holds the interpreter while it reads a message, every thread of the process waiting (and a
+# loaded machine may stop the reader meanwhile): 0.12 ms a box, 0.05 ms a transform on a quiet
+# machine, five times that on a loaded one (bench/RESULTS.md). The limits of what it reads item
+# by item keep one read to some 20 ms; arrays (a scan, a map, an image) read at memory speed.
 MAX_BYTES = {
     "small": 64 * _KB,  # odometry, go2_states, battery, camera_info: fixed size but strings
-    "detections": 1 * _MB,  # about 2,000 boxes; the MAX_BOXES most confident are kept
-    "tf": 256 * _KB,  # about 2,000 transforms; robot_state_publisher sends a Go2's 30 in 4 KB
+    "detections": 64 * _KB,  # about 150 boxes, the 100 most confident read; coco_detector's
+    # threshold (0.9) leaves a few, YOLO's (0.25) some dozens
+    "tf": 32 * _KB,  # about 300 transforms; robot_state_publisher sends a Go2's 30 in 3 KB
     "scan": 8 * MAX_BEAMS + 64 * _KB,
     "map": MAX_CELLS + 64 * _KB,  # 250 m x 250 m at 5 cm
     "image": 50 * _MB,  # a 4K rgb8 frame is 25 MB; a JPEG far less

@@ -1,8 +1,10 @@
 """Subscriptions that read no more than they may: each message arrives serialized, and one
 larger than its kind's limit (input_limits.MAX_BYTES) is refused before it is read, so no
 sender can make one message cost the executor more than that. What may take long to read (a
-map, an image, a detector's boxes) is read on a thread of its own (handoff.py), the newest
-first, never on the executor thread that serves odometry and the stops.
+map, an image, a detector's boxes, TF) is read on a thread of its own (handoff.py), never on
+the executor thread that serves odometry and the stops, and that thread spends at most
+READ_SHARE of its time reading: rclpy holds the interpreter while it reads a message, so a
+flood of them, read back to back, would still hold odometry's callbacks back.
 
 Every refusal goes to the node's log (each kind when it begins, then at most every 30 s) and
 to an InputReport the node's diagnostics show (`input_problems`).
@@ -19,7 +21,7 @@ from rclpy.qos import QoSProfile
 from rclpy.serialization import deserialize_message
 
 from .handoff import Handoff
-from .input_limits import MAX_BYTES, InputReport, size_words
+from .input_limits import MAX_BYTES, READ_SHARE, InputReport, size_words
 
 
 class RosInputs:
@@ -40,11 +42,10 @@ class RosInputs:
         *,
         thread: str = "",
         depth: int = 1,
-        share: float = 1.0,
     ) -> None:
         """`on_msg(msg)` for each message on `topic` of at most MAX_BYTES[kind] bytes; with
         `thread`, called on that thread for the newest `depth` messages in order (depth 1: the
-        newest only), reading at most `share` of its time, else on the executor."""
+        newest only), reading at most READ_SHARE of its time, else on the executor."""
         limit = MAX_BYTES[kind]
         name = self.node.resolve_topic_name(topic)
         what = msg_type.__name__
@@ -57,7 +58,7 @@ class RosInputs:
                 return
             on_msg(msg)
 
-        handoff = Handoff(read, thread, depth, share) if thread else None
+        handoff = Handoff(read, thread, depth, READ_SHARE) if thread else None
         if handoff is not None:
             self._handoffs.append(handoff)
 

@@ -51,7 +51,6 @@ from ..result import MissionResult
 from ..robot.base import RobotError
 from ..robot.estop_listener import EstopListener
 from ..robot.factory import make_robot
-from ..robot.input_limits import READ_SHARE
 from ..robot.ros_inputs import RosInputs
 from ..robot_config import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC
 from ..worker import MissionJob, MissionWorker
@@ -187,7 +186,6 @@ class MissionNode(Node):
                 _CAMERA,
                 "image",
                 thread="shadowhound-camera",
-                share=READ_SHARE,
             )
         except Exception as exc:  # rclpy raises several types for bad names
             raise ParameterError(f"cannot create the node's topics: {exc}") from exc

@@ -10,10 +10,10 @@ project's controller, so the step ends where the plan said, within the outcome t
 
 Nav2 drives at its own controller's speeds, which the governor cannot cap: the walk measures
 the robot's speed over each second and cancels the goal when it exceeds
-`safety.max_linear_speed` by more than SPEED_SLACK. The speed is the robot's own (the state's
-body velocity, from odometry in its own frame), not how fast its map pose moves: SLAM's map ->
-odom corrections move the map pose without the robot moving (a flapping one looked like 0.78 m/s
-while the robot walked at 0.40: issue 32).
+`safety.max_linear_speed` by more than SPEED_SLACK. The speed is how far the robot's odometer
+counted (`distance_travelled`: odometry's consistent steps, in its own frame), not how far its
+map pose moved: SLAM's map -> odom corrections move the map pose without the robot moving (a
+flapping one looked like 0.78 m/s while the robot walked at 0.40: issue 32).
 """
 
 from __future__ import annotations
@@ -79,10 +79,10 @@ def navigate(
     sent = ctx.robot.now()
     first: float | None = None
     recoveries = 0
-    speeds: deque[tuple[float, float]] = deque()
+    odometer: deque[tuple[float, float]] = deque()
     try:
         while True:
-            _check_speed(ctx, navigator.name, speeds)
+            _check_speed(ctx, navigator.name, odometer)
             report = handle.report()
             fb = report.feedback
             if fb is not None:
@@ -119,20 +119,18 @@ def navigate(
     return ctx.robot.get_state().distance_travelled - before
 
 
-def _check_speed(ctx: SkillContext, name: str, speeds: deque[tuple[float, float]]) -> None:
-    """Raise SkillError when the robot moved faster than the safety limit over the last
-    SPEED_WINDOW seconds: its own speed at each tick, averaged over the time between ticks."""
+def _check_speed(ctx: SkillContext, name: str, odometer: deque[tuple[float, float]]) -> None:
+    """Raise SkillError when the robot's odometer counted more than the safety limit allows
+    over the last SPEED_WINDOW seconds."""
     st = ctx.robot.get_state()
     now = ctx.robot.now()
-    speeds.append((now, math.hypot(st.vx, st.vy)))
-    while len(speeds) > 2 and now - speeds[1][0] >= SPEED_WINDOW:
-        speeds.popleft()
-    t0 = speeds[0][0]
+    odometer.append((now, st.distance_travelled))
+    while len(odometer) > 2 and now - odometer[1][0] >= SPEED_WINDOW:
+        odometer.popleft()
+    t0, d0 = odometer[0]
     if now - t0 < SPEED_WINDOW:
         return
-    ticks = list(speeds)
-    walked = sum(v * (t - before) for (before, _), (t, v) in zip(ticks, ticks[1:], strict=False))
-    speed = walked / (now - t0)
+    speed = (st.distance_travelled - d0) / (now - t0)
     limit = ctx.config.safety.max_linear_speed
     if speed > limit * SPEED_SLACK:
         raise SkillError(

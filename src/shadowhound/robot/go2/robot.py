@@ -32,7 +32,11 @@ Written against how the driver really behaves (docs/go2.md):
   sightings, the map and Nav2 goals are in it (odometry carried over with the latest map ->
   odom); a correction larger than a leg may absorb (a jump) counts in `RobotState.relocalized`,
   and the running leg stops (a walk plans again). Without it the world is odometry's frame, and
-  a map in another frame is used as if the two coincided, with a warning.
+  a map in another frame is used as if the two coincided, with a warning. A transform stamped
+  beyond the window of this computer's clock (go2/stamps.py) is refused and reported.
+- inputs: every subscription reads within its kind's size (ros_inputs.py, input_limits.py);
+  maps, images, boxes, detections and TF are read on threads of their own, not on the executor
+  thread that reads odometry; what was refused or cut is `input_problems` (the diagnostics').
 - scan: sensor_msgs/LaserScan on `scan`, taken at the pose odometry gave when it arrived.
 - navigation: Nav2's NavigateToPose on `navigate_to_pose` (`navigator()`, go2_nav2.py);
   `stop` and `emergency_stop` cancel its goals.
@@ -50,7 +54,8 @@ ros_base.py's RosRobot, as the Go2 EDU's is.
 
 Long because: it is the one Robot implementation over go2_ros2_sdk, whose protocol methods and
 ROS callbacks share one node, one executor thread and one lock; what needs no ROS already
-lives apart (go2_api: the sport API table, go2_motion: odometry tracking, go2_posture).
+lives apart (go2_api: the sport API table, go2_motion: odometry tracking, go2_posture, the
+detections' and the inputs' rules).
 """
 
 from __future__ import annotations
@@ -81,7 +86,6 @@ from ...world.image_sighting import Bearing, SightingRules
 from ...world.objects import KnownObject
 from ..base import RobotError
 from ..estop_listener import EstopListener
-from ..input_limits import READ_SHARE
 from ..ros_base import DRIVEN_SETTLE, KEEPALIVE_PERIOD, RELIABLE, RosRobot
 from ..ros_inputs import RosInputs
 from ..tf_tree import BASE, ODOM, MapCorrection, TfTree, Transform2D
@@ -214,7 +218,6 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                 _SENSOR,
                 "image",
                 thread="go2-camera",
-                share=READ_SHARE,
             )
         if c.detections_topic:
             try:
@@ -231,7 +234,6 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                 RELIABLE,
                 "detections",
                 thread="go2-detections",
-                share=READ_SHARE,
             )
         if c.coco_detections_topic:
             try:
@@ -249,7 +251,6 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                 _SENSOR_DEPTH,
                 "detections",
                 thread="go2-boxes",
-                share=READ_SHARE,
             )
             sub(CameraInfo, c.camera_info_topic, self._on_camera_info, _SENSOR, "small")
         if c.map_topic:  # reading and inflating a large map takes seconds
@@ -302,7 +303,7 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         """go2_states shows the robot standing in a mode in which it obeys Moves (settled)."""
         return self._postures.balanced()
 
-    # -- callbacks (executor thread; short) ----------------------------------------------
+    # -- callbacks (the executor thread, short; or a reading thread: ros_inputs) ----------
 
     def _on_odom(self, msg: Odometry) -> None:
         p, q = msg.pose.pose.position, msg.pose.pose.orientation
