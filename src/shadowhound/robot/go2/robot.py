@@ -201,8 +201,8 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         self._speech_pub = (
             n.create_publisher(String, c.speech_topic, RELIABLE) if c.speech_topic else None
         )
-        # Every input within its size (input_limits); maps, images and boxes read off the
-        # executor thread, which odometry and the stops need (ros_inputs).
+        # Every input within its size (input_limits); maps, images, detections and TF read
+        # off the executor thread, which odometry and the stops need (ros_inputs).
         self._inputs = inputs = RosInputs(n)
         sub = inputs.subscribe
         sub(Odometry, c.odom_topic, self._on_odom, RELIABLE, "small")
@@ -263,7 +263,7 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                     "reading SLAM's map frame from /tf needs the tf2_msgs package: run "
                     f"scripts/build_ros.sh, or set map_frame to '' to read no TF ({exc})"
                 ) from exc
-            # In order, off the executor: reading robot_state_publisher's 30 links takes ms.
+            # In order, off the executor: robot_state_publisher's 30 links take ms to read.
             sub(TFMessage, "/tf", self._on_tf, _TF, "tf", thread="go2-tf", depth=_TF.depth)
             sub(
                 TFMessage,
