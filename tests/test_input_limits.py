@@ -34,11 +34,11 @@ def intake_at_rest(until: float) -> BoxIntake:
     the scan of the couch 3 m ahead."""
     intake = BoxIntake(CameraMount(0.3, 0.0, 0.0))
     intake.on_camera_info([370.0, 0.0, 640.0, 0.0, 370.0, 360.0, 0.0, 0.0, 1.0])
-    t = 0.0
+    t = max(0.0, until - 5.0)
     while t <= until:
-        intake.on_pose(t, Pose2D())
+        assert intake.on_pose(t, Pose2D(), until) is None
         t += 0.5
-    intake.on_scan(until, cast_scan(World(objects=(COUCH,)), Pose2D()))
+    assert intake.on_scan(until, cast_scan(World(objects=(COUCH,)), Pose2D()), until) is None
     return intake
 
 
@@ -122,12 +122,13 @@ def turning(t: float) -> Pose2D:
 
 @settings(max_examples=80, deadline=None)
 @given(st.lists(st.tuples(st.floats(0.05, 1.0), st.booleans(), HONEST, FORGED), max_size=12))
-def test_forged_box_stamps_change_nothing_the_honest_boxes_give(
+def test_forged_stamps_change_nothing_the_honest_boxes_give(
     images: list[tuple[float, bool, float, float]],
 ) -> None:
     """A robot turns; odometry comes late, so boxes wait for the pose of their time. Whatever
-    forged images come between them, the honest ones give what they alone would (a box from
-    the future used to wait forever, and made every honest box after it too old to wait)."""
+    forged images, poses and scans come between them, the honest boxes give what they alone
+    would (a box from the future used to wait forever, and made every honest box after it too
+    old to wait; a pose from the future answered for every time before it)."""
     everything, honest = intake_at_rest(0.0), intake_at_rest(0.0)
     scan = cast_scan(World(objects=(COUCH,)), Pose2D())
     arrival, odometry = 100.0, 100.0 - LAG
@@ -136,8 +137,11 @@ def test_forged_box_stamps_change_nothing_the_honest_boxes_give(
         while odometry < arrival - LAG:  # odometry and scans of the turning robot
             odometry += 0.05
             for intake in (everything, honest):
-                intake.on_pose(odometry, turning(odometry))
-                intake.on_scan(odometry, scan)
+                assert intake.on_pose(odometry, turning(odometry), arrival) is None
+                assert intake.on_scan(odometry, scan, arrival) is None
+        if not is_honest:  # a forged pose and scan too, from the same clock
+            assert everything.on_pose(arrival + forged, Pose2D(5.0, 5.0, 1.0), arrival)
+            assert everything.on_scan(arrival + forged, scan, arrival)
         msg = _box_msg(arrival + (late if is_honest else forged), couch_box())
         got = everything.read(msg, arrival)
         if is_honest:

@@ -212,9 +212,9 @@ def test_boxes_become_sightings_with_the_pose_and_scan_at_the_images_stamp() -> 
     assert intake.on_camera_info([]) is not None  # kept the good one
     # The robot turned from facing +y to facing +x over one second; the image is at its end.
     for k in range(11):
-        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, math.pi / 2 * (1 - k / 10)))
+        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, math.pi / 2 * (1 - k / 10)), 10.0)
     # Cast where the robot was at 10 s, arriving with a wrong pose: placed by its stamp.
-    intake.on_scan(10.0, replace(cast_scan(world, Pose2D()), pose=Pose2D(99.0, 99.0, 0.0)))
+    intake.on_scan(10.0, replace(cast_scan(world, Pose2D()), pose=Pose2D(99.0, 99.0, 0.0)), 10.0)
     camera = CameraModel(370.0, 640.0, 0.3)
     half = math.asin(couch.radius / (couch.x - 0.3))
     left, right = camera.column_of(half), camera.column_of(-half)
@@ -249,7 +249,7 @@ def _couch_in_view() -> tuple[BoxIntake, NS, object]:
     intake = BoxIntake(CameraMount(0.3, 0.0, 0.0))
     intake.on_camera_info([370.0, 0.0, 640.0, 0.0, 370.0, 360.0, 0.0, 0.0, 1.0])
     couch = WorldObject("couch", 3.0, 0.0, 0.4)
-    intake.on_scan(10.0, cast_scan(World(objects=(couch,)), Pose2D()))
+    intake.on_scan(10.0, cast_scan(World(objects=(couch,)), Pose2D()), 10.0)
     half = math.asin(couch.radius / (couch.x - 0.3))
     camera = CameraModel(370.0, 640.0, 0.3)
     left, right = camera.column_of(half), camera.column_of(-half)
@@ -262,10 +262,10 @@ def test_a_box_seen_while_turning_waits_for_the_odometry_of_its_time() -> None:
     there the couch would land 0.8 m off): it waits for the pose of its time."""
     intake, box, couch = _couch_in_view()
     for k in range(9):  # turning right at 1.5 rad/s, odometry so far up to 9.8 s
-        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.15 * (10 - k - 1) + 0.15))
+        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.15 * (10 - k - 1) + 0.15), 10.0)
     assert intake.read(box, 10.1) == Reading()  # held
-    intake.on_pose(9.9, Pose2D(0.0, 0.0, 0.15))
-    intake.on_pose(10.0, Pose2D())
+    intake.on_pose(9.9, Pose2D(0.0, 0.0, 0.15), 10.0)
+    intake.on_pose(10.0, Pose2D(), 10.0)
     reading = intake.read(_box_msg(10.5), 10.6)  # the next array: nothing in view
     assert reading.problems == [] and reading.bearings == []
     seen = reading.seen
@@ -277,14 +277,14 @@ def test_a_box_seen_while_turning_waits_for_the_odometry_of_its_time() -> None:
 def test_a_box_seen_at_rest_is_placed_at_once_and_one_whose_odometry_never_comes_is_refused():
     intake, box, couch = _couch_in_view()
     for k in range(9):  # standing still: odometry up to 9.8 s, late, but the robot is there
-        intake.on_pose(9.0 + k / 10, Pose2D())
+        intake.on_pose(9.0 + k / 10, Pose2D(), 10.0)
     reading = intake.read(box, 10.1)
     seen, problems = reading.seen, reading.problems
     assert problems == [] and [o.name for o in seen] == ["sofa"]
     assert math.hypot(seen[0].x - couch.x, seen[0].y - couch.y) < 0.05
     turning, box, _couch = _couch_in_view()
     for k in range(9):
-        turning.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.1 * k))
+        turning.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.1 * k), 10.0)
     assert turning.read(box, 10.1) == Reading()  # held...
     assert turning.read(_box_msg(11.9), 12.0) == Reading()  # ... up to 2 s
     assert turning.read(_box_msg(12.1), 12.2).problems == [

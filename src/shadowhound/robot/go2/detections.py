@@ -280,16 +280,25 @@ class BoxIntake:
             self._camera = camera
         return None
 
-    def on_pose(self, stamp: float, pose: Pose2D) -> None:
-        """The robot's pose at `stamp` (when it was there: odometry's stamp less its lag)."""
-        with self._lock:
-            self._poses.add(stamp, pose)
+    def on_pose(self, stamp: float, pose: Pose2D, now: float) -> str | None:
+        """The robot's pose at `stamp` (when it was there: odometry's stamp less its lag),
+        received at `now` (the node's ROS clock). Returns why it was refused (a stamp outside
+        the window: kept, the latest by stamp would hold off every honest pose), or None."""
+        problem = self._window.problem(stamp, now)
+        if problem is None:
+            with self._lock:
+                self._poses.add(stamp, pose)
+        return problem
 
-    def on_scan(self, stamp: float, scan: Scan) -> None:
-        """A scan taken at `stamp`; placed at the robot's pose then when a box needs it (its
-        own pose only when the history has none for it)."""
-        with self._lock:
-            self._scans.append(replace(scan, stamp=stamp))
+    def on_scan(self, stamp: float, scan: Scan, now: float) -> str | None:
+        """A scan taken at `stamp`, received at `now`; placed at the robot's pose then when a
+        box needs it (its own pose only when the history has none for it). Returns why it was
+        refused (a stamp outside the window), or None."""
+        problem = self._window.problem(stamp, now)
+        if problem is None:
+            with self._lock:
+                self._scans.append(replace(scan, stamp=stamp))
+        return problem
 
     @property
     def has_camera(self) -> bool:

@@ -103,7 +103,6 @@ from .motion import MAX_LATENCY
 from .nav2 import Nav2Navigator
 from .odometry import OdometryFault
 from .posture import STAND_UP_BOUND, capped, finite_velocity, trick_info
-from .stamps import STAMPS
 from .topics import VELOCITY_TOPICS, VelocityRoute, choose_velocity_topic, node_name
 from .world_msgs import MAP_QOS, grid_from_msg, scan_from_msg
 
@@ -326,7 +325,10 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         if fault is not None:
             self._odometry_fault(fault)
         elif self._boxes is not None:  # the pose was the robot's `after` seconds before its stamp
-            self._boxes.on_pose(stamp - after, Pose2D(p.x, p.y, yaw))
+            problem = self._boxes.on_pose(stamp - after, Pose2D(p.x, p.y, yaw), self._ros_now())
+            if problem is not None:
+                topic = self.topic(self.config.odom_topic)
+                self._inputs.refuse(topic, "stamp", f"a pose {problem}: not used to place boxes")
         if abs(after - before) >= 0.01:
             self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
@@ -498,12 +500,10 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         if self._boxes is None:
             return
         # Boxes are ranged by the scan of their image's stamp (then placed in odometry's frame
-        # and carried over): a scan stamped outside the window would stand in for none.
+        # and carried over); one stamped outside the window is still the robot's scan.
         stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-        problem = STAMPS.problem(stamp, self._ros_now())
-        if problem is None:
-            self._boxes.on_scan(stamp, scan)
-        else:
+        problem = self._boxes.on_scan(stamp, scan, self._ros_now())
+        if problem is not None:
             self._inputs.refuse(topic, "stamp", f"a scan {problem}: not used to range boxes")
 
     def _on_battery(self, msg: BatteryState) -> None:
