@@ -18,6 +18,7 @@ from shadowhound.robot.go2.detections import (
     CameraMount,
     DetectionError,
     Frames,
+    Reading,
     SightingBoard,
     sightings_from_msg,
     to_sighting,
@@ -85,12 +86,13 @@ def test_an_array_uses_its_header_for_detections_that_leave_theirs_empty() -> No
             detection("cup", 1.0, "camera"),
         ],
     )
-    ages = {100: 0.5, 98: 2.5}
-    seen, problems = sightings_from_msg(
-        msg, Pose2D(5.0, 0.0, 0.0), FRAMES, 50.0, lambda stamp: ages[stamp.sec]
-    )
-    assert [(o.name, o.x, o.stamp) for o in seen] == [("box", 1.0, 49.5), ("dock", 6.0, 47.5)]
-    assert len(problems) == 1 and "'camera' is not supported" in problems[0]
+    reading = sightings_from_msg(msg, Pose2D(5.0, 0.0, 0.0), FRAMES, 50.0, 100.5)
+    assert [(o.name, o.x, o.stamp) for o in reading.seen] == [
+        ("box", 1.0, 49.5),
+        ("dock", 6.0, 47.5),
+    ]
+    assert len(reading.problems) == 1 and "'camera' is not supported" in reading.problems[0]
+    assert reading.notes == []
 
 
 names = st.sampled_from(["red ball", "The red ball", "RED  ball", "box", "dock"])
@@ -203,34 +205,36 @@ def test_boxes_become_sightings_with_the_pose_and_scan_at_the_images_stamp() -> 
     intake = BoxIntake(CameraMount(0.3, 0.0, 0.0))
     couch = WorldObject("couch", 3.0, 0.0, 0.4)
     world = World(objects=(couch,), bounds=(-10.0, 10.0, -10.0, 10.0))
-    assert intake.read(_box_msg(10.0, ("couch", 640.0, 100.0, 0.9)))[2] == [
+    assert intake.read(_box_msg(10.0, ("couch", 640.0, 100.0, 0.9)), 10.0).problems == [
         "no camera_info yet: the boxes cannot be turned into bearings"
     ]
     assert intake.on_camera_info([370.0, 0.0, 640.0, 0.0, 370.0, 360.0, 0.0, 0.0, 1.0]) is None
     assert intake.on_camera_info([]) is not None  # kept the good one
     # The robot turned from facing +y to facing +x over one second; the image is at its end.
     for k in range(11):
-        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, math.pi / 2 * (1 - k / 10)))
+        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, math.pi / 2 * (1 - k / 10)), 10.0)
     # Cast where the robot was at 10 s, arriving with a wrong pose: placed by its stamp.
-    intake.on_scan(10.0, replace(cast_scan(world, Pose2D()), pose=Pose2D(99.0, 99.0, 0.0)))
+    intake.on_scan(10.0, replace(cast_scan(world, Pose2D()), pose=Pose2D(99.0, 99.0, 0.0)), 10.0)
     camera = CameraModel(370.0, 640.0, 0.3)
     half = math.asin(couch.radius / (couch.x - 0.3))
     left, right = camera.column_of(half), camera.column_of(-half)
-    seen, bearings, problems = intake.read(
+    reading = intake.read(
         _box_msg(
             10.0,
             ("couch", (left + right) / 2, right - left, 0.8),
             ("tv", 100.0, 30.0, 0.7),  # to the left: only the wall 10 m off, beyond 6 m
             ("", 600.0, 10.0, 0.5),
-        )
+        ),
+        10.1,
     )
+    seen, bearings, problems = reading.seen, reading.bearings, reading.problems
     assert problems == ["a detection without a class (results is empty)"]
     assert [(o.name, o.stamp) for o in seen] == [("sofa", 10.0)]
     assert math.hypot(seen[0].x - couch.x, seen[0].y - couch.y) < 0.1
     assert [b.name for b in bearings] == ["television"] and isinstance(bearings[0], Bearing)
     assert intake.bearings() == tuple(bearings)
     # An image from before the odometry history has no pose: refused, never guessed.
-    assert intake.read(_box_msg(5.0, ("chair", 640.0, 50.0, 0.9)))[2] == [
+    assert intake.read(_box_msg(5.0, ("chair", 640.0, 50.0, 0.9)), 10.2).problems == [
         "'chair': no odometry pose at the image's time 5.00"
     ]
 
@@ -245,7 +249,7 @@ def _couch_in_view() -> tuple[BoxIntake, NS, object]:
     intake = BoxIntake(CameraMount(0.3, 0.0, 0.0))
     intake.on_camera_info([370.0, 0.0, 640.0, 0.0, 370.0, 360.0, 0.0, 0.0, 1.0])
     couch = WorldObject("couch", 3.0, 0.0, 0.4)
-    intake.on_scan(10.0, cast_scan(World(objects=(couch,)), Pose2D()))
+    intake.on_scan(10.0, cast_scan(World(objects=(couch,)), Pose2D()), 10.0)
     half = math.asin(couch.radius / (couch.x - 0.3))
     camera = CameraModel(370.0, 640.0, 0.3)
     left, right = camera.column_of(half), camera.column_of(-half)
@@ -258,29 +262,31 @@ def test_a_box_seen_while_turning_waits_for_the_odometry_of_its_time() -> None:
     there the couch would land 0.8 m off): it waits for the pose of its time."""
     intake, box, couch = _couch_in_view()
     for k in range(9):  # turning right at 1.5 rad/s, odometry so far up to 9.8 s
-        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.15 * (10 - k - 1) + 0.15))
-    assert intake.read(box) == ([], [], [])  # held
-    intake.on_pose(9.9, Pose2D(0.0, 0.0, 0.15))
-    intake.on_pose(10.0, Pose2D())
-    seen, bearings, problems = intake.read(_box_msg(10.5))  # the next array: nothing in view
-    assert problems == [] and bearings == []
+        intake.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.15 * (10 - k - 1) + 0.15), 10.0)
+    assert intake.read(box, 10.1) == Reading()  # held
+    intake.on_pose(9.9, Pose2D(0.0, 0.0, 0.15), 10.0)
+    intake.on_pose(10.0, Pose2D(), 10.0)
+    reading = intake.read(_box_msg(10.5), 10.6)  # the next array: nothing in view
+    assert reading.problems == [] and reading.bearings == []
+    seen = reading.seen
     assert [o.name for o in seen] == ["sofa"] and seen[0].stamp == 10.0
     assert math.hypot(seen[0].x - couch.x, seen[0].y - couch.y) < 0.05
-    assert intake.read(_box_msg(11.0)) == ([], [], [])  # placed once
+    assert intake.read(_box_msg(11.0), 11.1) == Reading()  # placed once
 
 
 def test_a_box_seen_at_rest_is_placed_at_once_and_one_whose_odometry_never_comes_is_refused():
     intake, box, couch = _couch_in_view()
     for k in range(9):  # standing still: odometry up to 9.8 s, late, but the robot is there
-        intake.on_pose(9.0 + k / 10, Pose2D())
-    seen, _bearings, problems = intake.read(box)
+        intake.on_pose(9.0 + k / 10, Pose2D(), 10.0)
+    reading = intake.read(box, 10.1)
+    seen, problems = reading.seen, reading.problems
     assert problems == [] and [o.name for o in seen] == ["sofa"]
     assert math.hypot(seen[0].x - couch.x, seen[0].y - couch.y) < 0.05
     turning, box, _couch = _couch_in_view()
     for k in range(9):
-        turning.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.1 * k))
-    assert turning.read(box) == ([], [], [])  # held...
-    assert turning.read(_box_msg(11.9)) == ([], [], [])  # ... up to 2 s
-    assert turning.read(_box_msg(12.1))[2] == [
+        turning.on_pose(9.0 + k / 10, Pose2D(0.0, 0.0, 0.1 * k), 10.0)
+    assert turning.read(box, 10.1) == Reading()  # held...
+    assert turning.read(_box_msg(11.9), 12.0) == Reading()  # ... up to 2 s
+    assert turning.read(_box_msg(12.1), 12.2).problems == [
         "'couch': no odometry pose at the image's time 10.00"
     ]

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 
 import pytest
@@ -311,6 +312,7 @@ def test_every_stop_is_a_stop_move_and_no_zero_twist_is_ever_sent(
 
 
 def _tf_message(edges: list[tuple[str, str]], sec: int) -> object:
+    """Transforms stamped `sec` seconds after the client's clock now (ROS time)."""
     from geometry_msgs.msg import TransformStamped
     from tf2_msgs.msg import TFMessage
 
@@ -318,7 +320,7 @@ def _tf_message(edges: list[tuple[str, str]], sec: int) -> object:
     for parent, child in edges:
         t = TransformStamped()
         t.header.frame_id, t.child_frame_id = parent, child
-        t.header.stamp.sec = sec
+        t.header.stamp.sec = sec + int(time.time())
         t.transform.translation.x = 0.1
         t.transform.rotation.w = 1.0
         msg.transforms.append(t)
@@ -359,8 +361,8 @@ def test_tf_feeds_the_frames_tree_only_with_the_edges_it_is_asked_about(
     )
     try:
         lonely._on_tf_static(_tf_message(_LINKS, 0))
-        lonely._on_tf(_tf_message([*_LINKS, ("map", "odom"), ("odom", "base_link")], 100))
-        lonely._on_tf(_tf_message(_LINKS, 101))
+        lonely._on_tf(_tf_message([*_LINKS, ("map", "odom"), ("odom", "base_link")], 0))
+        lonely._on_tf(_tf_message(_LINKS, 1))
         assert lonely.world_frame == "map"
         assert lonely._tf.frames() == {"map", "odom", "base_link"}
     finally:

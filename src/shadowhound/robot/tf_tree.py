@@ -12,6 +12,11 @@ short time-stamped history and each static edge once, and answers:
   since `since`, when that is more than the thresholds, so a running step can stop or re-plan;
 - `to_odom` / `to_map`: a `Pose2D` carried between map and odom.
 
+Each edge's latest sample is the one with the newest stamp, so a stamp from the future would win
+over every honest sample after it (SLAM's corrections ignored from then on): a sample comes with
+the time it arrived (`now`, this computer's ROS clock) and one stamped beyond the `StampWindow`
+(more than 2 s ahead of it, or older than the history kept) is refused with the reason.
+
 Poses and transforms are 2-D (x, y, yaw): the Go2 walks on a floor, and that is all the agent's
 belief uses. No clock of its own: every sample and question carries its stamp (seconds).
 """
@@ -24,6 +29,7 @@ from dataclasses import dataclass
 
 from ..errors import TransformUnavailable
 from ..state import Pose2D, compose, normalize_angle, not_finite
+from .go2.stamps import STAMP_AHEAD, StampWindow
 
 MAP, ODOM, BASE = "map", "odom", "base_link"
 
@@ -128,10 +134,13 @@ class TfTree:
         keep: float = 10.0,
         jump_distance: float = 0.2,
         jump_yaw: float = math.radians(10.0),
+        ahead: float = STAMP_AHEAD,
     ) -> None:
-        """`keep`: seconds of history per dynamic edge; `jump_distance` (metres) and `jump_yaw`
-        (radians): the smallest map -> odom correction `map_to_odom_jump` reports."""
+        """`keep`: seconds of history per dynamic edge (and the oldest stamp taken, behind the
+        clock); `ahead`: seconds a stamp may be ahead of the clock; `jump_distance` (metres) and
+        `jump_yaw` (radians): the smallest map -> odom correction `map_to_odom_jump` reports."""
         self.keep = keep
+        self.stamps = StampWindow(ahead=ahead, behind=keep)
         self.jump_distance = jump_distance
         self.jump_yaw = jump_yaw
         self._parent: dict[str, str] = {}
@@ -146,19 +155,24 @@ class TfTree:
         self._dynamic.pop(child, None)
         self._static[child] = transform
 
-    def set_transform(self, parent: str, child: str, stamp: float, transform: Transform2D) -> None:
-        """`child` sits at `transform` in `parent` at `stamp` (/tf)."""
-        if not math.isfinite(stamp):
-            raise TransformUnavailable(f"{parent} -> {child}: the stamp {stamp!r} is not finite")
+    def set_transform(
+        self, parent: str, child: str, stamp: float, transform: Transform2D, *, now: float
+    ) -> None:
+        """`child` sits at `transform` in `parent` at `stamp` (/tf), received at `now` (the
+        same clock). Raises TransformUnavailable, keeping nothing of it, for a stamp outside
+        the window around `now`, a transform that is not finite, or a frame with two parents."""
+        problem = self.stamps.problem(stamp, now)
+        if problem is not None:
+            raise TransformUnavailable(f"{parent} -> {child} {problem}; not kept")
         self._link(parent, child, transform)
         self._static.pop(child, None)
         self._dynamic.setdefault(child, _History(self.keep)).add(stamp, transform)
 
-    def set_map_to_odom(self, stamp: float, transform: Transform2D) -> None:
-        self.set_transform(MAP, ODOM, stamp, transform)
+    def set_map_to_odom(self, stamp: float, transform: Transform2D, *, now: float) -> None:
+        self.set_transform(MAP, ODOM, stamp, transform, now=now)
 
-    def set_odom_to_base(self, stamp: float, transform: Transform2D) -> None:
-        self.set_transform(ODOM, BASE, stamp, transform)
+    def set_odom_to_base(self, stamp: float, transform: Transform2D, *, now: float) -> None:
+        self.set_transform(ODOM, BASE, stamp, transform, now=now)
 
     def _link(self, parent: str, child: str, transform: Transform2D) -> None:
         bad = not_finite(x=transform.x, y=transform.y, yaw=transform.yaw)

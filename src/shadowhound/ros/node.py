@@ -13,15 +13,15 @@ Interfaces (names relative to the node's namespace unless absolute):
   service (shadowhound_interfaces/Chat) when the interface package is installed.
 
 Missions run on one worker thread (see worker.py), chat answers on another, camera frames are
-converted on a third (camera_intake.py); every ROS callback is short, so one
-SingleThreadedExecutor serves them all (the action's execute
+read and converted on a third (robot/ros_inputs.py, which also caps a frame's size); every ROS
+callback is short, so one SingleThreadedExecutor serves them all (the action's execute
 callback and the chat service are coroutines that await the other threads). Topic missions
 queue, action goals are rejected while a mission runs or waits.
 
 Long because: one node's whole ROS surface (topics, action, service, parameters, status and
 diagnostics publishing) reads as one plain node class, as nav2_simple_commander's does; the
-pure helpers live in their own modules (params, convert, rviz, camera_intake; the e-stop
-listener is robot/estop_listener.py).
+pure helpers live in their own modules (params, convert, rviz; the e-stop listener is
+robot/estop_listener.py, the capped camera subscription robot/ros_inputs.py).
 """
 
 from __future__ import annotations
@@ -51,9 +51,9 @@ from ..result import MissionResult
 from ..robot.base import RobotError
 from ..robot.estop_listener import EstopListener
 from ..robot.factory import make_robot
+from ..robot.ros_inputs import RosInputs
 from ..robot_config import ESTOP_RELEASE_TOPIC, ESTOP_TOPIC
 from ..worker import MissionJob, MissionWorker
-from .camera_intake import CameraIntake
 from .convert import (
     diagnostic_level,
     diagnostic_message,
@@ -122,6 +122,7 @@ class MissionNode(Node):
         self._worker.on("finished", self._on_mission_finish)
         self._chat_thread = ThreadPoolExecutor(1, thread_name_prefix="shadowhound-chat")
         self._web: Any = None
+        self._inputs = RosInputs(self)  # the node's own capped subscriptions (the camera)
         self._build_interfaces()
         if self.settings.enable_web_ui:
             self._start_web()
@@ -176,15 +177,16 @@ class MissionNode(Node):
                 on_estop=self._on_estop,
                 on_release=self._on_estop_release,
             )
-            # The callback only keeps the newest frame; converting it happens off the executor.
-            if s.camera_compressed:
-                self._camera = CameraIntake(self._on_compressed)
-                self.create_subscription(
-                    CompressedImage, s.camera_topic, self._camera.offer, _CAMERA
-                )
-            else:
-                self._camera = CameraIntake(self._on_image)
-                self.create_subscription(Image, s.camera_topic, self._camera.offer, _CAMERA)
+            # Within the image's size limit; the callback only keeps the newest frame, which
+            # is read and converted off the executor (robot/ros_inputs.py).
+            self._inputs.subscribe(
+                CompressedImage if s.camera_compressed else Image,
+                s.camera_topic,
+                self._on_compressed if s.camera_compressed else self._on_image,
+                _CAMERA,
+                "image",
+                thread="shadowhound-camera",
+            )
         except Exception as exc:  # rclpy raises several types for bad names
             raise ParameterError(f"cannot create the node's topics: {exc}") from exc
         self.create_timer(1.0, self._publish_diagnostics)
@@ -274,7 +276,7 @@ class MissionNode(Node):
         self._status_pub.wait_for_all_acked(Duration(seconds=2.0))
         self._chat_thread.shutdown(wait=False, cancel_futures=True)
         self.agent.cleanup()
-        self._camera.close()
+        self._inputs.close()
         self._estop.close()
         self._rviz.close()
 
@@ -476,6 +478,9 @@ class MissionNode(Node):
             "camera_last_error": self._last_camera_error,
             "busy": self._worker.busy,
         }
+        # What the node and its Go2 refused or cut of their inputs lately (input_limits).
+        refused = [self._inputs.summary(), self._go2.input_problems if self._go2 else ""]
+        extra["input_problems"] = "; ".join(r for r in refused if r)
         if self._go2 is not None:  # which topic reaches the driver, and why (go2_topics)
             route = self._go2.velocity_route
             extra.update(velocity_topic=route.topic, velocity_route=route.why)

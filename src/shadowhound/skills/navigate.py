@@ -9,8 +9,15 @@ goal tolerance (0.25 m by default); the last centimetres and the heading are clo
 project's controller, so the step ends where the plan said, within the outcome tolerance.
 
 Nav2 drives at its own controller's speeds, which the governor cannot cap: the walk measures
-the robot's speed over each second of odometry and cancels the goal when it exceeds
-`safety.max_linear_speed` by more than SPEED_SLACK.
+the robot's speed over each second and cancels the goal when it exceeds
+`safety.max_linear_speed` by more than SPEED_SLACK. The speed is what the robot's odometer
+counted (`distance_travelled`: odometry's consistent steps, in its own frame), not how far its
+map pose moved, which SLAM's map -> odom corrections move without the robot moving (a flapping
+one looked like 0.78 m/s while the robot walked at 0.40: issue 32). It is the lesser of two
+measures, each of which one honest hitch inflates: the count over the last second (a late
+burst of odometry crowds more than a second's steps into it) and over the time the samples
+themselves say the robot moved (`time_moving`, on their stamps: a shift of the stamps' clock
+offset shortens it). A Nav2 that drives too fast shows in both.
 """
 
 from __future__ import annotations
@@ -76,10 +83,10 @@ def navigate(
     sent = ctx.robot.now()
     first: float | None = None
     recoveries = 0
-    poses: deque[tuple[float, float, float]] = deque()
+    odometer: deque[tuple[float, float, float]] = deque()
     try:
         while True:
-            _check_speed(ctx, navigator.name, poses)
+            _check_speed(ctx, navigator.name, odometer)
             report = handle.report()
             fb = report.feedback
             if fb is not None:
@@ -116,18 +123,19 @@ def navigate(
     return ctx.robot.get_state().distance_travelled - before
 
 
-def _check_speed(ctx: SkillContext, name: str, poses: deque[tuple[float, float, float]]) -> None:
-    """Raise SkillError when the robot moved faster than the safety limit over the last
-    SPEED_WINDOW seconds."""
+def _check_speed(ctx: SkillContext, name: str, odometer: deque[tuple[float, float, float]]) -> None:
+    """Raise SkillError when the robot's odometer counted more than the safety limit allows
+    over the last SPEED_WINDOW seconds, by the clock and by the time it counted moving."""
     st = ctx.robot.get_state()
     now = ctx.robot.now()
-    poses.append((now, st.x, st.y))
-    while len(poses) > 2 and now - poses[1][0] >= SPEED_WINDOW:
-        poses.popleft()
-    t0, x0, y0 = poses[0]
+    odometer.append((now, st.distance_travelled, st.time_moving))
+    while len(odometer) > 2 and now - odometer[1][0] >= SPEED_WINDOW:
+        odometer.popleft()
+    t0, d0, moving0 = odometer[0]
     if now - t0 < SPEED_WINDOW:
         return
-    speed = math.hypot(st.x - x0, st.y - y0) / (now - t0)
+    counted, moving = st.distance_travelled - d0, st.time_moving - moving0
+    speed = min(counted / (now - t0), counted / moving if moving > 0 else math.inf)
     limit = ctx.config.safety.max_linear_speed
     if speed > limit * SPEED_SLACK:
         raise SkillError(

@@ -10,6 +10,11 @@ as they are, positions in the robot's body frame are placed with the robot's pos
 detection arrives. Other frames would need tf, which the project does not use: they are
 refused, with a message naming the frames allowed, and nothing else in the array is lost.
 
+Of one message the MAX_BOXES most confident detections are read (a model may send thousands:
+issue 32), and a detection stamped outside the StampWindow of the node's clock (from the future:
+its sighting would stay "latest" and in view; too old: no pose is kept for it) is refused. What
+a message lost so is its `Reading.notes`, which the robot reports (input_limits.InputReport).
+
 Pure Python (messages are read by attribute), so the rules are tested without ROS.
 """
 
@@ -19,7 +24,7 @@ import math
 import threading
 from collections import deque
 from collections.abc import Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ...errors import DetectionError
@@ -35,10 +40,48 @@ from ...world.image_sighting import (
     planner_name,
 )
 from ...world.objects import KnownObject, merge_sightings
+from ..input_limits import MAX_BOXES, most_confident
+from .stamps import STAMPS, StampWindow
 
 DEFAULT_RADIUS = 0.25  # metres, a detection that gives no footprint
 MAX_LABEL = 100  # characters; a label is a name people say, not a paragraph
 MAX_OBJECTS = 500  # distinct names kept; beyond this the oldest sighting is forgotten
+
+
+@dataclass
+class Reading:
+    """What one detection message gave: sightings, bearings (boxes with no range), what was
+    refused of single detections (`problems`), and what the message lost as a whole (`notes`:
+    (kind, words) of a cap or of stamps out of the window, for the robot's input report)."""
+
+    seen: list[KnownObject] = field(default_factory=list)
+    bearings: list[Bearing] = field(default_factory=list)
+    problems: list[str] = field(default_factory=list)
+    notes: list[tuple[str, str]] = field(default_factory=list)
+
+
+def _capped(detections: Any, score: Any, notes: list[tuple[str, str]]) -> list[Any]:
+    """The MAX_BOXES most confident of a message's detections, noting a cut."""
+    items = list(detections)
+    kept = most_confident(items, score, MAX_BOXES)
+    if len(kept) < len(items):
+        notes.append(
+            (
+                "too many",
+                f"{len(items)} detections in one message: read the {MAX_BOXES} most confident",
+            )
+        )
+    return kept
+
+
+def _refuse_stamp(
+    stamp: float, now: float, what: str, window: StampWindow, notes: list[tuple[str, str]]
+) -> bool:
+    """Whether `stamp` is outside the window at `now`, noting why."""
+    problem = window.problem(stamp, now)
+    if problem is not None:
+        notes.append(("stamp", f"{what} {problem}: refused"))
+    return problem is not None
 
 
 @dataclass(frozen=True)
@@ -104,20 +147,27 @@ def to_sighting(
 
 
 def sightings_from_msg(
-    msg: Any, pose: Pose2D, frames: Frames, now: float, age: Any
-) -> tuple[list[KnownObject], list[str]]:
-    """A DetectionArray as sightings, and what was refused. `age(header_stamp)` is how many
-    seconds ago a stamp was (0 for a zero stamp); `now` is the robot clock."""
-    seen: list[KnownObject] = []
-    problems: list[str] = []
+    msg: Any,
+    pose: Pose2D,
+    frames: Frames,
+    now: float,
+    clock: float,
+    window: StampWindow = STAMPS,
+) -> Reading:
+    """A DetectionArray as sightings, and what was refused. `now` is the robot clock, `clock`
+    the node's ROS clock the stamps are on (a zero stamp counts as `clock`)."""
+    out = Reading()
     default_frame = str(msg.header.frame_id)
-    for d in msg.detections:
+    for d in _capped(msg.detections, lambda d: float(d.confidence), out.notes):
         frame = str(d.header.frame_id) or default_frame
         stamp = (
             d.header.stamp if (d.header.stamp.sec or d.header.stamp.nanosec) else msg.header.stamp
         )
+        at = _seconds(stamp) if (stamp.sec or stamp.nanosec) else clock
+        if _refuse_stamp(at, clock, f"a detection ({str(d.label)[:40]!r})", window, out.notes):
+            continue
         try:
-            seen.append(
+            out.seen.append(
                 to_sighting(
                     str(d.label),
                     float(d.position.x),
@@ -125,14 +175,14 @@ def sightings_from_msg(
                     frame,
                     float(d.confidence),
                     float(d.radius),
-                    now - max(0.0, float(age(stamp))),
+                    now - max(0.0, clock - at),
                     pose,
                     frames,
                 )
             )
         except DetectionError as exc:
-            problems.append(str(exc))
-    return seen, problems
+            out.problems.append(str(exc))
+    return out
 
 
 class SightingBoard:
@@ -191,6 +241,11 @@ def _seconds(stamp: Any) -> float:
     return float(stamp.sec) + float(stamp.nanosec) * 1e-9
 
 
+def _best_score(d: Any) -> float:
+    """A box's confidence: its most likely class's score (0 without one)."""
+    return max((float(r.hypothesis.score) for r in d.results), default=0.0)
+
+
 class BoxIntake:
     """vision_msgs/Detection2DArray -> sightings, with the camera model from camera_info, the
     robot's poses from odometry and the scans that range the boxes, all by their stamps (the
@@ -198,11 +253,15 @@ class BoxIntake:
     odometry stamps later). Thread-safe; messages are read by attribute (no rclpy)."""
 
     def __init__(
-        self, mount: CameraMount = CameraMount(), rules: SightingRules | None = None
+        self,
+        mount: CameraMount = CameraMount(),
+        rules: SightingRules | None = None,
+        window: StampWindow = STAMPS,
     ) -> None:
         self._lock = threading.Lock()
         self._mount = mount
         self._rules = rules or SightingRules()
+        self._window = window
         self._camera: CameraModel | None = None
         self._poses = PoseHistory()
         self._scans: deque[Scan] = deque(maxlen=20)
@@ -221,16 +280,25 @@ class BoxIntake:
             self._camera = camera
         return None
 
-    def on_pose(self, stamp: float, pose: Pose2D) -> None:
-        """The robot's pose at `stamp` (when it was there: odometry's stamp less its lag)."""
-        with self._lock:
-            self._poses.add(stamp, pose)
+    def on_pose(self, stamp: float, pose: Pose2D, now: float) -> str | None:
+        """The robot's pose at `stamp` (when it was there: odometry's stamp less its lag),
+        received at `now` (the node's ROS clock). Returns why it was refused (a stamp outside
+        the window: kept, the latest by stamp would hold off every honest pose), or None."""
+        problem = self._window.problem(stamp, now)
+        if problem is None:
+            with self._lock:
+                self._poses.add(stamp, pose)
+        return problem
 
-    def on_scan(self, stamp: float, scan: Scan) -> None:
-        """A scan taken at `stamp`; placed at the robot's pose then when a box needs it (its
-        own pose only when the history has none for it)."""
-        with self._lock:
-            self._scans.append(replace(scan, stamp=stamp))
+    def on_scan(self, stamp: float, scan: Scan, now: float) -> str | None:
+        """A scan taken at `stamp`, received at `now`; placed at the robot's pose then when a
+        box needs it (its own pose only when the history has none for it). Returns why it was
+        refused (a stamp outside the window), or None."""
+        problem = self._window.problem(stamp, now)
+        if problem is None:
+            with self._lock:
+                self._scans.append(replace(scan, stamp=stamp))
+        return problem
 
     @property
     def has_camera(self) -> bool:
@@ -242,54 +310,61 @@ class BoxIntake:
         with self._lock:
             return tuple(self._bearings)
 
-    def read(self, msg: Any) -> tuple[list[KnownObject], list[Bearing], list[str]]:
+    def read(self, msg: Any, now: float) -> Reading:
         """A Detection2DArray as sightings (stamped with the image's header time), bearings
-        (no range, or beyond max_range) and what was refused. A box seen while the robot moved,
-        before odometry (late) reached its time, waits for it: it comes out of a later read,
-        placed by the pose it was seen from, or is refused after HOLD_SECONDS. Placed by the
-        last pose instead, a box seen while turning lands tens of centimetres off."""
-        problems: list[str] = []
+        (no range, or beyond max_range) and what was refused; `now` is the node's ROS clock,
+        which the stamps are on. A box seen while the robot moved, before odometry (late)
+        reached its time, waits for it: it comes out of a later read, placed by the pose it was
+        seen from, or is refused after HOLD_SECONDS. Placed by the last pose instead, a box
+        seen while turning lands tens of centimetres off."""
+        out = Reading()
         with self._lock:
             camera = self._camera
         if camera is None:
-            return [], [], ["no camera_info yet: the boxes cannot be turned into bearings"]
+            out.problems.append("no camera_info yet: the boxes cannot be turned into bearings")
+            return out
+        image = _seconds(msg.header.stamp)
+        if _refuse_stamp(image, now, "an image's boxes", self._window, out.notes):
+            return out
         boxes = []
-        for d in msg.detections:
+        for d in _capped(msg.detections, _best_score, out.notes):
             stamp = d.header.stamp if (d.header.stamp.sec or d.header.stamp.nanosec) else None
             if not d.results:
-                problems.append("a detection without a class (results is empty)")
+                out.problems.append("a detection without a class (results is empty)")
                 continue
             best = max(d.results, key=lambda r: float(r.hypothesis.score))
+            at = _seconds(stamp) if stamp is not None else image
+            if _refuse_stamp(
+                at, now, f"a box ({str(best.hypothesis.class_id)[:40]!r})", self._window, out.notes
+            ):
+                continue
             boxes.append(
                 BoxDetection(
                     str(best.hypothesis.class_id),
                     float(d.bbox.center.position.x),
                     float(d.bbox.size_x),
                     float(best.hypothesis.score),
-                    _seconds(stamp if stamp is not None else msg.header.stamp),
+                    at,
                 )
             )
-        ready = self._ready(boxes, _seconds(msg.header.stamp))
-        seen: list[KnownObject] = []
-        bearings: list[Bearing] = []
-        for box, pose, scan in ready:
+        for box, pose, scan in self._ready(boxes, image):
             if pose is None:
-                problems.append(
+                out.problems.append(
                     f"{box.label!r}: no odometry pose at the image's time {box.stamp:.2f}"
                 )
                 continue
             try:
                 found = locate(box, camera, pose, scan, self._rules)
             except ValueError as exc:
-                problems.append(str(exc))
+                out.problems.append(str(exc))
                 continue
             if isinstance(found, Bearing):
-                bearings.append(found)
+                out.bearings.append(found)
             else:
-                seen.append(found)
+                out.seen.append(found)
         with self._lock:
-            self._bearings.extend(bearings)
-        return seen, bearings, problems
+            self._bearings.extend(out.bearings)
+        return out
 
     def _ready(
         self, boxes: list[BoxDetection], now: float

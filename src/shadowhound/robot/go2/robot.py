@@ -32,7 +32,11 @@ Written against how the driver really behaves (docs/go2.md):
   sightings, the map and Nav2 goals are in it (odometry carried over with the latest map ->
   odom); a correction larger than a leg may absorb (a jump) counts in `RobotState.relocalized`,
   and the running leg stops (a walk plans again). Without it the world is odometry's frame, and
-  a map in another frame is used as if the two coincided, with a warning.
+  a map in another frame is used as if the two coincided, with a warning. A transform stamped
+  beyond the window of this computer's clock (go2/stamps.py) is refused and reported.
+- inputs: every subscription reads within its kind's size (ros_inputs.py, input_limits.py);
+  maps, images, boxes, detections and TF are read on threads of their own, not on the executor
+  thread that reads odometry; what was refused or cut is `input_problems` (the diagnostics').
 - scan: sensor_msgs/LaserScan on `scan`, taken at the pose odometry gave when it arrived.
 - navigation: Nav2's NavigateToPose on `navigate_to_pose` (`navigator()`, go2_nav2.py);
   `stop` and `emergency_stop` cancel its goals.
@@ -50,16 +54,15 @@ ros_base.py's RosRobot, as the Go2 EDU's is.
 
 Long because: it is the one Robot implementation over go2_ros2_sdk, whose protocol methods and
 ROS callbacks share one node, one executor thread and one lock; what needs no ROS already
-lives apart (go2_api: the sport API table, go2_motion: odometry tracking, go2_posture).
+lives apart (go2_api: the sport API table, go2_motion: odometry tracking, go2_posture, the
+detections' and the inputs' rules).
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
-import logging
 import math
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import replace
@@ -84,6 +87,7 @@ from ...world.objects import KnownObject
 from ..base import RobotError
 from ..estop_listener import EstopListener
 from ..ros_base import DRIVEN_SETTLE, KEEPALIVE_PERIOD, RELIABLE, RosRobot
+from ..ros_inputs import RosInputs
 from ..tf_tree import BASE, ODOM, MapCorrection, TfTree, Transform2D
 from . import api as go2_api
 from .detections import (
@@ -186,10 +190,6 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
             if c.estop_topic
             else None
         )
-        self._map_ready = threading.Condition()
-        self._map_msg: GridMsg | None = None  # the newest map not read yet
-        self._map_thread = threading.Thread(target=self._run_maps, name="go2-map", daemon=True)
-        self._map_thread.start()
         self._start_spinning("go2-ros")
 
     def _build_interfaces(self) -> None:
@@ -200,17 +200,23 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         self._speech_pub = (
             n.create_publisher(String, c.speech_topic, RELIABLE) if c.speech_topic else None
         )
-        n.create_subscription(Odometry, c.odom_topic, self._on_odom, RELIABLE)
-        n.create_subscription(Go2State, c.state_topic, self._on_state, RELIABLE)
+        # Every input within its size (input_limits); maps, images, detections and TF read
+        # off the executor thread, which odometry and the stops need (ros_inputs).
+        self._inputs = inputs = RosInputs(n)
+        sub = inputs.subscribe
+        sub(Odometry, c.odom_topic, self._on_odom, RELIABLE, "small")
+        sub(Go2State, c.state_topic, self._on_state, RELIABLE, "small")
         if c.battery_topic:
-            n.create_subscription(BatteryState, c.battery_topic, self._on_battery, RELIABLE)
+            sub(BatteryState, c.battery_topic, self._on_battery, RELIABLE, "small")
         if c.camera_topic:
             compressed = c.camera_topic.rstrip("/").endswith("compressed")
-            n.create_subscription(
+            sub(
                 CompressedImage if compressed else Image,
                 c.camera_topic,
                 self._on_compressed if compressed else self._on_image,
                 _SENSOR,
+                "image",
+                thread="go2-camera",
             )
         if c.detections_topic:
             try:
@@ -220,7 +226,14 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                     "detections_topic needs the shadowhound_interfaces package: "
                     f"run scripts/build_ros.sh ({exc})"
                 ) from exc
-            n.create_subscription(DetectionArray, c.detections_topic, self._on_detections, RELIABLE)
+            sub(
+                DetectionArray,
+                c.detections_topic,
+                self._on_detections,
+                RELIABLE,
+                "detections",
+                thread="go2-detections",
+            )
         if c.coco_detections_topic:
             try:
                 from vision_msgs.msg import Detection2DArray
@@ -230,12 +243,17 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                     f"run scripts/build_ros.sh ({exc})"
                 ) from exc
             # Best effort matches a detector's reliable publisher and a best-effort one.
-            n.create_subscription(
-                Detection2DArray, c.coco_detections_topic, self._on_boxes, _SENSOR_DEPTH
+            sub(
+                Detection2DArray,
+                c.coco_detections_topic,
+                self._on_boxes,
+                _SENSOR_DEPTH,
+                "detections",
+                thread="go2-boxes",
             )
-            n.create_subscription(CameraInfo, c.camera_info_topic, self._on_camera_info, _SENSOR)
-        if c.map_topic:
-            n.create_subscription(GridMsg, c.map_topic, self._on_map, MAP_QOS)
+            sub(CameraInfo, c.camera_info_topic, self._on_camera_info, _SENSOR, "small")
+        if c.map_topic:  # reading and inflating a large map takes seconds
+            sub(GridMsg, c.map_topic, self._take_map, MAP_QOS, "map", thread="go2-map")
         if c.map_frame:
             try:
                 from tf2_msgs.msg import TFMessage
@@ -244,10 +262,19 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                     "reading SLAM's map frame from /tf needs the tf2_msgs package: run "
                     f"scripts/build_ros.sh, or set map_frame to '' to read no TF ({exc})"
                 ) from exc
-            n.create_subscription(TFMessage, "/tf", self._on_tf, _TF)
-            n.create_subscription(TFMessage, "/tf_static", self._on_tf_static, _TF_STATIC)
+            # In order, off the executor: robot_state_publisher's 30 links take ms to read.
+            sub(TFMessage, "/tf", self._on_tf, _TF, "tf", thread="go2-tf", depth=_TF.depth)
+            sub(
+                TFMessage,
+                "/tf_static",
+                self._on_tf_static,
+                _TF_STATIC,
+                "tf",
+                thread="go2-tf-static",
+                depth=_TF_STATIC.depth,
+            )
         if c.scan_topic:
-            n.create_subscription(LaserScan, c.scan_topic, self._on_scan, _SENSOR)
+            sub(LaserScan, c.scan_topic, self._on_scan, _SENSOR, "scan")
         n.create_timer(KEEPALIVE_PERIOD, self._keep_alive)
         n.create_timer(5.0, self._warn_without_odometry)
         n.create_timer(_PUBLISHERS_PERIOD, self._check_publishers)
@@ -275,7 +302,7 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         """go2_states shows the robot standing in a mode in which it obeys Moves (settled)."""
         return self._postures.balanced()
 
-    # -- callbacks (executor thread; short) ----------------------------------------------
+    # -- callbacks (the executor thread, short; or a reading thread: ros_inputs) ----------
 
     def _on_odom(self, msg: Odometry) -> None:
         p, q = msg.pose.pose.position, msg.pose.pose.orientation
@@ -298,7 +325,10 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         if fault is not None:
             self._odometry_fault(fault)
         elif self._boxes is not None:  # the pose was the robot's `after` seconds before its stamp
-            self._boxes.on_pose(stamp - after, Pose2D(p.x, p.y, yaw))
+            problem = self._boxes.on_pose(stamp - after, Pose2D(p.x, p.y, yaw), self._ros_now())
+            if problem is not None:
+                topic = self.topic(self.config.odom_topic)
+                self._inputs.refuse(topic, "stamp", f"a pose {problem}: not used to place boxes")
         if abs(after - before) >= 0.01:
             self.node.get_logger().info(f"odometry lags the robot by {after:.2f} s (measured)")
 
@@ -355,6 +385,7 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         # A reference read without the lock: a frame id changing meanwhile is read again below.
         wanted = (self._odom_frame, ODOM, BASE)
         log = self.node.get_logger()
+        now = self._ros_now()  # stamps beyond TfTree's window around it are refused
         for t in msg.transforms:
             child = str(t.child_frame_id).lstrip("/")
             if child not in wanted:
@@ -369,11 +400,12 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                     if static:
                         self._tf.set_static(parent, child, edge)
                     else:
-                        self._tf.set_transform(parent, child, stamp, edge)
+                        self._tf.set_transform(parent, child, stamp, edge, now=now)
                     slam = parent == self.config.map_frame and child == self._odom_frame
                     first, jump = self._take_map_odom(stamp, edge) if slam else (False, None)
             except TransformUnavailable as exc:
-                log.warning(f"ignored a transform on /tf: {exc}", throttle_duration_sec=10.0)
+                topic = "/tf_static" if static else "/tf"
+                self._inputs.refuse(topic, f"{parent} -> {child}", f"ignored: {exc}")
                 continue
             if first:
                 log.info(
@@ -420,32 +452,13 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         with self._lock:
             return self.config.map_frame if self._map_odom is not None else self._odom_frame
 
-    def _on_map(self, msg: GridMsg) -> None:
-        """Hand the map to the map thread (the newest wins): reading and inflating a large
-        map takes seconds, and this executor thread also reads odometry."""
-        with self._map_ready:
-            self._map_msg = msg
-            self._map_ready.notify()
-
-    def _run_maps(self) -> None:
-        while True:
-            with self._map_ready:
-                while self._map_msg is None and not self._closed:
-                    self._map_ready.wait()
-                if self._closed:
-                    return
-                msg, self._map_msg = self._map_msg, None
-            try:
-                self._take_map(msg)
-            except Exception:  # a bug here must not end map updates for good
-                logging.getLogger(__name__).exception("reading a map failed")
-
     def _take_map(self, msg: GridMsg) -> None:
+        """On the map thread (the newest map first; ros_inputs)."""
         log = self.node.get_logger()
         try:
             grid = grid_from_msg(msg)
         except GridError as exc:
-            log.warning(f"ignored a map on {self.topic(self.config.map_topic)}: {exc}")
+            self._inputs.refuse(self.topic(self.config.map_topic), "map", f"ignored a map: {exc}")
             return
         world = self.world_frame
         frame = msg.header.frame_id
@@ -476,15 +489,22 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         with self._lock:
             pose = self._tracker.pose(now)
             world = self._to_world(*pose)
+        topic = self.topic(self.config.scan_topic)
         try:
             scan = scan_from_msg(msg, Pose2D(*pose), now)
         except ValueError as exc:
-            self.node.get_logger().warning(f"dropped a scan: {exc}", throttle_duration_sec=5.0)
+            self._inputs.refuse(topic, "scan", f"dropped a scan: {exc}")
             return
         with self._lock:
             self._scan = (now, replace(scan, pose=world))  # the world model's frame
-        if self._boxes is not None:  # boxes are placed in odometry's frame, then carried over
-            self._boxes.on_scan(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9, scan)
+        if self._boxes is None:
+            return
+        # Boxes are ranged by the scan of their image's stamp (then placed in odometry's frame
+        # and carried over); one stamped outside the window is still the robot's scan.
+        stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+        problem = self._boxes.on_scan(stamp, scan, self._ros_now())
+        if problem is not None:
+            self._inputs.refuse(topic, "stamp", f"a scan {problem}: not used to range boxes")
 
     def _on_battery(self, msg: BatteryState) -> None:
         percent = float(msg.percentage) * 100.0
@@ -498,9 +518,7 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
                 msg.data, msg.width, msg.height, msg.encoding, msg.step, source="go2"
             )
         except ValueError as exc:
-            self.node.get_logger().warning(
-                f"dropped a camera frame: {exc}", throttle_duration_sec=5.0
-            )
+            self._drop_frame(exc)
             return
         self._frame = frame
 
@@ -508,11 +526,15 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         try:
             self._frame = replace(to_camera_frame(bytes(msg.data)), source="go2")
         except ValueError as exc:
-            self.node.get_logger().warning(
-                f"dropped a camera frame: {exc}", throttle_duration_sec=5.0
-            )
+            self._drop_frame(exc)
+
+    def _drop_frame(self, exc: ValueError) -> None:
+        self._inputs.refuse(
+            self.topic(self.config.camera_topic), "frame", f"dropped a camera frame: {exc}"
+        )
 
     def _on_detections(self, msg: object) -> None:
+        """On the detections' thread (ros_inputs): the newest message first."""
         with self._lock:
             self._detections_at = time.monotonic()
         state = self.last_state()
@@ -521,16 +543,11 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
             if self._map_odom is not None:
                 m = self._map_odom
                 frames = replace(frames, map=self.config.map_frame, odom_in_map=(m.x, m.y, m.yaw))
-        clock = self.node.get_clock().now().nanoseconds * 1e-9
-
-        def age(stamp: object) -> float:
-            sec, nsec = getattr(stamp, "sec", 0), getattr(stamp, "nanosec", 0)
-            return clock - (sec + nsec * 1e-9) if (sec or nsec) else 0.0
-
-        seen, problems = sightings_from_msg(
-            msg, Pose2D(state.x, state.y, state.yaw), frames, self.now(), age
+        reading = sightings_from_msg(
+            msg, Pose2D(state.x, state.y, state.yaw), frames, self.now(), self._ros_now()
         )
-        self._add_sightings(seen, problems)
+        self._note_inputs(self.config.detections_topic, reading.notes)
+        self._add_sightings(reading.seen, reading.problems)
 
     def _on_camera_info(self, msg: CameraInfo) -> None:
         assert self._boxes is not None  # subscribed only with the boxes' intake
@@ -539,24 +556,42 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
             self.node.get_logger().warning(problem, throttle_duration_sec=30.0)
 
     def _on_boxes(self, msg: Any) -> None:
+        """On the boxes' thread (ros_inputs): the newest message first."""
         assert self._boxes is not None  # subscribed only with the boxes' intake
-        seen, bearings, problems = self._boxes.read(msg)
+        clock = self._ros_now()
+        reading = self._boxes.read(msg, clock)
+        self._note_inputs(self.config.coco_detections_topic, reading.notes)
         # Stamps are the image's (ROS clock); sightings are on the robot's clock, and in the
         # robot's world frame (the map, with SLAM, as it was when the image was taken).
-        offset = self.now() - self.node.get_clock().now().nanoseconds * 1e-9
+        offset = self.now() - clock
         with self._lock:
-            where = [self._to_world(o.x, o.y, 0.0, o.stamp) for o in seen]
+            where = [self._to_world(o.x, o.y, 0.0, o.stamp) for o in reading.seen]
         seen = [
             replace(o, x=w.x, y=w.y, stamp=o.stamp + offset)
-            for o, w in zip(seen, where, strict=True)
+            for o, w in zip(reading.seen, where, strict=True)
         ]
-        self._add_sightings(seen, problems)
+        self._add_sightings(seen, reading.problems)
         with self._lock:  # after the sightings: look() waits for a report it can read
             self._detections_at = time.monotonic()
-        for b in bearings:
+        for b in reading.bearings:
             self.node.get_logger().debug(
                 f"{b.name}: bearing {math.degrees(b.direction):.0f} degrees only ({b.why})"
             )
+
+    def _note_inputs(self, topic: str, notes: list[tuple[str, str]]) -> None:
+        """What a message lost as a whole (a cap, stamps), into the input report."""
+        for kind, text in notes:
+            self._inputs.refuse(self.topic(topic), kind, text)
+
+    @property
+    def input_problems(self) -> str:
+        """What the robot refused or cut of its inputs lately ('' when nothing), for the
+        node's diagnostics (input_limits)."""
+        return self._inputs.summary()
+
+    def _ros_now(self) -> float:
+        """This computer's ROS clock, which headers are stamped with (seconds)."""
+        return float(self.node.get_clock().now().nanoseconds) * 1e-9
 
     def _add_sightings(self, seen: list[KnownObject], problems: list[str]) -> None:
         """New sightings into the board and the world model; what was refused, logged."""
@@ -606,7 +641,7 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
             )
         # Boxes with no range (none in the scan, or too far): a direction in odometry's frame,
         # stamped with the image's time on the ROS clock.
-        offset = now - self.node.get_clock().now().nanoseconds * 1e-9
+        offset = now - self._ros_now()
         with self._lock:
             correction = self._map_odom.yaw if self._map_odom is not None else 0.0
         for b in self.bearings():
@@ -797,12 +832,11 @@ class Go2RosRobot(RosRobot[Go2RobotSettings]):
         return self._navigator
 
     def _closing(self) -> None:
-        """The map thread and the e-stop listener end (close(), before the executor's end)."""
-        with self._map_ready:
-            self._map_ready.notify()
+        """The reading threads and the e-stop listener end (close(), before the executor's
+        end)."""
+        self._inputs.close()
         if self._estop_node is not None:
             self._estop_node.close()
-        self._map_thread.join(2.0)
 
     def _destroy_node(self) -> None:
         if self._navigator is not None:

@@ -1,10 +1,54 @@
-"""When each odometry pose was sent, on this process's clock: the driver's stamps read
-against the link's jitter (a pure-Python helper of the Go2's odometry intake)."""
+"""Header stamps of what the Go2 robot reads from ROS, judged on this process's clocks (pure
+Python):
+
+- `StampWindow`: which stamps a message may carry, on this computer's ROS clock. Inputs kept
+  "latest by stamp" (TF's history, SLAM's newest map -> odom, sightings, boxes waiting for
+  their odometry) would let one stamp from the future win over every honest one after it, so a
+  stamp too far ahead (or too old to describe anything kept) is refused, and said why;
+- `StampClock`: when each odometry pose was sent, the driver's stamps read against the link's
+  jitter (the driver's clock need not agree with ours: odometry is not judged by the window).
+"""
 
 from __future__ import annotations
 
 import math
 from collections import deque
+from dataclasses import dataclass
+
+# Seconds a stamp may be ahead of this computer's clock. Honest senders post-date: AMCL stamps
+# map -> odom `transform_tolerance` (1 s by default) ahead, slam_toolbox `transform_timeout`
+# (0.2 s); synchronised computers differ by milliseconds. A stamp within this bound can hold off
+# honest samples for at most this long.
+STAMP_AHEAD = 2.0
+STAMP_BEHIND = 10.0  # seconds: older than any history kept (TF's, the poses boxes are placed by)
+
+
+@dataclass(frozen=True)
+class StampWindow:
+    """The stamps an input may carry: from `behind` seconds before this computer's clock (ROS
+    time, which the robot's driver, SLAM and detector share with it) to `ahead` after."""
+
+    ahead: float = STAMP_AHEAD
+    behind: float = STAMP_BEHIND
+
+    def problem(self, stamp: float, now: float) -> str | None:
+        """Why `stamp` is refused at `now` (both seconds of ROS time), or None."""
+        if not math.isfinite(stamp):
+            return f"its stamp {stamp!r} is not a time"
+        if stamp > now + self.ahead:
+            return (
+                f"stamped {stamp - now:.1f} s ahead of this computer's clock (at most "
+                f"{self.ahead:g} s is taken: a clock set wrong, or a forged message)"
+            )
+        if stamp < now - self.behind:
+            return (
+                f"stamped {now - stamp:.1f} s before this computer's clock (at most "
+                f"{self.behind:g} s is taken: clocks not synchronised, or a replayed message)"
+            )
+        return None
+
+
+STAMPS = StampWindow()  # the window every stamped input of the robot is judged by
 
 
 class StampClock:

@@ -17,6 +17,7 @@ from sensor_msgs.msg import LaserScan
 
 from ...state import Pose2D, Scan
 from ...world.grid import OccupancyGrid
+from ..input_limits import MAX_BEAMS
 
 # map_server and slam_toolbox publish `map` reliable and transient-local (a late subscriber
 # still gets the last map), depth 1.
@@ -88,7 +89,12 @@ def scan_to_msg(scan: Scan, frame_id: str, stamp: Any, scan_time: float) -> Lase
 def scan_from_msg(msg: LaserScan, pose: Pose2D, stamp: float) -> Scan:
     """The core's Scan from a LaserScan taken at `pose` (odom frame: the robot's pose when it
     arrived; the sensor is taken to sit at the body's centre, facing forward). Raises
-    ValueError when the message is not a usable scan."""
+    ValueError when the message is not a usable scan, or has more than MAX_BEAMS ranges."""
+    if len(msg.ranges) > MAX_BEAMS:
+        raise ValueError(
+            f"{len(msg.ranges)} ranges in one scan; at most {MAX_BEAMS} are read (a lidar's "
+            "scan has a few thousand)"
+        )
     return Scan(
         tuple(float(r) for r in msg.ranges),
         _decimal(msg.angle_min),
