@@ -92,6 +92,9 @@ class LyingOdometry:
 
     latency = 0.0  # its pose lies, but not late
 
+    def stalled(self, since: float) -> float:
+        return self.sim.stalled(since)
+
     def vocabulary(self) -> frozenset[str]:
         return self.sim.vocabulary()
 

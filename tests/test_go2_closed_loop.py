@@ -207,6 +207,9 @@ class LateRobot:
     def latency(self) -> float:
         return self.tracker.latency_bound
 
+    def stalled(self, since: float) -> float:
+        return self.intake.stalled(since)
+
     def vocabulary(self) -> frozenset[str]:
         return self.sim.vocabulary()
 

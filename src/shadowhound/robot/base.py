@@ -50,6 +50,9 @@ class TrickInfo(Protocol):
 
 
 NO_TRICKS: Mapping[str, TrickInfo] = MappingProxyType({})
+# Seconds: the longest stall of a robot's link (`Robot.stalled`) allowed for between what was
+# commanded and what odometry shows, as seen on loaded 2-core machines; no more is.
+MAX_STALL = 0.5
 
 
 @runtime_checkable
@@ -79,6 +82,14 @@ class Robot(Protocol):
     @property
     def realtime(self) -> bool:
         """True when the robot's clock runs by itself (a hung skill then needs a watchdog)."""
+        ...
+
+    def stalled(self, since: float) -> float:
+        """Seconds: the longest the link to the robot was seen stalled since `since` (robot
+        clock): a pose that came in later than it was sent, or a pause in what it sends,
+        beyond its usual rate (a loaded machine, a late link). Its commands may have been held
+        up as long, so a step allows for it between its commands and its pose. 0 for a robot
+        whose pose is known at once."""
         ...
 
     def get_state(self) -> RobotState:
@@ -202,10 +213,10 @@ class Robot(Protocol):
 class BaseRobot(ABC):
     """The `Robot` protocol with defaults for what a robot may lack: a backend inherits it and
     writes only what it has. A robot is, unless it says otherwise: on the wall clock
-    (`time_scale` 1, `realtime`), knowing its pose at once (`latency` 0), blind to its
-    surroundings (no camera frame, no scan, no map, no objects, no bearings, recognising
-    nothing), without a navigation server, a voice, tricks or an e-stop source of its own.
-    Closing it stops it.
+    (`time_scale` 1, `realtime`), knowing its pose at once (`latency` 0, never `stalled`),
+    blind to its surroundings (no camera frame, no scan, no map, no objects, no bearings,
+    recognising nothing), without a navigation server, a voice, tricks or an e-stop source of
+    its own. Closing it stops it.
 
     What every robot must say for itself is abstract: its name, its state, velocity, stops,
     the e-stop latch and postures."""
@@ -225,6 +236,9 @@ class BaseRobot(ABC):
     @property
     def realtime(self) -> bool:
         return True
+
+    def stalled(self, since: float) -> float:
+        return 0.0
 
     @abstractmethod
     def get_state(self) -> RobotState: ...

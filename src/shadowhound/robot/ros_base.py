@@ -188,6 +188,11 @@ class RosRobot(BaseRobot, Generic[SettingsT]):
         with self._lock:
             return self._tracker.latency_bound
 
+    def stalled(self, since: float) -> float:
+        """The longest stall of the pose stream seen since `since` (go2/odometry)."""
+        with self._lock:
+            return self._intake.stalled(since)
+
     def _observe_posture(self, mode: int, body_height: float) -> None:
         """A state message's mode and body height (executor thread): a posture change nobody
         here asked for (a fall, the remote) stops the robot and is logged."""
