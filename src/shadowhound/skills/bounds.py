@@ -13,16 +13,36 @@ keeps bounds from what it *commanded*, which no sensor can corrupt:
   geofence, judged from the commanded pose and from the measured pose (the stricter wins).
 
 The motion loops (motion.py) brake within the smallest of these, as they brake for the goal.
+
+The commands are dead-reckoned from when they were sent; a robot acts on each once it has it.
+A command held up on the way (a loaded machine stalls this process, the link or the driver)
+acts late by as much, so an honest robot ends up to `stall` x (each change of speed) from where
+its commands put it: further along when a slowing came late, short when a speed-up did.
+`CommandLedger.leeway` says how far, for the longest stall seen (`MAX_STALL` at most); with no
+stall seen it is zero, and the checks are exactly as strict as the margins say.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .. import geofence
 from ..config import SafetyConfig
+from ..robot.base import MAX_STALL
 from ..state import Pose2D
+
+__all__ = [
+    "MAX_STALL",
+    "CommandLedger",
+    "Leeway",
+    "fences",
+    "leg_margin",
+    "leg_room",
+    "room_ahead",
+    "turn_margin",
+    "turn_room",
+]
 
 
 def fences(lim: SafetyConfig) -> list[tuple[geofence.Fence, str, str]]:
@@ -63,6 +83,16 @@ def room_ahead(
     return room, name
 
 
+@dataclass(frozen=True)
+class Leeway:
+    """How far an honest robot may be, at rest, from where its leg's commands put it: along
+    the leg (or turn) beyond them and short of them, and to either side (metres or radians)."""
+
+    ahead: float = 0.0
+    behind: float = 0.0
+    aside: float = 0.0
+
+
 @dataclass
 class CommandLedger:
     """A step's velocity commands, dead-reckoned from where it started (robot clock)."""
@@ -73,6 +103,8 @@ class CommandLedger:
     turned: float = 0.0  # radians commanded (absolute)
     command: tuple[float, float, float] = (0.0, 0.0, 0.0)
     anchor: Pose2D | None = None  # where the current leg began (measured)
+    # The leg's changes of commanded velocity (odom frame: vx, vy, wz), for `leeway`.
+    changes: list[tuple[float, float, float]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if self.anchor is None:
@@ -82,6 +114,37 @@ class CommandLedger:
         """A leg starts at `at` (measured, at rest): commanded poses count from there."""
         self.advance(t)
         self.pose = self.anchor = at
+        self.changes.clear()
+
+    def leeway(self, stall: float, axis: tuple[float, float, float]) -> Leeway:
+        """How far an honest robot may be from the leg's commands when each of them may have
+        acted up to `stall` seconds late (in order): each slowing along `axis` (a unit vector:
+        the leg's direction in the odom frame and 0, or (0, 0, +-1) for a turn) lets it go on
+        further, each speed-up leaves it short, each change across it off to a side."""
+        ahead = behind = aside = 0.0
+        ux, uy, uw = axis
+        for dx, dy, dw in self.changes:
+            along = dx * ux + dy * uy + dw * uw
+            ahead, behind = ahead + max(0.0, -along), behind + max(0.0, along)
+            aside += abs(dy * ux - dx * uy)
+        return Leeway(stall * ahead, stall * behind, stall * aside)
+
+    def halt(self, t: float, linear_accel: float, angular_accel: float) -> float:
+        """A stop sent at once from full speed, outside the loop's ramps: the robot brakes at
+        its acceleration limits, going on as far as that takes it. Returns the metres
+        commanded since the last command."""
+        moving = any(self.command)
+        walked = self.set(t, 0.0, 0.0, 0.0)
+        vx, vy, wz = self.changes[-1] if moving else (0.0, 0.0, 0.0)  # less what it was
+        speed = math.hypot(vx, vy)
+        brake = speed / (2 * linear_accel)  # metres per m/s: v^2 / 2a
+        turn = abs(wz) / (2 * angular_accel)
+        self.pose = Pose2D(
+            self.pose.x - vx * brake, self.pose.y - vy * brake, self.pose.yaw - wz * turn
+        )
+        self.travelled += speed * brake
+        self.turned += abs(wz) * turn
+        return walked + speed * brake
 
     def offset(self, t: float) -> tuple[float, float, float]:
         """Where the commands took the robot from the leg's start: metres along x and y (odom
@@ -111,6 +174,10 @@ class CommandLedger:
         """A new command from time t; returns the metres commanded since the last one."""
         before = self.travelled
         self.advance(t)
+        if (vx, vy, wz) != self.command:
+            c, s = math.cos(self.pose.yaw), math.sin(self.pose.yaw)
+            (ox, oy, ow), (nx, ny) = self.command, (vx * c - vy * s, vx * s + vy * c)
+            self.changes.append((nx - (ox * c - oy * s), ny - (ox * s + oy * c), wz - ow))
         self.command = (vx, vy, wz)
         return self.travelled - before
 
@@ -131,20 +198,29 @@ def leg_room(
 ) -> float:
     """Metres the commands may still take the robot from `at` along `heading` and keep it
     within `margin` of the planned leg, the segment from (0, 0) (where the leg began) to
-    `goal`: the capsule around it. 0 when `at` is already outside and `heading` does not
-    lead back in."""
+    `goal`: the capsule around it. From outside it (a stalled control loop held a command
+    too long), only a way back: as far as it comes no further from the leg than it is, or
+    once back in, to the capsule's edge; 0 when `heading` does not lead back."""
     dx, dy = math.cos(heading), math.sin(heading)
 
     def off(s: float) -> float:  # distance from the leg of the point s metres ahead
         return _to_segment((at[0] + s * dx, at[1] + s * dy), goal) - margin
 
-    if off(0.0) > 0:
-        return 0.0 if off(1e-3) >= off(0.0) else 1e-3  # outside: only a way back may go on
-    # The distance to a segment is convex along a line: one crossing out, found by halving.
+    # The distance to a segment is convex along a line: one stretch inside, found by halving.
     reach = math.hypot(*goal) + 2 * margin + math.hypot(*at)
+    low = 0.0
+    if off(0.0) > 0:
+        if off(1e-3) >= off(0.0):
+            return 0.0
+        high = reach  # the nearest point along the line, by thirds
+        for _ in range(60):
+            a, b = low + (high - low) / 3, high - (high - low) / 3
+            low, high = (low, b) if off(a) <= off(b) else (a, high)
+        if off(low) > 0:
+            return low  # it never comes back in: as near as it gets
     if off(reach) <= 0:
         return reach
-    low, high = 0.0, reach
+    high = reach
     for _ in range(40):
         mid = (low + high) / 2
         low, high = (mid, high) if off(mid) <= 0 else (low, mid)

@@ -9,8 +9,8 @@ goal tolerance (0.25 m by default); the last centimetres and the heading are clo
 project's controller, so the step ends where the plan said, within the outcome tolerance.
 
 Nav2 drives at its own controller's speeds, which the governor cannot cap: the walk measures
-the robot's speed over each second of odometry and cancels the goal when it exceeds
-`safety.max_linear_speed` by more than SPEED_SLACK.
+the robot's speed over each second of odometry (and the stalls seen in it: `Robot.stalled`)
+and cancels the goal when it exceeds `safety.max_linear_speed` by more than SPEED_SLACK.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import math
 from collections import deque
 
 from ..errors import SkillError
+from ..robot.base import MAX_STALL
 from ..robot.navigator import Navigator, NavStatus
 from ..state import normalize_angle
 from . import motion
@@ -127,7 +128,10 @@ def _check_speed(ctx: SkillContext, name: str, poses: deque[tuple[float, float, 
     t0, x0, y0 = poses[0]
     if now - t0 < SPEED_WINDOW:
         return
-    speed = math.hypot(st.x - x0, st.y - y0) / (now - t0)
+    # Odometry held up by a stall seen in the window (a loaded machine, a late link) comes in
+    # at once: what it shows took that much longer.
+    held = min(MAX_STALL, ctx.robot.stalled(t0))
+    speed = math.hypot(st.x - x0, st.y - y0) / (now - t0 + held)
     limit = ctx.config.safety.max_linear_speed
     if speed > limit * SPEED_SLACK:
         raise SkillError(
