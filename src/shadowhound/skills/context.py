@@ -245,7 +245,7 @@ class SkillContext:
                 raise MissionCancelled("mission cancelled")
             if self.robot.now() - began > ODOMETRY_RETURN:
                 raise RobotError(
-                    f"{blind} Stopped; it did not come back within {ODOMETRY_RETURN:g} s."
+                    f"{blind} Stopped; it did not come back within {ODOMETRY_RETURN:g} s"
                 )
             self.robot.sleep(self.period)
             self.heartbeat(None)
