@@ -56,16 +56,17 @@ class LoadedRobot(LateRobot):
         delay: float = 0.2,
         pose_timeout: float = 0.5,
     ) -> None:
-        self.stalls: list[Stall] = []  # none while it starts up
+        self.schedule = list(stalls)
         self.pose_timeout = pose_timeout
         self._commands: deque[tuple[float, tuple[float, float, float] | None]] = deque()
         self._acted = 0.0  # when the last command acts: commands act in order
         self._arrived = 0.0  # when the last sample arrived: DDS keeps them in order
         self._received: float | None = None  # when odometry last came in
-        self._origin = 0.0
+        # Stalls count from the end of LateRobot's start-up wait (odometry has come in), which
+        # samples taken before it are published after: they see the stalls too.
+        self._origin = 1.0 + delay + 1.0 / rate
         super().__init__(rate, delay)
-        self._origin = self.sim.now()  # stalls count from here
-        self.stalls = list(stalls)
+        assert abs(self.sim.now() - self._origin) < 1e-6, (self.sim.now(), self._origin)
 
     # -- who is stalled when -----------------------------------------------------------
 
@@ -74,7 +75,7 @@ class LoadedRobot(LateRobot):
         moved = True
         while moved:
             moved = False
-            for s in self.stalls:
+            for s in self.schedule:
                 hit = s.who == who or (s.who == "process" and who in ("controller", "receiver"))
                 start = self._origin + s.at
                 end = (

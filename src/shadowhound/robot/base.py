@@ -17,7 +17,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, NamedTuple, Protocol, runtime_checkable
 
 from ..errors import RobotError as RobotError
 from ..state import CameraFrame, Posture, RobotState, Scan, Sighting
@@ -50,9 +50,21 @@ class TrickInfo(Protocol):
 
 
 NO_TRICKS: Mapping[str, TrickInfo] = MappingProxyType({})
-# Seconds: the longest stall of a robot's link (`Robot.stalled`) allowed for between what was
+# Seconds: the longest stall of a robot's link (`Robot.stalls`) allowed for between what was
 # commanded and what odometry shows, as seen on loaded 2-core machines; no more is.
 MAX_STALL = 0.5
+
+
+class Stall(NamedTuple):
+    """A stretch of robot time (`start` to `end`) in which the link to the robot was seen
+    stalled: a command sent in it may have acted only at its end."""
+
+    start: float
+    end: float
+
+    @property
+    def seconds(self) -> float:
+        return self.end - self.start
 
 
 @runtime_checkable
@@ -84,12 +96,12 @@ class Robot(Protocol):
         """True when the robot's clock runs by itself (a hung skill then needs a watchdog)."""
         ...
 
-    def stalled(self, since: float) -> float:
-        """Seconds: the longest the link to the robot was seen stalled since `since` (robot
-        clock): a pose that came in later than it was sent, or a pause in what it sends,
-        beyond its usual rate (a loaded machine, a late link). Its commands may have been held
-        up as long, so a step allows for it between its commands and its pose. 0 for a robot
-        whose pose is known at once."""
+    def stalls(self, since: float) -> tuple[Stall, ...]:
+        """The stalls of the link to the robot seen since `since` (robot clock), oldest first:
+        a pose that came in later than it was sent (from when it was sent to when it came in),
+        or a pause in what it sends beyond its usual rate (a loaded machine, a late link). A
+        command sent in one may have acted only at its end, so a step allows for them between
+        its commands and its pose. None for a robot whose pose is known at once."""
         ...
 
     def get_state(self) -> RobotState:
@@ -213,7 +225,7 @@ class Robot(Protocol):
 class BaseRobot(ABC):
     """The `Robot` protocol with defaults for what a robot may lack: a backend inherits it and
     writes only what it has. A robot is, unless it says otherwise: on the wall clock
-    (`time_scale` 1, `realtime`), knowing its pose at once (`latency` 0, never `stalled`),
+    (`time_scale` 1, `realtime`), knowing its pose at once (`latency` 0, no `stalls`),
     blind to its surroundings (no camera frame, no scan, no map, no objects, no bearings,
     recognising nothing), without a navigation server, a voice, tricks or an e-stop source of
     its own. Closing it stops it.
@@ -237,8 +249,8 @@ class BaseRobot(ABC):
     def realtime(self) -> bool:
         return True
 
-    def stalled(self, since: float) -> float:
-        return 0.0
+    def stalls(self, since: float) -> tuple[Stall, ...]:
+        return ()
 
     @abstractmethod
     def get_state(self) -> RobotState: ...

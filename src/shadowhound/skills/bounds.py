@@ -16,24 +16,31 @@ The motion loops (motion.py) brake within the smallest of these, as they brake f
 
 The commands are dead-reckoned from when they were sent; a robot acts on each once it has it.
 A command held up on the way (a loaded machine stalls this process, the link or the driver)
-acts late by as much, so an honest robot ends up to `stall` x (each change of speed) from where
-its commands put it: further along when a slowing came late, short when a speed-up did.
-`CommandLedger.leeway` says how far, for the longest stall seen (`MAX_STALL` at most); with no
-stall seen it is zero, and the checks are exactly as strict as the margins say.
+acts late by as much, so an honest robot ends up to (each change of speed) x (how long a stall
+seen around it may have held it up) from where its commands put it: further along when a
+slowing came late, short when a speed-up did. `CommandLedger.leeway` says how far; a change of
+speed that no stall seen could have held up counts for nothing, so with no stall seen it is
+zero and the checks are exactly as strict as the margins say.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from .. import geofence
 from ..config import SafetyConfig
-from ..robot.base import MAX_STALL
+from ..robot.base import MAX_STALL, Stall
 from ..state import Pose2D
+
+# Seconds a stall may have begun before it was seen to: a pause in odometry shows from the
+# first sample missing, up to a sample period after the sender stalled.
+STALL_ONSET = 0.1
 
 __all__ = [
     "MAX_STALL",
+    "STALL_ONSET",
     "CommandLedger",
     "Leeway",
     "fences",
@@ -92,6 +99,12 @@ class Leeway:
     behind: float = 0.0
     aside: float = 0.0
 
+    def catch_up(self, lag: float, margin: float) -> float:
+        """How much further the commands may go for a robot odometry shows `lag` behind them:
+        as far as it lags, at most `behind`; nothing when it lags by more than the stalls seen
+        and the `margin` explain (a lie, or a robot that does not follow)."""
+        return min(lag, self.behind) if 0.0 < lag <= self.behind + margin else 0.0
+
 
 @dataclass
 class CommandLedger:
@@ -103,8 +116,8 @@ class CommandLedger:
     turned: float = 0.0  # radians commanded (absolute)
     command: tuple[float, float, float] = (0.0, 0.0, 0.0)
     anchor: Pose2D | None = None  # where the current leg began (measured)
-    # The leg's changes of commanded velocity (odom frame: vx, vy, wz), for `leeway`.
-    changes: list[tuple[float, float, float]] = field(default_factory=list)
+    # The leg's changes of commanded velocity (when, and by how much: odom frame vx, vy, wz).
+    changes: list[tuple[float, float, float, float]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if self.anchor is None:
@@ -116,18 +129,23 @@ class CommandLedger:
         self.pose = self.anchor = at
         self.changes.clear()
 
-    def leeway(self, stall: float, axis: tuple[float, float, float]) -> Leeway:
-        """How far an honest robot may be from the leg's commands when each of them may have
-        acted up to `stall` seconds late (in order): each slowing along `axis` (a unit vector:
-        the leg's direction in the odom frame and 0, or (0, 0, +-1) for a turn) lets it go on
-        further, each speed-up leaves it short, each change across it off to a side."""
+    def leeway(self, stalls: Sequence[Stall], axis: tuple[float, float, float]) -> Leeway:
+        """How far an honest robot may be from the leg's commands when each change of them
+        may have acted as late as a stall seen around it held it up (in order; at most
+        MAX_STALL): each slowing along `axis` (a unit vector: the leg's direction in the odom
+        frame and 0, or (0, 0, +-1) for a turn) lets it go on further, each speed-up leaves it
+        short, each change across it off to a side."""
         ahead = behind = aside = 0.0
         ux, uy, uw = axis
-        for dx, dy, dw in self.changes:
+        for t, dx, dy, dw in self.changes:
+            held = max(
+                (s.end - t for s in stalls if s.start - STALL_ONSET <= t < s.end), default=0.0
+            )
+            held = min(MAX_STALL, held)
             along = dx * ux + dy * uy + dw * uw
-            ahead, behind = ahead + max(0.0, -along), behind + max(0.0, along)
-            aside += abs(dy * ux - dx * uy)
-        return Leeway(stall * ahead, stall * behind, stall * aside)
+            ahead, behind = ahead + held * max(0.0, -along), behind + held * max(0.0, along)
+            aside += held * abs(dy * ux - dx * uy)
+        return Leeway(ahead, behind, aside)
 
     def halt(self, t: float, linear_accel: float, angular_accel: float) -> float:
         """A stop sent at once from full speed, outside the loop's ramps: the robot brakes at
@@ -135,7 +153,7 @@ class CommandLedger:
         commanded since the last command."""
         moving = any(self.command)
         walked = self.set(t, 0.0, 0.0, 0.0)
-        vx, vy, wz = self.changes[-1] if moving else (0.0, 0.0, 0.0)  # less what it was
+        vx, vy, wz = self.changes[-1][1:] if moving else (0.0, 0.0, 0.0)  # less what it was
         speed = math.hypot(vx, vy)
         brake = speed / (2 * linear_accel)  # metres per m/s: v^2 / 2a
         turn = abs(wz) / (2 * angular_accel)
@@ -177,7 +195,7 @@ class CommandLedger:
         if (vx, vy, wz) != self.command:
             c, s = math.cos(self.pose.yaw), math.sin(self.pose.yaw)
             (ox, oy, ow), (nx, ny) = self.command, (vx * c - vy * s, vx * s + vy * c)
-            self.changes.append((nx - (ox * c - oy * s), ny - (ox * s + oy * c), wz - ow))
+            self.changes.append((t, nx - (ox * c - oy * s), ny - (ox * s + oy * c), wz - ow))
         self.command = (vx, vy, wz)
         return self.travelled - before
 

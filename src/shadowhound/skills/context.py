@@ -12,7 +12,7 @@ from ..config import ShadowHoundConfig
 from ..errors import MissionCancelled, PlanProblem, RobotError, SkillError, SkillTimeout
 from ..memory.service import AgentMemory
 from ..plan import Watch
-from ..robot.base import Robot
+from ..robot.base import Robot, Stall
 from ..speech import Saying
 from ..state import CameraFrame, Pose2D, Posture, RobotState
 from ..world import Belief, KnownObject
@@ -113,7 +113,7 @@ class SkillContext:
         self.ledger: CommandLedger | None = None  # the step's commands, from its first one
         self._leg_began = -math.inf  # robot time the current leg began (stalls count from it)
         self._ticked: float | None = None  # robot time the last tick of this leg ended
-        self._tick_late = 0.0  # the most a tick of this leg came late (this process stalled)
+        self._late_ticks: list[Stall] = []  # this leg's ticks that came late: its own stalls
         self._needs: Posture | None = None  # the posture the step runs in (ensure_standing)
         self._start_clearance: list[float] | None = None  # per fence, where the step began
         self._watcher: Watcher | None = None  # the step's watches (`watch`)
@@ -250,16 +250,20 @@ class SkillContext:
             self.robot.sleep(self.period)
             self.heartbeat(None)
 
+    def stalls(self) -> list[Stall]:
+        """The stalls seen since the current leg began: of the link (`Robot.stalls`) and of
+        this control loop (a tick that came late: the command before it may have gone out
+        late)."""
+        return [*self.robot.stalls(self._leg_began), *self._late_ticks]
+
     def stall(self) -> float:
-        """Seconds: the longest stall seen since the current leg began, of this control loop
-        (a tick that came late) or of the link (`Robot.stalled`), at most MAX_STALL."""
-        seen = max(self._tick_late, self.robot.stalled(self._leg_began))
-        return min(MAX_STALL, seen)
+        """Seconds: the longest of `stalls()`, at most MAX_STALL."""
+        return min(MAX_STALL, max((s.seconds for s in self.stalls()), default=0.0))
 
     def leeway(self, axis: tuple[float, float, float]) -> Leeway:
         """How far an honest robot may be from where the current leg's commands put it, for
         the stalls seen (bounds.CommandLedger.leeway; `axis` the leg's or the turn's)."""
-        return self.ledger.leeway(self.stall(), axis) if self.ledger else Leeway()
+        return self.ledger.leeway(self.stalls(), axis) if self.ledger else Leeway()
 
     @property
     def last_command(self) -> tuple[float, float, float]:
@@ -282,15 +286,16 @@ class SkillContext:
             self.ledger = CommandLedger(state.pose, self.robot.now())
         else:
             self.ledger.begin_leg(self.robot.now(), state.pose)
-        self._leg_began, self._ticked, self._tick_late = self.robot.now(), None, 0.0
+        self._leg_began, self._ticked, self._late_ticks = self.robot.now(), None, []
 
     def tick(self) -> None:
         """Wait one control period, then check cancellation and the time-out."""
         self.heartbeat(None)
         self.robot.sleep(self.period)
         now = self.robot.now()
-        if self._ticked is not None:
-            self._tick_late = max(self._tick_late, now - self._ticked - self.period)
+        if self._ticked is not None and now - self._ticked - self.period > 1e-3:
+            late = now - self._ticked - self.period
+            self._late_ticks.append(Stall(self._ticked, self._ticked + late))
         self._ticked = now
         self.heartbeat(None)
         self.check()

@@ -161,9 +161,10 @@ def drive_local(
             room, why = ctx.room(heading, error + 0.5, st)
             ox, oy, _ = ctx.commanded()
             # Going on along the leg, a robot whose speed-ups came late is short of its
-            # commands by up to the leeway: they may go as much further (bounds.py).
+            # commands by up to the leeway: they may go as much further as it lags (bounds.py).
             onward = math.cos(heading) * axis[0] + math.sin(heading) * axis[1] > 0
-            back = ctx.leeway(axis).behind if onward else 0.0
+            lag = (ox - dx) * axis[0] + (oy - dy) * axis[1]  # odometry behind the commands
+            back = ctx.leeway(axis).catch_up(lag, margin) if onward else 0.0
             left = leg_room((ox - axis[0] * back, oy - axis[1] * back), heading, leg, margin)
             by_commands = left < room
             if by_commands:
@@ -259,8 +260,9 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
                 )
             commanded = ctx.commanded()[2]
             # Going on the way it turns, a robot whose speed-ups came late is short of its
-            # commands by up to the leeway: they may turn as much further (bounds.py).
-            back = ctx.leeway(axis).behind if error * axis[2] > 0 else 0.0
+            # commands by up to the leeway: they may turn as much further as it lags (bounds.py).
+            lag = axis[2] * (commanded - turned)  # odometry behind the commands
+            back = ctx.leeway(axis).catch_up(lag, margin) if error * axis[2] > 0 else 0.0
             left = turn_room(commanded - axis[2] * back, error, angle, margin)
             if left < m.yaw_tolerance and abs(error) >= m.yaw_tolerance:
                 if not stopped_for_room:  # judge at rest: late odometry may only now catch up

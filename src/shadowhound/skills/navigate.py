@@ -9,7 +9,7 @@ goal tolerance (0.25 m by default); the last centimetres and the heading are clo
 project's controller, so the step ends where the plan said, within the outcome tolerance.
 
 Nav2 drives at its own controller's speeds, which the governor cannot cap: the walk measures
-the robot's speed over each second of odometry (and the stalls seen in it: `Robot.stalled`)
+the robot's speed over each second of odometry (and the stalls seen in it: `Robot.stalls`)
 and cancels the goal when it exceeds `safety.max_linear_speed` by more than SPEED_SLACK.
 """
 
@@ -130,7 +130,7 @@ def _check_speed(ctx: SkillContext, name: str, poses: deque[tuple[float, float, 
         return
     # Odometry held up by a stall seen in the window (a loaded machine, a late link) comes in
     # at once: what it shows took that much longer.
-    held = min(MAX_STALL, ctx.robot.stalled(t0))
+    held = min(MAX_STALL, max((s.seconds for s in ctx.robot.stalls(t0)), default=0.0))
     speed = math.hypot(st.x - x0, st.y - y0) / (now - t0 + held)
     limit = ctx.config.safety.max_linear_speed
     if speed > limit * SPEED_SLACK:

@@ -20,7 +20,7 @@ Each fault makes odometry untrusted until `recover` seconds of consistent sample
 since the last bad one (and no outside problem remains); `receive` returns a fault only when
 it begins, so the robot stops once.
 
-It also keeps how late the stream ran (`stalled`): a sample that came in later than its stamp
+It also keeps how late the stream ran (`stalls`): a sample that came in later than its stamp
 says it was sent (this process or the link stalled), or a pause in the stamps beyond the
 stream's usual rate (the driver stalled). A loaded machine stalls the commands going out as it
 stalls the poses coming in; a step allows for what was seen (skills/bounds.py). Taken from the
@@ -35,7 +35,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from ...state import normalize_angle
-from ..base import MAX_STALL
+from ..base import MAX_STALL, Stall
 from .motion import MotionTracker
 from .stamps import StampClock
 
@@ -95,7 +95,7 @@ class OdometryIntake:
         self._outside: dict[str, OdometryFault] = {}  # problems reported by the robot
         self._last_stamp = 0.0
         self._times: deque[float] = deque(maxlen=40)  # recent sample times (for burst gaps)
-        self._stalls: deque[tuple[float, float]] = deque()  # (arrival, seconds late) > 0
+        self._stalls: deque[Stall] = deque()  # the stream's stalls, in the order seen
         self._gaps: deque[float] = deque(maxlen=200)  # recent gaps between sample times
         self._changed_at: float | None = None  # when odometry last showed a new pose
         self._shown_motion = False  # odometry changed since motion was last commanded
@@ -193,10 +193,13 @@ class OdometryIntake:
 
     # -- outputs -----------------------------------------------------------------------
 
+    def stalls(self, since: float) -> tuple[Stall, ...]:
+        """The stream's stalls that ended since `since` (the clock of `arrival`)."""
+        return tuple(s for s in self._stalls if s.end >= since)
+
     def stalled(self, since: float) -> float:
-        """Seconds: the longest stall of the stream seen in samples that arrived since `since`
-        (the same clock as `arrival`)."""
-        return max((late for at, late in self._stalls if at >= since), default=0.0)
+        """Seconds: the longest of `stalls(since)`."""
+        return max((s.seconds for s in self.stalls(since)), default=0.0)
 
     def problem(self, now: float) -> str | None:
         """Why odometry is not trusted now (None: it is)."""
@@ -259,14 +262,14 @@ class OdometryIntake:
         gaps = sorted(self._gaps)
         usual = gaps[len(gaps) * 9 // 10] if len(gaps) >= 10 else math.inf  # bursts are usual
         gap = t - self._times[-1] if self._times else 0.0
-        late = max(arrival - t, gap - usual)
         self._gaps.append(gap)
-        while self._stalls and self._stalls[0][0] < arrival - _STALLS_KEPT:
+        while self._stalls and self._stalls[0].end < arrival - _STALLS_KEPT:
             self._stalls.popleft()
-        if late > 1e-3:  # a millisecond is the link's and the scheduler's noise
-            self._stalls.append((arrival, late))
-        if late > _DISTURBS:
-            self.tracker.disturbed()
+        for stall in (Stall(t, arrival), Stall(t - gap + usual, t)):  # late; after a pause
+            if stall.seconds > 1e-3:  # a millisecond is the link's and the scheduler's noise
+                self._stalls.append(stall)
+            if stall.seconds > _DISTURBS:
+                self.tracker.disturbed()
 
     def _slack(self) -> float:
         """Time a burst may have compressed: the longest recent gap between samples (a burst
