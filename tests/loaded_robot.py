@@ -10,7 +10,9 @@ run; between them everything runs on time. Who:
   and comes in one burst when it ends, each sample with its own stamp;
 - "process": all of ShadowHound (both): the control loop wakes first, before the burst;
 - "driver": the driver's process: commands that reach it meanwhile act when it ends, in order;
-  it takes no pose meanwhile (one when it ends) and publishes none (stamped when published).
+  it takes no pose meanwhile (one when it ends) and publishes none (stamped when published);
+- "commands": only the driver's command path (its executor busy with a detector's work, say):
+  commands act when it ends, while its odometry thread goes on as ever.
 
 Commands act as go2_ros2_sdk's do: a velocity as soon as the driver has it, StopMove at its
 10 Hz request loop's next turn. As on the Go2 robot, odometry older than `pose_timeout` while
@@ -27,7 +29,7 @@ from shadowhound.errors import RobotError
 from shadowhound.state import Posture, RobotState
 from tests.test_go2_closed_loop import LateRobot
 
-WHO = ("controller", "receiver", "process", "driver")
+WHO = ("controller", "receiver", "process", "driver", "commands")
 _REQUEST_LOOP = 0.1  # seconds between the driver's turns of its request queue
 _AFTER = 1e-3  # the ROS thread wakes this much after the control loop from a process stall
 
@@ -76,7 +78,10 @@ class LoadedRobot(LateRobot):
         while moved:
             moved = False
             for s in self.schedule:
-                hit = s.who == who or (s.who == "process" and who in ("controller", "receiver"))
+                hit = s.who == who or (
+                    (s.who, who) in (("process", "controller"), ("process", "receiver"))
+                    or (s.who, who) == ("driver", "commands")
+                )
                 start = self._origin + s.at
                 end = (
                     start + s.seconds + (_AFTER if s.who == "process" and who == "receiver" else 0)
@@ -105,13 +110,13 @@ class LoadedRobot(LateRobot):
         super().send_velocity(vx, vy, wz)
 
     def _walk(self, vx: float, vy: float, wz: float) -> None:
-        self._acted = max(self._acted, self.free("driver", self.sim.now()))
+        self._acted = max(self._acted, self.free("commands", self.sim.now()))
         self._commands.append((self._acted, (vx, vy, wz)))
 
     def stop(self) -> None:
         now = self.sim.now()
-        loop = math.ceil(self.free("driver", now) / _REQUEST_LOOP - 1e-9) * _REQUEST_LOOP
-        self._acted = max(self._acted, self.free("driver", loop))
+        loop = math.ceil(self.free("commands", now) / _REQUEST_LOOP - 1e-9) * _REQUEST_LOOP
+        self._acted = max(self._acted, self.free("commands", loop))
         self._commands.append((self._acted, None))
         self._moving = False
         self.intake.command(now, 0.0, 0.0, 0.0)

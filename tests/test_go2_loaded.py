@@ -63,6 +63,33 @@ def test_a_turn_whose_commands_the_driver_held_up_succeeds(stall: Stall, ci_said
     assert abs(turned(robot, start.yaw) - 90.0) <= 5.0, turned(robot, start.yaw)
 
 
+def test_a_start_the_driver_held_up_unseen_in_odometry_succeeds_on_a_loaded_machine() -> None:
+    """Only the driver's command path stalls (its executor busy with a detector's work), its
+    odometry goes out as ever: the stream shows no stall then, but odometry shows the turn start
+    0.3 s later than the latency says, and ShadowHound's own ROS thread stalled a moment later
+    (the machine is loaded): that start's commands are allowed for (it failed: "stopped 10
+    degrees short of the turn")."""
+    robot = LoadedRobot([Stall("commands", 0.0, 0.3), Stall("receiver", 0.8, 0.1)])
+    start = robot.sim.get_state()
+    result = go2_agent(robot).execute_mission("turn left 90 degrees")
+    robot.sleep(2.0)
+    assert result.success, result.response
+    assert abs(turned(robot, start.yaw) - 90.0) <= 5.0, turned(robot, start.yaw)
+
+
+def test_a_late_start_on_a_quiet_machine_is_allowed_nothing() -> None:
+    """With no stall of the link seen, a start odometry shows late is the robot's own, or the
+    shape of a lie: the commands go no further than the margin, as before."""
+    robot = LoadedRobot([Stall("commands", 0.0, 0.3)])
+    start = robot.sim.get_state()
+    robot.truths.clear()
+    result = go2_agent(robot).execute_mission("turn left 90 degrees")
+    robot.sleep(2.0)
+    most = max(math.degrees(math.remainder(t.yaw - start.yaw, math.tau)) for t in robot.truths)
+    assert most <= 90.0 + 5.0, (most, result.response)
+    assert not result.success or abs(turned(robot, start.yaw) - 90.0) <= 5.0, result.response
+
+
 def test_shadowhound_stalling_mid_walk_stops_the_robot_and_goes_on() -> None:
     """ShadowHound gets no CPU for 0.6 s mid-walk: its control loop wakes to odometry 0.6 s old
     (the rest waits in its queue), which failed the step ("no odometry on odom for 0.6 s").
@@ -134,15 +161,21 @@ def test_a_lie_that_the_turn_lags_is_caught_when_no_stall_explains_it(jump: floa
     assert most <= 90.0 + 5.0, (most, result.response)
 
 
+# Who stalls in the property: a whole process, which odometry shows (a driver's command path
+# stalling alone shows only in a late start: the tests above).
+SEEN = tuple(who for who in WHO if who != "commands")
+
+
 def stalls_of(seed: int, longest: float, apart: float) -> list[Stall]:
-    """A minute of stalls of anyone, each up to `longest` seconds, `apart` seconds apart on
-    average."""
+    """A minute of stalls of any process, each up to `longest` seconds, `apart` seconds apart
+    on average and at least 0.2 s (back to back they are one longer stall: more than a step
+    allows for, MAX_STALL)."""
     rng = random.Random(seed)
     out, t = [], rng.uniform(0.0, 1.0)
     while t < 60.0:
         seconds = rng.uniform(0.02, longest)
-        out.append(Stall(rng.choice(WHO), t, seconds))
-        t += seconds + rng.expovariate(1.0 / apart)
+        out.append(Stall(rng.choice(SEEN), t, seconds))
+        t += seconds + 0.2 + rng.expovariate(1.0 / apart)
     return out
 
 

@@ -212,9 +212,10 @@ def test_how_late_the_stream_ran_is_kept_from_the_times_alone() -> None:
     t += 0.3 + 0.005
     t = at_rest(intake, t, 1.0)
     mark = t
-    t += 0.45  # the driver sent nothing for 0.45 s
+    t += 0.45  # the driver sent nothing for 0.45 s: it stalled after the sample before
     intake.receive(t, t, 0.0, 0.0, 0.0)
-    assert math.isclose(intake.stalled(mark), 0.40, abs_tol=0.01)
+    assert math.isclose(intake.stalled(mark), 0.45, abs_tol=0.01)
+    assert intake.stalls(mark)[-1] == (t - 0.45, t)
     assert intake.stalled(t + 0.001) == 0.0  # since then: nothing
 
 

@@ -34,13 +34,13 @@ from ..config import SafetyConfig
 from ..robot.base import MAX_STALL, Stall
 from ..state import Pose2D
 
-# Seconds a stall may have begun before it was seen to: a pause in odometry shows from the
-# first sample missing, up to a sample period after the sender stalled.
-STALL_ONSET = 0.1
+# Seconds a stop (StopMove) may wait for the driver's request loop before it acts (go2_ros2_sdk
+# runs it at 10 Hz): a stall that begins that soon after a change holds it up too.
+STOP_LOOP = 0.1
 
 __all__ = [
     "MAX_STALL",
-    "STALL_ONSET",
+    "STOP_LOOP",
     "CommandLedger",
     "Leeway",
     "fences",
@@ -129,22 +129,34 @@ class CommandLedger:
         self.pose = self.anchor = at
         self.changes.clear()
 
-    def leeway(self, stalls: Sequence[Stall], axis: tuple[float, float, float]) -> Leeway:
+    def leeway(
+        self, stalls: Sequence[Stall], axis: tuple[float, float, float], accel: float
+    ) -> Leeway:
         """How far an honest robot may be from the leg's commands when each change of them
         may have acted as late as a stall seen around it held it up (in order; at most
         MAX_STALL): each slowing along `axis` (a unit vector: the leg's direction in the odom
         frame and 0, or (0, 0, +-1) for a turn) lets it go on further, each speed-up leaves it
-        short, each change across it off to a side."""
+        short, each change across it off to a side. The changes a stall held act together
+        when it ends, so the robot then takes its acceleration limit (`accel`) to follow them
+        all, as far again as a change of that size sent at once."""
         ahead = behind = aside = 0.0
+        held_by: dict[int, list[float]] = {}  # per stall: the slowings, the speed-ups it held
         ux, uy, uw = axis
         for t, dx, dy, dw in self.changes:
-            held = max(
-                (s.end - t for s in stalls if s.start - STALL_ONSET <= t < s.end), default=0.0
-            )
-            held = min(MAX_STALL, held)
+            around = [
+                (s.end - t, i) for i, s in enumerate(stalls) if s.start - STOP_LOOP < t < s.end
+            ]
+            if not around:
+                continue
+            late, which = max(around)
+            held = min(MAX_STALL, late)
             along = dx * ux + dy * uy + dw * uw
             ahead, behind = ahead + held * max(0.0, -along), behind + held * max(0.0, along)
             aside += held * abs(dy * ux - dx * uy)
+            sums = held_by.setdefault(which, [0.0, 0.0])
+            sums[0], sums[1] = sums[0] + max(0.0, -along), sums[1] + max(0.0, along)
+        for slowed, sped in held_by.values():
+            ahead, behind = ahead + slowed**2 / (2 * accel), behind + sped**2 / (2 * accel)
         return Leeway(ahead, behind, aside)
 
     def halt(self, t: float, linear_accel: float, angular_accel: float) -> float:

@@ -263,7 +263,11 @@ class SkillContext:
     def leeway(self, axis: tuple[float, float, float]) -> Leeway:
         """How far an honest robot may be from where the current leg's commands put it, for
         the stalls seen (bounds.CommandLedger.leeway; `axis` the leg's or the turn's)."""
-        return self.ledger.leeway(self.stalls(), axis) if self.ledger else Leeway()
+        if self.ledger is None:
+            return Leeway()
+        lim = self.config.safety  # how fast the robot follows a change: the commands' caps
+        accel = lim.max_angular_accel if axis[2] else lim.max_linear_accel
+        return self.ledger.leeway(self.stalls(), axis, accel)
 
     @property
     def last_command(self) -> tuple[float, float, float]:

@@ -7,6 +7,8 @@ link). A closed loop that steers on it overshoots by speed x delay. `MotionTrack
 - what was commanded (body-frame velocity, with StopMove as a step to zero), run through a
   model of the robot's response (acceleration-limited) into a dead-reckoned trace;
 - the odometry samples, each taken to show the robot `latency` seconds before it arrived;
+- starts that odometry showed later than the latency says (`held`): their first commands were
+  held up on the way, evidence of a stall the odometry stream alone does not show;
 - the latency itself: fixed by configuration, or measured: a first guess each time the robot
   starts from rest (time from the first command to the first sample that shows motion, less
   the time the model needs to show it and half a sample period), then, each time odometry
@@ -32,6 +34,7 @@ from dataclasses import dataclass
 
 from ... import robot_config
 from ...state import compose, normalize_angle
+from ..base import Stall
 
 # Motion control for real odometry, used with robot go2 for every field the profile (or the
 # environment) does not set: the simulator's defaults (2 mm, 0.001 degrees, 20 Hz) are exact
@@ -45,6 +48,7 @@ _MOTION_EPS = 0.003  # metres (and the same in radians) that count as "it moved"
 _STILL_WINDOW = 0.25  # seconds of odometry a velocity is measured over
 _FIT_SECONDS = 3.0  # seconds of odometry the delay is fitted over
 _BURST = 0.01  # seconds: samples closer together than this came in one burst
+_HELD = 0.05  # seconds a start may come later than the latency says before it was held up
 
 
 @dataclass(frozen=True)
@@ -107,6 +111,7 @@ class MotionTracker:
         # sample that showed it (odometry cannot show motion before it happens).
         self._cap: float | None = None
         self._disturbed = False  # a stall was seen in this motion's odometry (`disturbed`)
+        self._held: deque[Stall] = deque(maxlen=50)  # starts that came late (`held`)
 
     # -- inputs ------------------------------------------------------------------------
 
@@ -185,6 +190,12 @@ class MotionTracker:
         a = self._trace_at(t0 - self.latency)
         b = self._trace_at(t1 - self.latency)
         return math.hypot(b[0] - a[0], b[1] - a[1]), abs(b[2] - a[2])
+
+    def held(self, since: float) -> tuple[Stall, ...]:
+        """Starts from rest that odometry showed later than the latency says since `since`:
+        the commands that began them were held up on the way (a loaded machine, a late link),
+        from the first command until odometry's lateness says it acted."""
+        return tuple(s for s in self._held if s.end >= since)
 
     def disturbed(self) -> None:
         """Odometry of the motion under way came in stalled (a loaded machine, a late link):
@@ -334,6 +345,9 @@ class MotionTracker:
             if math.hypot(d[0], d[1]) >= _MOTION_EPS or abs(d[2]) >= _MOTION_EPS:
                 break
         latency = sample.t - shown - self._sample_period() / 2
+        late = latency - self.latency  # later than usual: its first commands were held up
+        if late > max(_HELD, self._sample_period()) and not self._disturbed:  # (not its odometry)
+            self._held.append(Stall(started - 1e-3, started + late))  # its first command on
         if not self._disturbed:
             self._latencies.append(min(MAX_LATENCY, max(0.0, latency)))
 

@@ -22,10 +22,12 @@ it begins, so the robot stops once.
 
 It also keeps how late the stream ran (`stalls`): a sample that came in later than its stamp
 says it was sent (this process or the link stalled), or a pause in the stamps beyond the
-stream's usual rate (the driver stalled). A loaded machine stalls the commands going out as it
-stalls the poses coming in; a step allows for what was seen (skills/bounds.py). Taken from the
-times alone, whatever the poses say. No rclpy and no clock of its own: every call takes the
-time.
+stream's usual rate (the driver stalled), and, near such a stall, a start it showed later than
+the latency says (its commands were held up: MotionTracker.held). A loaded machine stalls the
+commands going out as it stalls the poses coming in; a step allows for what was seen
+(skills/bounds.py). Taken from when samples were sent and came in, and when odometry first
+showed a start, never from how far a pose says the robot went. No rclpy and no clock of its
+own: every call takes the time.
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ _SHOWN = 0.25  # ... or this share of what the commands moved it by since the sa
 _GOOD_SAMPLES = 5  # consistent samples (besides `recover` seconds) before trusting again
 _STALLS_KEPT = 30.0  # seconds of stalls `stalled` can look back over
 _DISTURBS = 0.05  # seconds of stall that make a motion's odometry no measure of the latency
+_LOADED = 2.0  # seconds from a stall of the stream within which a late start was held up too
 
 
 @dataclass(frozen=True)
@@ -194,8 +197,17 @@ class OdometryIntake:
     # -- outputs -----------------------------------------------------------------------
 
     def stalls(self, since: float) -> tuple[Stall, ...]:
-        """The stream's stalls that ended since `since` (the clock of `arrival`)."""
-        return tuple(s for s in self._stalls if s.end >= since)
+        """The stalls that ended since `since` (the clock of `arrival`): the stream's, and
+        starts it showed later than the latency says (MotionTracker.held) on a loaded machine:
+        within `_LOADED` seconds of a stall of the stream. On a quiet one a late start is the
+        robot's own, or a lie's shape, and allowed nothing."""
+        seen = [s for s in self._stalls if s.end >= since - _LOADED]
+        held = [
+            h
+            for h in self.tracker.held(since)
+            if any(s.start - _LOADED <= h.start <= s.end + _LOADED for s in seen)
+        ]
+        return (*(s for s in seen if s.end >= since), *held)
 
     def stalled(self, since: float) -> float:
         """Seconds: the longest of `stalls(since)`."""
@@ -265,10 +277,12 @@ class OdometryIntake:
         self._gaps.append(gap)
         while self._stalls and self._stalls[0].end < arrival - _STALLS_KEPT:
             self._stalls.popleft()
-        for stall in (Stall(t, arrival), Stall(t - gap + usual, t)):  # late; after a pause
-            if stall.seconds > 1e-3:  # a millisecond is the link's and the scheduler's noise
+        # Late: held from when it was sent. After a pause: the sender stalled at some moment
+        # after the sample before (a stall is as long as it is beyond the usual gap).
+        for stall, seconds in ((Stall(t, arrival), arrival - t), (Stall(t - gap, t), gap - usual)):
+            if seconds > 1e-3:  # a millisecond is the link's and the scheduler's noise
                 self._stalls.append(stall)
-            if stall.seconds > _DISTURBS:
+            if seconds > _DISTURBS:
                 self.tracker.disturbed()
 
     def _slack(self) -> float:
