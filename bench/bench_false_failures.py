@@ -1,11 +1,13 @@
 """Honest Go2 missions over DDS on a loaded machine (issue 32): how many fail, and how.
 
 Run:  .venv/bin/python bench/bench_false_failures.py [--missions N] [--hogs N] [--label L]
-      [--write]
+      [--write] [--json FILE]
+      .venv/bin/python bench/bench_false_failures.py --saved LABEL=FILE [--saved ...]
 Needs rclpy, shadowhound_interfaces, go2_interfaces and vision_msgs (bash scripts/build_ros.sh).
 DDS stays on loopback (the project's Fast DDS profile, LOCALHOST discovery, a domain id this
-process holds). --write puts this run's row (under `--label`, e.g. "before" or "after") into the
-"false-failures" section of bench/RESULTS.md, keeping the rows of other labels.
+process holds). --write puts this run's row (under `--label`, e.g. "after, run 1") into the
+"false-failures" section of bench/RESULTS.md, keeping the rows of other labels; --json saves the
+run's records, and --saved writes saved runs (before and after a change: each its own checkout).
 
 Method. As tests/ros/test_go2_coco.py runs them: `shadowhound sim-driver --detector coco` (the
 simulated Go2 as go2_ros2_sdk behaves, its camera's COCO boxes on `detected_objects`) and
@@ -196,51 +198,46 @@ def row(label: str, result: dict[str, Any]) -> str:
     )
 
 
-def write(label: str, result: dict[str, Any]) -> None:
+def write(runs: dict[str, dict[str, Any]]) -> None:
+    """Put `runs` (label -> result) into the section, keeping the rows of other labels."""
     text = RESULTS.read_text() if RESULTS.exists() else ""
     start, end = f"<!-- {SECTION}:start -->", f"<!-- {SECTION}:end -->"
-    kept: list[str] = []
-    if start in text:
-        old = text.split(start, 1)[1].split(end, 1)[0]
-        kept = [
-            line
-            for line in old.splitlines()
-            if line.startswith("| ")
-            and not line.startswith(("| label", "| run"))
-            and not line.startswith(f"| {label} |")
-        ]
-    failures = [
-        f"- {label}: `{r['mission']}`: {r['final'][:300]} (truth: {r['truth'] or 'as asked'})"
+    old = text.split(start, 1)[1].split(end, 1)[0] if start in text else ""
+    ours = tuple(f"| {label} |" for label in runs) + tuple(f"- {label}: " for label in runs)
+    kept = [line for line in old.splitlines() if not line.startswith(ours)]
+    rows = [line for line in kept if line.startswith("| ") and not line.startswith("| run ")]
+    rows += [row(label, result) for label, result in runs.items()]
+    failures = [line for line in kept if line.startswith("- ")]
+    failures += [
+        f"- {label}: `{r['mission']}`: {r['final'][:200]}... (truth: {r['truth'] or 'as asked'})"
+        for label, result in runs.items()
         for r in result["records"]
         if not r["ok"]
     ]
-    kept_failures = []
-    if start in text:
-        kept_failures = [
-            line
-            for line in text.split(start, 1)[1].split(end, 1)[0].splitlines()
-            if line.startswith("- ") and not line.startswith(f"- {label}: ")
-        ]
     section = f"""{start}
 ## Honest Go2 missions on a loaded machine (issue 32, `bench/bench_false_failures.py`)
 
 Measured {date.today().isoformat()} with `python bench/bench_false_failures.py --label LABEL
---write` (CPython {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores, shared
-with other engineers' runs; ROS 2 Jazzy rclpy from PyPI, Fast DDS on shared memory / loopback).
+--write` (CPython {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores,
+shared with five other engineers' test runs; ROS 2 Jazzy rclpy from PyPI, Fast DDS on shared
+memory / loopback); "before" is the code before issue 32's fix, "after" with it.
 
 `shadowhound sim-driver --detector coco` and `shadowhound node -p robot:=go2` (with the
-detector's boxes) as their own processes, beside pure-Python CPU hogs at nice 0; a round of
+detector's boxes, and the ROS tests' 1 s watchdog) as their own processes, as
+tests/ros/test_go2_coco.py runs them, beside two pure-Python CPU hogs at nice 0; a round of
 honest missions over and over (turns of 90 and 180 degrees, walks of 1 to 2 m forward and back,
 "go to x=0, y=0" through the driver's Nav2). The driver never lies: every failed mission is a
-false failure. "Did it anyway" counts the failed missions the driver's truth shows within the
-outcome tolerance of what was asked (5 degrees, 0.10 m); "wrong successes" those that reported
-success with the truth outside it. Load: the 1-minute load average, mean over the missions.
+failure of an honest robot. "Did it anyway" counts the failed missions the driver's truth shows
+within the outcome tolerance of what was asked (5 degrees, 0.10 m): false failures in the
+strict sense; "wrong successes" the missions that reported success with the truth outside it.
+Load: the 1-minute load average (2 cores), mean over the missions; the hogs make about 2 of it,
+the other engineers' runs the rest.
 
 | run | missions | failed | did it anyway | failures by kind | wrong successes | hogs | load |
 |---|---|---|---|---|---|---|---|
-{chr(10).join(sorted([*kept, row(label, result)]))}
+{chr(10).join(sorted(rows))}
 
-{chr(10).join(sorted([*kept_failures, *failures])) or "No failures."}
+{chr(10).join(sorted(failures)) or "No failures."}
 {end}
 """
     write_section(SECTION, section)
@@ -253,13 +250,27 @@ def main() -> None:
     parser.add_argument("--label", default="run")
     parser.add_argument("--write", action="store_true")
     parser.add_argument("--json", type=Path, help="also save every mission's record here")
+    parser.add_argument(
+        "--saved",
+        action="append",
+        default=[],
+        metavar="LABEL=JSON",
+        help="write a run saved with --json under LABEL instead of running one",
+    )
     args = parser.parse_args()
+    if args.saved:
+        runs = {}
+        for item in args.saved:
+            label, path = item.split("=", 1)
+            runs[label] = json.loads(Path(path).read_text())
+        write(runs)
+        return
     result = run(args.missions, args.hogs)
     print(row(args.label, result))
     if args.json:
         args.json.write_text(json.dumps(result, indent=1))
     if args.write:
-        write(args.label, result)
+        write({args.label: result})
 
 
 if __name__ == "__main__":
