@@ -22,6 +22,10 @@ robot counts as still only once odometry has caught up and shows it still: a ste
 result from a pose that no longer moves, not from a prediction.
 
 No rclpy and no clock of its own: every call takes the time, so tests drive it exactly.
+
+Long because: the model, the samples and the latency are one state that every output reads
+(the pose now needs the latency, the latency the model and the samples); the stamp clock
+already lives apart (stamps.py).
 """
 
 from __future__ import annotations
