@@ -14,6 +14,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from shadowhound import SimRobot
+from shadowhound.robot.base import Stall
 from shadowhound.state import CameraFrame, Posture, RobotState, Scan
 
 if TYPE_CHECKING:
@@ -91,6 +92,9 @@ class LyingOdometry:
         self.sim.say(text)
 
     latency = 0.0  # its pose lies, but not late
+
+    def stalls(self, since: float) -> tuple[Stall, ...]:
+        return self.sim.stalls(since)
 
     def vocabulary(self) -> frozenset[str]:
         return self.sim.vocabulary()

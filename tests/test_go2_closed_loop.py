@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from shadowhound import RobotAgent, RobotAgentConfig
 from shadowhound.config import ShadowHoundConfig
 from shadowhound.errors import RobotError
+from shadowhound.robot.base import Stall
 from shadowhound.robot.go2.motion import GO2_MOTION, MotionTracker
 from shadowhound.robot.go2.odometry import OdometryIntake
 from shadowhound.robot.sim.robot import SimRobot
@@ -206,6 +207,9 @@ class LateRobot:
     @property
     def latency(self) -> float:
         return self.tracker.latency_bound
+
+    def stalls(self, since: float) -> tuple[Stall, ...]:
+        return self.intake.stalls(since)
 
     def vocabulary(self) -> frozenset[str]:
         return self.sim.vocabulary()

@@ -216,3 +216,42 @@ def test_stamp_clock_without_stamps_uses_arrival_and_starts_over_when_the_sender
     assert clock.local_time(4600.0, 5.4) == pytest.approx(5.4)
     assert clock.local_time(4600.05, 5.6) == pytest.approx(5.45)
     assert clock.local_time(0.0, 5.5) == pytest.approx(5.5)  # never backwards
+
+
+def test_a_pose_sent_before_the_command_teaches_no_latency_and_breaks_nothing() -> None:
+    """ShadowHound's process stalled: the last pose it had showed the robot still, but the ones
+    held in its queue, sent before the next command, show the robot still moving. The first of
+    them, read as the start of the new motion, made the latency negative and the fit at rest
+    raised ValueError in the ROS callback (seen on a loaded machine)."""
+    tracker = MotionTracker()
+    t = 0.0
+    for _ in range(40):  # at rest
+        t += 0.05
+        tracker.odometry(t, 0.0, 0.0, 0.0)
+    tracker.command(t + 0.3, 0.3, 0.0, 0.0)  # it looked at rest: a start
+    for i in range(1, 4):  # held in the queue, sent before the command: still coasting
+        tracker.odometry(t + 0.05 * i, 0.002 * i, 0.0, 0.0)
+    t += 0.3
+    x = 0.006
+    for _ in range(40):  # the new motion, then a stop and rest: the fit runs
+        t += 0.05
+        x += 0.3 * 0.05
+        tracker.odometry(t, x, 0.0, 0.0)
+    tracker.command(t, 0.0, 0.0, 0.0)
+    for _ in range(40):
+        t += 0.05
+        tracker.odometry(t, x, 0.0, 0.0)
+    assert 0.0 <= tracker.latency < 1.0, tracker.latency
+
+
+def test_a_motion_whose_odometry_came_in_stalled_teaches_no_latency() -> None:
+    """The tracker keeps its latency when told the motion's odometry came in stalled."""
+    tracker = MotionTracker(initial_latency=0.2)
+    odometry = DelayedOdometry(tracker, 20.0, 0.2)
+    odometry.run(0.5)
+    odometry.command(0.3, 0.0, 0.0)
+    tracker.disturbed()
+    odometry.run(1.0)
+    odometry.command(0.0, 0.0, 0.0)
+    odometry.run(2.0)
+    assert tracker.latency == 0.2

@@ -194,3 +194,84 @@ def test_a_mission_never_counts_less_than_it_commanded_nor_a_nan() -> None:
     assert budget.travelled(RobotState(distance_travelled=math.nan)) == 1.5
     assert budget.travelled(RobotState(distance_travelled=2.5)) == 1.5
     assert budget.travelled(RobotState(distance_travelled=6.0)) == 4.0
+
+
+# -- a loaded machine (issue 32): how late the stream ran, and no fault for it --------------
+
+
+def test_how_late_the_stream_ran_is_kept_from_the_times_alone() -> None:
+    """`stalled`: a sample that came in later than its stamp says it was sent (this process
+    stalled: DDS held it), or after a pause in what was sent beyond the usual gap (the driver
+    stalled); bursts that are the stream's own rhythm are no stall."""
+    intake = OdometryIntake(MotionTracker(latency=0.0))
+    t = at_rest(intake, 0.0, 2.0)
+    assert intake.stalled(0.0) == 0.0  # on time
+    for i in range(1, 6):  # sent 20 Hz on, taken in by a process that stalled 0.3 s
+        intake.receive(t + 0.3 + 0.001 * i, t + 0.05 * i, 0.0, 0.0, 0.0)
+    assert math.isclose(intake.stalled(t), 0.25, abs_tol=0.01)
+    t += 0.3 + 0.005
+    t = at_rest(intake, t, 1.0)
+    mark = t
+    t += 0.45  # the driver sent nothing for 0.45 s: it stalled after the sample before
+    intake.receive(t, t, 0.0, 0.0, 0.0)
+    assert math.isclose(intake.stalled(mark), 0.45, abs_tol=0.01)
+    assert intake.stalls(mark)[-1] == (t - 0.45, t)
+    assert intake.stalled(t + 0.001) == 0.0  # since then: nothing
+
+
+def test_bursts_that_are_the_links_rhythm_are_no_stall() -> None:
+    """go2_ros2_sdk #231: three samples 1 ms apart, then 0.175 s of nothing, over and over."""
+    intake = OdometryIntake(MotionTracker(latency=0.0))
+    t = 0.0
+    for _ in range(60):
+        t += 0.175
+        for i in range(3):
+            intake.receive(t + 0.001 * i, t + 0.001 * i, 0.0, 0.0, 0.0)
+    assert intake.stalled(5.0) == 0.0
+
+
+def turning_slowly(intake: OdometryIntake, seconds: float, pause_at: float, freeze_at: float):
+    """A correction turning at 1 degree/s, odometry 20 Hz without delay, the driver pausing
+    0.3 s at `pause_at` and the pose frozen (fresh stamps) from `freeze_at`; the faults."""
+    rate = math.radians(1.0)
+    t = at_rest(intake, 0.0, 1.0)
+    start = t
+    intake.command(start, 0.0, 0.0, rate)
+    faults, shown = [], 0.0
+    while t < start + seconds:
+        t += 0.05
+        if pause_at <= t - start < pause_at + 0.3:
+            continue  # the driver stalled: nothing sent
+        if t - start < freeze_at:
+            shown = rate * (t - start)
+        fault = intake.receive(t, t, 0.0, 0.0, shown)
+        if fault is not None:
+            faults.append(fault.kind)
+    return faults
+
+
+def test_a_slow_turn_is_not_taken_for_frozen_odometry() -> None:
+    """At 1 degree/s a 20 Hz pose changes less from one sample to the next than a pose must to
+    count as new; after a pause in the stream showed it moving, it was taken for a freeze once
+    the commands had turned it 9 degrees (a Go2 turn's slow correction, failed on a loaded
+    machine: "odometry has not changed for 8.6 s while the robot was commanded to move")."""
+    assert turning_slowly(OdometryIntake(MotionTracker(latency=0.0)), 15.0, 1.0, 100.0) == []
+
+
+def test_a_frozen_pose_is_still_caught_in_a_slow_turn() -> None:
+    faults = turning_slowly(OdometryIntake(MotionTracker(latency=0.0)), 15.0, 1.0, 3.0)
+    assert faults == ["frozen"]
+
+
+def test_noise_in_a_burst_after_a_pause_is_no_one_else_driving() -> None:
+    """The driver stalled 0.6 s, then sent what it held at once: three poses of a robot at rest
+    a millisecond of noise apart, stamped a millisecond apart. Read as a velocity that is a
+    metre a second: it made odometry untrusted ("a joystick or another controller drives it")
+    and the next mission was refused."""
+    intake = OdometryIntake(MotionTracker(latency=0.2))
+    t = at_rest(intake, 0.0, 5.0)
+    t += 0.6
+    for i in range(3):
+        fault = intake.receive(t + 0.001 * i, t + 0.001 * i, 0.001 * i, 0.0, 0.0)
+        assert fault is None, fault
+    assert intake.problem(t + 0.01) is None

@@ -393,6 +393,7 @@ def test_without_a_driver_commands_time_out_and_motion_is_refused(client: RosCli
         ("{}", Faults()),
         ('{"odom": false, "delay_ms": 250}', Faults(odom=False, delay=0.25)),
         ('{"drop_commands": true}', Faults(drop_commands=True)),
+        ('{"stall_ms": 400, "after_deg": 75}', Faults(stall=0.4, after_deg=75.0)),
     ],
 )
 def test_fault_messages(text: str, expected: Faults) -> None:
@@ -405,6 +406,7 @@ def test_fault_messages(text: str, expected: Faults) -> None:
         ('{"lidar": false}', "unknown fault(s) ['lidar']"),
         ('{"odom": "no"}', "take true or false"),
         ('{"delay_ms": -5}', "delay_ms must be a number of milliseconds in 0..10000"),
+        ('{"stall_ms": 6000}', "stall_ms must be a number of milliseconds in 0..5000"),
         ("[1]", "must be a JSON object"),
     ],
 )

@@ -18,6 +18,63 @@ from shadowhound.web import WebServer
 from tests.web.conftest import approach, make_agent, wait_for
 from tests.web.test_browser import ARTIFACTS, DESKTOP, PHONE, _playwright, launch, open_dashboard
 
+# On a loaded machine the answer to the click on "Drive" (POST /api/teleop) can come after a
+# status frame the server sent before it switched driving on: that frame turns the box off
+# again until the answer and the frames after it turn it on (CI: Playwright's check() read the
+# box between the two, "Clicking the checkbox did not change its state"). Here it happens every
+# time: the page gets the last frame it had again right after the click, and the answer is
+# held until then. The test then waits for what it needs: a frame
+# from the server saying driving is on, and the page showing it.
+STALE_FRAME = """
+(() => {
+  const Socket = window.WebSocket, sockets = [];
+  let last = null;
+  window.__teleop = null;  // what the latest frame from the server said
+  window.__stale = false;  // the stale frame was delivered
+  window.WebSocket = class extends Socket {
+    constructor(...args) {
+      super(...args);
+      sockets.push(this);
+      this.addEventListener("message", (event) => {
+        const message = JSON.parse(event.data);
+        const status = message.kind === "snapshot" ? message.status : message;
+        if (typeof status.teleop === "boolean") window.__teleop = status.teleop;
+        last = event.data;
+      });
+    }
+  };
+  document.addEventListener("change", (event) => {
+    if (event.target.id !== "drive-on" || last === null) return;
+    const stale = last;
+    queueMicrotask(() => {
+      sockets.forEach((s) => s.onmessage?.({ data: stale }));
+      window.__stale = true;
+    });
+  });
+})();
+"""
+FRAME_OFF = "() => window.__teleop === false"
+SHOWN_ON = """() => window.__teleop === true && document.querySelector("#drive-on").checked
+  && document.querySelector("#pad").dataset.on === 'true'"""
+
+
+def switch_on(page: Any) -> None:
+    """Click "Drive" with its answer held back until the page has had a frame from before the
+    switch again, then let it go and wait for the page to show driving on."""
+    held: list[Any] = []
+
+    def hold(route: Any) -> None:
+        held.append(route)
+
+    page.route("**/api/teleop", hold)
+    page.wait_for_function(FRAME_OFF)  # a first frame has come
+    page.locator("#drive-on").click()
+    page.wait_for_function("() => window.__stale")
+    wait_for(lambda: held or page.evaluate("0"), 10, "the switch's request")  # calls pump it
+    held[0].continue_()
+    page.unroute("**/api/teleop", hold)
+    page.wait_for_function(SHOWN_ON)
+
 
 @contextlib.contextmanager
 def driving(
@@ -35,9 +92,8 @@ def driving(
     with sync_playwright() as p:
         context = launch(p, tmp_path, viewport)
         try:
-            page = open_dashboard(context, server.url, errors)
-            page.check("#drive-on")
-            page.wait_for_selector('#pad[data-on="true"]')
+            page = open_dashboard(context, server.url, errors, init_script=STALE_FRAME)
+            switch_on(page)
             page.locator("#pad").scroll_into_view_if_needed()
             yield page, agent.robot
         finally:

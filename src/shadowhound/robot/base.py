@@ -17,7 +17,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, NamedTuple, Protocol, runtime_checkable
 
 from ..errors import RobotError as RobotError
 from ..state import CameraFrame, Posture, RobotState, Scan, Sighting
@@ -50,6 +50,21 @@ class TrickInfo(Protocol):
 
 
 NO_TRICKS: Mapping[str, TrickInfo] = MappingProxyType({})
+# Seconds: the longest stall of a robot's link (`Robot.stalls`) allowed for between what was
+# commanded and what odometry shows, as seen on loaded 2-core machines; no more is.
+MAX_STALL = 0.5
+
+
+class Stall(NamedTuple):
+    """A stretch of robot time (`start` to `end`) in which the link to the robot was seen
+    stalled: a command sent in it may have acted only at its end."""
+
+    start: float
+    end: float
+
+    @property
+    def seconds(self) -> float:
+        return self.end - self.start
 
 
 @runtime_checkable
@@ -79,6 +94,14 @@ class Robot(Protocol):
     @property
     def realtime(self) -> bool:
         """True when the robot's clock runs by itself (a hung skill then needs a watchdog)."""
+        ...
+
+    def stalls(self, since: float) -> tuple[Stall, ...]:
+        """The stalls of the link to the robot seen since `since` (robot clock), oldest first:
+        a pose that came in later than it was sent (from when it was sent to when it came in),
+        or a pause in what it sends beyond its usual rate (a loaded machine, a late link). A
+        command sent in one may have acted only at its end, so a step allows for them between
+        its commands and its pose. None for a robot whose pose is known at once."""
         ...
 
     def get_state(self) -> RobotState:
@@ -202,10 +225,10 @@ class Robot(Protocol):
 class BaseRobot(ABC):
     """The `Robot` protocol with defaults for what a robot may lack: a backend inherits it and
     writes only what it has. A robot is, unless it says otherwise: on the wall clock
-    (`time_scale` 1, `realtime`), knowing its pose at once (`latency` 0), blind to its
-    surroundings (no camera frame, no scan, no map, no objects, no bearings, recognising
-    nothing), without a navigation server, a voice, tricks or an e-stop source of its own.
-    Closing it stops it.
+    (`time_scale` 1, `realtime`), knowing its pose at once (`latency` 0, no `stalls`),
+    blind to its surroundings (no camera frame, no scan, no map, no objects, no bearings,
+    recognising nothing), without a navigation server, a voice, tricks or an e-stop source of
+    its own. Closing it stops it.
 
     What every robot must say for itself is abstract: its name, its state, velocity, stops,
     the e-stop latch and postures."""
@@ -225,6 +248,9 @@ class BaseRobot(ABC):
     @property
     def realtime(self) -> bool:
         return True
+
+    def stalls(self, since: float) -> tuple[Stall, ...]:
+        return ()
 
     @abstractmethod
     def get_state(self) -> RobotState: ...

@@ -33,7 +33,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from ..state import Pose2D, Posture, RobotState
-from .base import BaseRobot, RobotError
+from .base import BaseRobot, RobotError, Stall
 from .go2 import api as go2_api
 from .go2.motion import MotionTracker
 from .go2.odometry import OdometryIntake, OdometryLimits
@@ -187,6 +187,11 @@ class RosRobot(BaseRobot, Generic[SettingsT]):
         """The most the pose may lag now: measured (or configured), else MAX_LATENCY."""
         with self._lock:
             return self._tracker.latency_bound
+
+    def stalls(self, since: float) -> tuple[Stall, ...]:
+        """The pose stream's stalls seen since `since` (go2/odometry)."""
+        with self._lock:
+            return self._intake.stalls(since)
 
     def _observe_posture(self, mode: int, body_height: float) -> None:
         """A state message's mode and body height (executor thread): a posture change nobody

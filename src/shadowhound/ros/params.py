@@ -66,7 +66,7 @@ PARAMETERS: dict[str, tuple[Any, str]] = {
     "webrtc_topic": ("webrtc_req", "go2: go2_interfaces/WebRtcReq sport commands out"),
     "odom_topic": ("odom", "go2: nav_msgs/Odometry in"),
     "go2_states_topic": ("go2_states", "go2: go2_interfaces/Go2State in"),
-    "odom_timeout": (0.5, "go2: seconds without odometry before a motion step fails (0.05..10)"),
+    "odom_timeout": (0.5, "go2: seconds without odometry before a moving robot stops (0.05..10)"),
     "odom_latency": (
         -1.0,
         "go2: seconds odometry lags the robot (0..5); -1 = measured at each start from rest",

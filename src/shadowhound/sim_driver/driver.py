@@ -33,7 +33,7 @@ Per robot (names prefixed `robot{i}/` with `--robots 2` or more, as go2_ros2_sdk
   posture, mode, counts of Moves and StopMoves received ...), kept apart from what the driver
   publishes; `sim_driver/requests` out: one JSON record per sport request; `sim_driver/fault`
   in: fault injection ({"odom": false}, {"states": false}, {"camera": false},
-  {"delay_ms": 200}, {"drop_commands": true}; {} clears them).
+  {"delay_ms": 200}, {"drop_commands": true}, {"stall_ms": 400}; {} clears them).
 
 With `--interface unitree_ros2` the robots speak Unitree's own interface instead (a Go2 EDU;
 sim_driver/unitree.py): `api/sport/request` in, `api/sport/response`, `lf/sportmodestate` and
@@ -223,8 +223,9 @@ odom_delay:=0.5); an option given here wins. -r __ns:=/NS moves every topic, the
 _EPILOG = """faults: publish JSON on sim_driver/fault, e.g. '{"odom": false}', '{"delay_ms": 200}',
 '{"drop_commands": true}'; SLAM mislocalized (--slam): '{"slam_error": {"x": 0.5, "y": 0}}';
 odometry that lies: '{"jump": {"x": -0.5, "y": 0, "yaw_deg": 0}}',
-'{"freeze": true}', '{"nan": 3}', '{"clock_step": -2}', and '{"fall": true}', each firing at once
-or after "after_m" metres / "after_deg" degrees of true motion; '{}' clears them (docs/go2.md).
+'{"freeze": true}', '{"nan": 3}', '{"clock_step": -2}', and '{"fall": true}'; a loaded machine:
+'{"stall_ms": 400}'; each firing at once or after "after_m" metres / "after_deg" degrees of true
+motion; '{}' clears them (docs/go2.md).
 exit codes: 0 after Ctrl-C / SIGTERM, 2 for invalid options or parameters."""
 
 

@@ -11,6 +11,9 @@ ask for odometry that lies while it still arrives, as a real Go2's does:
 - `nan`: the next N odometry messages carry NaN instead of a pose;
 - `clock_step`: seconds added to every odometry stamp from then on (negative: set back);
 - `fall`: the robot falls (Damping, lying, Moves ignored) as it fires;
+- `stall_ms`: the driver's process stalls this long as it fires, as on a loaded machine: no
+  command acts and no odometry goes out meanwhile (what came in acts, and what was due goes
+  out, when it ends); the robot walks on as last told, and the truth keeps coming;
 - `slam_error`: {"x", "y" metres, "yaw_deg"}: with `--slam`, SLAM's map -> odom is published
   this far off (SLAM mislocalized; the robot's map pose is off by it): clearing it makes the
   correction jump back, as a loop closure does. It takes effect at once;
@@ -33,6 +36,7 @@ _FLAGS = ("odom", "states", "camera", "drop_commands", "freeze", "fall")
 _KNOWN = (
     *_FLAGS,
     "delay_ms",
+    "stall_ms",
     "jump",
     "nan",
     "clock_step",
@@ -56,6 +60,7 @@ class Faults:
     nan: int = 0  # odometry messages sent as NaN
     clock_step: float = 0.0  # seconds added to odometry stamps
     fall: bool = False
+    stall: float = 0.0  # seconds the driver's process stalls once, as the faults fire
     after_m: float = 0.0  # metres of true motion before the odometry faults and fall fire
     after_deg: float = 0.0  # degrees of true turning, likewise
     slam_error: tuple[float, float, float] | None = None  # map -> odom off by x, y, yaw
@@ -63,7 +68,9 @@ class Faults:
     @property
     def lies(self) -> bool:
         """Odometry faults or a fall that wait for their moment (`after_m`, `after_deg`)."""
-        return bool(self.jump or self.freeze or self.nan or self.clock_step or self.fall)
+        return bool(
+            self.jump or self.freeze or self.nan or self.clock_step or self.fall or self.stall
+        )
 
     @classmethod
     def from_json(cls, text: str) -> Faults:
@@ -79,6 +86,7 @@ class Faults:
             raise ValueError(f"{', '.join(_FLAGS)} take true or false")
         out: dict[str, Any] = dict(flags)
         out["delay"] = _number(data, "delay_ms", 0, 10_000, "a number of milliseconds") / 1000.0
+        out["stall"] = _number(data, "stall_ms", 0, 5_000, "a number of milliseconds") / 1000.0
         out["nan"] = int(_number(data, "nan", 0, 10_000, "a whole number of messages"))
         if out["nan"] != data.get("nan", 0):
             raise ValueError("nan must be a whole number of messages in 0..10000")
@@ -94,6 +102,7 @@ class Faults:
         """As the truth record shows them (JSON)."""
         out = {k: getattr(self, k) for k in _FLAGS}
         out.update(delay_ms=self.delay * 1000.0, nan=self.nan, clock_step=self.clock_step)
+        out.update(stall_ms=self.stall * 1000.0)
         out.update(after_m=self.after_m, after_deg=self.after_deg)
         for key in ("jump", "slam_error"):
             value = getattr(self, key)

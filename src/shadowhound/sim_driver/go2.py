@@ -87,6 +87,7 @@ class SimGo2:
         self._order = itertools.count()
         self._ready = threading.Condition()
         self._closing = threading.Event()
+        self._stalled_until = 0.0  # monotonic: the `stall_ms` fault holds commands and odometry
         # go2_ros2_sdk's topics, or unitree_ros2's (unitree.py) with --interface unitree_ros2
         sdk = settings.interface == "go2_ros2_sdk"
         self.unitree = None if sdk else UnitreeLink(node, self.topic, self._on_unitree_request)
@@ -245,6 +246,8 @@ class SimGo2:
 
     def forward_requests(self) -> None:
         """The driver's 10 Hz loop: every queued request goes to the robot, in order."""
+        if time.monotonic() < self._stalled_until:
+            return  # the process is stalled (fault injection)
         while self._pending:
             api_id, parameter, topic, arrived = self._pending.popleft()
             self.body.request(
@@ -277,10 +280,11 @@ class SimGo2:
         while True:
             with self._ready:
                 while not self._closing.is_set() and (
-                    not self._commands or self._commands[0][0] > time.monotonic()
+                    not self._commands
+                    or max(self._commands[0][0], self._stalled_until) > time.monotonic()
                 ):
-                    wait = self._commands[0][0] - time.monotonic() if self._commands else None
-                    self._ready.wait(wait)
+                    due = max(self._commands[0][0], self._stalled_until) if self._commands else 0
+                    self._ready.wait(due - time.monotonic() if self._commands else None)
                 if self._closing.is_set():
                     return
                 _due, _seq, apply = heapq.heappop(self._commands)
@@ -311,6 +315,8 @@ class SimGo2:
         group: list[Taken] = []  # the burst being gathered
         next_take = time.monotonic()
         while True:
+            if self._closing.wait(max(0.0, self._stalled_until - time.monotonic())):
+                return  # a stalled process takes and publishes nothing (fault injection)
             now = time.monotonic()
             if now >= next_take:
                 truth = self.body.truth()
@@ -318,7 +324,10 @@ class SimGo2:
                 with self._lie_lock:
                     before = self._lying.fired
                     shown, shift = self._lying.publish(odom)
-                    fall = self._lying.fired and not before and self._lying.faults.fall
+                    fired = self._lying.fired and not before
+                    fall = fired and self._lying.faults.fall
+                    if fired and self._lying.faults.stall:
+                        self._stalled_until = now + self._lying.faults.stall
                 if fall:
                     self.body.fall()
                 group.append((truth, shown, shift, odom))

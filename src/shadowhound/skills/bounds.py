@@ -17,19 +17,46 @@ keeps bounds from what it *commanded*, which no sensor can corrupt:
   is the fastest speed that still stops within the room.
 
 The motion loops (motion.py) brake within the smallest of these, as they brake for the goal.
+
+The commands are dead-reckoned from when they were sent; a robot acts on each once it has it.
+A command held up on the way (a loaded machine stalls this process, the link or the driver)
+acts late by as much, so an honest robot ends up to (each change of speed) x (how long a stall
+seen around it may have held it up) from where its commands put it: further along when a
+slowing came late, short when a speed-up did. `CommandLedger.leeway` says how far; a change of
+speed that no stall seen could have held up counts for nothing, so with no stall seen it is
+zero and the checks are exactly as strict as the margins say.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 from .. import geofence
 from ..config import SafetyConfig
+from ..robot.base import MAX_STALL, Stall
 from ..state import Pose2D
 from ..world import Belief, check_leg
 
 STOP_SHORT = 0.05  # metres kept short of a fence or an obstacle when braking for it
+
+# Seconds a stop (StopMove) may wait for the driver's request loop before it acts (go2_ros2_sdk
+# runs it at 10 Hz): a stall that begins that soon after a change holds it up too.
+STOP_LOOP = 0.1
+
+__all__ = [
+    "MAX_STALL",
+    "STOP_LOOP",
+    "CommandLedger",
+    "Leeway",
+    "fences",
+    "leg_margin",
+    "leg_room",
+    "room_ahead",
+    "turn_margin",
+    "turn_room",
+]
 
 
 def fences(lim: SafetyConfig) -> list[tuple[geofence.Fence, str, str]]:
@@ -102,6 +129,22 @@ def brake_speed(room: float, accel: float, period: float) -> float:
     return max(0.0, -accel * period + math.sqrt((accel * period) ** 2 + 2 * accel * room))
 
 
+@dataclass(frozen=True)
+class Leeway:
+    """How far an honest robot may be, at rest, from where its leg's commands put it: along
+    the leg (or turn) beyond them and short of them, and to either side (metres or radians)."""
+
+    ahead: float = 0.0
+    behind: float = 0.0
+    aside: float = 0.0
+
+    def catch_up(self, lag: float, margin: float) -> float:
+        """How much further the commands may go for a robot odometry shows `lag` behind them:
+        as far as it lags, at most `behind`; nothing when it lags by more than the stalls seen
+        and the `margin` explain (a lie, or a robot that does not follow)."""
+        return min(lag, self.behind) if 0.0 < lag <= self.behind + margin else 0.0
+
+
 @dataclass
 class CommandLedger:
     """A step's velocity commands, dead-reckoned from where it started (robot clock)."""
@@ -112,6 +155,8 @@ class CommandLedger:
     turned: float = 0.0  # radians commanded (absolute)
     command: tuple[float, float, float] = (0.0, 0.0, 0.0)
     anchor: Pose2D | None = None  # where the current leg began (measured)
+    # The leg's changes of commanded velocity (when, and by how much: odom frame vx, vy, wz).
+    changes: list[tuple[float, float, float, float]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if self.anchor is None:
@@ -121,6 +166,54 @@ class CommandLedger:
         """A leg starts at `at` (measured, at rest): commanded poses count from there."""
         self.advance(t)
         self.pose = self.anchor = at
+        self.changes.clear()
+
+    def leeway(
+        self, stalls: Sequence[Stall], axis: tuple[float, float, float], accel: float
+    ) -> Leeway:
+        """How far an honest robot may be from the leg's commands when each change of them
+        may have acted as late as a stall seen around it held it up (in order; at most
+        MAX_STALL): each slowing along `axis` (a unit vector: the leg's direction in the odom
+        frame and 0, or (0, 0, +-1) for a turn) lets it go on further, each speed-up leaves it
+        short, each change across it off to a side. The changes a stall held act together
+        when it ends, so the robot then takes its acceleration limit (`accel`) to follow them
+        all, as far again as a change of that size sent at once."""
+        ahead = behind = aside = 0.0
+        held_by: dict[int, list[float]] = {}  # per stall: the slowings, the speed-ups it held
+        ux, uy, uw = axis
+        for t, dx, dy, dw in self.changes:
+            around = [
+                (s.end - t, i) for i, s in enumerate(stalls) if s.start - STOP_LOOP < t < s.end
+            ]
+            if not around:
+                continue
+            late, which = max(around)
+            held = min(MAX_STALL, late)
+            along = dx * ux + dy * uy + dw * uw
+            ahead, behind = ahead + held * max(0.0, -along), behind + held * max(0.0, along)
+            aside += held * abs(dy * ux - dx * uy)
+            sums = held_by.setdefault(which, [0.0, 0.0])
+            sums[0], sums[1] = sums[0] + max(0.0, -along), sums[1] + max(0.0, along)
+        for slowed, sped in held_by.values():
+            ahead, behind = ahead + slowed**2 / (2 * accel), behind + sped**2 / (2 * accel)
+        return Leeway(ahead, behind, aside)
+
+    def halt(self, t: float, linear_accel: float, angular_accel: float) -> float:
+        """A stop sent at once from full speed, outside the loop's ramps: the robot brakes at
+        its acceleration limits, going on as far as that takes it. Returns the metres
+        commanded since the last command."""
+        moving = any(self.command)
+        walked = self.set(t, 0.0, 0.0, 0.0)
+        vx, vy, wz = self.changes[-1][1:] if moving else (0.0, 0.0, 0.0)  # less what it was
+        speed = math.hypot(vx, vy)
+        brake = speed / (2 * linear_accel)  # metres per m/s: v^2 / 2a
+        turn = abs(wz) / (2 * angular_accel)
+        self.pose = Pose2D(
+            self.pose.x - vx * brake, self.pose.y - vy * brake, self.pose.yaw - wz * turn
+        )
+        self.travelled += speed * brake
+        self.turned += abs(wz) * turn
+        return walked + speed * brake
 
     def offset(self, t: float) -> tuple[float, float, float]:
         """Where the commands took the robot from the leg's start: metres along x and y (odom
@@ -150,6 +243,10 @@ class CommandLedger:
         """A new command from time t; returns the metres commanded since the last one."""
         before = self.travelled
         self.advance(t)
+        if (vx, vy, wz) != self.command:
+            c, s = math.cos(self.pose.yaw), math.sin(self.pose.yaw)
+            (ox, oy, ow), (nx, ny) = self.command, (vx * c - vy * s, vx * s + vy * c)
+            self.changes.append((t, nx - (ox * c - oy * s), ny - (ox * s + oy * c), wz - ow))
         self.command = (vx, vy, wz)
         return self.travelled - before
 
@@ -170,20 +267,29 @@ def leg_room(
 ) -> float:
     """Metres the commands may still take the robot from `at` along `heading` and keep it
     within `margin` of the planned leg, the segment from (0, 0) (where the leg began) to
-    `goal`: the capsule around it. 0 when `at` is already outside and `heading` does not
-    lead back in."""
+    `goal`: the capsule around it. From outside it (a stalled control loop held a command
+    too long), only a way back: as far as it comes no further from the leg than it is, or
+    once back in, to the capsule's edge; 0 when `heading` does not lead back."""
     dx, dy = math.cos(heading), math.sin(heading)
 
     def off(s: float) -> float:  # distance from the leg of the point s metres ahead
         return _to_segment((at[0] + s * dx, at[1] + s * dy), goal) - margin
 
-    if off(0.0) > 0:
-        return 0.0 if off(1e-3) >= off(0.0) else 1e-3  # outside: only a way back may go on
-    # The distance to a segment is convex along a line: one crossing out, found by halving.
+    # The distance to a segment is convex along a line: one stretch inside, found by halving.
     reach = math.hypot(*goal) + 2 * margin + math.hypot(*at)
+    low = 0.0
+    if off(0.0) > 0:
+        if off(1e-3) >= off(0.0):
+            return 0.0
+        high = reach  # the nearest point along the line, by thirds
+        for _ in range(60):
+            a, b = low + (high - low) / 3, high - (high - low) / 3
+            low, high = (low, b) if off(a) <= off(b) else (a, high)
+        if off(low) > 0:
+            return low  # it never comes back in: as near as it gets
     if off(reach) <= 0:
         return reach
-    low, high = 0.0, reach
+    high = reach
     for _ in range(40):
         mid = (low + high) / 2
         low, high = (mid, high) if off(mid) <= 0 else (low, mid)

@@ -9,18 +9,21 @@ from dataclasses import dataclass, field
 
 from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
-from ..errors import MissionCancelled, PlanProblem, SkillError, SkillTimeout
+from ..errors import MissionCancelled, PlanProblem, RobotError, SkillError, SkillTimeout
 from ..memory.records import Secondhand
 from ..memory.service import AgentMemory
 from ..plan import Watch
-from ..robot.base import Robot
+from ..robot.base import Robot, Stall
 from ..speech import Saying
 from ..state import CameraFrame, Pose2D, Posture, RobotState
 from ..world import Belief, KnownObject
-from .bounds import CommandLedger, fences, room_ahead, room_on_map
+from .bounds import MAX_STALL, CommandLedger, Leeway, fences, room_ahead, room_on_map
 from .watches import Watcher, raise_if_fired
 
 _TRANSLATING = 0.05  # m/s commanded: the robot goes somewhere (a path check looks along it)
+# Robot seconds a step stopped for stale odometry waits, at rest, for it to come back: a loaded
+# machine stalls the stream (this process, the driver) for a fraction of a second.
+ODOMETRY_RETURN = 2.0
 
 
 @dataclass
@@ -112,6 +115,9 @@ class SkillContext:
         self._late = ""
         self.notes: list[str] = []
         self.ledger: CommandLedger | None = None  # the step's commands, from its first one
+        self._leg_began = -math.inf  # robot time the current leg began (stalls count from it)
+        self._ticked: float | None = None  # robot time the last tick of this leg ended
+        self._late_ticks: list[Stall] = []  # this leg's ticks that came late: its own stalls
         self._needs: Posture | None = None  # the posture the step runs in (ensure_standing)
         self._start_clearance: list[float] | None = None  # per fence, where the step began
         self._watcher: Watcher | None = None  # the step's watches (`watch`)
@@ -143,7 +149,7 @@ class SkillContext:
             raise MissionCancelled("mission cancelled")
         if self.robot.now() > self.deadline:
             raise SkillTimeout(self._late)
-        state = self.robot.get_state()
+        state = self.state()
         if self._watcher is not None:
             vx, vy, _ = self._last_command  # where it goes: a path check looks along it
             heading = math.atan2(vy, vx) if math.hypot(vx, vy) > _TRANSLATING else None
@@ -217,6 +223,66 @@ class SkillContext:
             return ahead, f"{what} is in the way"
         return room, why
 
+    def state(self) -> RobotState:
+        """The robot's state. Odometry gone stale while it moved (this process, the link or
+        the driver stalled, or the stream stopped) stops the robot at once; the step then waits
+        at rest, up to ODOMETRY_RETURN seconds, for odometry to come back, and fails naming the
+        stale stream only if it does not. Odometry that is not trusted fails at once."""
+        try:
+            return self.robot.get_state()
+        except RobotError as blind:
+            if self.robot.last_state().connected:
+                raise  # not stale: untrusted, and no wait for a lie
+            return self._await_odometry(blind)
+
+    def _await_odometry(self, blind: RobotError) -> RobotState:
+        self.robot.stop()
+        lim = self.config.safety
+        if self.ledger is not None:  # it brakes from where it was going, as far as that takes
+            walked = self.ledger.halt(self.robot.now(), lim.max_linear_accel, lim.max_angular_accel)
+            if self.env.budget is not None:
+                self.env.budget.command(walked)
+        self._last_command = (0.0, 0.0, 0.0)
+        self.heartbeat(False)
+        began = self.robot.now()
+        while True:
+            state = self.robot.get_state()  # raises when odometry is not trusted, at rest too
+            if state.connected:
+                self._ticked = None  # the wait is no late tick (the stream shows the stall)
+                note = (
+                    "stopped while odometry paused (a loaded machine or a late link), and went on"
+                )
+                if note not in self.notes:
+                    self.notes.append(note)
+                return state
+            if self._cancelled.is_set():
+                raise MissionCancelled("mission cancelled")
+            if self.robot.now() - began > ODOMETRY_RETURN:
+                raise RobotError(
+                    f"{blind} Stopped; it did not come back within {ODOMETRY_RETURN:g} s"
+                )
+            self.robot.sleep(self.period)
+            self.heartbeat(None)
+
+    def stalls(self) -> list[Stall]:
+        """The stalls seen since the current leg began: of the link (`Robot.stalls`) and of
+        this control loop (a tick that came late: the command before it may have gone out
+        late)."""
+        return [*self.robot.stalls(self._leg_began), *self._late_ticks]
+
+    def stall(self) -> float:
+        """Seconds: the longest of `stalls()`, at most MAX_STALL."""
+        return min(MAX_STALL, max((s.seconds for s in self.stalls()), default=0.0))
+
+    def leeway(self, axis: tuple[float, float, float]) -> Leeway:
+        """How far an honest robot may be from where the current leg's commands put it, for
+        the stalls seen (bounds.CommandLedger.leeway; `axis` the leg's or the turn's)."""
+        if self.ledger is None:
+            return Leeway()
+        lim = self.config.safety  # how fast the robot follows a change: the commands' caps
+        accel = lim.max_angular_accel if axis[2] else lim.max_linear_accel
+        return self.ledger.leeway(self.stalls(), axis, accel)
+
     @property
     def last_command(self) -> tuple[float, float, float]:
         """The velocity last commanded (vx, vy, wz): what the robot is doing as far as the
@@ -238,11 +304,17 @@ class SkillContext:
             self.ledger = CommandLedger(state.pose, self.robot.now())
         else:
             self.ledger.begin_leg(self.robot.now(), state.pose)
+        self._leg_began, self._ticked, self._late_ticks = self.robot.now(), None, []
 
     def tick(self) -> None:
         """Wait one control period, then check cancellation and the time-out."""
         self.heartbeat(None)
         self.robot.sleep(self.period)
+        now = self.robot.now()
+        if self._ticked is not None and now - self._ticked - self.period > 1e-3:
+            late = now - self._ticked - self.period
+            self._late_ticks.append(Stall(self._ticked, self._ticked + late))
+        self._ticked = now
         self.heartbeat(None)
         self.check()
 
@@ -266,11 +338,17 @@ class SkillContext:
         self._last_command = (vx, vy, wz)
         if self.ledger is None:
             self.ledger = CommandLedger(state.pose, self.robot.now())
+            self._leg_began = self.robot.now()
         walked = self.ledger.set(self.robot.now(), vx, vy, wz)
         if self.env.budget is not None:
             self.env.budget.command(walked)
         self.heartbeat(bool(vx or vy or wz))
-        self.robot.send_velocity(vx, vy, wz)
+        try:
+            self.robot.send_velocity(vx, vy, wz)
+        except RobotError as blind:  # odometry went stale since `check`: as there
+            if self.robot.last_state().connected:
+                raise
+            self._await_odometry(blind)
 
     def ensure_standing(self) -> None:
         """Stand up first when allowed (`motion.auto_stand`); from then on the step runs

@@ -13,11 +13,16 @@ and the commanded pose) and the mission's distance left. A loop that has used th
 odometry still shows the goal ahead stops and fails, naming the bound; only when the bound was
 its own commands' and odometry shows it within the step's outcome tolerance does it end there,
 saying so (a robot slow to start, a command late on the way: the commands ran ahead of it).
-A leg or turn done is checked against its commands once more at rest: odometry further along
-than the commands could take the robot is a lie, and fails.
+A leg or turn done is checked against its commands once more at rest (agreement.py):
+odometry further along than the commands could take the robot is a lie, and fails.
+
+On a loaded machine a command may be held up on its way, as long as the stalls seen
+(`SkillContext.stall`): the loops brake that much sooner, and the commands' bound and the check
+at rest allow for the honest difference (bounds.CommandLedger.leeway); a loop that makes no
+progress within the step's outcome tolerance ends there, saying so.
 
 Long because: the straight leg and the turn are one closed loop each, with the same approaches,
-corrections, bounds and checks at rest; split, each half would need the other's helpers.
+corrections and bounds; split, each half would need the other's helpers.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ from collections.abc import Callable
 
 from ..errors import Relocalized, SkillError
 from ..state import Pose2D, RobotState, carried, normalize_angle
+from .agreement import LATE, SLOW, allowing, deg, disagree, ended_short, leg_agrees, turn_agrees
 from .bounds import leg_margin, leg_room, turn_margin, turn_room
 from .context import SkillContext
 
@@ -103,13 +109,14 @@ def drive_local(
     """
     robot = ctx.robot
     m = ctx.config.motion
-    start = prev = robot.get_state()
+    start = prev = ctx.state()
     origin = start.pose  # where the leg starts (carried over SLAM's jumps when relative)
     c, s = math.cos(origin.yaw), math.sin(origin.yaw)
     goal = math.hypot(tx, ty)
     ctx.begin_leg(start)
     margin = leg_margin(ctx.config.safety, goal)
     leg = (tx * c - ty * s, tx * s + ty * c)  # the planned leg, from its start
+    axis = (leg[0] / goal, leg[1] / goal, 0.0) if goal else (1.0, 0.0, 0.0)  # its direction
     stopped_for_room = False  # the loop stopped for want of room and settled
     short = False  # ended short, within the outcome tolerance: the commands' room is used up
     for attempt in range(1 + _CORRECTIONS):
@@ -118,7 +125,7 @@ def drive_local(
         toward: tuple[float, float] | None = None  # where the goal lay when this approach began
         passes = _Passes()
         while True:
-            st = robot.get_state()
+            st = ctx.state()
             if st.relocalized != prev.relocalized:
                 if not relative:
                     _relocalized(ctx)
@@ -142,6 +149,10 @@ def drive_local(
                 robot.stop()
                 if st.blocked_by:
                     raise SkillError(f"blocked by {st.blocked_by} with {error:.2f} m to go")
+                if error <= ctx.config.safety.outcome_tolerance:  # done, as steps are judged
+                    ctx.notes.append(ended_short(f"{error:.2f} m", f"{goal:.2f} m leg", SLOW))
+                    short = True
+                    break
                 raise SkillError(
                     f"no progress for {m.stall_timeout:.1f} s with {error:.2f} m to go: "
                     "the robot is blocked, stalled or ignoring velocity commands"
@@ -149,10 +160,15 @@ def drive_local(
             heading = origin.yaw + math.atan2(ey, ex)  # where the robot goes
             room, why = ctx.room(heading, error + 0.5, st)
             ox, oy, _ = ctx.commanded()
-            left = leg_room((ox, oy), heading, leg, margin)
+            # Going on along the leg, a robot whose speed-ups came late is short of its
+            # commands by up to the leeway: they may go as much further as it lags (bounds.py).
+            onward = math.cos(heading) * axis[0] + math.sin(heading) * axis[1] > 0
+            lag = (ox - dx) * axis[0] + (oy - dy) * axis[1]  # odometry behind the commands
+            back = ctx.leeway(axis).catch_up(lag, margin) if onward else 0.0
+            left = leg_room((ox - axis[0] * back, oy - axis[1] * back), heading, leg, margin)
             by_commands = left < room
             if by_commands:
-                room, why = left, _disagree(math.hypot(ox, oy), goal, margin, goal - error)
+                room, why = left, disagree(math.hypot(ox, oy), goal, margin, goal - error, back)
             if room < m.position_tolerance and error >= m.position_tolerance:
                 if not stopped_for_room:  # judge at rest: late odometry may only now catch up
                     stopped_for_room = True
@@ -161,10 +177,11 @@ def drive_local(
                     continue
                 if by_commands and error <= ctx.config.safety.outcome_tolerance:
                     ctx.notes.append(
-                        _ended_short(
+                        ended_short(
                             f"{error:.2f} m",
                             f"{goal:.2f} m leg",
-                            f"taken the robot {math.hypot(ox, oy):.2f} m, the most the leg allows",
+                            f"its commands had taken the robot {math.hypot(ox, oy):.2f} m, the "
+                            f"most the leg allows, and odometry shows less ({LATE})",
                         )
                     )
                     short = True
@@ -172,7 +189,8 @@ def drive_local(
                 robot.stop()
                 raise SkillError(f"stopped {error:.2f} m short of the goal: {why}")
             stopped_for_room = False
-            v = abs(_profile(min(error, room), cap, m.linear_accel, ctx.period))
+            # A command may be held (or act) as late as the stalls seen: brake that much sooner.
+            v = abs(_profile(min(error, room), cap, m.linear_accel, ctx.period + ctx.stall()))
             yaw_error = normalize_angle(origin.yaw - here.yaw)
             # Body-frame command toward the goal; the start frame and the body differ by
             # yaw_error.
@@ -184,7 +202,7 @@ def drive_local(
             ctx.on_progress(min(1.0, 1.0 - error / goal) if goal else 1.0)
             ctx.tick()
         settle(ctx)
-        at_rest = robot.get_state()
+        at_rest = ctx.state()
         if at_rest.relocalized != prev.relocalized:  # a jump while it settled
             if not relative:
                 _relocalized(ctx)
@@ -192,53 +210,11 @@ def drive_local(
             c, s = math.cos(origin.yaw), math.sin(origin.yaw)
         if short or _off(at_rest.pose, origin, tx, ty) < m.position_tolerance:
             break  # judged on the pose at rest, not on the one the loop stopped on
-    end = robot.get_state()
+    end = ctx.state()
     if end.relocalized != prev.relocalized:
         origin = carried(origin, prev, end)
-    _agrees(ctx, end, origin, start.yaw, margin, (tx, ty))
+    leg_agrees(ctx, end, origin, start.yaw, margin, (tx, ty), ctx.leeway(axis))
     return math.hypot(end.x - origin.x, end.y - origin.y)
-
-
-def _agrees(
-    ctx: SkillContext,
-    end: RobotState,
-    origin: Pose2D,
-    yaw0: float,
-    margin: float,
-    leg: tuple[float, float],
-) -> None:
-    """A leg odometry says is done must agree with what its commands did: where odometry
-    puts the robot (from the leg's start, in its frame) and where the commands alone put it
-    (the ledger, from the same start) may differ by at most the leg's margin. A jump of the
-    odometry too small to be seen as one (within what the robot could move between two
-    samples) otherwise ends the leg early by as much, reported as done.
-
-    Only odometry *ahead* of the commands along the leg (`leg`: its goal, in the same frame)
-    counts: commands further along than odometry are what a link does (each command acts
-    once it arrives, so a stop that arrives sooner than the velocity before it cuts that
-    short), and leg_room has kept them within the margin, so the truth is within it too."""
-    c, s = math.cos(origin.yaw), math.sin(origin.yaw)
-    dx, dy = end.x - origin.x, end.y - origin.y
-    measured = (dx * c + dy * s, -dx * s + dy * c)
-    ox, oy, _ = ctx.commanded()  # in the frame the leg began in (odometry's, before any jump)
-    c, s = math.cos(yaw0), math.sin(yaw0)
-    commanded = (ox * c + oy * s, -ox * s + oy * c)
-    ax, ay = measured[0] - commanded[0], measured[1] - commanded[1]
-    length = math.hypot(*leg)
-    if length > 0:
-        ux, uy = leg[0] / length, leg[1] / length
-        along = ax * ux + ay * uy
-        apart = math.hypot(max(0.0, along), ax * uy - ay * ux)  # ahead, and to either side
-    else:
-        apart = math.hypot(ax, ay)
-    if apart > margin:
-        ctx.robot.stop()
-        raise SkillError(
-            f"odometry shows the leg done ({math.hypot(*measured):.2f} m), yet its commands "
-            f"took the robot {math.hypot(*commanded):.2f} m, {apart:.2f} m apart (at most "
-            f"{margin:.2f}: safety.step_travel_margin, step_travel_slack): odometry disagrees "
-            "with the motion (a small jump, a slipping or lifted robot?)"
-        )
 
 
 def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False) -> float:
@@ -247,11 +223,12 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
     faces a goal on the map and a jump stops it (Relocalized). Returns the measured turn."""
     robot = ctx.robot
     m = ctx.config.motion
-    first = prev = robot.get_state()
+    first = prev = ctx.state()
     last_yaw = first.yaw
     turned = 0.0
     ctx.begin_leg(first)
     margin = turn_margin(ctx.config.safety, angle)
+    axis = (0.0, 0.0, math.copysign(1.0, angle))  # the way it turns
     stopped_for_room = False  # the loop stopped for want of room and settled
     short = False  # ended short, within the outcome tolerance: the commands' room is used up
     for attempt in range(1 + _CORRECTIONS):
@@ -259,7 +236,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
         cap = speed if attempt == 0 else min(speed, m.yaw_tolerance / _CORRECTION_SECONDS)
         passes = _Passes()
         while True:
-            st = robot.get_state()
+            st = ctx.state()
             last_yaw, prev = _turn_jumped(ctx, last_yaw, prev, st, relative), st
             turned += normalize_angle(st.yaw - last_yaw)  # unwrapped, so 360 degree turns work
             last_yaw = st.yaw
@@ -272,12 +249,21 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
                 best, best_time = abs(error), robot.now()
             elif robot.now() - best_time > m.stall_timeout:
                 robot.stop()
+                if abs(error) <= math.radians(ctx.config.safety.outcome_tolerance_deg):
+                    done = f"{math.degrees(abs(error)):.1f} degrees"
+                    ctx.notes.append(ended_short(done, f"{deg(angle)} degree turn", SLOW))
+                    short = True
+                    break
                 raise SkillError(
                     f"no progress for {m.stall_timeout:.1f} s with {math.degrees(error):.0f} "
                     "degrees to go: the robot is blocked, stalled or ignoring velocity commands"
                 )
             commanded = ctx.commanded()[2]
-            left = turn_room(commanded, error, angle, margin)
+            # Going on the way it turns, a robot whose speed-ups came late is short of its
+            # commands by up to the leeway: they may turn as much further as it lags (bounds.py).
+            lag = axis[2] * (commanded - turned)  # odometry behind the commands
+            back = ctx.leeway(axis).catch_up(lag, margin) if error * axis[2] > 0 else 0.0
+            left = turn_room(commanded - axis[2] * back, error, angle, margin)
             if left < m.yaw_tolerance and abs(error) >= m.yaw_tolerance:
                 if not stopped_for_room:  # judge at rest: late odometry may only now catch up
                     stopped_for_room = True
@@ -286,11 +272,11 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
                     continue
                 if abs(error) <= math.radians(ctx.config.safety.outcome_tolerance_deg):
                     ctx.notes.append(
-                        _ended_short(
+                        ended_short(
                             f"{math.degrees(abs(error)):.1f} degrees",
-                            f"{math.degrees(abs(angle)):.0f} degree turn",
-                            f"turned the robot {math.degrees(abs(commanded)):.0f} degrees, the "
-                            "most the turn allows",
+                            f"{deg(angle)} degree turn",
+                            f"its commands had turned the robot {deg(commanded)} degrees, the "
+                            f"most the turn allows, and odometry shows less ({LATE})",
                         )
                     )
                     short = True
@@ -301,48 +287,26 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
                     f"commanded {math.degrees(commanded):.0f} degrees for a "
                     f"{math.degrees(angle):.0f} degree turn (at most "
                     f"{math.degrees(margin):.0f} beyond it: safety.step_turn_margin_deg, "
-                    "step_travel_slack), yet odometry does not show it turned: odometry "
-                    "disagrees with the motion (a relocalization, a frozen stream?)"
+                    f"step_travel_slack{allowing(ctx, math.degrees(back), 'degrees')}), yet "
+                    "odometry does not show it turned: odometry disagrees with the motion (a "
+                    "relocalization, a frozen stream?)"
                 )
             stopped_for_room = False
             limit = math.copysign(min(abs(error), left), error)
-            ctx.drive(0.0, 0.0, _profile(limit, cap, m.angular_accel, ctx.period))
+            hold = ctx.period + ctx.stall()  # brake sooner by the stalls seen, as a leg does
+            ctx.drive(0.0, 0.0, _profile(limit, cap, m.angular_accel, hold))
             ctx.on_progress(min(1.0, 1.0 - abs(error) / abs(angle)) if angle else 1.0)
             ctx.tick()
         settle(ctx)
-        st = robot.get_state()
+        st = ctx.state()
         last_yaw, prev = _turn_jumped(ctx, last_yaw, prev, st, relative), st
         if short or abs(angle - turned - normalize_angle(st.yaw - last_yaw)) < m.yaw_tolerance:
             break  # judged on the heading at rest, not on the one the loop stopped on
-    st = robot.get_state()
+    st = ctx.state()
     last_yaw = _turn_jumped(ctx, last_yaw, prev, st, relative)
     turned += normalize_angle(st.yaw - last_yaw)
-    commanded = ctx.commanded()[2]
-    # Odometry turned further than the commands could have (a heading jump too small to be
-    # seen as one): a success would not be true. Commands further than odometry are not: a
-    # command acts only once it reaches the robot, so a stop that arrives sooner than the last
-    # velocity before it cuts that short (a link's latency varies from message to message);
-    # turn_room has kept the commands within the margin, so the truth is too either way.
-    apart = turned - commanded
-    apart = math.copysign(1.0, angle) * apart if angle else abs(apart)  # ahead counts
-    if apart > margin:
-        robot.stop()
-        raise SkillError(
-            f"odometry shows the turn done ({math.degrees(turned):.0f} degrees), yet its "
-            f"commands turned the robot {math.degrees(commanded):.0f} degrees (at most "
-            f"{math.degrees(margin):.0f} apart: safety.step_turn_margin_deg, step_travel_slack): "
-            "odometry disagrees with the motion (a small jump of the heading?)"
-        )
+    turn_agrees(ctx, turned, angle, margin)
     return turned
-
-
-def _ended_short(short: str, planned: str, commanded: str) -> str:
-    """The note of a leg or turn that ended `short` of the `planned` one, within the outcome
-    tolerance, because its commands had done what it allows (`commanded`)."""
-    return (
-        f"ended {short} short of the {planned}: its commands had {commanded}, and odometry "
-        "shows less (the robot slow to start, or commands late or lost on the way)"
-    )
 
 
 def _turn_jumped(
@@ -369,22 +333,6 @@ def _relocalized(ctx: SkillContext) -> None:
     )
 
 
-def _disagree(commanded: float, goal: float, margin: float, measured: float) -> str:
-    """Why a leg stopped when its commands would take the robot off the planned leg:
-    odometry shows it short of the goal (or nowhere near)."""
-    lead = (
-        f"its commands took it {commanded:.2f} m for a {goal:.2f} m leg (at most {margin:.2f} "
-        "m off the leg: safety.step_travel_margin, step_travel_slack), yet odometry shows "
-        f"{measured:.2f} m"
-    )
-    if measured < 0.25 * commanded:
-        return (
-            f"{lead}: the commands do not reach the robot or it ignores them (is it "
-            "standing? does another controller hold it?), or odometry is frozen"
-        )
-    return f"{lead}: odometry disagrees with the motion (a relocalization, a frozen stream?)"
-
-
 def _off(st: Pose2D, start: Pose2D, tx: float, ty: float) -> float:
     """How far `st` is from the goal (tx, ty), given in the body frame at `start`."""
     c, s = math.cos(start.yaw), math.sin(start.yaw)
@@ -394,13 +342,13 @@ def _off(st: Pose2D, start: Pose2D, tx: float, ty: float) -> float:
 
 def go_to(ctx: SkillContext, x: float, y: float, linear: float, angular: float) -> float:
     """Face the point (x, y) in the odom frame, then walk to it. Returns metres covered."""
-    st = ctx.robot.get_state()
+    st = ctx.state()
     distance = math.hypot(x - st.x, y - st.y)
     if distance < ctx.config.motion.position_tolerance:
         return 0.0
     bearing = math.atan2(y - st.y, x - st.x)
     rotate(ctx, normalize_angle(bearing - st.yaw), angular)
-    st = ctx.robot.get_state()
+    st = ctx.state()
     c, s = math.cos(st.yaw), math.sin(st.yaw)
     dx, dy = x - st.x, y - st.y
     return drive_local(ctx, dx * c + dy * s, -dx * s + dy * c, linear)
@@ -417,7 +365,7 @@ def follow(
     walk to it. Progress is the distance along the path (after `done` metres already walked
     of the route) over its whole length. Returns metres covered."""
     report = ctx.on_progress
-    st = ctx.robot.get_state()
+    st = ctx.state()
     corners = [(st.x, st.y), *points]
     legs = [math.dist(a, b) for a, b in zip(corners, corners[1:], strict=False)]
     total = done + sum(legs)
@@ -431,12 +379,12 @@ def follow(
 
     try:
         for (x, y), leg in zip(points, legs, strict=True):
-            st = ctx.robot.get_state()
+            st = ctx.state()
             if math.hypot(x - st.x, y - st.y) >= ctx.config.motion.position_tolerance:
                 ctx.on_progress = from_here(done, 0.0)  # turning: no distance yet
                 bearing = math.atan2(y - st.y, x - st.x)
                 rotate(ctx, normalize_angle(bearing - st.yaw), angular)
-                st = ctx.robot.get_state()
+                st = ctx.state()
                 c, s = math.cos(st.yaw), math.sin(st.yaw)
                 dx, dy = x - st.x, y - st.y
                 ctx.on_progress = from_here(done, leg)
@@ -453,7 +401,7 @@ def settle(ctx: SkillContext) -> None:
     odometry is late (a Go2), until odometry shows it at rest."""
     ctx.drive(0.0, 0.0, 0.0)
     for _ in range(int((_SETTLE_SECONDS + ctx.robot.latency) / ctx.period) + 1):
-        st = ctx.robot.get_state()
+        st = ctx.state()
         if max(abs(st.vx), abs(st.vy), abs(st.wz)) < _SETTLE_SPEED:
             return
         ctx.tick()

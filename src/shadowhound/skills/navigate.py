@@ -17,7 +17,8 @@ one looked like 0.78 m/s while the robot walked at 0.40: issue 32). It is the le
 measures, each of which one honest hitch inflates: the count over the last second (a late
 burst of odometry crowds more than a second's steps into it) and over the time the samples
 themselves say the robot moved (`time_moving`, on their stamps: a shift of the stamps' clock
-offset shortens it). A Nav2 that drives too fast shows in both.
+offset shortens it; a stall seen in the window, `Robot.stalls`, held the odometry up and the
+clock's measure allows for it). A Nav2 that drives too fast shows in both.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ import math
 from collections import deque
 
 from ..errors import SkillError
+from ..robot.base import MAX_STALL
 from ..robot.navigator import Navigator, NavStatus
 from ..state import normalize_angle
 from . import motion
@@ -135,7 +137,10 @@ def _check_speed(ctx: SkillContext, name: str, odometer: deque[tuple[float, floa
     if now - t0 < SPEED_WINDOW:
         return
     counted, moving = st.distance_travelled - d0, st.time_moving - moving0
-    speed = min(counted / (now - t0), counted / moving if moving > 0 else math.inf)
+    # Odometry held up by a stall seen in the window (a loaded machine, a late link) comes in
+    # at once: by the clock, what it counts took that much longer.
+    held = min(MAX_STALL, max((s.seconds for s in ctx.robot.stalls(t0)), default=0.0))
+    speed = min(counted / (now - t0 + held), counted / moving if moving > 0 else math.inf)
     limit = ctx.config.safety.max_linear_speed
     if speed > limit * SPEED_SLACK:
         raise SkillError(

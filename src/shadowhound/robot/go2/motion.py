@@ -7,11 +7,14 @@ link). A closed loop that steers on it overshoots by speed x delay. `MotionTrack
 - what was commanded (body-frame velocity, with StopMove as a step to zero), run through a
   model of the robot's response (acceleration-limited) into a dead-reckoned trace;
 - the odometry samples, each taken to show the robot `latency` seconds before it arrived;
+- starts that odometry showed later than the latency says (`held`): their first commands were
+  held up on the way, evidence of a stall the odometry stream alone does not show;
 - the latency itself: fixed by configuration, or measured: a first guess each time the robot
   starts from rest (time from the first command to the first sample that shows motion, less
   the time the model needs to show it and half a sample period), then, each time odometry
   shows the robot still again, the delay that best lines the last seconds of odometry up with
-  the trace (least squares over a grid of delays).
+  the trace (least squares over a grid of delays); never from a motion whose odometry came in
+  stalled (`disturbed`: a loaded machine's stall says nothing of the link's latency).
 
 `pose()` is the last odometry pose moved forward by the trace's motion since that sample was
 taken. `velocity()` is the larger of the model's and the odometry's (successive poses), so a
@@ -19,6 +22,10 @@ robot counts as still only once odometry has caught up and shows it still: a ste
 result from a pose that no longer moves, not from a prediction.
 
 No rclpy and no clock of its own: every call takes the time, so tests drive it exactly.
+
+Long because: the model, the samples and the latency are one state that every output reads
+(the pose now needs the latency, the latency the model and the samples); the stamp clock
+already lives apart (stamps.py).
 """
 
 from __future__ import annotations
@@ -31,6 +38,7 @@ from dataclasses import dataclass
 
 from ... import robot_config
 from ...state import compose, normalize_angle
+from ..base import Stall
 
 # Motion control for real odometry, used with robot go2 for every field the profile (or the
 # environment) does not set: the simulator's defaults (2 mm, 0.001 degrees, 20 Hz) are exact
@@ -44,6 +52,7 @@ _MOTION_EPS = 0.003  # metres (and the same in radians) that count as "it moved"
 _STILL_WINDOW = 0.25  # seconds of odometry a velocity is measured over
 _FIT_SECONDS = 3.0  # seconds of odometry the delay is fitted over
 _BURST = 0.01  # seconds: samples closer together than this came in one burst
+_HELD = 0.05  # seconds a start may come later than the latency says before it was held up
 
 
 @dataclass(frozen=True)
@@ -105,6 +114,8 @@ class MotionTracker:
         # The most the latency can be in this motion: from its first command to the first
         # sample that showed it (odometry cannot show motion before it happens).
         self._cap: float | None = None
+        self._disturbed = False  # a stall was seen in this motion's odometry (`disturbed`)
+        self._held: deque[Stall] = deque(maxlen=50)  # starts that came late (`held`)
 
     # -- inputs ------------------------------------------------------------------------
 
@@ -113,6 +124,7 @@ class MotionTracker:
         self._advance(t)
         moving = bool(vx or vy or wz)
         if moving and not self._model_moving():
+            self._disturbed = False  # a new motion: its odometry may teach the latency
             at_rest = bool(self._samples) and _still(self.measured_velocity())
             self._segment = self._samples[-1] if at_rest else None  # the rest it starts from
             self._cap = None
@@ -183,6 +195,17 @@ class MotionTracker:
         b = self._trace_at(t1 - self.latency)
         return math.hypot(b[0] - a[0], b[1] - a[1]), abs(b[2] - a[2])
 
+    def held(self, since: float) -> tuple[Stall, ...]:
+        """Starts from rest that odometry showed later than the latency says since `since`:
+        the commands that began them were held up on the way (a loaded machine, a late link),
+        from the first command until odometry's lateness says it acted."""
+        return tuple(s for s in self._held if s.end >= since)
+
+    def disturbed(self) -> None:
+        """Odometry of the motion under way came in stalled (a loaded machine, a late link):
+        its timing says more of the stall than of the latency, which it does not teach."""
+        self._disturbed = True
+
     def restart(self) -> None:
         """Forget the odometry samples (not the latency): the next sample starts a new frame,
         as after a relocalization. What the model predicts from commands stays."""
@@ -233,9 +256,9 @@ class MotionTracker:
             first = sample
             if last.t - sample.t >= _STILL_WINDOW:
                 break
-        span = last.t - first.t
-        if span <= 0:
-            return (0.0, 0.0, 0.0)
+        # A burst after a pause (the driver stalled, then sent what it held) spans a few
+        # milliseconds: a millimetre of noise across it would be a metre a second.
+        span = max(last.t - first.t, _STILL_WINDOW / 2)
         dx, dy, dyaw = relative((first.x, first.y, first.yaw), (last.x, last.y, last.yaw))
         return dx / span, dy / span, dyaw / span
 
@@ -313,6 +336,8 @@ class MotionTracker:
                 self._start = None  # the robot did not move (ignored, or sitting): no measure
             return
         self._start = None
+        if sample.t <= started:  # sent before the command: it was not at rest (odometry came
+            return  # late, held up in a stalled process), so this start tells no latency
         self._cap = sample.t - started + self._sample_period()
         base = self._trace_at(started)
         shown = started
@@ -324,7 +349,11 @@ class MotionTracker:
             if math.hypot(d[0], d[1]) >= _MOTION_EPS or abs(d[2]) >= _MOTION_EPS:
                 break
         latency = sample.t - shown - self._sample_period() / 2
-        self._latencies.append(min(MAX_LATENCY, max(0.0, latency)))
+        late = latency - self.latency  # later than usual: its first commands were held up
+        if late > max(_HELD, self._sample_period()) and not self._disturbed:  # (not its odometry)
+            self._held.append(Stall(started - 1e-3, started + late))  # its first command on
+        if not self._disturbed:
+            self._latencies.append(min(MAX_LATENCY, max(0.0, latency)))
 
     def _fit_latency(self) -> None:
         """The delay that best lines odometry up with the trace over the motion that just
@@ -332,7 +361,7 @@ class MotionTracker:
         explains what odometry saw: commands the robot never obeyed (a dropped link) must not
         teach a delay."""
         segment, end = self._segment, self._samples[-1].t
-        if segment is None:
+        if segment is None or self._disturbed:
             return
         # The trace reaches back _FIT_SECONDS + MAX_LATENCY (it keeps _TRACE_SECONDS).
         recent = [s for s in self._samples if s.t >= max(segment.t, end - _FIT_SECONDS)]

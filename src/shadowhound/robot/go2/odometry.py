@@ -18,7 +18,16 @@ what the person allowed. `OdometryIntake` stands between the messages and `Motio
 
 Each fault makes odometry untrusted until `recover` seconds of consistent samples have arrived
 since the last bad one (and no outside problem remains); `receive` returns a fault only when
-it begins, so the robot stops once. No rclpy and no clock of its own: every call takes the time.
+it begins, so the robot stops once.
+
+It also keeps how late the stream ran (`stalls`): a sample that came in later than its stamp
+says it was sent (this process or the link stalled), or a pause in the stamps beyond the
+stream's usual rate (the driver stalled), and, near such a stall, a start it showed later than
+the latency says (its commands were held up: MotionTracker.held). A loaded machine stalls the
+commands going out as it stalls the poses coming in; a step allows for what was seen
+(skills/bounds.py). Taken from when samples were sent and came in, and when odometry first
+showed a start, never from how far a pose says the robot went. No rclpy and no clock of its
+own: every call takes the time.
 """
 
 from __future__ import annotations
@@ -28,12 +37,17 @@ from collections import deque
 from dataclasses import dataclass
 
 from ...state import normalize_angle
+from ..base import MAX_STALL, Stall
 from .motion import MotionTracker
 from .stamps import StampClock
 
 MAX_COORDINATE = 1.0e5  # metres: farther than any robot's odometry frame can honestly reach
 _CHANGED = 0.001  # metres (and radians) a pose must change by to count as new
+_SHOWN = 0.25  # ... or this share of what the commands moved it by since the sample before
 _GOOD_SAMPLES = 5  # consistent samples (besides `recover` seconds) before trusting again
+_STALLS_KEPT = 30.0  # seconds of stalls `stalled` can look back over
+_DISTURBS = 0.05  # seconds of stall that make a motion's odometry no measure of the latency
+_LOADED = 2.0  # seconds from a stall of the stream within which a late start was held up too
 
 
 @dataclass(frozen=True)
@@ -84,6 +98,8 @@ class OdometryIntake:
         self._outside: dict[str, OdometryFault] = {}  # problems reported by the robot
         self._last_stamp = 0.0
         self._times: deque[float] = deque(maxlen=40)  # recent sample times (for burst gaps)
+        self._stalls: deque[Stall] = deque()  # the stream's stalls, in the order seen
+        self._gaps: deque[float] = deque(maxlen=200)  # recent gaps between sample times
         self._changed_at: float | None = None  # when odometry last showed a new pose
         self._shown_motion = False  # odometry changed since motion was last commanded
 
@@ -129,6 +145,7 @@ class OdometryIntake:
         if stamp > 0:
             self._last_stamp = stamp
         t = self.clock.local_time(stamp, arrival)
+        self._note_stall(arrival, t)
         last = self.tracker.last_sample()
         jump = self._jump(last.t, (last.x, last.y, last.yaw), t, pose) if last else ""
         if jump:
@@ -141,7 +158,10 @@ class OdometryIntake:
             turn = abs(normalize_angle(yaw - last.yaw))
             self.distance += step
             self.turned += turn
-            if step > _CHANGED or turn > _CHANGED:
+            # A new pose: it moved, or as far as a slow command moves it between two samples
+            # (a correction at 1 degree/s turns less than _CHANGED from one to the next).
+            moved, turned = self.tracker.model_motion(last.t, t)
+            if step > min(_CHANGED, _SHOWN * moved) or turn > min(_CHANGED, _SHOWN * turned):
                 self.moving += min(max(0.0, t - last.t), self.limits.burst)  # not a gap's
                 self._changed_at = t
                 self._shown_motion = self._shown_motion or self.tracker.commanding
@@ -175,6 +195,23 @@ class OdometryIntake:
         return self._outside[kind] if new else None
 
     # -- outputs -----------------------------------------------------------------------
+
+    def stalls(self, since: float) -> tuple[Stall, ...]:
+        """The stalls that ended since `since` (the clock of `arrival`): the stream's, and
+        starts it showed later than the latency says (MotionTracker.held) on a loaded machine:
+        within `_LOADED` seconds of a stall of the stream. On a quiet one a late start is the
+        robot's own, or a lie's shape, and allowed nothing."""
+        seen = [s for s in self._stalls if s.end >= since - _LOADED]
+        held = [
+            h
+            for h in self.tracker.held(since)
+            if any(s.start - _LOADED <= h.start <= s.end + _LOADED for s in seen)
+        ]
+        return (*(s for s in seen if s.end >= since), *held)
+
+    def stalled(self, since: float) -> float:
+        """Seconds: the longest of `stalls(since)`."""
+        return max((s.seconds for s in self.stalls(since)), default=0.0)
 
     def problem(self, now: float) -> str | None:
         """Why odometry is not trusted now (None: it is)."""
@@ -230,6 +267,24 @@ class OdometryIntake:
             )
         return ""
 
+    def _note_stall(self, arrival: float, t: float) -> None:
+        """Keep how late the sample that arrived at `arrival`, sent at `t` (this clock), was:
+        later than sent (this process or the link stalled), or after a pause in what was sent
+        beyond the usual gap (the driver stalled)."""
+        gaps = sorted(self._gaps)
+        usual = gaps[len(gaps) * 9 // 10] if len(gaps) >= 10 else math.inf  # bursts are usual
+        gap = t - self._times[-1] if self._times else 0.0
+        self._gaps.append(gap)
+        while self._stalls and self._stalls[0].end < arrival - _STALLS_KEPT:
+            self._stalls.popleft()
+        # Late: held from when it was sent. After a pause: the sender stalled at some moment
+        # after the sample before (a stall is as long as it is beyond the usual gap).
+        for stall, seconds in ((Stall(t, arrival), arrival - t), (Stall(t - gap, t), gap - usual)):
+            if seconds > 1e-3:  # a millisecond is the link's and the scheduler's noise
+                self._stalls.append(stall)
+            if seconds > _DISTURBS:
+                self.tracker.disturbed()
+
     def _slack(self) -> float:
         """Time a burst may have compressed: the longest recent gap between samples (a burst
         delivers what a gap held back), at least 0.1 s, at most `burst`."""
@@ -242,7 +297,12 @@ class OdometryIntake:
         this motion began, says the robot has moved on."""
         if not (self.tracker.commanding and self._shown_motion) or self._changed_at is None:
             return None
-        moved, turned = self.tracker.model_motion(self._changed_at, t)
+        # A stall seen meanwhile held the commands up as long (the driver's process, the link):
+        # the robot only then went on as they say.
+        held = min(MAX_STALL, self.stalled(self._changed_at))
+        if self._changed_at + held >= t:
+            return None
+        moved, turned = self.tracker.model_motion(self._changed_at + held, t)
         lim = self.limits
         if moved < lim.freeze_distance and turned < lim.freeze_turn:
             return None

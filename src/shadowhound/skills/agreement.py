@@ -1,0 +1,124 @@
+"""A leg or turn done, checked against its own commands, and the words that say how it ended.
+
+Odometry that jumps by less than the robot could move between two samples is not seen as a
+jump (robot/go2/odometry.py); it would end a leg or a turn early, reported as done. So at rest
+the step compares where odometry puts the robot with where its commands alone put it (the
+ledger, bounds.py): odometry *ahead* of the commands by more than the step's margin, beyond the
+leeway of the stalls seen (commands that acted late on a loaded machine), fails. Commands
+further along than odometry are what a link does (each command acts once it arrives, so a stop
+that arrives sooner than the velocity before it cuts that short), and the commands' bound has
+kept them within the margin, so the truth is within it too.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..errors import SkillError
+from ..state import Pose2D, RobotState
+from .bounds import Leeway
+from .context import SkillContext
+
+LATE = "the robot slow to start, or commands late or lost on the way"
+SLOW = "no progress for a while (the robot slow to follow: a loaded machine, a late link?)"
+
+
+def leg_agrees(
+    ctx: SkillContext,
+    end: RobotState,
+    origin: Pose2D,
+    yaw0: float,
+    margin: float,
+    leg: tuple[float, float],
+    leeway: Leeway,
+) -> None:
+    """A leg odometry says is done must agree with what its commands did: where odometry
+    puts the robot (from the leg's start, in its frame) and where the commands alone put it
+    (the ledger, from the same start) may differ by at most the leg's margin, beyond the
+    `leeway` of the stalls seen (commands that acted late: bounds.py). A jump of the odometry
+    too small to be seen as one (within what the robot could move between two samples)
+    otherwise ends the leg early by as much, reported as done.
+
+    Only odometry *ahead* of the commands along the leg (`leg`: its goal, in the same frame)
+    counts: commands further along than odometry are what a link does (each command acts
+    once it arrives, so a stop that arrives sooner than the velocity before it cuts that
+    short), and leg_room has kept them within the margin, so the truth is within it too."""
+    c, s = math.cos(origin.yaw), math.sin(origin.yaw)
+    dx, dy = end.x - origin.x, end.y - origin.y
+    measured = (dx * c + dy * s, -dx * s + dy * c)
+    ox, oy, _ = ctx.commanded()  # in the frame the leg began in (odometry's, before any jump)
+    c, s = math.cos(yaw0), math.sin(yaw0)
+    commanded = (ox * c + oy * s, -ox * s + oy * c)
+    ax, ay = measured[0] - commanded[0], measured[1] - commanded[1]
+    length = math.hypot(*leg)
+    if length > 0:
+        ux, uy = leg[0] / length, leg[1] / length
+        along, aside = ax * ux + ay * uy, abs(ax * uy - ay * ux)
+    else:
+        along, aside = math.hypot(ax, ay), 0.0
+    # Ahead, and to either side, beyond what the stalls seen explain.
+    apart = math.hypot(max(0.0, along - leeway.ahead), max(0.0, aside - leeway.aside))
+    if apart > margin:
+        ctx.robot.stop()
+        raise SkillError(
+            f"odometry shows the leg done ({math.hypot(*measured):.2f} m), yet its commands "
+            f"took the robot {math.hypot(*commanded):.2f} m, {apart:.2f} m apart (at most "
+            f"{margin:.2f}: safety.step_travel_margin, step_travel_slack"
+            f"{allowing(ctx, leeway.ahead, 'm')}): odometry disagrees with the motion (a "
+            "small jump, a slipping or lifted robot?)"
+        )
+
+
+def turn_agrees(ctx: SkillContext, turned: float, angle: float, margin: float) -> None:
+    """A turn odometry says is done (`turned` of `angle`, radians) must agree with what its
+    commands turned: odometry further than they could have (a heading jump too small to be seen
+    as one), by more than `margin` and the leeway of the stalls seen, fails."""
+    commanded = ctx.commanded()[2]
+    apart = turned - commanded
+    apart = math.copysign(1.0, angle) * apart if angle else abs(apart)  # ahead counts
+    ahead = ctx.leeway((0.0, 0.0, math.copysign(1.0, angle))).ahead  # late slowings
+    if apart > margin + ahead:
+        ctx.robot.stop()
+        raise SkillError(
+            f"odometry shows the turn done ({math.degrees(turned):.0f} degrees), yet its "
+            f"commands turned the robot {math.degrees(commanded):.0f} degrees (at most "
+            f"{math.degrees(margin):.0f} apart: safety.step_turn_margin_deg, step_travel_slack"
+            f"{allowing(ctx, math.degrees(ahead), 'degrees')}): odometry disagrees with the "
+            "motion (a small jump of the heading?)"
+        )
+
+
+def ended_short(short: str, planned: str, why: str) -> str:
+    """The note of a leg or turn that ended `short` of the `planned` one, within the step's
+    outcome tolerance, and `why` it ended there."""
+    return f"ended {short} short of the {planned}: {why}"
+
+
+def deg(radians: float) -> str:
+    return f"{math.degrees(abs(radians)):.0f}"
+
+
+def allowing(ctx: SkillContext, extra: float, unit: str) -> str:
+    """What a limit allowed beyond its margin for the stalls seen ('' when none were)."""
+    if extra <= 0.0:
+        return ""
+    spec = ".2f" if unit == "m" else ".0f"
+    return f", and {extra:{spec}} {unit} more for {ctx.stall():.2f} s of stalls seen"
+
+
+def disagree(commanded: float, goal: float, margin: float, measured: float, extra: float) -> str:
+    """Why a leg stopped when its commands would take the robot off the planned leg (by
+    `margin`, and `extra` for the stalls seen): odometry shows it short of the goal (or
+    nowhere near)."""
+    more = f", and {extra:.2f} m more for the stalls seen" if extra > 0 else ""
+    lead = (
+        f"its commands took it {commanded:.2f} m for a {goal:.2f} m leg (at most {margin:.2f} "
+        f"m off the leg: safety.step_travel_margin, step_travel_slack{more}), yet odometry "
+        f"shows {measured:.2f} m"
+    )
+    if measured < 0.25 * commanded:
+        return (
+            f"{lead}: the commands do not reach the robot or it ignores them (is it "
+            "standing? does another controller hold it?), or odometry is frozen"
+        )
+    return f"{lead}: odometry disagrees with the motion (a relocalization, a frozen stream?)"
