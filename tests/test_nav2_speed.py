@@ -31,6 +31,9 @@ class Walk:
     def now(self) -> float:
         return self.tick * TICK
 
+    def stalls(self, since: float) -> tuple:
+        return ()  # the lateness is steady: no stall is seen
+
     def get_state(self) -> RobotState:
         shown = max(
             0.0, self.now() - self.late[self.tick % len(self.late)]
