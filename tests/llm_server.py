@@ -12,6 +12,11 @@ Every ``POST /v1/chat/completions`` takes the next reply from a FIFO queue. An e
 answers HTTP 500 ``{"error": {"message": "no scripted reply left", "type": "server_error"}}``.
 Also served: ``GET /v1/models``, ``GET /v1/models/{id}`` and, when ``ollama_tags`` is given,
 the Ollama-native ``GET /api/tags``. Everything else is a 404 with a JSON error body.
+
+``holding()`` says how many requests a ``hang()`` or ``delay()`` reply holds unanswered right
+now, so a test can say "the client gave up (or the mission ended) while the server still held
+its request" without measuring time; ``release()`` lets go of them (each connection is dropped)
+while the server serves on.
 """
 
 from __future__ import annotations
@@ -23,7 +28,7 @@ import sys
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
@@ -74,12 +79,14 @@ class Reply:
 
 def model_settings(srv: Any, **llm: Any) -> dict[str, Any]:
     """The `llm` section for an agent whose every mission this scripted server plans: no
-    retries, a short timeout, hybrid planning off (the offline planner would answer first)."""
+    retries, hybrid planning off (the offline planner would answer first). The time-out only
+    bounds a hung test (a loaded machine may take seconds to answer on loopback); a test of
+    the time-out sets its own."""
     return {
         "base_url": srv.url,
         "model": "test-model",
         "max_retries": 0,
-        "timeout": 5,
+        "timeout": 60,
         "hybrid": False,
         **llm,
     }
@@ -125,13 +132,15 @@ def status(code: int, message: str = "boom", *, retry_after_ms: int | None = Non
 
 
 def delay(seconds: float, then: Reply) -> Reply:
-    """Wait ``seconds`` (cut short by ``stop()``, then the connection is dropped), send ``then``."""
+    """Wait ``seconds`` (cut short by ``stop()`` or ``release()``, then the connection is
+    dropped), send ``then``."""
     return Reply(kind="delay", seconds=seconds, then=then)
 
 
 def hang() -> Reply:
-    """Read the request and never answer: a model server that is stuck. ``stop()`` (or the client
-    hanging up) ends it; ``hung_up()`` tells whether the client closed the connection."""
+    """Read the request and never answer: a model server that is stuck. ``stop()``,
+    ``release()`` or the client hanging up ends it; ``hung_up()`` tells whether the client
+    closed the connection."""
     return Reply(kind="hang")
 
 
@@ -258,12 +267,18 @@ class _Handler(BaseHTTPRequestHandler):
         elif reply.kind == "drop":
             self._drop()
         elif reply.kind == "hang":
-            self._hang()
+            with owner._holding():
+                hung_up = self._hang()
+            if hung_up:  # counted once no longer held: a test that sees it sees both
+                owner._note_hangup()
+            self._drop()
         elif reply.kind == "delay":
-            if owner._stopping.wait(reply.seconds) or reply.then is None:
-                self._drop()  # shutting down: never hold stop() up
-            else:
+            with owner._holding() as let_go:
+                waited_out = not let_go(reply.seconds)
+            if waited_out and reply.then is not None:
                 self._serve(reply.then, body)
+            else:
+                self._drop()  # stopping or released: never hold stop() up
         elif reply.kind == "dynamic" and reply.fn is not None:
             try:
                 produced = reply.fn(body)
@@ -277,21 +292,20 @@ class _Handler(BaseHTTPRequestHandler):
         else:
             self._send_error(500, f"unknown scripted reply kind {reply.kind!r}")
 
-    def _hang(self) -> None:
-        """Wait, answering nothing, until the server stops or the client closes the connection."""
-        owner = self.server.owner
+    def _hang(self) -> bool:
+        """Wait, answering nothing, until the server stops or lets go (False), or the client
+        closes the connection (True)."""
+        let_go = self.server.owner._let_go_marker()
         self.connection.settimeout(_POLL_INTERVAL)
-        while not owner._stopping.is_set():
+        while not let_go():
             try:
                 if self.connection.recv(1, socket.MSG_PEEK) == b"":
-                    owner._note_hangup()
-                    break
+                    return True
             except TimeoutError:
                 continue
             except OSError:
-                owner._note_hangup()
-                break
-        self._drop()
+                return True
+        return False
 
     def _drop(self) -> None:
         self.close_connection = True
@@ -371,6 +385,8 @@ class ScriptedLLM:
         self._completion_ids = 0
         self._call_ids = 0
         self._hangups = 0
+        self._held = 0  # requests a hang() or delay() holds unanswered now
+        self._releases = 0  # release() calls so far: a hold started before one is let go
 
     # -- addresses
 
@@ -456,7 +472,51 @@ class ScriptedLLM:
         with self._lock:
             return self._hangups
 
+    def holding(self) -> int:
+        """How many requests a ``hang()`` or ``delay()`` reply holds unanswered right now."""
+        with self._lock:
+            return self._held
+
+    def release(self) -> None:
+        """Let go of every request held now: each connection is dropped (the client sees a lost
+        connection), as ``stop()`` does, but the server serves on; later holds are held."""
+        with self._lock:
+            self._releases += 1
+
     # -- used by the handler threads
+
+    @contextlib.contextmanager
+    def _holding(self) -> Iterator[Callable[[float], bool]]:
+        """Count a held request while inside; yields `wait(seconds)`, True when let go first."""
+        let_go = self._let_go_marker()
+
+        def wait(seconds: float) -> bool:
+            end = time.monotonic() + seconds
+            while not let_go():
+                left = end - time.monotonic()
+                if left <= 0:
+                    return False
+                self._stopping.wait(min(left, _POLL_INTERVAL))
+            return True
+
+        with self._lock:
+            self._held += 1
+        try:
+            yield wait
+        finally:
+            with self._lock:
+                self._held -= 1
+
+    def _let_go_marker(self) -> Callable[[], bool]:
+        """A check, true once the server stops or release() is called after this call."""
+        with self._lock:
+            releases = self._releases
+
+        def let_go() -> bool:
+            with self._lock:
+                return self._stopping.is_set() or self._releases != releases
+
+        return let_go
 
     def _note_hangup(self) -> None:
         with self._lock:

@@ -20,6 +20,17 @@ from shadowhound import (
 )
 from shadowhound.errors import RobotError
 
+SAFETY = 60.0  # seconds: bounds a hung test (a loaded machine is slow), never what is asserted
+# A walk slow enough (20 s of real time) that a press always lands while the robot walks.
+SLOW_WALK = "walk forward 2 meters at 0.1 m/s"
+
+
+def until(check, what: str) -> None:
+    deadline = time.monotonic() + SAFETY
+    while not check():
+        assert time.monotonic() < deadline, f"timed out waiting for {what}"
+        time.sleep(0.01)
+
 
 def test_documented_usage_of_the_original_names():
     executor = MissionExecutor(MissionExecutorConfig(robot=SimRobot()))
@@ -148,16 +159,12 @@ def test_estop_cancels_the_mission_even_when_the_robots_stop_raises() -> None:
     robot = _RefusingStop(time_scale=1.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot))
     box: dict = {}
-    worker = threading.Thread(
-        target=lambda: box.update(r=agent.execute_mission("walk forward 2 meters"))
-    )
+    worker = threading.Thread(target=lambda: box.update(r=agent.execute_mission(SLOW_WALK)))
     worker.start()
-    deadline = time.monotonic() + 5
-    while robot.get_state().vx < 0.2 and time.monotonic() < deadline:
-        time.sleep(0.01)
+    until(lambda: robot.get_state().vx > 0.05, "the robot to walk")
     with pytest.raises(RobotError, match="did not acknowledge"):
         agent.estop()  # the caller hears of the error ...
-    worker.join(5)
+    worker.join(SAFETY)
     assert not worker.is_alive()  # ... and the mission ended all the same, latched
     assert agent.estop_latched and robot.get_state().vx == 0.0
     assert box["r"].status is MissionStatus.STOPPED and "e-stop" in box["r"].response
@@ -167,18 +174,20 @@ def test_estop_while_a_mission_runs_in_another_thread():
     robot = SimRobot(time_scale=1.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot))
     box = {}
-    worker = threading.Thread(
-        target=lambda: box.update(r=agent.execute_mission("walk forward 2 meters"))
-    )
+    worker = threading.Thread(target=lambda: box.update(r=agent.execute_mission(SLOW_WALK)))
     worker.start()
-    deadline = time.monotonic() + 5
-    while robot.get_state().vx < 0.2 and time.monotonic() < deadline:
-        diag = agent.get_diagnostics()  # diagnostics work while the mission runs
-        time.sleep(0.02)
+    diagnosed = []
+
+    def walking() -> bool:
+        diagnosed.append(agent.get_diagnostics())  # diagnostics work while the mission runs
+        return robot.get_state().vx > 0.05
+
+    until(walking, "the robot to walk")
+    diag = diagnosed[-1]
     assert diag["status"] == "executing" and diag["current_skill"] == "nav.move"
     agent.estop()
     assert robot.get_state().vx == 0.0  # hard stop at once
-    worker.join(5)
+    worker.join(SAFETY)
     result = box["r"]
     assert result.status is MissionStatus.STOPPED and "e-stop" in result.response
     x = robot.get_state().x
@@ -204,12 +213,15 @@ def test_cancel_stops_the_mission(agent, robot):
 def test_one_mission_at_a_time():
     robot = SimRobot(time_scale=1.0)
     agent = RobotAgent(RobotAgentConfig(robot=robot))
-    worker = threading.Thread(target=agent.execute_mission, args=("wait 1 second",))
+    box = {}
+    worker = threading.Thread(target=lambda: box.update(r=agent.execute_mission("wait 60 seconds")))
     worker.start()
-    time.sleep(0.2)
+    until(lambda: agent.get_diagnostics()["status"] == "executing", "the wait to run")
     busy = agent.execute_mission("stand up")
     assert not busy.success and "another mission is running" in busy.response
-    worker.join()
+    agent.cancel()
+    worker.join(SAFETY)
+    assert not worker.is_alive() and box["r"].status is MissionStatus.STOPPED
 
 
 def test_planner_failure_and_usage_are_reported(robot):

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import timeit
 from typing import Any
 
 import pytest
@@ -434,11 +433,19 @@ def test_non_text_is_a_planning_error(value: Any) -> None:
         PLANNER.plan(value)
 
 
-def test_fast_enough() -> None:
+def test_a_five_clause_sentence_is_five_steps_and_planning_it_again_gives_the_same_plan() -> None:
+    """How fast the offline planner is, is bench/bench_core.py's figure (a five-step sentence,
+    under 1 ms), not a test's: a loaded machine makes any time."""
     text = "stand up, walk forward three meters, turn left 90 degrees, go to the kitchen, sit down"
-    assert len(PLANNER.plan(text).steps) == 5
-    per_call = min(timeit.repeat(lambda: PLANNER.plan(text), number=50, repeat=3)) / 50
-    assert per_call < 0.005  # about 0.2 ms on a laptop; generous for slow CI machines
+    plan = PLANNER.plan(text)
+    assert [s.skill for s in plan.steps] == [
+        "body.stand",
+        "nav.move",
+        "nav.rotate",
+        "nav.goto",
+        "body.sit",
+    ]
+    assert PLANNER.plan(text).steps == plan.steps  # nothing carried over between calls
 
 
 hypothesis = pytest.importorskip("hypothesis")

@@ -20,7 +20,9 @@ from shadowhound.worker import (
     MissionWorker,
 )
 
-WAIT = 20.0  # seconds: a bound on anything here, never the expected time
+WAIT = 60.0  # seconds: a bound on anything here, never the expected time
+# 30 s of walking at real time: an e-stop pressed once it walks lands mid-walk on any machine.
+WALK = "walk backward 3 meters at 0.1 m/s"
 
 
 class RecordingSim(SimRobot):
@@ -72,7 +74,7 @@ def running(agent: RobotAgent, job: MissionJob) -> None:
 def test_estop_stops_the_robot_before_it_drops_the_queue(
     agent: RobotAgent, robot: RecordingSim, worker: MissionWorker
 ) -> None:
-    walking = MissionJob("walk backward 3 meters")
+    walking = MissionJob(WALK)
     waiting = [MissionJob("turn left 90 degrees"), MissionJob("sit down")]
     robot.watched = waiting
 
@@ -101,7 +103,7 @@ def test_estop_stops_the_robot_before_it_drops_the_queue(
 def test_estop_from_many_threads_while_a_mission_walks_and_missions_arrive(
     agent: RobotAgent, robot: RecordingSim, worker: MissionWorker
 ) -> None:
-    walking = MissionJob("walk backward 3 meters")
+    walking = MissionJob(WALK)
     assert worker.submit(walking) is None
     running(agent, walking)
     go = threading.Barrier(5)

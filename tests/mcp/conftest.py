@@ -66,7 +66,7 @@ class HttpServer:
                 self.log.append(line)
                 self._logged.notify_all()
 
-    def wait_for_log(self, text: str, count: int = 1, timeout: float = 30.0) -> None:
+    def wait_for_log(self, text: str, count: int = 1, timeout: float = 60.0) -> None:
         """Until `count` lines of the server's log contain `text`."""
         with self._logged:
             if not self._logged.wait_for(
@@ -77,7 +77,7 @@ class HttpServer:
     def _wait_for_url(self) -> str:
         assert self.proc.stderr is not None
         seen = []
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + 120  # a loaded machine starts Python slowly
         while time.monotonic() < deadline:
             line = self.proc.stderr.readline()
             if not line:
@@ -96,7 +96,7 @@ class HttpServer:
         if self.proc.poll() is None:
             self.proc.terminate()
             try:
-                self.proc.wait(10)
+                self.proc.wait(30)
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()

@@ -4,6 +4,7 @@ any interface's mission runs, an MCP mission or skill call is refused as busy, n
 from __future__ import annotations
 
 import math
+import threading
 
 import pytest
 from hypothesis import given, settings
@@ -26,24 +27,37 @@ def test_a_mission_from_another_interface_makes_mcp_busy():
     agent.initialize()
     worker = MissionWorker(agent)  # e.g. the ROS node's
     desk = McpDesk(agent, worker=worker)
+    # The ROS node's mission is held at its start until the MCP calls have been refused: it is
+    # running then whatever the machine's speed (a short walk could otherwise end first).
+    started, refused_both = threading.Event(), threading.Event()
+
+    def hold(job: MissionJob) -> None:
+        if job.source == "topic":
+            started.set()
+            assert refused_both.wait(60), "the MCP calls never came"
+
+    worker.on("started", hold)
     try:
         ros_job = MissionJob("walk forward 0.3 meters", source="topic")
         assert worker.submit(ros_job) is None
+        assert started.wait(60)
         with pytest.raises(ToolInputError) as refused:
             desk.start_mission("turn left 90 degrees")
         assert str(refused.value) == BUSY
         with pytest.raises(ToolInputError, match="^busy:"):
             desk.start_skill("nav_rotate", {"degrees": 90})
-        assert ros_job.done.wait(30) and ros_job.result is not None
+        refused_both.set()
+        assert ros_job.done.wait(60) and ros_job.result is not None
         assert ros_job.result.success
         mcp_job = desk.start_skill("nav_rotate", {"degrees": 90})
-        assert mcp_job.done.wait(30) and mcp_job.result is not None
+        assert mcp_job.done.wait(60) and mcp_job.result is not None
         assert [s.skill for s in mcp_job.result.steps] == ["nav.rotate"]
         assert [r.mission for r in agent.history] == [
             "walk forward 0.3 meters",
             "nav.rotate(degrees=90.0)",
         ]
     finally:
+        refused_both.set()
         desk.close()
         worker.stop()
         agent.cleanup()
@@ -94,7 +108,7 @@ def test_a_skill_tool_runs_exactly_when_its_one_step_plan_passes_the_checks(call
             assert not allowed  # refused at the door: only calls that fail validation
             assert agent.get_robot_state().pose == start.pose
             return
-        assert job.done.wait(30) and job.result is not None
+        assert job.done.wait(60) and job.result is not None
         ran = job.result.steps[0].status.value != "skipped"
         assert ran == allowed, (job.result.response, checked)
         assert bool(job.result.refusals) == (not allowed)

@@ -31,11 +31,13 @@ def inspector() -> list[str]:
         pytest.skip("node is not installed (the MCP Inspector is a node program)")
     if not INSPECTOR.exists():
         pytest.fail(f"the MCP Inspector is not installed: run scripts/test.sh or `{INSTALL}`")
-    return [str(INSPECTOR), "--cli"]
+    # Its connect time-out (15 s by default) only bounds a hung server here: a loaded machine
+    # may take longer than that to start Python and the server.
+    return [str(INSPECTOR), "--cli", "--connect-timeout", "120000"]
 
 
 def _inspect(command: list[str], *args: str) -> dict:
-    proc = subprocess.run([*command, *args], capture_output=True, text=True, timeout=120, cwd=ROOT)
+    proc = subprocess.run([*command, *args], capture_output=True, text=True, timeout=300, cwd=ROOT)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
     return json.loads(proc.stdout)
 

@@ -23,6 +23,8 @@ from .conftest import HttpServer, connect, server_env, structured, text_of
 
 TRANSPORTS = ["stdio", "http"]
 REAL_TIME = 1.0  # the robot takes real seconds, so there is a mission to stop
+# 20 s of walking: a stop pressed once it walks lands mid-walk on any machine.
+SLOW_WALK = "walk forward 2 meters at 0.1 m/s"
 
 
 @contextlib.asynccontextmanager
@@ -42,13 +44,22 @@ async def robot(client: Any) -> dict[str, Any]:
     return structured(await client.call_tool("get_state", {}))["robot"]
 
 
-async def wait_for_step(progress: list[str], skill: str, timeout: float = 30.0) -> None:
+async def wait_for_step(progress: list[str], skill: str, timeout: float = 60.0) -> None:
     """Until a progress message says `skill` started."""
     for _ in range(int(timeout / 0.02)):
         if any(skill in m and ":" not in m for m in progress):
             return
         await asyncio.sleep(0.02)
     raise AssertionError(f"{skill} never started; progress: {progress}")
+
+
+async def walking(client: Any) -> dict[str, Any]:
+    """The robot's state once it has walked a few centimetres (60 s at most)."""
+    for _ in range(3000):
+        if (state := await robot(client))["x"] > 0.05:
+            return state
+        await asyncio.sleep(0.02)
+    raise AssertionError("the robot never walked")
 
 
 def run(coro: Any) -> Any:
@@ -282,12 +293,10 @@ def test_emergency_stop_mid_mission_stops_the_robot_and_latches(transport, http_
     async def scenario() -> None:
         async with client_for(transport, http_server, time_scale=REAL_TIME) as client:
             mission = asyncio.create_task(
-                client.call_tool(
-                    "run_mission", {"text": "walk forward 2 meters"}, progress_callback=on_progress
-                )
+                client.call_tool("run_mission", {"text": SLOW_WALK}, progress_callback=on_progress)
             )
             await wait_for_step(progress, "nav.move")
-            await asyncio.sleep(0.5)  # moving now
+            await walking(client)
             stop = structured(await client.call_tool("emergency_stop", {}))
             assert stop["estop_latched"] is True
             # Stopped before the answer was written: the state in it was read after the stop.
@@ -325,7 +334,7 @@ def test_patrol_until_i_say_stop_ends_on_cancel_mission_as_a_success(http_server
                 )
             )
             await wait_for_step(progress, "nav.patrol")
-            for _ in range(500):  # walking: its odometer counts
+            for _ in range(3000):  # walking: its odometer counts (60 s at most)
                 if (await robot(client))["distance_travelled"] > 0.1:
                     break
                 await asyncio.sleep(0.02)
@@ -336,7 +345,7 @@ def test_patrol_until_i_say_stop_ends_on_cancel_mission_as_a_success(http_server
             result = structured(await mission)
             assert result["success"] is True and result["status"] == "succeeded", result
             assert "stopped: you said stop (until I say stop)" in result["response"]
-            for _ in range(250):  # it brakes within its deceleration limit, then stands
+            for _ in range(3000):  # it brakes within its deceleration limit, then stands
                 if not (await robot(client))["moving"]:
                     break
                 await asyncio.sleep(0.02)
@@ -356,23 +365,20 @@ def test_a_second_mission_is_refused_busy_never_queued(transport, http_server):
     async def scenario() -> None:
         async with client_for(transport, http_server, time_scale=REAL_TIME) as client:
             first = asyncio.create_task(
-                client.call_tool(
-                    "run_mission",
-                    {"text": "walk forward 0.5 meters"},
-                    progress_callback=on_progress,
-                )
+                client.call_tool("run_mission", {"text": SLOW_WALK}, progress_callback=on_progress)
             )
             await wait_for_step(progress, "nav.move")
             second = await client.call_tool("run_mission", {"text": "turn left 90 degrees"})
             skill = await client.call_tool("nav_rotate", {"degrees": 90})
             assert second.is_error and text_of(second).startswith("busy:")
             assert skill.is_error and text_of(skill).startswith("busy:")
-            assert structured(await first)["success"] is True
-            await asyncio.sleep(0.3)
-            state = await robot(client)
-            assert state["yaw"] == 0.0  # neither refused call ran later
+            assert structured(await client.call_tool("cancel_mission", {}))["cancelled"] is True
+            assert structured(await first)["status"] == "stopped"
+            state = structured(await client.call_tool("get_state", {}))
+            assert state["busy"] is False  # nothing was queued behind it (it would be busy)
+            assert state["robot"]["yaw"] == 0.0  # neither refused call ran
             history = structured(await client.call_tool("history", {"limit": 10}))["missions"]
-            assert history[0]["mission"] == "walk forward 0.5 meters"
+            assert history[0]["mission"] == SLOW_WALK  # a queued one would be on record
             assert not {"turn left 90 degrees", "nav.rotate(degrees=90)"} & {
                 m["mission"] for m in history
             }
@@ -390,18 +396,21 @@ def test_http_client_going_away_mid_mission_stops_the_robot(http_server):
     async def scenario() -> None:
         async with connect("http", url=server.url) as client:
             mission = asyncio.create_task(
-                client.call_tool(
-                    "run_mission", {"text": "walk forward 2 meters"}, progress_callback=on_progress
-                )
+                client.call_tool("run_mission", {"text": SLOW_WALK}, progress_callback=on_progress)
             )
             await wait_for_step(progress, "nav.move")
-            await asyncio.sleep(0.3)
+            await walking(client)
             mission.cancel()  # the client gives up on the call and leaves
             with contextlib.suppress(asyncio.CancelledError):
                 await mission
         async with connect("http", url=server.url) as client:
-            assert structured(await client.call_tool("get_state", {}))["busy"] is False
-            for _ in range(100):  # the simulator brakes at its deceleration limit
+            for _ in range(3000):  # the server notices the client gone, ends its mission
+                if not structured(await client.call_tool("get_state", {}))["busy"]:
+                    break
+                await asyncio.sleep(0.02)
+            else:
+                raise AssertionError("the mission of the client that left ran on")
+            for _ in range(1200):  # the simulator brakes at its deceleration limit
                 if not (first := await robot(client))["moving"]:
                     break
                 await asyncio.sleep(0.05)

@@ -42,11 +42,13 @@ def test_sessions_whose_clients_vanish_close_at_once(http_server):
 
 
 def test_an_idle_session_expires(http_server):
-    server = http_server("-v", "--session-idle", "0.3")
+    # 3 s: the listening client must open its stream within that of opening its session (a few
+    # milliseconds, more on a loaded machine), or it would be idle too.
+    server = http_server("-v", "--session-idle", "3")
     client = opened(server.url)
     listening = opened(server.url)
     stream = listening.open_get_stream()  # a client that listens is never idle
-    server.wait_for_log("closed: idle for 0.3 s")
+    server.wait_for_log("closed: idle for 3 s")
     assert status(client) == 404
     assert status(listening) == 200
     stream.close()

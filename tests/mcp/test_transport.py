@@ -27,7 +27,7 @@ def test_accepted_connections_send_without_delay(module):
         server = await asyncio.start_server(accepted, sock=sock)
         async with server:
             _reader, writer = await asyncio.open_connection(*sock.getsockname()[:2])
-            value = await asyncio.wait_for(seen.get(), 10)
+            value = await asyncio.wait_for(seen.get(), 60)
             writer.close()
         return value
 

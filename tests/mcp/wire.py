@@ -42,7 +42,7 @@ class Stream:
         self.sock = sock
         self.received = b""
 
-    def wait_for(self, text: bytes, timeout: float = 30.0) -> None:
+    def wait_for(self, text: bytes, timeout: float = 60.0) -> None:
         """Until `text` has arrived on the stream."""
         deadline = time.monotonic() + timeout
         while text not in self.received:

@@ -32,6 +32,8 @@ if _MISSING:
     collect_ignore_glob = ["test_*.py"]
 
 TOKEN = "test-token-0123456789abcdef"
+SAFETY = 60.0  # seconds: what a wait allows before it fails; it bounds a hung test, and a loaded
+# machine is slow, so no wait asserts how soon something happens (bench/ measures that)
 
 
 def make_agent(time_scale: float = 0.0, **settings: Any) -> RobotAgent:
@@ -45,7 +47,7 @@ def make_agent(time_scale: float = 0.0, **settings: Any) -> RobotAgent:
 
 def wait_for(
     check: Callable[[], Any],
-    timeout: float = 10.0,
+    timeout: float = SAFETY,
     what: str = "condition",
     detail: Callable[[], str] | None = None,
 ) -> Any:
@@ -97,7 +99,7 @@ def serve() -> Iterator[Callable[..., WebServer]]:
         server.app.state.web.agent.cleanup()
 
 
-def finished(client: Any, mission_id: str, timeout: float = 15.0) -> dict[str, Any]:
+def finished(client: Any, mission_id: str, timeout: float = SAFETY) -> dict[str, Any]:
     """The mission's record once it has finished (or was dropped)."""
 
     def done() -> dict[str, Any] | None:
@@ -116,7 +118,7 @@ def heard() -> Iterator[Any]:
         yield srv
 
 
-def approach(robot: Any, name: str, timeout: float = 20.0) -> float:
+def approach(robot: Any, name: str, timeout: float = SAFETY) -> float:
     """While something drives the simulated robot at the object `name`: wait until it has come
     past 1 m and stopped, and return how close its body came to the object (truth), metres."""
     thing = next(o for o in robot.world.objects if o.name == name)

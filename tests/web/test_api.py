@@ -116,9 +116,10 @@ def test_estop_latches_drops_the_queue_and_refuses_missions(client: TestClient) 
 
 
 def test_cancel_a_running_mission_and_refuse_cancelling_a_finished_one() -> None:
-    agent = make_agent(time_scale=0.05)  # real clock, 20x faster: the mission runs ~0.5 s
+    agent = make_agent(time_scale=1.0)  # real time: the walk takes 40 s, the cancel lands in it
     with TestClient(create_app(agent), base_url="http://127.0.0.1") as client:
-        first = client.post("/api/mission", json={"command": "walk backward 4 meters"}).json()
+        walk = {"command": "walk backward 4 meters at 0.1 m/s"}
+        first = client.post("/api/mission", json=walk).json()
         queued = client.post("/api/mission", json={"command": "turn left 90 degrees"}).json()
         assert queued["queued_ahead"] >= 1
         wait_for(

@@ -17,7 +17,7 @@ from typing import Any
 import pytest
 
 from shadowhound.web import WebServer
-from tests.web.conftest import make_agent, wait_for
+from tests.web.conftest import SAFETY, make_agent, wait_for
 
 CHROMIUM = os.environ.get("SHADOWHOUND_CHROMIUM", "/usr/bin/chromium")
 ARTIFACTS = Path(__file__).resolve().parent / "artifacts"
@@ -52,7 +52,7 @@ def open_dashboard(
     url: str,
     errors: list[str],
     *,
-    timeout_ms: int = 20_000,
+    timeout_ms: int = int(SAFETY * 1000),
     init_script: str = "",
 ) -> Any:
     """A new page on the dashboard at `url`, its script errors kept in `errors`, once its live
@@ -105,19 +105,20 @@ def test_dashboard_runs_a_mission_and_the_estop_stops_the_robot(
             page.wait_for_selector('#steps li[data-status="succeeded"]')
             page.wait_for_selector('#result[data-kind="ok"]')
             assert "moved 1.00 m forward" in page.text_content("#result")
-            wait_for(lambda: _map_x(page) > 0.95, 10, "the robot to move on the map")
+            wait_for(lambda: _map_x(page) > 0.95, what="the robot to move on the map")
             page.wait_for_selector('#history li[data-status="succeeded"]')
             page.screenshot(path=str(ARTIFACTS / "dashboard-mission.png"), full_page=True)
 
-            # 2. A longer mission, stopped with the STOP button while the robot walks.
-            page.fill("#command", "walk backward 5 meters")
+            # 2. A longer mission, stopped with the STOP button while the robot walks: slow
+            #    (25 s here), so the press lands mid-walk however slowly a loaded machine clicks.
+            page.fill("#command", "walk backward 5 meters at 0.1 m/s")
             page.click("#run")
             page.wait_for_selector('#steps li[data-status="running"]')
             # Judged by the robot itself (the map's following it is checked above): a CI run once
             # timed out here; the message now says where the robot and the map were.
             wait_for(
-                lambda: agent.get_robot_state().x < -1.4,
-                20,
+                lambda: agent.get_robot_state().x < -0.3,
+                SAFETY,
                 "the robot to walk on",
                 lambda: (
                     f"robot {agent.get_robot_state()}, map x {_map_x(page)}, "
@@ -130,15 +131,14 @@ def test_dashboard_runs_a_mission_and_the_estop_stops_the_robot(
             page.wait_for_selector("#estop-banner", state="visible")
             wait_for(
                 lambda: agent.get_robot_state().estopped and not agent.get_robot_state().is_moving,
-                5,
-                "the robot to stop",
+                what="the robot to stop",
             )
             page.wait_for_selector('#steps li[data-status="cancelled"]')
             page.wait_for_selector('#result[data-kind="error"]')
             assert "e-stop" in page.text_content("#result")
             page.wait_for_selector('#status-pill[data-status="stopped"]')
             x = agent.get_robot_state().x
-            assert 1.4 < -x < 5.5
+            assert 0.3 < -x < 5.0  # it walked, and stopped short of the 5 m asked
             page.evaluate("window.scrollTo(0, 0)")
             page.screenshot(path=str(ARTIFACTS / "dashboard-estop.png"), full_page=True)
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from shadowhound.web import WebServer
-from tests.web.conftest import make_agent, wait_for
+from tests.web.conftest import SAFETY, make_agent, wait_for
 from tests.web.test_browser import ARTIFACTS, _playwright, launch
 
 DESKTOP = {"width": 1100, "height": 900}
@@ -123,7 +123,9 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
     serve: Callable[..., WebServer], tmp_path: Path
 ) -> None:
     sync_playwright = _playwright()
-    agent = make_agent(time_scale=0.25)  # real clock, four times as fast as life
+    # Real time: the walk back in part 4 takes seconds, so STOP lands before the ball on any
+    # machine (at four times as fast it raced the click on a loaded one).
+    agent = make_agent(time_scale=1.0)
     server = serve(agent)
     ARTIFACTS.mkdir(exist_ok=True)
     planned = [(p.x, p.y) for p in agent.dry_run("go to x=4, y=0").predicted_path]
@@ -139,7 +141,7 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
         try:
             page = browser.new_page()
             page.on("pageerror", lambda exc: errors.append(str(exc)))
-            page.set_default_timeout(20_000)
+            page.set_default_timeout(SAFETY * 1000)
             grids: list[str] = []
             page.on("request", lambda r: grids.append(r.url) if "grid.png" in r.url else None)
             frames: list[dict[str, Any]] = []
@@ -175,8 +177,7 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
             page.wait_for_selector('#result[data-kind="ok"]')
             wait_for(
                 lambda: float(page.get_attribute("#map", "data-x") or 0) > 3.9,
-                10,
-                "the robot to arrive on the map",
+                what="the robot to arrive on the map",
             )
 
             # The page may learn the last pose from the world refresh at the mission's end
@@ -190,7 +191,7 @@ def test_the_map_draws_grid_objects_planned_and_walked_paths(
 
             wait_for(
                 at_goal,
-                10,
+                SAFETY,
                 "a state frame with the robot at the goal",
                 lambda: str(trail_sent(frames)[-3:]),
             )
@@ -233,7 +234,7 @@ def test_the_grid_is_drawn_behind_a_token_too(
         browser = launch(p, tmp_path, DESKTOP)
         try:
             page = browser.new_page()
-            page.set_default_timeout(20_000)
+            page.set_default_timeout(SAFETY * 1000)
             page.goto(server.url + "/#token=" + TOKEN, wait_until="domcontentloaded")
             page.wait_for_selector('#map[data-grid]:not([data-grid=""])')
             assert near(Canvas(page).at(0.5, 1.5), (254, 254, 254), 12)

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from shadowhound.web import WebServer
-from tests.web.conftest import make_agent, wait_for
+from tests.web.conftest import SAFETY, make_agent, wait_for
 from tests.web.test_browser import ARTIFACTS, PHONE, _playwright, launch
 
 DESKTOP = {"width": 1100, "height": 900}
@@ -96,6 +96,15 @@ def _check_labels(page: Any, agent: Any, where: str) -> None:
         ), (where, name, box)
 
 
+def _laid_out(page: Any) -> bool:
+    """Whether the page has laid its overlay out for the map's current size: the scale bar
+    (laid out in the same redraw as the names) is as long as its metres on the map now."""
+    view = MapView(page)
+    metres = float(page.get_attribute("#map-scale", "data-metres") or "nan")
+    bar = page.locator("#map-scale .bar").bounding_box()
+    return bar is not None and abs(bar["width"] - metres * view.scale * view.ratio) < 1.5
+
+
 def _check_legend_and_badge(page: Any, where: str) -> None:
     legend = page.text_content("#map-legend") or ""
     for word in ("place", "geofence", "wall", "planned", "walked", "seen object", "robot"):
@@ -126,7 +135,7 @@ def test_the_map_names_what_the_robot_knows_and_no_two_names_overlap(
         try:
             page = browser.new_page()
             page.on("pageerror", lambda exc: errors.append(str(exc)))
-            page.set_default_timeout(20_000)
+            page.set_default_timeout(SAFETY * 1000)
             page.goto(server.url + "/", wait_until="domcontentloaded")
             page.wait_for_selector('#map[data-grid]:not([data-grid=""])')
             page.wait_for_selector("#robot-badge:not(:empty)")
@@ -144,9 +153,9 @@ def test_the_map_names_what_the_robot_knows_and_no_two_names_overlap(
             # A phone: the map is a third narrower, and the names still keep apart.
             page.set_viewport_size(PHONE)
             wait_for(
-                lambda: MapView(page).box["width"] < 380, 5, "the map to fit the phone's width"
+                lambda: MapView(page).box["width"] < 380, what="the map to fit the phone's width"
             )
-            page.wait_for_timeout(300)  # the page lays the names out again on resize
+            wait_for(lambda: _laid_out(page), what="the names laid out again for the new width")
             _check_labels(page, agent, "phone")
             _check_legend_and_badge(page, "phone")
             page.locator("#map-h").scroll_into_view_if_needed()
@@ -174,7 +183,7 @@ def test_the_page_says_one_thing_at_a_time_in_words_for_people(
         try:
             page = browser.new_page()
             page.on("pageerror", lambda exc: errors.append(str(exc)))
-            page.set_default_timeout(20_000)
+            page.set_default_timeout(SAFETY * 1000)
             page.goto(server.url + "/", wait_until="domcontentloaded")
             page.wait_for_selector('#conn[data-state="live"]')
 
@@ -207,26 +216,26 @@ def test_the_page_says_one_thing_at_a_time_in_words_for_people(
             assert "accepted" not in (page.text_content("#mission-msg") or "")
             assert page.locator("#cancel").is_hidden()
             reason = "exceeds the limit of 5 m per step"
-            wait_for(lambda: reason in (page.text_content("#diag") or ""), 10, "diagnostics")
+            wait_for(lambda: reason in (page.text_content("#diag") or ""), what="diagnostics")
             diag = page.text_content("#diag") or ""
             assert diag.count(reason) == 1, _panel(page, "#diag")
 
-            # 4. A mission: Cancel while it runs, gone when it ends; numbers rounded.
-            page.fill("#command", "walk forward 1 meter")
+            # 4. A mission: Cancel while it runs, gone when it ends; numbers rounded. (At 0.1 m/s
+            #    it runs 5 s here: long enough to see it running on a loaded machine.)
+            page.fill("#command", "walk forward 1 meter at 0.1 m/s")
             page.click("#run")
             page.wait_for_selector('#steps li[data-status="running"]')
             assert page.locator("#cancel").is_visible()
             page.wait_for_selector('#result[data-kind="ok"]')
             page.wait_for_selector("#cancel", state="hidden")
             assert (page.text_content("#mission-msg") or "").strip() == ""
-            wait_for(lambda: _panel(page, "#robot")["moving"] == "no", 5, "the robot to stop")
+            wait_for(lambda: _panel(page, "#robot")["moving"] == "no", what="the robot to stop")
             travelled = _panel(page, "#robot")["travelled"]
             assert re.fullmatch(r"1\.0\d m|0\.99 m", travelled), travelled
-            assert "nav.move(distance=1)" in (page.text_content("#steps") or "")
+            assert "nav.move(distance=1, speed=0.1)" in (page.text_content("#steps") or "")
             wait_for(
                 lambda: "succeeded" in _panel(page, "#diag").get("last mission", ""),
-                10,
-                "the diagnostics to show the mission",
+                what="the diagnostics to show the mission",
             )
             diag_now = _panel(page, "#diag")
             assert "none" not in diag_now.get("refusals", ""), diag_now
@@ -239,7 +248,7 @@ def test_the_page_says_one_thing_at_a_time_in_words_for_people(
             # status (it read "released" for a moment under load): wait for it.
             wait_for(
                 lambda: _panel(page, "#robot")["e-stop"] == "latched",
-                5,
+                SAFETY,
                 "the robot panel to show the e-stop latched",
                 lambda: str(_panel(page, "#robot")),
             )
@@ -250,8 +259,7 @@ def test_the_page_says_one_thing_at_a_time_in_words_for_people(
             page.wait_for_selector("#estop-banner", state="hidden")
             wait_for(
                 lambda: "latched" not in (page.text_content("#mission-msg") or ""),
-                5,
-                "the e-stop note to go",
+                what="the e-stop note to go",
             )
         finally:
             browser.close()

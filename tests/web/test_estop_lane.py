@@ -58,6 +58,7 @@ def test_estop_reaches_the_robot_before_an_event_reaches_hundreds_of_clients() -
     async def run() -> None:
         loop = asyncio.get_running_loop()
         gone = asyncio.Event()
+        snapshots: list[dict[str, Any]] = []
         estop_tasks: list[asyncio.Task[None]] = []
 
         async def receive_nothing() -> dict[str, Any]:
@@ -71,6 +72,10 @@ def test_estop_reaches_the_robot_before_an_event_reaches_hundreds_of_clients() -
             answers.append(message)
 
         async def client_send(message: dict[str, Any]) -> None:
+            if message["type"] == "http.response.body" and b'"kind":"snapshot"' in message.get(
+                "body", b""
+            ):
+                snapshots.append(message)
             if message["type"] == "http.response.body" and b'"kind":"step"' in message.get(
                 "body", b""
             ):
@@ -84,9 +89,8 @@ def test_estop_reaches_the_robot_before_an_event_reaches_hundreds_of_clients() -
             loop.create_task(app(_scope("GET", "/api/events"), receive_nothing, client_send))
             for _ in range(CLIENTS)
         ]
-        while feed.clients < CLIENTS:
+        while len(snapshots) < CLIENTS:  # every client has written its snapshot and waits
             await asyncio.sleep(0.01)
-        await asyncio.sleep(0.1)  # every client has written its snapshot and waits
         feed.publish("step", {"n": 1})
         while log.count("client got the event") < CLIENTS or not answers:
             await asyncio.sleep(0.01)

@@ -13,7 +13,7 @@ import pytest
 
 from shadowhound.web import WebServer
 from tests.images import tiny_jpeg
-from tests.web.conftest import TOKEN, finished, make_agent, wait_for
+from tests.web.conftest import SAFETY, TOKEN, finished, make_agent, wait_for
 
 websockets_sync = pytest.importorskip(
     "websockets.sync.client", reason="the websockets package is needed"
@@ -26,7 +26,7 @@ def _ws_url(server: WebServer, query: str = "") -> str:
     return server.url.replace("http://", "ws://") + "/ws/status" + query
 
 
-def _collect(ws: Any, until: str, timeout: float = 15.0) -> list[dict[str, Any]]:
+def _collect(ws: Any, until: str, timeout: float = SAFETY) -> list[dict[str, Any]]:
     """Messages up to and including the first of kind `until`."""
     seen: list[dict[str, Any]] = []
     deadline = time.monotonic() + timeout
@@ -43,16 +43,17 @@ def test_websocket_reports_a_mission_step_by_step(serve: Serve) -> None:
     with websockets_sync.connect(
         _ws_url(server), subprotocols=["shadowhound", f"bearer.{TOKEN}"]
     ) as ws:
-        assert json.loads(ws.recv(timeout=5))["kind"] == "snapshot"
+        assert json.loads(ws.recv(timeout=SAFETY))["kind"] == "snapshot"
         reply = httpx.post(
             server.url + "/api/mission",
             json={"command": "walk forward 1 meter then turn left 90 degrees"},
             headers={"Authorization": f"Bearer {TOKEN}"},
+            timeout=SAFETY,
         )
         mission_id = reply.json()["mission_id"]
         events = [m for m in _collect(ws, "mission_record") if m["kind"] != "state"]
         ws.send("ping")
-        assert any(json.loads(ws.recv(timeout=5))["kind"] == "pong" for _ in range(50))
+        assert any(json.loads(ws.recv(timeout=SAFETY))["kind"] == "pong" for _ in range(50))
     kinds = [e["kind"] for e in events]
     assert kinds == [
         "mission_queued",
@@ -85,7 +86,7 @@ def test_websocket_events_are_sent_uncompressed_even_to_a_client_offering_deflat
         assert "permessage-deflate" in offered  # the client did offer it
         assert ws.response is not None
         assert "Sec-WebSocket-Extensions" not in ws.response.headers
-        assert json.loads(ws.recv(timeout=5))["kind"] == "snapshot"
+        assert json.loads(ws.recv(timeout=SAFETY))["kind"] == "snapshot"
 
 
 def test_websocket_without_token_is_refused(serve: Serve) -> None:
@@ -94,12 +95,12 @@ def test_websocket_without_token_is_refused(serve: Serve) -> None:
         pytest.raises(Exception, match="403|1008|rejected"),
         websockets_sync.connect(_ws_url(server)) as ws,
     ):
-        ws.recv(timeout=5)
+        ws.recv(timeout=SAFETY)
 
 
 def test_sse_streams_events_and_replays_after_reconnect(serve: Serve) -> None:
     server = serve(make_agent())
-    with httpx.Client(base_url=server.url, timeout=10) as client:
+    with httpx.Client(base_url=server.url, timeout=SAFETY) as client:
         first = client.post("/api/mission", json={"command": "turn left 90 degrees"}).json()
         finished(client, first["mission_id"])
         with client.stream("GET", "/api/events?since=0") as stream:
@@ -108,7 +109,7 @@ def test_sse_streams_events_and_replays_after_reconnect(serve: Serve) -> None:
     replayed = [m for m in messages if m.get("mission_id") == first["mission_id"]]
     assert replayed[0]["kind"] == "mission_queued" and replayed[-1]["kind"] == "mission_record"
     last_id = replayed[-1]["_id"]
-    with httpx.Client(base_url=server.url, timeout=10) as client:
+    with httpx.Client(base_url=server.url, timeout=SAFETY) as client:
         second = client.post("/api/mission", json={"command": "sit down"}).json()
         finished(client, second["mission_id"])
         with client.stream("GET", "/api/events", headers={"Last-Event-ID": last_id}) as stream:
@@ -117,7 +118,7 @@ def test_sse_streams_events_and_replays_after_reconnect(serve: Serve) -> None:
     assert kinds[0] == "mission_queued" and messages[-1]["mission_id"] == second["mission_id"]
 
 
-def _sse_until(stream: httpx.Response, kind: str, timeout: float = 10.0) -> list[dict[str, Any]]:
+def _sse_until(stream: httpx.Response, kind: str, timeout: float = SAFETY) -> list[dict[str, Any]]:
     messages: list[dict[str, Any]] = []
     deadline = time.monotonic() + timeout
     event_id = ""
@@ -142,7 +143,7 @@ def test_mjpeg_passes_jpeg_frames_through_unchanged(serve: Serve) -> None:
     agent.update_camera_image(frames[0])
     received: list[bytes] = []
     with (
-        httpx.Client(base_url=server.url, timeout=10) as client,
+        httpx.Client(base_url=server.url, timeout=SAFETY) as client,
         client.stream("GET", "/api/camera/stream?fps=30") as stream,
     ):
         assert stream.headers["content-type"].startswith("multipart/x-mixed-replace")
@@ -177,9 +178,11 @@ def _parts(buffer: bytes) -> list[bytes]:
 def test_estop_over_http_stops_a_running_mission(serve: Serve) -> None:
     agent = make_agent(time_scale=0.5)  # real time, twice as fast
     server = serve(agent)
-    with httpx.Client(base_url=server.url, timeout=10) as client:
-        mission = client.post("/api/mission", json={"command": "walk backward 4 meters"}).json()
-        wait_for(lambda: agent.get_robot_state().vx < -0.2, what="the robot to walk")
+    with httpx.Client(base_url=server.url, timeout=SAFETY) as client:
+        # 4 m at 0.1 m/s: 20 s of real time, so the e-stop lands mid-walk on any machine.
+        walk = {"command": "walk backward 4 meters at 0.1 m/s"}
+        mission = client.post("/api/mission", json=walk).json()
+        wait_for(lambda: agent.get_robot_state().vx < -0.05, what="the robot to walk")
         reply = client.post("/api/estop").json()
         assert reply["robot"]["estopped"] is True
         # The hard stop zeroes velocity before the answer is sent.

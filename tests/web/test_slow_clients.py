@@ -15,7 +15,7 @@ from typing import Any
 import httpx
 
 from shadowhound.web import WebServer
-from tests.web.conftest import make_agent, wait_for
+from tests.web.conftest import SAFETY, make_agent, wait_for
 
 Serve = Callable[..., WebServer]
 # 1500 events of 10 kB: 15 MB, more than socket buffers hold (Linux grows a loopback sender's
@@ -44,7 +44,7 @@ class FastReader(threading.Thread):
 
     def _read(self) -> None:
         with (
-            httpx.Client(timeout=30) as client,
+            httpx.Client(timeout=SAFETY) as client,
             client.stream("GET", self.url + "/api/events") as stream,
         ):
             for line in stream.iter_lines():
@@ -68,8 +68,7 @@ def _publish_keeping_pace(feed: Any, reader: FastReader) -> list[int]:
         last = published[-1]
         wait_for(
             lambda last=last: reader.seqs and reader.seqs[-1] >= last,
-            30,
-            "the fast client to read the chunk",
+            what="the fast client to read the chunk",
         )
     return published
 
@@ -104,7 +103,7 @@ def test_a_slow_sse_client_is_told_and_dropped_while_a_fast_one_gets_everything(
     feed = server.app.state.web.feed
     fast = FastReader(server.url)
     fast.start()
-    assert fast.ready.wait(10)
+    assert fast.ready.wait(SAFETY)
     slow = _slow_socket(server, b"GET /api/events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")
     wait_for(lambda: feed.clients == 2, what="the slow client to subscribe")
     published = _publish_keeping_pace(feed, fast)
@@ -148,7 +147,7 @@ def test_a_slow_websocket_client_is_told_and_closed_while_a_fast_one_gets_everyt
     feed = server.app.state.web.feed
     fast = FastReader(server.url)
     fast.start()
-    assert fast.ready.wait(10)
+    assert fast.ready.wait(SAFETY)
     key = base64.b64encode(os.urandom(16))
     slow = _slow_socket(
         server,
@@ -161,7 +160,7 @@ def test_a_slow_websocket_client_is_told_and_closed_while_a_fast_one_gets_everyt
     published = _publish_keeping_pace(feed, fast)
     fast.stop.set()
 
-    slow.settimeout(30)
+    slow.settimeout(SAFETY)
     data, deadline = b"", time.monotonic() + 60
     while not any(op == 8 for op, _ in _ws_frames(data.partition(b"\r\n\r\n")[2])):
         assert time.monotonic() < deadline, "the server did not close the WebSocket"

@@ -16,7 +16,7 @@ import pytest
 from shadowhound import RobotAgent, RobotAgentConfig, ShadowHoundConfig
 from tests.lying_odometry import LyingOdometry
 from tests.strict_json import strict_loads
-from tests.web.conftest import TOKEN, wait_for
+from tests.web.conftest import SAFETY, TOKEN, wait_for
 
 
 @pytest.fixture
@@ -118,7 +118,7 @@ def test_server_sent_events_stay_strict_json(lying: RobotAgent, serve: Any) -> N
 
     # A real server: Starlette's TestClient before 1.8 (what Python 3.10 gets) reads a whole
     # response before it returns, and an event stream never ends (the test hung there).
-    with httpx.Client(base_url=serve(lying).url, timeout=10) as client:
+    with httpx.Client(base_url=serve(lying).url, timeout=SAFETY) as client:
         client.post("/api/mission", json={"command": "sit down"})
 
         def record() -> Any:

@@ -14,7 +14,7 @@ import httpx
 import pytest
 
 from shadowhound.web import WebServer
-from tests.web.conftest import TOKEN, make_agent
+from tests.web.conftest import SAFETY, TOKEN, make_agent
 from tests.web.test_browser import ARGS, CHROMIUM, PHONE, _playwright
 
 websockets_sync = pytest.importorskip(
@@ -24,7 +24,7 @@ websockets_sync = pytest.importorskip(
 Serve = Callable[..., WebServer]
 
 
-def _until(ws: Any, kind: str, timeout: float = 15.0) -> list[dict[str, Any]]:
+def _until(ws: Any, kind: str, timeout: float = SAFETY) -> list[dict[str, Any]]:
     seen: list[dict[str, Any]] = []
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
@@ -40,11 +40,12 @@ def test_the_words_reach_the_live_feed_while_their_step_runs(serve: Serve) -> No
     server = serve(make_agent(), token=TOKEN)
     url = server.url.replace("http://", "ws://") + "/ws/status"
     with websockets_sync.connect(url, subprotocols=["shadowhound", f"bearer.{TOKEN}"]) as ws:
-        assert json.loads(ws.recv(timeout=5))["kind"] == "snapshot"
+        assert json.loads(ws.recv(timeout=SAFETY))["kind"] == "snapshot"
         reply = httpx.post(
             server.url + "/api/mission",
             json={"command": "say good morning, then say it is nice to see you"},
             headers={"Authorization": f"Bearer {TOKEN}"},
+            timeout=SAFETY,
         )
         events = _until(ws, "mission_record")
     mission_id = reply.json()["mission_id"]
@@ -84,7 +85,7 @@ def test_the_page_shows_what_the_robot_said_and_can_speak_it(serve: Serve, tmp_p
                 " value: {speak: (u) => window.__said.push(u.text)}});"
             )
             page.on("pageerror", lambda exc: errors.append(str(exc)))
-            page.set_default_timeout(20_000)
+            page.set_default_timeout(SAFETY * 1000)
             page.goto(server.url + "/", wait_until="domcontentloaded")
             page.wait_for_selector('#conn[data-state="live"]')
             page.check("#voice-here")

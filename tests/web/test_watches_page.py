@@ -22,7 +22,7 @@ def test_the_page_shows_the_watch_and_why_it_stopped(serve: Serve, tmp_path: Pat
     with sync_playwright() as p:
         browser = launch(p, tmp_path, DESKTOP)
         try:
-            page = open_dashboard(browser, server.url, errors, timeout_ms=30_000)
+            page = open_dashboard(browser, server.url, errors)
             page.fill("#command", "walk forward 2 meters unless something is in the way")
             page.click("#run")
             # While it walks: the step shows what it watches.
