@@ -96,6 +96,13 @@ class SafetyConfig(_Section):
     watchdog_timeout: float = Field(
         0.25, gt=0, le=5, description="seconds without a control tick before zero velocity"
     )
+    watchdog_grace: float = Field(
+        2.0,
+        gt=0,
+        le=60,
+        description="seconds a control loop the watchdog stopped the robot for may take to "
+        "come back (it then goes on from rest) before the mission stops",
+    )
     outcome_tolerance: float = Field(
         0.10, gt=0, le=5, description="metres a motion step may end away from its target"
     )

@@ -156,7 +156,10 @@ class Crew:
         if not robot.realtime:
             return None
         period = 1.0 / self.settings.motion.control_rate_hz
-        self.watchdog.arm(max(self.settings.safety.watchdog_timeout, 3 * period * robot.time_scale))
+        self.watchdog.arm(
+            max(self.settings.safety.watchdog_timeout, 3 * period * robot.time_scale),
+            self.settings.safety.watchdog_grace,
+        )
         return self.watchdog
 
 

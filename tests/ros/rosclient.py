@@ -349,16 +349,9 @@ class Agent:
         return json.loads(self.robot.wait_for(lambda _m: True, timeout, "robot status", mark).data)
 
 
-# Every ShadowHound process a ROS test starts (node, serve) runs its watchdog at 1 s, not 0.25:
-# with three test workers on two cores beside it, a control loop stalled 0.27-0.43 s (seen in
-# CI in the node's e-stop tests, SLAM walks and `serve --robot go2`) and the watchdog stopped
-# the walk under test. The watchdog stays on; it has tests of its own (test_governance.py).
-LOADED_MACHINE_ENV = {"SHADOWHOUND_SAFETY__WATCHDOG_TIMEOUT": "1.0"}
-
-
 class NodeProcess:
     """`python -m shadowhound node --ros-args ...` in a child process, output in a file, with
-    `LOADED_MACHINE_ENV` and `env` on top of this process's environment.
+    `env` on top of this process's environment.
 
     `command="sim-driver"` starts the simulated Go2 driver instead; `options` go before
     `--ros-args` (the driver's own options, e.g. ("--odom-delay", "0.5"))."""
@@ -377,7 +370,6 @@ class NodeProcess:
             **os.environ,
             "PYTHONUNBUFFERED": "1",
             "RCUTILS_LOGGING_BUFFERED_STREAM": "0",
-            **LOADED_MACHINE_ENV,
             **(env or {}),
         }
         with os.fdopen(fd, "w") as log:

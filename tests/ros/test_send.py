@@ -70,8 +70,6 @@ def client() -> Iterator[RosClient]:
 
 @pytest.fixture(scope="module")
 def node(client: RosClient) -> Iterator[Agent]:
-    # (NodeProcess keeps the watchdog out of the way of the stops under test on a loaded
-    # machine: rosclient.LOADED_MACHINE_ENV.)
     process = NodeProcess("-p", "time_scale:=1.0")
     agent = Agent(client)
     try:

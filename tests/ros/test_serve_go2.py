@@ -11,7 +11,6 @@ Skipped without rclpy or the interface packages unless SHADOWHOUND_REQUIRE_ROS=1
 from __future__ import annotations
 
 import math
-import os
 import signal
 import subprocess
 import sys
@@ -26,7 +25,6 @@ from tests.ros.needs import require
 require("rclpy", "shadowhound_interfaces", "go2_interfaces", "fastapi")
 
 from tests.ros.rosclient import (  # noqa: E402
-    LOADED_MACHINE_ENV,
     NodeProcess,
     RosClient,
     wait_until,
@@ -81,7 +79,6 @@ def test_serve_robot_go2_walks_the_driver_from_the_http_api(
             ],
             stdout=out,
             stderr=subprocess.STDOUT,
-            env={**os.environ, **LOADED_MACHINE_ENV},
         )
     try:
         truth.wait_ready(driver)

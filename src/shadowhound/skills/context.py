@@ -6,6 +6,7 @@ import math
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from ..budget import MissionBudget, out_of_time, walked_too_far
 from ..config import ShadowHoundConfig
@@ -19,6 +20,9 @@ from ..state import CameraFrame, Pose2D, Posture, RobotState
 from ..world import Belief, KnownObject
 from .bounds import MAX_STALL, CommandLedger, Leeway, fences, room_ahead, room_on_map
 from .watches import Watcher, raise_if_fired
+
+if TYPE_CHECKING:
+    from ..safety import Trip
 
 _TRANSLATING = 0.05  # m/s commanded: the robot goes somewhere (a path check looks along it)
 # Robot seconds a step stopped for stale odometry waits, at rest, for it to come back: a loaded
@@ -92,7 +96,7 @@ class SkillContext:
         camera: Callable[[], CameraFrame | None] = lambda: None,
         vision: Callable[[CameraFrame, str], str] | None = None,
         on_progress: Callable[[float], None] = lambda _fraction: None,
-        heartbeat: Callable[[bool | None], None] = lambda _moving: None,
+        heartbeat: Callable[[bool | None], Trip | None] = lambda _moving: None,
         memory: AgentMemory | None = None,
         say: Callable[[str], Saying] | None = None,
         answer: Callable[[], str | None] = lambda: None,
@@ -308,15 +312,41 @@ class SkillContext:
 
     def tick(self) -> None:
         """Wait one control period, then check cancellation and the time-out."""
-        self.heartbeat(None)
+        self._beat(None)
         self.robot.sleep(self.period)
         now = self.robot.now()
         if self._ticked is not None and now - self._ticked - self.period > 1e-3:
             late = now - self._ticked - self.period
             self._late_ticks.append(Stall(self._ticked, self._ticked + late))
         self._ticked = now
-        self.heartbeat(None)
+        self._beat(None)
         self.check()
+
+    def _beat(self, moving: bool | None) -> bool:
+        """The control loop's heartbeat (the watchdog's). True when the watchdog stopped the
+        robot since the last beat (this loop stalled past `safety.watchdog_timeout`: a loaded
+        machine); the loop then goes on from rest. The stop is sent again (a command held up
+        in the stall may have gone out after the watchdog's), the commands count it from when
+        the watchdog sent it, and the next command ramps up from zero."""
+        trip = self.heartbeat(moving)
+        if trip is None:
+            return False
+        self.robot.stop()
+        if self.ledger is not None:
+            lim = self.config.safety
+            at = max(self.ledger.t, self.robot.now() - trip.ago)
+            walked = self.ledger.halt(at, lim.max_linear_accel, lim.max_angular_accel)
+            if self.env.budget is not None:
+                self.env.budget.command(walked)
+        self._last_command = (0.0, 0.0, 0.0)
+        self.heartbeat(False)
+        note = (
+            "stopped when its control loop stalled (the watchdog, after "
+            f"{trip.stalled:.2f} s: a loaded machine), and went on"
+        )
+        if note not in self.notes:
+            self.notes.append(note)
+        return True
 
     def drive(self, vx: float, vy: float, wz: float) -> None:
         """Send body-frame velocity within the safety caps (defence behind the plan check).
@@ -325,16 +355,22 @@ class SkillContext:
         a command to stop is always sent at once.
         """
         s = self.config.safety
-        vx, vy = _cap_vector(vx, vy, s.max_linear_speed)
-        wz = max(-s.max_angular_speed, min(s.max_angular_speed, wz))
-        if vx or vy or wz:
-            lx, ly, lw = self._last_command
-            dx, dy = _cap_vector(vx - lx, vy - ly, s.max_linear_accel * self.period)
-            dw = max(
-                -s.max_angular_accel * self.period, min(s.max_angular_accel * self.period, wz - lw)
-            )
-            vx, vy, wz = lx + dx, ly + dy, lw + dw
-        state = self.check()
+        asked = vx, vy, wz
+        while True:
+            self._beat(None)  # a stop by the watchdog since the last command: ramp up from zero
+            vx, vy = _cap_vector(asked[0], asked[1], s.max_linear_speed)
+            wz = max(-s.max_angular_speed, min(s.max_angular_speed, asked[2]))
+            if vx or vy or wz:
+                lx, ly, lw = self._last_command
+                dx, dy = _cap_vector(vx - lx, vy - ly, s.max_linear_accel * self.period)
+                dw = max(
+                    -s.max_angular_accel * self.period,
+                    min(s.max_angular_accel * self.period, wz - lw),
+                )
+                vx, vy, wz = lx + dx, ly + dy, lw + dw
+            state = self.check()
+            if not self._beat(bool(vx or vy or wz)):
+                break  # else stopped by the watchdog during the check: again, from zero
         self._last_command = (vx, vy, wz)
         if self.ledger is None:
             self.ledger = CommandLedger(state.pose, self.robot.now())
@@ -342,7 +378,6 @@ class SkillContext:
         walked = self.ledger.set(self.robot.now(), vx, vy, wz)
         if self.env.budget is not None:
             self.env.budget.command(walked)
-        self.heartbeat(bool(vx or vy or wz))
         try:
             self.robot.send_velocity(vx, vy, wz)
         except RobotError as blind:  # odometry went stale since `check`: as there
