@@ -8,6 +8,7 @@ without rclpy or the interface packages unless SHADOWHOUND_REQUIRE_ROS=1 (then i
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import signal
@@ -175,10 +176,14 @@ def test_the_dashboards_pad_drives_the_go2_over_cmd_vel(rig) -> None:
 
     start = truth()
     held = threading.Event()
+    numbers = itertools.count(1)  # the page numbers its requests (a late one is dropped)
+    answers: list[httpx.Response] = []
 
     def hold() -> None:  # the page, sending the stick back every 0.1 s
         while not held.wait(0.1):
-            web.post("/api/teleop/drive", json={"forward": -0.6})
+            answers.append(
+                web.post("/api/teleop/drive", json={"forward": -0.6, "seq": next(numbers)})
+            )
 
     thread = threading.Thread(target=hold, daemon=True)
     thread.start()
@@ -191,7 +196,9 @@ def test_the_dashboards_pad_drives_the_go2_over_cmd_vel(rig) -> None:
     finally:
         held.set()
         thread.join()
-    web.post("/api/teleop/drive", json={"forward": 0.0})
+    assert answers and all(a.status_code == 200 for a in answers), answers[-1].text
+    let_go = web.post("/api/teleop/drive", json={"forward": 0.0, "seq": next(numbers)})
+    assert let_go.status_code == 200, let_go.text
     wait_until(lambda: not truth()["moving"], 5.0, "the Go2 to stop (truth)")
     stopped = truth()
     time.sleep(0.5)
