@@ -12,7 +12,7 @@ run's records, and --saved writes saved runs (before and after a change: each it
 Method. As tests/ros/test_go2_coco.py runs them: `shadowhound sim-driver --detector coco` (the
 simulated Go2 as go2_ros2_sdk behaves, its camera's COCO boxes on `detected_objects`) and
 `shadowhound node -p robot:=go2 -p coco_detections_topic:=detected_objects` as their own
-processes (the tests' environment: rosclient.LOADED_MACHINE_ENV), beside `--hogs` CPU hogs
+processes (their defaults: the watchdog at 0.25 s), beside `--hogs` CPU hogs
 (pure-Python busy loops at nice 0). The node runs a fixed round of honest missions, over and over
 (turns of 90 and 180 degrees, walks of 1 to 2 m forward and back, "go to x=0, y=0" through the
 driver's Nav2): the driver never lies. Each mission is judged by the driver's truth (start and

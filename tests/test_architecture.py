@@ -54,6 +54,7 @@ BASE = {
     "typos",
     "units",
     "usage",
+    "watchdog",
 }
 
 # Known exceptions, each with why and who removes it. Keep this list short.

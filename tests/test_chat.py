@@ -149,9 +149,12 @@ def test_estop_still_acts_at_once_on_the_terminal():
         start = len(term.screen)
         os.write(term.master, b"/run walk backward 2 meters at 0.1 m/s\n")  # 20 s: /estop lands
         term.read_until("nav.move(distance=-2.0, speed=0.1) ...", start)
-        shown = term.ask("/estop")
-        assert "e-stop latched" in shown and "failed: " in shown, shown
-        assert shown.index("e-stop latched") < shown.index("failed: "), shown
+        asked = len(term.screen)
+        os.write(term.master, b"/estop\n")
+        # Both, in either order: the answer to /estop and the mission's end it caused (the
+        # mission's thread and the prompt's print race on a loaded machine; neither waits).
+        term.read_until("e-stop latched", asked)
+        term.read_until("failed: Stopped at step 1 (nav.move): e-stop pressed.", asked)
     finally:
         assert term.close() == 0
 

@@ -36,10 +36,11 @@ from .plan import Plan, SkillCall
 from .planning import FixedPlanner, Planner, make_planner
 from .result import MissionResult
 from .robot.base import NO_TRICKS, Robot, RobotError, TrickInfo
-from .safety import Governor, Watchdog
+from .safety import Governor
 from .skills import SkillRegistry, default_registry
 from .speech import Voice
 from .state import CameraFrame, RobotState
+from .watchdog import Watchdog
 
 if TYPE_CHECKING:
     from .llm.backend import LLMBackend

@@ -24,10 +24,11 @@ from .memory.places import Places
 from .memory.service import AgentMemory
 from .planning import Planner, PlanningContext
 from .robot.base import Robot
-from .safety import Governor, Watchdog
+from .safety import Governor
 from .skills import SkillRegistry
 from .speech import Voice
 from .state import CameraFrame, RobotState
+from .watchdog import Watchdog
 
 log = logging.getLogger(__name__)
 

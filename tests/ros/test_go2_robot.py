@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 
@@ -266,6 +267,33 @@ _OPERATIONS = st.lists(
 )
 
 
+_LISTENING: dict[int, tuple[Any, Any]] = {}
+
+
+def _listening(client: RosClient, robot: Go2RosRobot) -> tuple[Any, Any]:
+    """This module's readers of the robot's cmd_vel and webrtc_req, made once and matched on
+    both sides of DDS (the robot's writers see them, they see the robot's): a request the
+    robot sends after this is read, whichever side discovered the other last."""
+    if id(robot) not in _LISTENING:
+        request_pub = robot._request_pub
+        twist_pub = robot._twist_pubs[robot._discover_velocity_topic()]
+        had = request_pub.get_subscription_count(), twist_pub.get_subscription_count()
+        twists = client.subscribe(Twist, f"{NS}/cmd_vel")
+        requests = client.subscribe(WebRtcReq, f"{NS}/webrtc_req")
+        wait_until(
+            lambda: (
+                requests.subscription.get_publisher_count() > 0
+                and twists.subscription.get_publisher_count() > 0
+                and request_pub.get_subscription_count() > had[0]
+                and twist_pub.get_subscription_count() > had[1]
+            ),
+            10,
+            "the robot's cmd_vel and webrtc_req writers and these readers to match",
+        )
+        _LISTENING[id(robot)] = (twists, requests)
+    return _LISTENING[id(robot)]
+
+
 @settings(
     max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
@@ -276,38 +304,33 @@ def test_every_stop_is_a_stop_move_and_no_zero_twist_is_ever_sent(
     """The whole kind: whatever the sequence of commands, each stop (stop, e-stop, a zero
     command after motion) reaches the driver as StopMove, and no all-zero Twist goes out
     (the driver would drop it and the robot keep walking)."""
-    twists = client.subscribe(Twist, f"{NS}/cmd_vel")
-    requests = client.subscribe(WebRtcReq, f"{NS}/webrtc_req")
-    wait_until(lambda: requests.subscription.get_publisher_count() > 0, 10, "the robot")
+    twists, requests = _listening(client, robot)
+    seen_twists, seen_requests = len(twists.items), len(requests.items)
     expected, moving = 0, False
-    try:
-        for op in [*operations, ("stop",)]:
-            if op[0] == "move":
-                values = (float(op[1]), float(op[2]), float(op[3]))  # type: ignore[arg-type]
-                robot.send_velocity(*values)
-                expected += moving and not any(values)
-                moving = any(values)
-            elif op[0] == "zero":
-                robot.send_velocity(0.0, 0.0, 0.0)
-                expected += moving
-                moving = False
-            elif op[0] == "stop":
-                robot.stop()
-                expected, moving = expected + 1, False
-            else:
-                robot.emergency_stop()
-                robot.release_estop()
-                expected, moving = expected + 1, False
+    for op in [*operations, ("stop",)]:
+        if op[0] == "move":
+            values = (float(op[1]), float(op[2]), float(op[3]))  # type: ignore[arg-type]
+            robot.send_velocity(*values)
+            expected += moving and not any(values)
+            moving = any(values)
+        elif op[0] == "zero":
+            robot.send_velocity(0.0, 0.0, 0.0)
+            expected += moving
+            moving = False
+        elif op[0] == "stop":
+            robot.stop()
+            expected, moving = expected + 1, False
+        else:
+            robot.emergency_stop()
+            robot.release_estop()
+            expected, moving = expected + 1, False
 
-        def stops() -> int:
-            return sum(m.api_id == 1003 for m in requests.items)
+    def stops() -> int:
+        return sum(m.api_id == 1003 for m in requests.items[seen_requests:])
 
-        wait_until(lambda: stops() >= expected, 10, f"{expected} StopMoves")
-        assert stops() == expected
-        assert all(m.linear.x or m.linear.y or m.angular.z for m in twists.items)
-    finally:
-        client.node.destroy_subscription(twists.subscription)
-        client.node.destroy_subscription(requests.subscription)
+    wait_until(lambda: stops() >= expected, 10, f"{expected} StopMoves")
+    assert stops() == expected
+    assert all(m.linear.x or m.linear.y or m.angular.z for m in twists.items[seen_twists:])
     wait_until(lambda: not driver.truth().moving, 10, "the true robot to stop")
 
 

@@ -1,4 +1,10 @@
-"""What a running skill can use: the robot, the limits, the clock, cancellation and the camera."""
+"""What a running skill can use: the robot, the limits, the clock, cancellation and the camera.
+
+Long because: SkillContext is the one door every skill drives the robot through; its checks,
+the ledger of its commands, the stalls it has seen, its waits for odometry and the watchdog's
+heartbeat share one state (what was last commanded, and since when), which a split would
+hand back and forth.
+"""
 
 from __future__ import annotations
 
@@ -22,7 +28,7 @@ from .bounds import MAX_STALL, CommandLedger, Leeway, fences, room_ahead, room_o
 from .watches import Watcher, raise_if_fired
 
 if TYPE_CHECKING:
-    from ..safety import Trip
+    from ..watchdog import Trip
 
 _TRANSLATING = 0.05  # m/s commanded: the robot goes somewhere (a path check looks along it)
 # Robot seconds a step stopped for stale odometry waits, at rest, for it to come back: a loaded
