@@ -219,11 +219,11 @@ def write(runs: dict[str, dict[str, Any]]) -> None:
 
 Measured {date.today().isoformat()} with `python bench/bench_false_failures.py --label LABEL
 --write` (CPython {platform.python_version()}, {platform.machine()}, {os.cpu_count()} cores,
-shared with five other engineers' test runs; ROS 2 Jazzy rclpy from PyPI, Fast DDS on shared
-memory / loopback); "before" is the code before issue 32's fix, "after" with it.
+nothing else running; ROS 2 Jazzy rclpy from PyPI, Fast DDS on shared memory / loopback);
+"before" is the code before issue 32's fix (57af3de, run from its own checkout), "after" with it.
 
 `shadowhound sim-driver --detector coco` and `shadowhound node -p robot:=go2` (with the
-detector's boxes, and the ROS tests' 1 s watchdog) as their own processes, as
+detector's boxes; every setting at its default, the watchdog at 0.25 s) as their own processes, as
 tests/ros/test_go2_coco.py runs them, beside two pure-Python CPU hogs at nice 0; a round of
 honest missions over and over (turns of 90 and 180 degrees, walks of 1 to 2 m forward and back,
 "go to x=0, y=0" through the driver's Nav2). The driver never lies: every failed mission is a
@@ -231,7 +231,7 @@ failure of an honest robot. "Did it anyway" counts the failed missions the drive
 within the outcome tolerance of what was asked (5 degrees, 0.10 m): false failures in the
 strict sense; "wrong successes" the missions that reported success with the truth outside it.
 Load: the 1-minute load average (2 cores), mean over the missions; the hogs make about 2 of it,
-the other engineers' runs the rest.
+the driver, the node and the bench the rest.
 
 | run | missions | failed | did it anyway | failures by kind | wrong successes | hogs | load |
 |---|---|---|---|---|---|---|---|
