@@ -107,10 +107,19 @@ class RobotState:
     # Those jumps composed (x, y, yaw, in the pose's frame): a place seen before them is at
     # compose(jumps, place) after them. `carried` follows a pose across jumps with it.
     jumps: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    # Odometry's own pose (x, y, yaw in its frame), before any map correction; None where the
+    # pose is odometry's (no SLAM). What the robot's motion did, whatever SLAM moved the map
+    # by meanwhile: the checks of a leg against its commands read it (`own_pose`).
+    odometry: tuple[float, float, float] | None = None
 
     @property
     def pose(self) -> Pose2D:
         return Pose2D(self.x, self.y, self.yaw)
+
+    @property
+    def own_pose(self) -> Pose2D:
+        """Odometry's pose in its own frame: `pose` without SLAM's map -> odom corrections."""
+        return self.pose if self.odometry is None else Pose2D(*self.odometry)
 
     @property
     def battery_text(self) -> str:

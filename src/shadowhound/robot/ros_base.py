@@ -234,6 +234,7 @@ class RosRobot(BaseRobot, Generic[SettingsT]):
         now = time.monotonic()
         with self._lock:
             pose, relocalized, jumps = self._locate(now)
+            own = self._tracker.pose(now)  # odometry's, before the world's corrections
             vx, vy, wz = self._tracker.velocity(now)
             pose_at, battery = self._pose_at, self._battery
             travel = (self._intake.distance, self._intake.turned, self._intake.moving)
@@ -257,6 +258,7 @@ class RosRobot(BaseRobot, Generic[SettingsT]):
             connected=fresh,
             relocalized=relocalized,
             jumps=jumps,
+            odometry=(own[0], own[1], own[2]),
         )
 
     def _command_velocity(

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 from ..errors import SkillError
-from ..state import Pose2D, RobotState
+from ..state import RobotState
 from .bounds import Leeway
 from .context import SkillContext
 
@@ -25,29 +25,33 @@ SLOW = "no progress for a while (the robot slow to follow: a loaded machine, a l
 
 def leg_agrees(
     ctx: SkillContext,
+    start: RobotState,
     end: RobotState,
-    origin: Pose2D,
-    yaw0: float,
     margin: float,
     leg: tuple[float, float],
     leeway: Leeway,
 ) -> None:
     """A leg odometry says is done must agree with what its commands did: where odometry
-    puts the robot (from the leg's start, in its frame) and where the commands alone put it
+    puts the robot (from the leg's `start`, in its frame) and where the commands alone put it
     (the ledger, from the same start) may differ by at most the leg's margin, beyond the
     `leeway` of the stalls seen (commands that acted late: bounds.py). A jump of the odometry
     too small to be seen as one (within what the robot could move between two samples)
     otherwise ends the leg early by as much, reported as done.
 
-    Only odometry *ahead* of the commands along the leg (`leg`: its goal, in the same frame)
-    counts: commands further along than odometry are what a link does (each command acts
-    once it arrives, so a stop that arrives sooner than the velocity before it cuts that
+    Odometry's own poses are compared (`RobotState.own_pose`), not the map's: SLAM's map ->
+    odom corrections move the map pose without the robot moving, small ones included (a
+    correction of the drift that came in mid-leg on a loaded machine failed an honest leg).
+
+    Only odometry *ahead* of the commands along the leg (`leg`: its goal, in the start's body
+    frame) counts: commands further along than odometry are what a link does (each command
+    acts once it arrives, so a stop that arrives sooner than the velocity before it cuts that
     short), and leg_room has kept them within the margin, so the truth is within it too."""
+    origin, here = start.own_pose, end.own_pose
     c, s = math.cos(origin.yaw), math.sin(origin.yaw)
-    dx, dy = end.x - origin.x, end.y - origin.y
+    dx, dy = here.x - origin.x, here.y - origin.y
     measured = (dx * c + dy * s, -dx * s + dy * c)
-    ox, oy, _ = ctx.commanded()  # in the frame the leg began in (odometry's, before any jump)
-    c, s = math.cos(yaw0), math.sin(yaw0)
+    ox, oy, _ = ctx.commanded()  # in the world frame the leg began in, from start.pose
+    c, s = math.cos(start.yaw), math.sin(start.yaw)
     commanded = (ox * c + oy * s, -ox * s + oy * c)
     ax, ay = measured[0] - commanded[0], measured[1] - commanded[1]
     length = math.hypot(*leg)

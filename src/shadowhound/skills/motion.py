@@ -213,7 +213,7 @@ def drive_local(
     end = ctx.state()
     if end.relocalized != prev.relocalized:
         origin = carried(origin, prev, end)
-    leg_agrees(ctx, end, origin, start.yaw, margin, (tx, ty), ctx.leeway(axis))
+    leg_agrees(ctx, start, end, margin, (tx, ty), ctx.leeway(axis))
     return math.hypot(end.x - origin.x, end.y - origin.y)
 
 
