@@ -84,6 +84,25 @@ def test_a_correction_smaller_than_a_jump_mid_walk_is_no_lie(
     assert math.hypot(end.x - start.x - 2.0, end.y - start.y) <= tolerance, result.response
 
 
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(yaw=st.floats(math.radians(-2), math.radians(8)), after=st.floats(10.0, 70.0))
+def test_a_heading_correction_smaller_than_a_jump_mid_turn_is_no_lie(
+    yaw: float, after: float
+) -> None:
+    """The same for a turn: SLAM turning the map by less than a jump (10 degrees) mid-turn is
+    no heading lie; the turn succeeds, 90 degrees in the map."""
+    robot = relocalizing()
+    agent = agent_for(robot)
+    start = robot.get_state()
+    robot.jump_after((0.0, 0.0, yaw), degrees=after, counted=False)
+    result = agent.execute_mission("turn left 90 degrees")
+    end = robot.get_state()
+    assert robot.corrected == 1 and robot.relocalized == 0, "the correction never came"
+    assert result.success, result.response
+    turned = math.degrees(math.remainder(end.yaw - start.yaw, math.tau))
+    assert abs(turned - 90.0) <= agent.settings.safety.outcome_tolerance_deg, result.response
+
+
 @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(yaw=st.floats(math.radians(-20), math.radians(20)), after=st.floats(10.0, 70.0))
 def test_a_heading_jump_mid_turn_leaves_a_relative_turn_as_asked(yaw: float, after: float) -> None:

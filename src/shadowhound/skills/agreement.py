@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 from ..errors import SkillError
-from ..state import RobotState
+from ..state import RobotState, normalize_angle
 from .bounds import Leeway
 from .context import SkillContext
 
@@ -74,9 +74,10 @@ def leg_agrees(
 
 
 def turn_agrees(ctx: SkillContext, turned: float, angle: float, margin: float) -> None:
-    """A turn odometry says is done (`turned` of `angle`, radians) must agree with what its
-    commands turned: odometry further than they could have (a heading jump too small to be seen
-    as one), by more than `margin` and the leeway of the stalls seen, fails."""
+    """A turn odometry says is done (`turned` of `angle`, radians, on odometry's own heading:
+    `absorbed_yaw` taken off the map's) must agree with what its commands turned: odometry
+    further than they could have (a heading jump too small to be seen as one), by more than
+    `margin` and the leeway of the stalls seen, fails."""
     commanded = ctx.commanded()[2]
     apart = turned - commanded
     apart = math.copysign(1.0, angle) * apart if angle else abs(apart)  # ahead counts
@@ -90,6 +91,15 @@ def turn_agrees(ctx: SkillContext, turned: float, angle: float, margin: float) -
             f"{allowing(ctx, math.degrees(ahead), 'degrees')}): odometry disagrees with the "
             "motion (a small jump of the heading?)"
         )
+
+
+def absorbed_yaw(first: RobotState, end: RobotState) -> float:
+    """Radians SLAM's corrections smaller than a jump turned the map heading between `first`
+    and `end` (it moved without the robot turning): the map -> odom change in yaw, less the
+    jumps' (a turn carries those over itself, or stops on them). What a turn's check against
+    its commands takes off the heading the map shows."""
+    total = (end.yaw - end.own_pose.yaw) - (first.yaw - first.own_pose.yaw)
+    return normalize_angle(total - (end.jumps[2] - first.jumps[2]))
 
 
 def ended_short(short: str, planned: str, why: str) -> str:

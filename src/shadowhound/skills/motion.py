@@ -32,7 +32,17 @@ from collections.abc import Callable
 
 from ..errors import Relocalized, SkillError
 from ..state import Pose2D, RobotState, carried, normalize_angle
-from .agreement import LATE, SLOW, allowing, deg, disagree, ended_short, leg_agrees, turn_agrees
+from .agreement import (
+    LATE,
+    SLOW,
+    absorbed_yaw,
+    allowing,
+    deg,
+    disagree,
+    ended_short,
+    leg_agrees,
+    turn_agrees,
+)
 from .bounds import leg_margin, leg_room, turn_margin, turn_room
 from .context import SkillContext
 
@@ -305,7 +315,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
     st = ctx.state()
     last_yaw = _turn_jumped(ctx, last_yaw, prev, st, relative)
     turned += normalize_angle(st.yaw - last_yaw)
-    turn_agrees(ctx, turned, angle, margin)
+    turn_agrees(ctx, turned - absorbed_yaw(first, st), angle, margin)
     return turned
 
 
