@@ -144,7 +144,9 @@ def test_timeout_cancels_the_mission_and_exits_1(node: Agent) -> None:
 
 
 def test_estop_stops_a_walking_mission_and_release_lets_missions_run_again(node: Agent) -> None:
-    walking = start("send", "walk backward 2 meters")
+    # 20 s at 0.1 m/s: the e-stop lands mid-walk however long `shadowhound estop` takes to start
+    # on a loaded machine (2 m at the default speed ended before it, in CI)
+    walking = start("send", "walk backward 2 meters at 0.1 m/s")
     until_line(walking, "[1/1] nav.move ...")
     wait_until(lambda: node.robot_state()["moving"], TIMEOUT, "the robot to walk")
     pressed = shadowhound("estop")

@@ -223,7 +223,7 @@ def drive_local(
     end = ctx.state()
     if end.relocalized != prev.relocalized:
         origin = carried(origin, prev, end)
-    leg_agrees(ctx, start, end, margin, (tx, ty), ctx.leeway(axis))
+    leg_agrees(ctx, start, end, origin, margin, (tx, ty), ctx.leeway(axis))
     return math.hypot(end.x - origin.x, end.y - origin.y)
 
 
@@ -315,7 +315,7 @@ def rotate(ctx: SkillContext, angle: float, speed: float, relative: bool = False
     st = ctx.state()
     last_yaw = _turn_jumped(ctx, last_yaw, prev, st, relative)
     turned += normalize_angle(st.yaw - last_yaw)
-    turn_agrees(ctx, turned - absorbed_yaw(first, st), angle, margin)
+    turn_agrees(ctx, turned, angle, margin, absorbed_yaw(first, st))
     return turned
 
 
