@@ -136,6 +136,11 @@ class Governor:
         want = expected[-1]
         off = math.hypot(after.x - want.x, after.y - want.y)
         turn = abs(math.degrees(normalize_angle(after.yaw - want.yaw)))
+        if after.relocalized != before.relocalized:
+            # The skill planned again from the corrected pose (a goal on the map) or carried its
+            # turn over the jump: the heading it ended on is its closed loop's (a goto with no
+            # heading asked faces its last leg's way, not the first plan's); where is judged.
+            turn = 0.0
         lim = self.limits
         if off <= lim.outcome_tolerance and turn <= lim.outcome_tolerance_deg:
             return ""
